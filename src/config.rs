@@ -1,0 +1,1 @@
+//! Server settings and limits: one struct, documented defaults, settable by flags or environment.

@@ -1,0 +1,2 @@
+//! gangue server binary.
+fn main() {}

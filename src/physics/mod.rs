@@ -1,0 +1,12 @@
+//! Pure, synchronous numerics: contact, column dynamics, migration, studies.
+//!
+//! Nothing in here knows about HTTP, JSON or async runtimes. Every solver takes plain parameter
+//! structs (SI units) and a [`Control`] handle it polls for cancellation and deadlines.
+
+pub mod contact;
+pub mod control;
+pub mod error;
+pub mod material;
+
+pub use control::Control;
+pub use error::{PhysicsError, PhysicsResult};
