@@ -6,5 +6,3 @@
 pub mod config;
 pub mod http;
 pub mod physics;
-
-

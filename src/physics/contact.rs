@@ -101,3 +101,28 @@ pub enum ForceLaw {
 pub fn solve_impact(_case: &ImpactCase) -> PhysicsResult<ImpactResult> {
     todo!("contact solver")
 }
+
+impl ForceLaw {
+    /// Contact force P(δ) at approach δ ≥ 0, N; 0 for δ ≤ 0. For the log laws this is the W₋₁
+    /// inverse P = kδ/(1 + u(e·kδ/P_ref)); past the capacity δ_cap it returns `None`.
+    pub fn force(&self, delta: f64) -> Option<f64> {
+        if delta <= 0.0 {
+            return Some(0.0);
+        }
+        match *self {
+            ForceLaw::Log { k, p_ref } => {
+                let g = std::f64::consts::E * k * delta / p_ref;
+                super::lambert::branch_u(g).map(|u| k * delta / (1.0 + u))
+            }
+            ForceLaw::Hertz { kappa } => Some(kappa * delta * delta.sqrt()),
+        }
+    }
+
+    /// Approach at the capacity δ_cap = P_ref/(e k), m; `None` for Hertz (unbounded).
+    pub fn deformation_capacity(&self) -> Option<f64> {
+        match *self {
+            ForceLaw::Log { k, p_ref } => Some(p_ref / (std::f64::consts::E * k)),
+            ForceLaw::Hertz { .. } => None,
+        }
+    }
+}

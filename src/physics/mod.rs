@@ -6,6 +6,7 @@
 pub mod contact;
 pub mod control;
 pub mod error;
+pub mod lambert;
 pub mod material;
 
 pub use control::Control;

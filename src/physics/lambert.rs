@@ -1,0 +1,111 @@
+//! The lower Lambert W branch near its branch point, in the well-conditioned variable u.
+//!
+//! With W = W₋₁(−G/e) and u = −(1 + W) ≥ 0, the defining equation becomes (1 + u)e^{−u} = G.
+//! Working in u (never in z = −G/e) keeps every digit near the branch point G → 1, where
+//! 1 + e·z cancels catastrophically (physics.md §A.5).
+
+/// u ≥ 0 solving (1 + u)·e^{−u} = G for G ∈ [0, 1]; `None` for G > 1 or NaN.
+///
+/// G = 1 gives u = 0 (the branch point, W = −1); G = 0 gives u = +∞.
+///
+/// # Examples
+/// ```
+/// let u = gangue::physics::lambert::branch_u(0.5).unwrap();
+/// assert!(((1.0 + u) * (-u).exp() - 0.5).abs() < 1e-15);
+/// ```
+///
+/// # Special cases
+/// * `G > 1` or NaN: `None` (no real solution on the physical branch).
+/// * `G == 1`: `Some(0.0)`.
+/// * `G == 0`: `Some(f64::INFINITY)`.
+/// * `1 − G < 1e-12`: the branch-point series alone (u ≈ √(2(1−G)) …), relative error ≲ 1e-16.
+///
+/// # References
+/// physics.md §A.5 (series: the standard branch-point expansion of W₋₁, Corless et al. 1996,
+/// "On the Lambert W function", Adv. Comput. Math. 5, 329–359, doi:10.1007/BF02124750).
+pub fn branch_u(g: f64) -> Option<f64> {
+    if g.is_nan() || g > 1.0 || g < 0.0 {
+        return None;
+    }
+    if g == 1.0 {
+        return Some(0.0);
+    }
+    if g == 0.0 {
+        return Some(f64::INFINITY);
+    }
+    let q = 1.0 - g;
+    let y = -g.ln();
+    let mut u = if q < 2e-3 {
+        let s = (2.0 * q).sqrt();
+        let series = s
+            * (1.0
+                + s * (1.0 / 3.0
+                    + s * (11.0 / 72.0
+                        + s * (43.0 / 540.0
+                            + s * (769.0 / 17280.0
+                                + s * (221.0 / 8505.0
+                                    + s * (680863.0 / 43545600.0 + s * (1963.0 / 204120.0))))))));
+        if q < 1e-12 {
+            return Some(series);
+        }
+        series
+    } else if y > 1.0 {
+        y + y.ln_1p()
+    } else {
+        (2.0 * y).sqrt() + 2.0 * y / 3.0
+    };
+    // Newton on f(u) = u − ln(1 + u) − y, f'(u) = u/(1 + u).
+    for _ in 0..50 {
+        let f = u - u.ln_1p() - y;
+        let mut next = u - f * (1.0 + u) / u;
+        if next <= 0.0 {
+            next = 0.5 * u;
+        }
+        let du = (next - u).abs();
+        u = next;
+        if du <= 4e-16 * u {
+            break;
+        }
+    }
+    Some(u)
+}
+
+/// W₋₁(−G/e) = −1 − u(G) for G ∈ [0, 1]; `None` outside.
+pub fn lambert_wm1_of_g(g: f64) -> Option<f64> {
+    branch_u(g).map(|u| -1.0 - u)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn satisfies_defining_equation_over_decades() {
+        for k in 1..300 {
+            let g = 10f64.powf(-(k as f64));
+            let u = branch_u(g).unwrap();
+            // (1+u)e^{-u} = G  ⇔  u − ln(1+u) = −ln G
+            let lhs = u - u.ln_1p();
+            let rhs = -g.ln();
+            assert!((lhs - rhs).abs() <= 1e-14 * rhs.abs().max(1.0), "G = {g}");
+        }
+    }
+
+    #[test]
+    fn branch_point_and_outside() {
+        assert_eq!(branch_u(1.0), Some(0.0));
+        assert_eq!(branch_u(0.0), Some(f64::INFINITY));
+        assert_eq!(branch_u(1.0 + f64::EPSILON), None);
+        assert_eq!(branch_u(f64::NAN), None);
+        assert_eq!(branch_u(-1e-300), None);
+    }
+
+    #[test]
+    fn near_branch_point_matches_series_leading_term() {
+        let g = 1.0 - 1e-10;
+        let q = 1.0 - g;
+        let u = branch_u(g).unwrap();
+        let s = (2.0 * q).sqrt();
+        assert!((u / s - 1.0 - s / 3.0).abs() < 1e-9);
+    }
+}
