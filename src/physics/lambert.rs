@@ -111,11 +111,22 @@ pub fn branch_u_parts(q: f64, y: f64) -> f64 {
     u
 }
 
-/// u − ln(1 + u) for u ≥ 0 without cancellation at small u.
+/// y = −ln G = u − ln(1 + u) for u ≥ 0 (the inverse of [`branch_u_log`]), without
+/// cancellation at small u.
 ///
+/// # Examples
+/// ```
+/// let y = gangue::physics::lambert::u_minus_ln1p(1e-8);
+/// assert!((y / 5e-17 - 1.0).abs() < 1e-7); // u²/2 − u³/3 …
+/// ```
+///
+/// # Special cases
+/// * `u == 0`: 0; `u == +∞`: +∞.
+///
+/// # References
 /// Below u = 0.25 it uses ln(1 + u) = 2 atanh(w), w = u/(2 + u), so that
 /// u − ln(1 + u) = u²/(2 + u) − 2(w³/3 + w⁵/5 + …), a sum without cancellation.
-fn u_minus_ln1p(u: f64) -> f64 {
+pub fn u_minus_ln1p(u: f64) -> f64 {
     if u < 0.25 {
         let w = u / (2.0 + u);
         let w2 = w * w;
@@ -125,8 +136,10 @@ fn u_minus_ln1p(u: f64) -> f64 {
             tail = w2 * (1.0 / (2 * j + 1) as f64 + tail);
         }
         u * u / (2.0 + u) - 2.0 * w * tail
-    } else {
+    } else if u.is_finite() {
         u - u.ln_1p()
+    } else {
+        u
     }
 }
 
