@@ -81,7 +81,11 @@ fn from_request(req: &Value) -> ImpactCase {
         Some("paper") | None => {}
         Some(other) => panic!("unexpected law {other}"),
     }
-    if req.pointer("/contact/effective_modulus").and_then(Value::as_str) == Some("two_body") {
+    if req
+        .pointer("/contact/effective_modulus")
+        .and_then(Value::as_str)
+        == Some("two_body")
+    {
         c.contact.modulus = ModulusConvention::TwoBody;
     }
     c
@@ -129,7 +133,10 @@ fn verification_cases_p01_to_p04_and_p14() {
     let mut seen = 0;
     for c in verification_cases() {
         let id = c["id"].as_str().unwrap();
-        if !["P01", "P02", "P03", "P04", "P14"].iter().any(|p| id.starts_with(p)) {
+        if !["P01", "P02", "P03", "P04", "P14"]
+            .iter()
+            .any(|p| id.starts_with(p))
+        {
             continue;
         }
         seen += 1;
@@ -193,7 +200,12 @@ fn log_force_independent(k: f64, p_ref: f64, delta: f64) -> f64 {
 
 /// Classical RK4 on (δ, δ̇) until δ̇ = 0; the event is located by re-stepping from the last
 /// state with the sub-step found by bisection. Returns (δmax, P(δmax), time of the maximum).
-fn integrate_to_maximum(mass: f64, v: f64, force: &dyn Fn(f64) -> f64, t_est: f64) -> (f64, f64, f64) {
+fn integrate_to_maximum(
+    mass: f64,
+    v: f64,
+    force: &dyn Fn(f64) -> f64,
+    t_est: f64,
+) -> (f64, f64, f64) {
     let n = 200_000;
     let h = 2.0 * t_est / n as f64;
     let acc = |d: f64| -force(d) / mass;
@@ -275,7 +287,11 @@ fn energy_balance_by_quadrature() {
         rel_tol: 1e-13,
         ..Default::default()
     };
-    for law in [ContactLaw::Paper, ContactLaw::Johnson, ContactLaw::HertzPoint] {
+    for law in [
+        ContactLaw::Paper,
+        ContactLaw::Johnson,
+        ContactLaw::HertzPoint,
+    ] {
         for modulus in [ModulusConvention::Paper, ModulusConvention::TwoBody] {
             for v in [0.01, 5.0, 60.0] {
                 let mut c = case(law, modulus);
@@ -285,7 +301,10 @@ fn energy_balance_by_quadrature() {
                 let f = force_law(&c).unwrap();
                 // ∫ P(δ) dδ through the library's W₋₁ inverse …
                 let w1 = integrate(|d| f.force(d).unwrap(), &[0.0, dmax], opts);
-                assert!(rel(w1.value, r.kinetic_energy) < 1e-11, "{law:?} {v}: {w1:?}");
+                assert!(
+                    rel(w1.value, r.kinetic_energy) < 1e-11,
+                    "{law:?} {v}: {w1:?}"
+                );
                 // … and ∫ P δ′(P) dP from the explicit law, independent of W.
                 if let ForceLaw::Log { k, p_ref } = f {
                     let w2 = integrate(
@@ -342,11 +361,20 @@ fn branch_point_u_against_reference() {
         let u = branch_u(*g).unwrap();
         let w = -1.0 - u;
         // G is fed exactly, so u itself is well determined: a few ulp.
-        assert!((u - u_ref).abs() <= 1e-14 * u_ref + 1e-300, "G = {g}: u {u} vs {u_ref}");
+        assert!(
+            (u - u_ref).abs() <= 1e-14 * u_ref + 1e-300,
+            "G = {g}: u {u} vs {u_ref}"
+        );
         assert!((w - w_ref).abs() <= 1e-8, "G = {g}: W");
-        assert!((w - w_ref).abs() <= 4e-16 * w_ref.abs(), "G = {g}: W {w} vs {w_ref}");
+        assert!(
+            (w - w_ref).abs() <= 4e-16 * w_ref.abs(),
+            "G = {g}: W {w} vs {w_ref}"
+        );
         assert!(rel((-0.5 * u).exp(), p_ref) < 1e-15, "G = {g}: P factor");
-        assert!(rel((-0.5 * u).exp() * (2.0 + u), d_ref) < 1e-15, "G = {g}: δ factor");
+        assert!(
+            rel((-0.5 * u).exp() * (2.0 + u), d_ref) < 1e-15,
+            "G = {g}: δ factor"
+        );
     }
 }
 
@@ -396,15 +424,24 @@ fn near_capacity_from_physical_inputs_against_reference() {
             }
             continue;
         }
-        let ImpactDetail::Line(l) = impact_maxima(c).unwrap_or_else(|e| panic!("{c:?}: {e}")) else {
+        let ImpactDetail::Line(l) = impact_maxima(c).unwrap_or_else(|e| panic!("{c:?}: {e}"))
+        else {
             panic!()
         };
         let u = o["u"].as_f64().unwrap();
         let d = o["delta_max"].as_f64().unwrap();
         let p = o["P_max"].as_f64().unwrap();
-        assert!(rel(l.max_deformation, d) < 1e-12, "{c:?}: δ {} vs {d}", l.max_deformation);
+        assert!(
+            rel(l.max_deformation, d) < 1e-12,
+            "{c:?}: δ {} vs {d}",
+            l.max_deformation
+        );
         let bound = (1.0 + u) / (2.0 * u) * 4.0 * f64::EPSILON + 1e-15;
-        assert!(rel(l.max_force, p) < bound, "{c:?}: P {} vs {p} (bound {bound})", l.max_force);
+        assert!(
+            rel(l.max_force, p) < bound,
+            "{c:?}: P {} vs {p} (bound {bound})",
+            l.max_force
+        );
         assert!((l.lambert_w - o["W"].as_f64().unwrap()).abs() < 1e-8);
     }
 }
@@ -418,7 +455,11 @@ fn random_cases_against_reference() {
     };
     let mut cases = Vec::new();
     for i in 0..60 {
-        let law = [ContactLaw::Paper, ContactLaw::Johnson, ContactLaw::HertzPoint][i % 3];
+        let law = [
+            ContactLaw::Paper,
+            ContactLaw::Johnson,
+            ContactLaw::HertzPoint,
+        ][i % 3];
         let modulus = [ModulusConvention::Paper, ModulusConvention::TwoBody][(i / 3) % 2];
         let side = log_uniform(&mut rng, 0.01, 5.0);
         let mut c = ImpactCase {
@@ -482,7 +523,12 @@ fn random_cases_against_reference() {
                 chk("δ", h.max_deformation, f("delta_max"), 1e-9);
                 chk("P", h.max_force, f("P_max"), 1e-9);
                 chk("R_e", h.equivalent_radius, f("Re"), 1e-9);
-                chk("δ_eq", h.max_deformation_equivalent_radius, f("delta_max_equiv_radius"), 1e-9);
+                chk(
+                    "δ_eq",
+                    h.max_deformation_equivalent_radius,
+                    f("delta_max_equiv_radius"),
+                    1e-9,
+                );
                 chk("b/a", h.axis_ratio, f("axis_ratio_b_over_a"), 1e-9);
             }
         }
@@ -512,14 +558,27 @@ fn hertz_exact_kappa_over_the_ratio_range() {
         let m_ref = common_oracle::num(&row[0]);
         let kappa_ref = common_oracle::num(&row[3]);
         let h = gangue::physics::contact::hertz_geometry(1.0, *rc, *r, true);
-        assert!(rel(h.stiffness, kappa_ref) < 1e-13, "rc {rc} R {r}: κ/E* {} vs {kappa_ref}", h.stiffness);
-        assert!(rel(h.eccentricity_squared, m_ref) < 1e-12, "rc {rc} R {r}: m");
-        assert!(rel(h.axis_ratio, (1.0 - m_ref).sqrt()) < 1e-12, "rc {rc} R {r}: b/a");
+        assert!(
+            rel(h.stiffness, kappa_ref) < 1e-13,
+            "rc {rc} R {r}: κ/E* {} vs {kappa_ref}",
+            h.stiffness
+        );
+        assert!(
+            rel(h.eccentricity_squared, m_ref) < 1e-12,
+            "rc {rc} R {r}: m"
+        );
+        assert!(
+            rel(h.axis_ratio, (1.0 - m_ref).sqrt()) < 1e-12,
+            "rc {rc} R {r}: b/a"
+        );
     }
     // Below r_c/R = 1e-12: the circular limit κ → (4/3)E*√R_e.
     for rc in [1e-20, 1e-100, 1e-300, 5e-324] {
         let h = gangue::physics::contact::hertz_geometry(1.0, rc, 10.0, true);
-        assert!(rel(h.stiffness, h.stiffness_equivalent_radius) < 1e-15, "rc {rc}");
+        assert!(
+            rel(h.stiffness, h.stiffness_equivalent_radius) < 1e-15,
+            "rc {rc}"
+        );
         assert!(h.axis_ratio <= 1.0 && h.axis_ratio > 1.0 - 1e-12);
     }
     let _ = PI;

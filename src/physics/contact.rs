@@ -437,7 +437,11 @@ pub fn line_duration_integral(u0: f64) -> Integral {
     let f = |theta: f64| {
         let (sin, cos) = theta.sin_cos();
         let c2 = cos * cos;
-        let ln_s2 = if c2 < 0.5 { (-c2).ln_1p() } else { 2.0 * sin.ln() };
+        let ln_s2 = if c2 < 0.5 {
+            (-c2).ln_1p()
+        } else {
+            2.0 * sin.ln()
+        };
         let y = y0 - ln_s2;
         let q = q0 + g * c2;
         let u = if y > 0.0 { branch_u_parts(q, y) } else { 0.0 };
@@ -747,7 +751,13 @@ pub fn impact_maxima(case: &ImpactCase) -> PhysicsResult<ImpactDetail> {
     match case.contact.law {
         ContactLaw::Paper | ContactLaw::Johnson => {
             let s = solve_log(case, e_star)?;
-            let half_width = 2.0 * (s.p_max * r / s.k).sqrt();
+            // √Pmax directly, so that a and p₀ = √(P E*/(πRL)) survive an underflowing Pmax.
+            let sqrt_p = if s.u < 1400.0 {
+                s.p_cap.sqrt() * (-0.25 * s.u).exp()
+            } else {
+                (0.5 * s.p_cap.ln() - 0.25 * s.u).exp()
+            };
+            let half_width = 2.0 * sqrt_p * (r / s.k).sqrt();
             Ok(ImpactDetail::Line(LineImpact {
                 energy_parameter: s.g,
                 lambert_w: -1.0 - s.u,
@@ -755,7 +765,7 @@ pub fn impact_maxima(case: &ImpactCase) -> PhysicsResult<ImpactDetail> {
                 max_deformation: s.d_max,
                 max_force: s.p_max,
                 half_width,
-                max_pressure: 2.0 * s.p_max / (PI * half_width * l),
+                max_pressure: sqrt_p * (s.k / r).sqrt() / (PI * l),
                 energy_capacity: s.p_cap * s.p_cap / (4.0 * s.k),
                 deformation_capacity: s.p_ref / (E * s.k),
                 force_capacity: s.p_cap,
@@ -766,7 +776,7 @@ pub fn impact_maxima(case: &ImpactCase) -> PhysicsResult<ImpactDetail> {
             let v = case.velocity;
             let h = hertz_geometry(es, corner_radius(case), r, case.contact.hertz_exact);
             let d = hertz_max_deformation(mass, v, h.stiffness);
-            let a = (h.semi_axis_factor * d).sqrt();
+            let a = h.semi_axis_factor.sqrt() * d.sqrt();
             Ok(ImpactDetail::Hertz(HertzImpact {
                 max_deformation: d,
                 max_force: h.stiffness * d * d.sqrt(),
@@ -811,7 +821,12 @@ pub fn solve_impact(case: &ImpactCase) -> PhysicsResult<ImpactResult> {
     let contact_duration = match &detail {
         ImpactDetail::Line(l) => {
             let j = line_duration_integral(l.u).value;
-            2.0 * mass * v / l.max_force * j
+            if l.max_force > 1e-280 {
+                2.0 * mass * v / l.max_force * j
+            } else {
+                // v/Pmax from logarithms: at v ~ 5e-324 Pmax itself underflows.
+                2.0 * mass * j * (v.ln() - l.force_capacity.ln() + 0.5 * l.u).exp()
+            }
         }
         ImpactDetail::Hertz(h) => HERTZ_DURATION_FACTOR * h.max_deformation / v,
     };
@@ -868,7 +883,8 @@ pub fn force_curve(law: &ForceLaw, max_deformation: f64, n: usize) -> (Vec<f64>,
 
 impl ForceLaw {
     /// Contact force P(δ) at approach δ ≥ 0, N; 0 for δ ≤ 0. For the log laws this is the W₋₁
-    /// inverse P = kδ/(1 + u(e·kδ/P_ref)); past the capacity δ_cap it returns `None`.
+    /// inverse P = kδ/(1 + u(e·kδ/P_ref)); past the capacity δ_cap (by more than the rounding of
+    /// e·kδ/P_ref, 8 ulp) it returns `None`.
     pub fn force(&self, delta: f64) -> Option<f64> {
         if delta <= 0.0 {
             return Some(0.0);
@@ -876,7 +892,10 @@ impl ForceLaw {
         match *self {
             ForceLaw::Log { k, p_ref } => {
                 let g = E * k * delta / p_ref;
-                let u = if g >= 1e-250 {
+                let u = if g > 1.0 && g <= 1.0 + 8.0 * f64::EPSILON {
+                    // δ_cap itself, rounded just past the branch point.
+                    Some(0.0)
+                } else if g >= 1e-250 {
                     super::lambert::branch_u(g)
                 } else {
                     // G underflows: u from ln G.
@@ -992,7 +1011,12 @@ mod tests {
         assert!(rel(h.max_deformation, 0.005_446_911_017_075_47) < 1e-13);
         assert!(rel(h.max_force, 387_260.778_336_077_1) < 1e-13);
         assert!(rel(h.equivalent_radius, 0.018_569_533_817_705_187) < 1e-15);
-        assert!(rel(h.max_deformation_equivalent_radius, 0.005_447_910_697_006_21) < 1e-14);
+        assert!(
+            rel(
+                h.max_deformation_equivalent_radius,
+                0.005_447_910_697_006_21
+            ) < 1e-14
+        );
         assert!(rel(h.axis_ratio, 0.905_800_144_462_170_7) < 1e-13);
         assert!(rel(r.contact_duration, 0.003_206_351_605_556_613_6) < 1e-13);
         // p₀ = 3P/(2πab) and the semi-axes are consistent with P.
@@ -1048,7 +1072,11 @@ mod tests {
 
     #[test]
     fn force_curve_ends_at_the_maximum() {
-        for law in [ContactLaw::Paper, ContactLaw::Johnson, ContactLaw::HertzPoint] {
+        for law in [
+            ContactLaw::Paper,
+            ContactLaw::Johnson,
+            ContactLaw::HertzPoint,
+        ] {
             let mut c = ImpactCase::default();
             c.contact.law = law;
             let f = force_law(&c).unwrap();
@@ -1063,7 +1091,11 @@ mod tests {
             assert!(rel(p[100], pmax) < 1e-14, "{law:?}");
             assert!(p.windows(2).all(|w| w[1] > w[0]));
         }
-        assert!(force_curve(&ForceLaw::Hertz { kappa: 1.0 }, 1.0, 0).0.is_empty());
+        assert!(
+            force_curve(&ForceLaw::Hertz { kappa: 1.0 }, 1.0, 0)
+                .0
+                .is_empty()
+        );
     }
 
     #[test]

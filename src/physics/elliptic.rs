@@ -146,7 +146,10 @@ mod tests {
             let r = complete_elliptic_parts(m, 1.0 - m);
             let c = complete_elliptic_parts(1.0 - m, m);
             let lhs = r.e * c.k + c.e * r.k - r.k * c.k;
-            assert!((lhs - FRAC_PI_2).abs() < 2e-14 * r.k.max(c.k), "m = {m}: {lhs}");
+            assert!(
+                (lhs - FRAC_PI_2).abs() < 2e-14 * r.k.max(c.k),
+                "m = {m}: {lhs}"
+            );
         }
     }
 

@@ -310,8 +310,15 @@ mod tests {
         let r = integrate(|x: f64| 1.0 / x.sqrt(), &[0.0, 1.0], opts);
         assert!((r.value - 2.0).abs() < 1e-11, "{r:?}");
         // ∫₀¹ √(ln(1/x)) dx = Γ(3/2) = √π/2.
-        let r = integrate(|x: f64| (-x.ln()).sqrt(), &[0.0, 1e-6, 1e-3, 0.1, 1.0], opts);
-        assert!((r.value - std::f64::consts::PI.sqrt() / 2.0).abs() < 1e-11, "{r:?}");
+        let r = integrate(
+            |x: f64| (-x.ln()).sqrt(),
+            &[0.0, 1e-6, 1e-3, 0.1, 1.0],
+            opts,
+        );
+        assert!(
+            (r.value - std::f64::consts::PI.sqrt() / 2.0).abs() < 1e-11,
+            "{r:?}"
+        );
         assert!(r.error < 1e-11 && r.converged);
     }
 
