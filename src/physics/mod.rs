@@ -3,6 +3,7 @@
 //! Nothing in here knows about HTTP, JSON or async runtimes. Every solver takes plain parameter
 //! structs (SI units) and a [`Control`] handle it polls for cancellation and deadlines.
 
+pub mod beam;
 pub mod contact;
 pub mod control;
 pub mod error;
