@@ -9,6 +9,7 @@ pub mod control;
 pub mod error;
 pub mod lambert;
 pub mod material;
+pub mod ode;
 
 pub use control::Control;
 pub use error::{PhysicsError, PhysicsResult};
