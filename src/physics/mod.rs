@@ -6,6 +6,7 @@
 pub mod beam;
 pub mod contact;
 pub mod control;
+pub mod coupled;
 pub mod error;
 pub mod lambert;
 pub mod material;
