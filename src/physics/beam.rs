@@ -486,7 +486,8 @@ impl FreeVibration {
             }
             Regime::Overdamped => {
                 // r₁ = −ω_n/(ζ + √(ζ²−1)) = −(σ − β) without cancellation; r₂ = −(σ + β).
-                let r1 = -self.omega_n / (self.zeta + ((self.zeta - 1.0) * (self.zeta + 1.0)).sqrt());
+                let r1 =
+                    -self.omega_n / (self.zeta + ((self.zeta - 1.0) * (self.zeta + 1.0)).sqrt());
                 let r2 = -(sigma + q);
                 let e1 = (r1 * t).exp();
                 let ec = 0.5 * (e1 + (r2 * t).exp());
@@ -645,19 +646,23 @@ impl Galerkin {
         let s = column.section();
         let l = column.length;
         let modes: Vec<BeamMode> = (1..=n).map(BeamMode::clamped).collect();
-        let j0 = if rotary_inertia { s.rotary_inertia } else { 0.0 };
+        let j0 = if rotary_inertia {
+            s.rotary_inertia
+        } else {
+            0.0
+        };
         let mass = DMatrix::from_fn(n, n, |i, j| {
             let a11 = rotary_integral(i + 1, &modes[i], j + 1, &modes[j]);
             let a00 = if i == j { 1.0 } else { 0.0 };
             s.mass_per_length * l * a00 + j0 / l * a11
         });
-        let damping = DMatrix::from_fn(n, n, |i, j| {
-            if i == j {
-                damping_coefficient * l
-            } else {
-                0.0
-            }
-        });
+        let damping = DMatrix::from_fn(
+            n,
+            n,
+            |i, j| {
+                if i == j { damping_coefficient * l } else { 0.0 }
+            },
+        );
         let kf = s.bending_stiffness / l.powi(3);
         let stiffness = DMatrix::from_fn(n, n, |i, j| {
             if i == j {
@@ -695,8 +700,7 @@ impl Galerkin {
     pub fn damping_ratios(&self) -> Vec<f64> {
         (0..self.modes.len())
             .map(|i| {
-                self.damping[(i, i)]
-                    / (2.0 * (self.stiffness[(i, i)] * self.mass[(i, i)]).sqrt())
+                self.damping[(i, i)] / (2.0 * (self.stiffness[(i, i)] * self.mass[(i, i)]).sqrt())
             })
             .collect()
     }
@@ -757,7 +761,13 @@ mod tests {
     /// Midpoint values of §B.3 and clamped boundary conditions, for modes 1…50 (finite, BC ~ 0).
     #[test]
     fn shapes_are_stable_and_clamped() {
-        let mid = [1.588146262064605, 0.0, -1.405998464277214, 0.0, 1.414567511330687];
+        let mid = [
+            1.588146262064605,
+            0.0,
+            -1.405998464277214,
+            0.0,
+            1.414567511330687,
+        ];
         for (i, &m) in mid.iter().enumerate() {
             let v = BeamMode::clamped(i + 1).shape(0.5);
             assert!((v - m).abs() < 1e-13, "{i}: {v}");
@@ -782,9 +792,18 @@ mod tests {
             let q = mode_integrals_quadrature(&md);
             assert!(rel(q.mass, 1.0) < 1e-11, "{i}: {}", q.mass);
             assert!(rel(q.stiffness, md.lambda.powi(4)) < 1e-11, "{i}");
-            assert!(rel(q.rotary, rotary_integral(i, &md, i, &md)) < 1e-11, "{i}");
+            assert!(
+                rel(q.rotary, rotary_integral(i, &md, i, &md)) < 1e-11,
+                "{i}"
+            );
         }
-        let diag = [12.302618623, 46.050120144, 98.904801402, 171.585655702, 263.997980736];
+        let diag = [
+            12.302618623,
+            46.050120144,
+            98.904801402,
+            171.585655702,
+            263.997980736,
+        ];
         for (i, &d) in diag.iter().enumerate() {
             let md = BeamMode::clamped(i + 1);
             assert!(rel(rotary_integral(i + 1, &md, i + 1, &md), d) < 1e-10);
@@ -831,14 +850,18 @@ mod tests {
         let f = g.natural_frequencies();
         for (i, fi) in f.iter().enumerate() {
             let l = clamped_root(i + 1);
-            let eb = l * l * (s.bending_stiffness / (s.mass_per_length * col.length.powi(4))).sqrt()
-                / (2.0 * PI);
+            let eb =
+                l * l * (s.bending_stiffness / (s.mass_per_length * col.length.powi(4))).sqrt()
+                    / (2.0 * PI);
             assert!(rel(*fi, eb) < 1e-12, "{i}: {fi} vs {eb}");
         }
         // Rotary inertia lowers every frequency; P08 values for n = 3.
         let g3 = Galerkin::new(&col, 3, 1.0, true).unwrap();
         let f3 = g3.natural_frequencies();
-        for (a, b) in f3.iter().zip([892.9026290343181, 2307.892309001549, 4151.338613669198]) {
+        for (a, b) in f3
+            .iter()
+            .zip([892.9026290343181, 2307.892309001549, 4151.338613669198])
+        {
             assert!(rel(*a, b) < 1e-11, "{a} vs {b}");
         }
     }

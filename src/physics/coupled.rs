@@ -6,6 +6,8 @@
 //! are not coupled to them by the mass matrix and stay at rest), and D = ∫ẇᵀCẇ dt the energy
 //! dissipated by the column's damping (J), integrated as a state of its own.
 
+#![allow(clippy::needless_range_loop)] // index loops over several parallel arrays
+
 use nalgebra::{DMatrix, DVector};
 
 use super::beam::Galerkin;
@@ -329,7 +331,8 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
         h.strain_energy.push(strain);
         h.dissipated_energy.push(ys[2 + 2 * n]);
         h.rock_displacement.push(ys[0]);
-        h.rock_kinetic_energy.push(0.5 * input.rock_mass * ys[1] * ys[1]);
+        h.rock_kinetic_energy
+            .push(0.5 * input.rock_mass * ys[1] * ys[1]);
         h.contact_force.push(p);
         h.contact_energy.push(ec);
     };
@@ -353,8 +356,14 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
             let cr = st.functional(&f_delta_rate);
             let cd = st.functional(&f_delta);
             let g = |th: f64| Dopri5::eval_functional(&cr, th);
-            for th in find_roots(g, apply(&f_delta_rate, y0), apply(&f_delta_rate, y1), -1, sub, false)
-            {
+            for th in find_roots(
+                g,
+                apply(&f_delta_rate, y0),
+                apply(&f_delta_rate, y1),
+                -1,
+                sub,
+                false,
+            ) {
                 let d = Dopri5::eval_functional(&cd, th);
                 if d > res.max_contact_deformation {
                     res.max_contact_deformation = d;
@@ -422,7 +431,14 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
         let cd = st.functional(&f_delta);
         let gd = |th: f64| Dopri5::eval_functional(&cd, th);
         let dir = if in_contact { -1 } else { 1 };
-        let hit = find_roots(gd, apply(&f_delta, &ysave), apply(&f_delta, &y), dir, 4, true);
+        let hit = find_roots(
+            gd,
+            apply(&f_delta, &ysave),
+            apply(&f_delta, &y),
+            dir,
+            4,
+            true,
+        );
         if let Some(&th) = hit.first() {
             let (t0, h) = st.last_step();
             let te = (t0 + th * h).max(t_save);
@@ -434,9 +450,19 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
             while t < te {
                 ytmp.copy_from_slice(&y);
                 let y0 = ytmp.clone();
-                t = st.step(&sys, t, &mut y, te).map_err(|e| map_ode(e, in_contact))?;
+                t = st
+                    .step(&sys, t, &mut y, te)
+                    .map_err(|e| map_ode(e, in_contact))?;
                 let mut scratch = vec![0.0; dim];
-                process(&st, &mut res, &mut next_sample, &y0, &y, in_contact, &mut scratch)?;
+                process(
+                    &st,
+                    &mut res,
+                    &mut next_sample,
+                    &y0,
+                    &y,
+                    in_contact,
+                    &mut scratch,
+                )?;
             }
             if in_contact {
                 if !first_separated {
@@ -455,7 +481,15 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
             st.h = st.h.max(input.time_scale * 1e-6);
             continue;
         }
-        process(&st, &mut res, &mut next_sample, &ysave, &y, in_contact, &mut ytmp)?;
+        process(
+            &st,
+            &mut res,
+            &mut next_sample,
+            &ysave,
+            &y,
+            in_contact,
+            &mut ytmp,
+        )?;
         if in_contact {
             let d = sys.delta(&y);
             if let Some(cap) = input.law.deformation_capacity()
@@ -526,7 +560,6 @@ mod tests_support {
             max_steps: 10_000_000,
         }
     }
-
 }
 
 #[cfg(test)]
@@ -556,8 +589,18 @@ mod tests {
     #[test]
     fn base_case_matches_reference_table() {
         let rows = [
-            (1usize, [0.754774, 1.40118e-3, 1.24702e-3, 1.40732e-3, -4.70516, 96.571]),
-            (3, [0.749493, 1.39241e-3, 1.26031e-3, 1.41535e-3, -4.70578, 96.374]),
+            (
+                1usize,
+                [
+                    0.754774, 1.40118e-3, 1.24702e-3, 1.40732e-3, -4.70516, 96.571,
+                ],
+            ),
+            (
+                3,
+                [
+                    0.749493, 1.39241e-3, 1.26031e-3, 1.41535e-3, -4.70578, 96.374,
+                ],
+            ),
         ];
         for (n, exp) in rows {
             let r = solve_coupled(&base_input(n, 1e-10), &Control::unlimited()).unwrap();
@@ -594,10 +637,22 @@ mod explore {
                 let el = t.elapsed();
                 let e = |a: f64, b: f64| ((a - b) / b).abs();
                 let err = e(r.max_force, reference.max_force)
-                    .max(e(r.column_energy_after_contact, reference.column_energy_after_contact))
-                    .max(e(r.first_contact_duration.unwrap(), reference.first_contact_duration.unwrap()))
-                    .max(e(r.max_midpoint_displacement, reference.max_midpoint_displacement));
-                println!("n={n} tol={tol:e} steps={} rej={} resid={:.2e} err={:.2e} time={:?}", r.steps, r.rejected_steps, r.energy_residual, err, el);
+                    .max(e(
+                        r.column_energy_after_contact,
+                        reference.column_energy_after_contact,
+                    ))
+                    .max(e(
+                        r.first_contact_duration.unwrap(),
+                        reference.first_contact_duration.unwrap(),
+                    ))
+                    .max(e(
+                        r.max_midpoint_displacement,
+                        reference.max_midpoint_displacement,
+                    ));
+                println!(
+                    "n={n} tol={tol:e} steps={} rej={} resid={:.2e} err={:.2e} time={:?}",
+                    r.steps, r.rejected_steps, r.energy_residual, err, el
+                );
             }
         }
     }

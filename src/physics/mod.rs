@@ -4,6 +4,7 @@
 //! structs (SI units) and a [`Control`] handle it polls for cancellation and deadlines.
 
 pub mod beam;
+pub mod column;
 pub mod contact;
 pub mod control;
 pub mod coupled;

@@ -4,6 +4,8 @@
 //! The integrator takes one accepted step at a time so that the caller can look for events
 //! on the dense output between the two ends of the step and restart after a discontinuity.
 
+#![allow(clippy::needless_range_loop)] // index loops over several parallel arrays
+
 /// A first-order system y′ = f(t, y).
 pub trait OdeSystem {
     /// Evaluates f(t, y) into `dy`; returns `false` when y lies outside the system's domain
@@ -194,7 +196,9 @@ impl Dopri5 {
         h: f64,
     ) -> Result<(), OdeError> {
         self.fsal_valid = false;
-        let err = self.attempt(sys, t, y, h).ok_or(OdeError::StepTooSmall { t })?;
+        let err = self
+            .attempt(sys, t, y, h)
+            .ok_or(OdeError::StepTooSmall { t })?;
         self.last_error = err;
         self.accept(t, y, h);
         Ok(())
@@ -461,9 +465,7 @@ mod tests {
         let (w, z) = (50.0, 0.05);
         let sys = Osc { w, z };
         let wd = w * (1.0 - z * z).sqrt();
-        let exact = |t: f64| {
-            (-z * w * t).exp() * ((wd * t).cos() + z * w / wd * (wd * t).sin())
-        };
+        let exact = |t: f64| (-z * w * t).exp() * ((wd * t).cos() + z * w / wd * (wd * t).sin());
         let mut last = f64::INFINITY;
         for tol in [1e-4, 1e-7, 1e-10] {
             let mut st = Dopri5::new(tol, vec![tol; 2], 1e-3);
