@@ -8,10 +8,12 @@ pub mod column;
 pub mod contact;
 pub mod control;
 pub mod coupled;
+pub mod elliptic;
 pub mod error;
 pub mod lambert;
 pub mod material;
 pub mod ode;
+pub mod quadrature;
 
 pub use control::Control;
 pub use error::{PhysicsError, PhysicsResult};
