@@ -101,10 +101,19 @@ fn tolerance_table() {
         let err = [
             e(d.max_force, reference.max_force),
             e(d.max_contact_deformation, reference.max_contact_deformation),
-            e(d.max_midpoint_displacement, reference.max_midpoint_displacement),
-            e(d.first_contact_duration.unwrap(), reference.first_contact_duration.unwrap()),
+            e(
+                d.max_midpoint_displacement,
+                reference.max_midpoint_displacement,
+            ),
+            e(
+                d.first_contact_duration.unwrap(),
+                reference.first_contact_duration.unwrap(),
+            ),
             e(d.rebound_velocity, reference.rebound_velocity),
-            e(d.column_energy_after_contact, reference.column_energy_after_contact),
+            e(
+                d.column_energy_after_contact,
+                reference.column_energy_after_contact,
+            ),
         ]
         .into_iter()
         .fold(0.0f64, f64::max);

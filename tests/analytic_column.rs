@@ -744,3 +744,92 @@ fn reference_implementation_cases() {
         }
     }
 }
+
+/// P05–P08 end to end through `solve_column` (the contact module supplies the impact).
+#[test]
+fn verification_cases_through_solve_column() {
+    use gangue::physics::column::solve_column;
+    let ctl = Control::unlimited();
+    let r = solve_column(&ColumnCase::default(), &ctl).unwrap();
+    close("P05 M1", r.modal_mass, 61.85689848982988, 1e-9, 0.0);
+    close(
+        "P05 f",
+        r.natural_frequencies_hz[0],
+        892.9278048201711,
+        1e-9,
+        0.0,
+    );
+    let p06 = solve_column(
+        &ColumnCase {
+            mode_shapes: ModeShapes::Paper,
+            ..ColumnCase::default()
+        },
+        &ctl,
+    )
+    .unwrap();
+    close("P06 K1", p06.modal_stiffness, 1947015218.4511666, 1e-9, 0.0);
+    let p07 = solve_column(
+        &ColumnCase {
+            output: HistoryRequest::Times(vec![0.0, 1e-4, 1e-3, 0.01, 0.6]),
+            ..ColumnCase::default()
+        },
+        &ctl,
+    )
+    .unwrap();
+    let ColumnDetail::Decoupled(d) = p07.detail else {
+        panic!()
+    };
+    close(
+        "P07 delta",
+        d.max_deformation,
+        0.0017933266473674732,
+        1e-9,
+        0.0,
+    );
+    close("P07 P", d.max_force, 994968.3372475737, 1e-9, 0.0);
+    close("P07 U0", d.absorbed_energy, 1241.3332403473112, 1e-9, 0.0);
+    close("P07 ratio", d.energy_ratio, 1.4712097663375543, 1e-9, 0.0);
+    let h = p07.history.unwrap();
+    close(
+        "P07 D(0.6)",
+        h.dissipated_energy[4],
+        15.673711669926378,
+        1e-7,
+        1.24e-5,
+    );
+    close(
+        "P07 w(0.6)",
+        h.midpoint_displacement[4],
+        7.479925705297985e-05,
+        1e-7,
+        1.79e-12,
+    );
+    let p08 = solve_column(
+        &ColumnCase {
+            model: ColumnModel::Coupled,
+            modes: Some(3),
+            ..ColumnCase::default()
+        },
+        &ctl,
+    )
+    .unwrap();
+    let ColumnDetail::Coupled(c) = p08.detail else {
+        panic!()
+    };
+    let want = [
+        (c.max_force, 749493.3867374723),
+        (c.max_contact_deformation, 0.0013924112012874794),
+        (c.max_midpoint_displacement, 0.001260307275923841),
+        (c.first_contact_duration.unwrap(), 0.001415347740063528),
+        (c.rebound_velocity, -4.705782663643899),
+        (c.column_energy_after_contact, 96.37434621560254),
+        (c.energy_ratio, 0.11422144736664007),
+        (p08.kinetic_energy, 843.7499999999999),
+    ];
+    for (i, (g, w)) in want.iter().enumerate() {
+        close(&format!("P08[{i}]"), *g, *w, 1e-5, 0.0);
+    }
+    assert_eq!(c.contact_count, 1);
+    // the default window is 50 × the rigid contact duration (1.1081705 ms)
+    close("window", c.end_time, 50.0 * 1.1081705e-3, 1e-7, 0.0);
+}

@@ -2,7 +2,7 @@
 //! free vibration, or the coupled rock–contact–beam model (physics.md §B).
 
 use super::beam::{FirstMode, Galerkin, ModeIntegrals, ModeShapes, SingleMode};
-use super::contact::{ForceLaw, ImpactDetail, ImpactResult, solve_impact};
+use super::contact::{ForceLaw, ImpactDetail, ImpactResult, force_law, solve_impact};
 use super::control::Control;
 use super::coupled::{CoupledInput, solve_coupled};
 use super::error::{PhysicsError, PhysicsResult};
@@ -261,7 +261,8 @@ fn max_deformation_and_force(impact: &ImpactResult) -> (f64, f64) {
 /// physics.md §B.5–§B.7; api.md `POST /v1/column`.
 pub fn solve_column(case: &ColumnCase, control: &Control) -> PhysicsResult<ColumnResult> {
     let impact = solve_impact(&case.impact)?;
-    solve_column_with_impact(case, &impact, control)
+    let law = force_law(&case.impact)?;
+    solve_inner(case, &impact, law, control)
 }
 
 fn check_times(times: &[f64], limit: Option<f64>) -> PhysicsResult<()> {
@@ -385,6 +386,15 @@ pub fn solve_column_with_impact(
     impact: &ImpactResult,
     control: &Control,
 ) -> PhysicsResult<ColumnResult> {
+    solve_inner(case, impact, force_law_of(impact), control)
+}
+
+fn solve_inner(
+    case: &ColumnCase,
+    impact: &ImpactResult,
+    law: ForceLaw,
+    control: &Control,
+) -> PhysicsResult<ColumnResult> {
     let col = &case.impact.column;
     let single = SingleMode::new(col, case.mode_shapes, case.rotary_inertia)?;
     let ke = impact.kinetic_energy;
@@ -401,7 +411,7 @@ pub fn solve_column_with_impact(
     }
     match case.model {
         ColumnModel::Decoupled => decoupled(case, impact, &single, ke, warnings),
-        ColumnModel::Coupled => coupled(case, impact, &single, ke, warnings, control),
+        ColumnModel::Coupled => coupled(case, impact, law, &single, ke, warnings, control),
     }
 }
 
@@ -542,6 +552,7 @@ fn decoupled(
 fn coupled(
     case: &ColumnCase,
     impact: &ImpactResult,
+    law: ForceLaw,
     single: &SingleMode,
     ke: f64,
     mut warnings: Vec<Warning>,
@@ -592,7 +603,7 @@ fn coupled(
     let input = CoupledInput {
         rock_mass: impact.mass,
         velocity: v,
-        law: force_law_of(impact),
+        law,
         galerkin,
         column_length: col.length,
         end_time,
