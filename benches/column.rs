@@ -5,7 +5,7 @@ use std::f64::consts::{E, PI};
 use std::hint::black_box;
 use std::time::Instant;
 
-use criterion::{Criterion, criterion_group};
+use criterion::Criterion;
 use gangue::physics::Control;
 use gangue::physics::column::{
     ColumnCase, ColumnDetail, ColumnModel, HistoryRequest, solve_column_with_impact,
@@ -72,7 +72,6 @@ fn benches(c: &mut Criterion) {
     }
 }
 
-criterion_group!(group, benches);
 
 /// Largest relative error of the reported coupled quantities against a run at 1e-13.
 fn tolerance_table() {
@@ -125,7 +124,8 @@ fn tolerance_table() {
 }
 
 fn main() {
-    group();
-    Criterion::default().configure_from_args().final_summary();
+    let mut c = Criterion::default().configure_from_args();
+    benches(&mut c);
+    c.final_summary();
     tolerance_table();
 }
