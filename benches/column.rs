@@ -72,7 +72,6 @@ fn benches(c: &mut Criterion) {
     }
 }
 
-
 /// Largest relative error of the reported coupled quantities against a run at 1e-13.
 fn tolerance_table() {
     let imp = base_impact();

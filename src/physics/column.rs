@@ -294,7 +294,7 @@ fn sample_times(
     f1: f64,
     window: Option<f64>,
     max_samples: usize,
-) -> PhysicsResult<Option<Vec<f64>>> {
+) -> PhysicsResult<Option<Grid>> {
     match req {
         HistoryRequest::None => Ok(None),
         HistoryRequest::Times(t) => {
@@ -306,7 +306,7 @@ fn sample_times(
                 ));
             }
             check_times(t, window)?;
-            Ok(Some(t.clone()))
+            Ok(Some(Grid::Times(t.clone())))
         }
         HistoryRequest::Uniform { duration, samples } => {
             let d = match (duration, window) {
@@ -353,12 +353,27 @@ fn sample_times(
                     (if want.is_finite() { want.min(cap) } else { cap }).max(2.0) as usize
                 }
             };
-            let step = d / (n - 1) as f64;
-            Ok(Some(
+            Ok(Some(Grid::Uniform(d, n)))
+        }
+    }
+}
+
+/// Sample times: a list, or n evenly spaced over [0, d] (the last exactly d).
+enum Grid {
+    Times(Vec<f64>),
+    Uniform(f64, usize),
+}
+
+impl Grid {
+    fn times(self) -> Vec<f64> {
+        match self {
+            Grid::Times(t) => t,
+            Grid::Uniform(d, n) => {
+                let step = d / (n - 1) as f64;
                 (0..n)
                     .map(|k| if k + 1 == n { d } else { k as f64 * step })
-                    .collect(),
-            ))
+                    .collect()
+            }
         }
     }
 }
@@ -511,10 +526,14 @@ fn decoupled(
         });
     }
     let f1 = fv.omega_n / (2.0 * std::f64::consts::PI);
-    let history = sample_times(&case.output, f1, None, case.max_samples)?.map(|times| {
+    let samples = sample_times(&case.output, f1, None, case.max_samples)?.map(|g| match g {
+        Grid::Uniform(d, n) => fv.sample_uniform(d, n),
+        Grid::Times(t) => t.iter().map(|&t| fv.sample(t)).collect(),
+    });
+    let history = samples.map(|samples: Vec<_>| {
         let mut h = ColumnHistory::default();
-        for t in times {
-            let s = fv.sample(t);
+        for s in samples {
+            let t = s.time;
             h.time.push(t);
             h.midpoint_displacement.push(phi * s.displacement);
             h.kinetic_energy.push(s.kinetic);
@@ -589,7 +608,8 @@ fn coupled(
         Some(t) => t,
         None => 50.0 * tc,
     };
-    let mut times = sample_times(&case.output, freqs[0], Some(end_time), case.max_samples)?;
+    let mut times =
+        sample_times(&case.output, freqs[0], Some(end_time), case.max_samples)?.map(Grid::times);
     // The integrator wants ascending times; remember the caller's order.
     let order: Option<Vec<usize>> = times.as_mut().map(|t| {
         let mut idx: Vec<usize> = (0..t.len()).collect();

@@ -83,6 +83,8 @@ pub struct Dopri5 {
     ytmp: Vec<f64>,
     ynew: Vec<f64>,
     fsal_valid: bool,
+    /// Error norm of the last accepted step (PI control).
+    err_old: f64,
     /// Dense-output coefficients of the last accepted step.
     rcont: [Vec<f64>; 5],
     t_old: f64,
@@ -108,6 +110,7 @@ impl Dopri5 {
             ytmp: z(),
             ynew: z(),
             fsal_valid: false,
+            err_old: 1e-4,
             rcont: [z(), z(), z(), z(), z()],
             t_old: 0.0,
             h_old: 0.0,
@@ -260,12 +263,12 @@ impl Dopri5 {
                     }
                 }
                 Some(err) if err <= 1.0 => {
+                    // PI step control (Hairer & Wanner's DOPRI5: exponents 0.2 − 0.75β and β,
+                    // β = 0.04), which damps the accept/reject oscillation of the plain rule.
+                    let err_c = err.max(1e-10);
+                    let fac = (0.9 * err_c.powf(-0.17) * self.err_old.powf(0.04)).clamp(0.2, 10.0);
+                    self.err_old = err_c;
                     self.last_error = err;
-                    let fac = if err == 0.0 {
-                        5.0
-                    } else {
-                        (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
-                    };
                     self.accept(t, y, h);
                     self.h = h * fac;
                     return Ok(if last { t_end } else { t + h });
@@ -273,7 +276,7 @@ impl Dopri5 {
                 Some(err) => {
                     self.rejected += 1;
                     let fac = if err.is_finite() {
-                        (0.9 * err.powf(-0.2)).clamp(0.1, 0.9)
+                        (0.9 * err.powf(-0.17)).clamp(0.1, 0.9)
                     } else {
                         0.1
                     };
