@@ -8,6 +8,7 @@ pub mod control;
 pub mod error;
 pub mod lambert;
 pub mod material;
+pub mod migration;
 
 pub use control::Control;
 pub use error::{PhysicsError, PhysicsResult};
