@@ -480,7 +480,7 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
                 ));
             }
             let along_at = |x: f64| -> Option<f64> {
-                let f = floor.locate(x, y, 1.0, 0.0)?;
+                let f = floor.locate(x, y, 0.0, 0.0)?;
                 let z = floor.facet_plane(f).z(x, y);
                 Some(mean.along(&Vector3::new(x, y, z)))
             };
@@ -508,7 +508,8 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
                 }
             }
             let x = if along_at(hi).is_some_and(|a| a == rel.along_dip) { hi } else { lo };
-            (x, floor.locate(x, y, 1.0, 0.0).ok_or_else(off)?)
+            let f = floor.locate(x, y, 1.0, 0.0).or_else(|| floor.locate(x, y, 0.0, 0.0));
+            (x, f.ok_or_else(off)?)
         }
     };
     let pl = floor.facet_plane(facet);

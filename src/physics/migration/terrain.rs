@@ -260,6 +260,7 @@ pub(crate) struct MeshFloor {
     cells: CellGrid,
     bucket_start: Vec<u32>,
     bucket_items: Vec<u32>,
+    bbox: [f64; 4],
 }
 
 const NONE: u32 = u32::MAX;
@@ -636,6 +637,7 @@ impl Floor {
                 cells,
                 bucket_start: counts,
                 bucket_items: items,
+                bbox: [lo[0], hi[0], lo[1], hi[1]],
             }),
             mean: MeanPlane {
                 x0: x_min,
@@ -667,9 +669,10 @@ impl Floor {
                 f64::NEG_INFINITY,
                 f64::INFINITY,
             ],
-            FloorKind::Grid(GridFloor { cells, .. }) | FloorKind::Mesh(MeshFloor { cells, .. }) => {
+            FloorKind::Grid(GridFloor { cells, .. }) => {
                 [cells.x0, cells.x_max(), cells.y0, cells.y_max()]
             }
+            FloorKind::Mesh(m) => m.bbox,
         }
     }
 
