@@ -146,6 +146,14 @@ impl CellGrid {
 
     /// Cell index along one axis for coordinate u (in cells) moving with rate r, or None outside.
     fn axis_cell(u: f64, r: f64, n: usize) -> Option<usize> {
+        // points a rounding error outside the extent count as on its boundary
+        let u = if u < 0.0 && u > -1e-9 {
+            0.0
+        } else if u > n as f64 && u < n as f64 + 1e-9 {
+            n as f64
+        } else {
+            u
+        };
         if !(u >= 0.0 && u <= n as f64) {
             return None;
         }
