@@ -31,7 +31,11 @@ fn case_by_id(id: &str) -> Value {
 }
 
 fn rel(a: f64, b: f64) -> f64 {
-    if b == 0.0 { a.abs() } else { ((a - b) / b).abs() }
+    if b == 0.0 {
+        a.abs()
+    } else {
+        ((a - b) / b).abs()
+    }
 }
 
 fn solve(c: &MigrationCase) -> MigrationResult {
@@ -67,7 +71,10 @@ fn check_expected(case: &Value, r: &MigrationResult) {
             Value::String(s) if s == "exact" => assert_eq!(got, want, "{p}"),
             t => {
                 let tol = t["abs"].as_f64().unwrap() + t["rel"].as_f64().unwrap() * want.abs();
-                assert!((got - want).abs() <= tol, "{p}: got {got}, want {want} ± {tol}");
+                assert!(
+                    (got - want).abs() <= tol,
+                    "{p}: got {got}, want {want} ± {tol}"
+                );
             }
         }
     }
@@ -86,7 +93,12 @@ fn p10_etm_deterministic() {
     // three impacts and one slide start among the events
     let ev = r.events.as_ref().unwrap();
     assert_eq!(ev.iter().filter(|e| e.kind == EventKind::Impact).count(), 3);
-    assert_eq!(ev.iter().filter(|e| e.kind == EventKind::SlideStart).count(), 1);
+    assert_eq!(
+        ev.iter()
+            .filter(|e| e.kind == EventKind::SlideStart)
+            .count(),
+        1
+    );
     let lost: f64 = ev.iter().map(|e| e.energy_lost).sum();
     assert!(rel(lost, r.energy.impacts + r.energy.transition) < 1e-12);
 }
@@ -142,7 +154,12 @@ fn p09_analytic_numbers_through_the_solver() {
     let r = solve(&roll);
     assert!(rel(r.arrival.speed, x("roll_full_face_v")) < 1e-9);
     assert!(rel(r.arrival.speed.powi(2) / 240.0, x("a_roll_sphere")) < 1e-9);
-    assert!(rel(r.arrival.kinetic_energy, 0.7 * r.mass * r.arrival.speed.powi(2)) < 1e-12);
+    assert!(
+        rel(
+            r.arrival.kinetic_energy,
+            0.7 * r.mass * r.arrival.speed.powi(2)
+        ) < 1e-12
+    );
     assert_eq!(r.arrival.phase, Phase::Roll);
     // free fall of 3.27 m: the first impact event
     let r = solve(&MigrationCase::default());
@@ -202,7 +219,10 @@ fn projectile_flight(vx0: f64, vy0: f64) -> (f64, f64, f64, f64) {
 /// pinned here; regenerate with `echo '{…}' | python3 reference.py -`).
 #[test]
 fn random_cases_against_reference_etm() {
-    let Ok(out) = std::process::Command::new("python3").arg("--version").output() else {
+    let Ok(out) = std::process::Command::new("python3")
+        .arg("--version")
+        .output()
+    else {
         eprintln!("python3 not available: skipped");
         return;
     };
@@ -224,7 +244,11 @@ fn random_cases_against_reference_etm() {
         let dip = 5.0 + 75.0 * u();
         let tan = dip.to_radians().tan();
         let roll = u() < 0.3;
-        let mu = if roll { 2.0 / 7.0 * tan + 0.5 * u() } else { 1.2 * u() };
+        let mu = if roll {
+            2.0 / 7.0 * tan + 0.5 * u()
+        } else {
+            1.2 * u()
+        };
         let s_len = 1.0 + 300.0 * u();
         let h = 0.05 + 20.0 * u();
         let (en, et, vs) = (u(), u(), 0.05 + 2.0 * u());
@@ -256,7 +280,11 @@ fn random_cases_against_reference_etm() {
         case.lumped_mass.motion = if roll { Motion::Roll } else { Motion::Slide };
         let r = solve(&case);
         let ctx = format!("{req} -> {o}");
-        assert_eq!(r.impact_count as f64, o["n_impacts"].as_f64().unwrap(), "{ctx}");
+        assert_eq!(
+            r.impact_count as f64,
+            o["n_impacts"].as_f64().unwrap(),
+            "{ctx}"
+        );
         let phase = o["phase"].as_str().unwrap();
         let want_phase = match r.arrival.phase {
             Phase::Flight => "flight",
@@ -267,24 +295,50 @@ fn random_cases_against_reference_etm() {
         assert_eq!(phase, want_phase, "{ctx}");
         let tol = 1e-9;
         let close = |a: f64, b: f64, what: &str| {
-            assert!((a - b).abs() <= tol * b.abs().max(1e-6), "{what}: {a} vs {b}; {ctx}")
+            assert!(
+                (a - b).abs() <= tol * b.abs().max(1e-6),
+                "{what}: {a} vs {b}; {ctx}"
+            )
         };
         if phase == "stopped" {
-            close(r.stop_along_dip.unwrap(), o["x_stop"].as_f64().unwrap(), "x_stop");
+            close(
+                r.stop_along_dip.unwrap(),
+                o["x_stop"].as_f64().unwrap(),
+                "x_stop",
+            );
             close(r.arrival.time, o["t"].as_f64().unwrap(), "t");
         } else {
             close(r.arrival.time, o["t"].as_f64().unwrap(), "t");
             close(r.arrival.speed, o["speed"].as_f64().unwrap(), "speed");
-            close(r.arrival.kinetic_energy, o["KE_end"].as_f64().unwrap(), "KE_end");
+            close(
+                r.arrival.kinetic_energy,
+                o["KE_end"].as_f64().unwrap(),
+                "KE_end",
+            );
         }
-        close(r.energy.impacts, o["E_impacts"].as_f64().unwrap(), "E_impacts");
+        close(
+            r.energy.impacts,
+            o["E_impacts"].as_f64().unwrap(),
+            "E_impacts",
+        );
         if o["E_friction"].as_f64().unwrap() > 0.0 {
-            close(r.energy.friction, o["E_friction"].as_f64().unwrap(), "E_friction");
+            close(
+                r.energy.friction,
+                o["E_friction"].as_f64().unwrap(),
+                "E_friction",
+            );
         }
         if o["E_transition"].as_f64().unwrap() > 1e-9 {
-            close(r.energy.transition, o["E_transition"].as_f64().unwrap(), "E_transition");
+            close(
+                r.energy.transition,
+                o["E_transition"].as_f64().unwrap(),
+                "E_transition",
+            );
         }
-        assert!(r.energy.residual.abs() <= 1e-9 * r.energy.total_start, "{ctx}");
+        assert!(
+            r.energy.residual.abs() <= 1e-9 * r.energy.total_start,
+            "{ctx}"
+        );
     }
 }
 
@@ -302,7 +356,10 @@ fn plane_grid(dip_deg: f64, d: f64, x0: f64, y0: f64, nx: usize, ny: usize) -> F
 
 fn assert_same(a: &MigrationResult, b: &MigrationResult, tol: f64) {
     let close = |x: f64, y: f64, what: &str| {
-        assert!((x - y).abs() <= tol * y.abs().max(1.0), "{what}: {x} vs {y}")
+        assert!(
+            (x - y).abs() <= tol * y.abs().max(1.0),
+            "{what}: {x} vs {y}"
+        )
     };
     assert_eq!(a.impact_count, b.impact_count);
     assert_eq!(a.arrival.phase, b.arrival.phase);
@@ -348,7 +405,14 @@ fn plane_equivalent_grid_reproduces_the_plane() {
         let a = solve(&plane);
         let mut grid = plane.clone();
         let xlen = 121.0 * dip.to_radians().cos() + 2.0;
-        grid.face.floor = plane_grid(dip, d, 0.0, -5.0, (xlen / d) as usize + 2, (10.0 / d) as usize + 2);
+        grid.face.floor = plane_grid(
+            dip,
+            d,
+            0.0,
+            -5.0,
+            (xlen / d) as usize + 2,
+            (10.0 / d) as usize + 2,
+        );
         let b = solve(&grid);
         assert_same(&b, &a, 1e-9);
     }
@@ -453,7 +517,10 @@ fn trajectory_samples_balance_energy() {
     assert_eq!(n, (r.arrival.time / 0.001).floor() as usize + 2);
     for k in 0..n {
         let e = tr.kinetic_energy[k] + tr.potential_energy[k] + tr.dissipated_energy[k];
-        assert!((e - r.energy.total_start).abs() < 1e-9 * r.energy.total_start, "sample {k}");
+        assert!(
+            (e - r.energy.total_start).abs() < 1e-9 * r.energy.total_start,
+            "sample {k}"
+        );
         assert!(tr.height[k] >= -1e-9);
     }
     // free fall: z(t) = h − ½ g t² before the first impact
@@ -483,7 +550,10 @@ fn ensemble_is_thread_count_independent() {
                 min: 0.0,
                 max: 1.0,
             }),
-            restitution_normal: Distribution::Normal { mean: 0.3, std: 0.1 },
+            restitution_normal: Distribution::Normal {
+                mean: 0.3,
+                std: 0.1,
+            },
             ..MonteCarlo::default()
         }),
         output: gangue::physics::migration::OutputOptions {
@@ -492,7 +562,12 @@ fn ensemble_is_thread_count_independent() {
         },
         ..MigrationCase::default()
     };
-    let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+    let pool = |n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+    };
     let a = pool(1).install(|| solve(&case));
     let b = pool(2).install(|| solve(&case));
     assert_eq!(a, b);

@@ -16,7 +16,7 @@
 
 use nalgebra::Vector3;
 
-use super::terrain::{Facet, Floor, FlightEnd};
+use super::terrain::{Facet, FlightEnd, Floor};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
 
@@ -164,6 +164,85 @@ struct St {
     e_trans: f64,
     spin: (f64, Vector3<f64>),
     undecelerated: bool,
+    crease: Option<Crease>,
+}
+
+/// A concave edge (V-shaped crease) that holds the rock: it slides along the edge line.
+#[derive(Debug, Clone, Copy)]
+struct Crease {
+    /// Edge end points (3-D).
+    ends: [Vector3<f64>; 2],
+    /// Unit direction from ends[0] to ends[1].
+    e: Vector3<f64>,
+    /// Total normal force per kg of the two faces, N_A + N_B.
+    n_tot: f64,
+}
+
+/// Largest time, s, for the rock to ride up the far face of a concave edge and come back, below
+/// which it is taken to slide along the edge (the alternative is an endless zig-zag across it).
+const CREASE_RETURN_TIME: f64 = 1e-4;
+
+/// The crease at the concave edge `ends` between facets with normals na (the one the rock
+/// comes from) and nb, when both faces slope down towards the edge and the rock, moving into b
+/// with in-plane speed w across the edge, would come back within [`CREASE_RETURN_TIME`].
+fn crease_of(
+    ends: [Vector3<f64>; 2],
+    na: &Vector3<f64>,
+    nb: &Vector3<f64>,
+    out_a: &Vector3<f64>,
+    v: &Vector3<f64>,
+    g: f64,
+) -> Option<Crease> {
+    let e = (ends[1] - ends[0]).try_normalize(0.0)?;
+    let kink = na.cross(nb).dot(&e);
+    if kink.abs() < 1e-6 {
+        return None;
+    }
+    let gv = Vector3::new(0.0, 0.0, -g);
+    let mut mb = nb.cross(&e);
+    if mb.dot(out_a) < 0.0 {
+        mb = -mb;
+    }
+    let mut ma = na.cross(&e);
+    if ma.dot(out_a) > 0.0 {
+        ma = -ma;
+    }
+    let gb = gv.dot(&mb); // gravity along b, away from the edge
+    let ga = gv.dot(&ma); // gravity along a, away from the edge
+    if !(gb < -1e-9 * g && ga < -1e-9 * g) {
+        return None;
+    }
+    let w = v.dot(&mb).max(0.0);
+    if 2.0 * w / -gb > CREASE_RETURN_TIME {
+        return None;
+    }
+    // N_A n_A + N_B n_B = −g_⊥ in the plane normal to e
+    let gp = gv - e * gv.dot(&e);
+    let n_a = -(gp.cross(nb)).dot(&e) / kink;
+    let n_b = -(na.cross(&gp)).dot(&e) / kink;
+    Some(Crease {
+        ends,
+        e,
+        n_tot: n_a.max(0.0) + n_b.max(0.0),
+    })
+}
+
+/// Moves the rock to height `z` (a rounding-level correction onto a facet or edge) and keeps
+/// KE + PE unchanged by rescaling the speed; what the kinetic energy cannot cover is booked as a
+/// (signed) transition term, so the balance stays exact.
+fn set_height(s: &mut St, z: f64, g: f64, ke_factor: f64) {
+    let dpe = g * (z - s.p.z);
+    s.p.z = z;
+    if dpe == 0.0 {
+        return;
+    }
+    let ke = 0.5 * ke_factor * s.v.norm_squared();
+    if ke > 0.0 && ke >= dpe {
+        s.v *= ((ke - dpe) / ke).sqrt();
+    } else {
+        s.e_trans -= dpe - ke;
+        s.v = Vector3::zeros();
+    }
 }
 
 /// Smallest positive root of ½ c t² + b t − s = 0 (s > 0), or +∞.
@@ -215,6 +294,7 @@ pub(crate) fn simulate(
         e_trans: 0.0,
         spin: (0.0, Vector3::zeros()),
         undecelerated: false,
+        crease: None,
     };
     let push_event = |rec: &mut Option<&mut Recording>, ev: EventRec| {
         if let Some(r) = rec.as_deref_mut() {
@@ -319,13 +399,15 @@ pub(crate) fn simulate(
                     FlightEnd::Hit { facet, .. } => {
                         let pl = floor.facet_plane(facet);
                         let n = pl.normal();
-                        s.p.z = pl.z(s.p.x, s.p.y);
+                        let z = pl.z(s.p.x, s.p.y);
+                        set_height(&mut s, z, g, 1.0);
                         let vn = s.v.dot(&n);
                         let vt = s.v - n * vn;
                         let (en, et) = draw();
                         s.impacts += 1;
                         let speed_before = s.v.norm();
-                        let lost = 0.5 * ((1.0 - en * en) * vn * vn + (1.0 - et * et) * vt.norm_squared())
+                        let lost = 0.5
+                            * ((1.0 - en * en) * vn * vn + (1.0 - et * et) * vt.norm_squared())
                             + s.spin.0;
                         s.e_imp += lost;
                         s.spin = (0.0, Vector3::zeros());
@@ -358,6 +440,111 @@ pub(crate) fn simulate(
                             s.max_bounce = s.max_bounce.max(r * r / (2.0 * g * n.z));
                         }
                     }
+                }
+            }
+            Some(_) if s.crease.is_some() => {
+                let c = s.crease.expect("checked");
+                let ve = s.v.dot(&c.e);
+                let ge = gv.dot(&c.e);
+                let (ae, dir) = if roll {
+                    (ge * (5.0 / 7.0), 0.0)
+                } else {
+                    let dir = if ve.abs() <= REST_SPEED {
+                        s.e_fric += 0.5 * s.v.norm_squared();
+                        s.v = Vector3::zeros();
+                        if ge.abs() <= mu * c.n_tot * (1.0 + 1e-12) || ge.abs() <= 1e-12 * g {
+                            break (Phase::Stopped, StopReason::AtRest);
+                        }
+                        ge.signum()
+                    } else {
+                        ve.signum()
+                    };
+                    (ge - dir * mu * c.n_tot, dir)
+                };
+                let ve = s.v.dot(&c.e);
+                let t_s = reach_time(s_left, ve * c.e.dot(&dip), ae * c.e.dot(&dip));
+                let mut t_max = t_s.min(t_left);
+                let mut stop_at = f64::INFINITY;
+                if !roll && ae * dir < 0.0 {
+                    stop_at = ve.abs() / ae.abs();
+                }
+                t_max = t_max.min(stop_at);
+                let u0 = (s.p - c.ends[0]).dot(&c.e);
+                let len = (c.ends[1] - c.ends[0]).dot(&c.e);
+                let t_end_edge = super::terrain::outward_root(u0 - len, ve, ae)
+                    .into_iter()
+                    .chain(super::terrain::outward_root(-u0, -ve, -ae))
+                    .fold(f64::INFINITY, f64::min);
+                let at_vertex = t_end_edge <= t_max;
+                let dt = if at_vertex { t_end_edge } else { t_max };
+                let du = ve * dt + 0.5 * ae * dt * dt;
+                s.undecelerated = ae * ve >= 0.0;
+                if let Some(r) = rec.as_deref_mut() {
+                    r.segments.push(Segment {
+                        t0: s.t,
+                        dt,
+                        p0: s.p,
+                        v0: c.e * ve,
+                        a: c.e * ae,
+                        fric: c.e * (dir * mu * c.n_tot),
+                        diss0,
+                        rolling: None,
+                        spin: (0.0, Vector3::zeros()),
+                    });
+                }
+                s.p += c.e * du;
+                s.v = c.e * (ve + ae * dt);
+                s.t += dt;
+                if !roll {
+                    s.e_fric += dir * mu * c.n_tot * du;
+                }
+                if at_vertex {
+                    s.crease = None;
+                    let d3 = if s.v.norm() > 0.0 { s.v } else { c.e * ae };
+                    match floor.locate(s.p.x, s.p.y, d3.x, d3.y) {
+                        None => break (moving, StopReason::LeftFloor),
+                        Some(fb) => {
+                            let plb = floor.facet_plane(fb);
+                            let nb = plb.normal();
+                            let z = plb.z(s.p.x, s.p.y);
+                            set_height(&mut s, z, g, ke_factor);
+                            let vn = s.v.dot(&nb);
+                            let sp = s.v.norm();
+                            if vn > 1e-9 * sp + 1e-12 {
+                                s.ground = None;
+                                if roll {
+                                    s.spin = (0.2 * sp * sp, nb.cross(&s.v) / su.radius);
+                                }
+                                push_event(
+                                    &mut rec,
+                                    EventRec {
+                                        t: s.t,
+                                        kind: EventKind::TakeOff,
+                                        p: s.p,
+                                        speed_before: sp,
+                                        speed_after: sp,
+                                        lost: 0.0,
+                                    },
+                                );
+                            } else {
+                                let vp = s.v - nb * vn;
+                                s.e_trans += 0.5 * ke_factor * (sp * sp - vp.norm_squared());
+                                s.v = vp;
+                                s.ground = Some(fb);
+                            }
+                        }
+                    }
+                    continue;
+                }
+                if dt == t_s && t_s <= t_left {
+                    break (moving, StopReason::LowerEnd);
+                }
+                if dt == t_left {
+                    break (moving, StopReason::EndTime);
+                }
+                if dt == stop_at {
+                    s.e_fric += 0.5 * s.v.norm_squared();
+                    s.v = Vector3::zeros();
                 }
             }
             Some(f) => {
@@ -433,13 +620,14 @@ pub(crate) fn simulate(
                 } else {
                     zero_steps = 0;
                 }
-                if let Some((_, next)) = exit {
+                if let Some((_, next, edge)) = exit {
                     let Some(fb) = next else {
                         break (moving, StopReason::LeftFloor);
                     };
                     let plb = floor.facet_plane(fb);
                     let nb = plb.normal();
-                    s.p.z = plb.z(s.p.x, s.p.y);
+                    let z = plb.z(s.p.x, s.p.y);
+                    set_height(&mut s, z, g, ke_factor);
                     let vn = s.v.dot(&nb);
                     let sp = s.v.norm();
                     if vn > 1e-9 * sp + 1e-12 {
@@ -464,6 +652,22 @@ pub(crate) fn simulate(
                         s.e_trans += 0.5 * ke_factor * (sp * sp - vp.norm_squared());
                         s.v = vp;
                         s.ground = Some(fb);
+                        let ends = edge.map(|q| Vector3::new(q[0], q[1], plb.z(q[0], q[1])));
+                        let d = ends[1] - ends[0];
+                        let out_a = Vector3::new(d.y, -d.x, 0.0);
+                        if let Some(c) = crease_of(ends, &n, &nb, &out_a, &s.v, g) {
+                            let ve = s.v.dot(&c.e);
+                            let before = s.v.norm_squared();
+                            s.v = c.e * ve;
+                            s.e_trans += 0.5 * ke_factor * (before - ve * ve);
+                            // on the edge line through the crossing point
+                            let u = (s.p - c.ends[0]).dot(&c.e);
+                            let q = c.ends[0] + c.e * u;
+                            s.p.x = q.x;
+                            s.p.y = q.y;
+                            set_height(&mut s, q.z, g, ke_factor);
+                            s.crease = Some(c);
+                        }
                     }
                     if zero_steps > 16 {
                         // stuck on a vertex by rounding: move a hair along the motion
@@ -480,7 +684,8 @@ pub(crate) fn simulate(
                                 if s.ground.is_some() {
                                     s.ground = Some(fc);
                                 }
-                                s.p.z = floor.facet_plane(fc).z(s.p.x, s.p.y);
+                                let z = floor.facet_plane(fc).z(s.p.x, s.p.y);
+                                set_height(&mut s, z, g, ke_factor);
                             }
                             None => break (moving, StopReason::LeftFloor),
                         }

@@ -476,7 +476,10 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
                 return Err(PhysicsError::invalid(
                     "/release/across_m",
                     y,
-                    format!("the release must be over the floor: y in [{}, {}] m", ext[2], ext[3]),
+                    format!(
+                        "the release must be over the floor: y in [{}, {}] m",
+                        ext[2], ext[3]
+                    ),
                 ));
             }
             let along_at = |x: f64| -> Option<f64> {
@@ -507,8 +510,14 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
                     None => return Err(off()),
                 }
             }
-            let x = if along_at(hi).is_some_and(|a| a == rel.along_dip) { hi } else { lo };
-            let f = floor.locate(x, y, 1.0, 0.0).or_else(|| floor.locate(x, y, 0.0, 0.0));
+            let x = if along_at(hi).is_some_and(|a| a == rel.along_dip) {
+                hi
+            } else {
+                lo
+            };
+            let f = floor
+                .locate(x, y, 1.0, 0.0)
+                .or_else(|| floor.locate(x, y, 0.0, 0.0));
             (x, f.ok_or_else(off)?)
         }
     };
@@ -773,12 +782,32 @@ fn sample_trajectory(
                 let v = s.v0 + s.a * tau;
                 let diss = s.diss0 + s.fric.dot(&(p - s.p0));
                 let (rot, om) = match s.rolling {
-                    Some(nrm) => (0.2 * v.norm_squared(), nrm.cross(&v) / roll_radius(&case.rock)),
+                    Some(nrm) => (
+                        0.2 * v.norm_squared(),
+                        nrm.cross(&v) / roll_radius(&case.rock),
+                    ),
                     None => s.spin,
                 };
-                (p, v, diss, rot, om, s.fric != Vector3::zeros() || s.rolling.is_some() || s.a.x != 0.0 || s.a.y != 0.0)
+                (
+                    p,
+                    v,
+                    diss,
+                    rot,
+                    om,
+                    s.fric != Vector3::zeros()
+                        || s.rolling.is_some()
+                        || s.a.x != 0.0
+                        || s.a.y != 0.0,
+                )
             }
-            None => (out.p, out.v, out.e_imp + out.e_fric + out.e_trans, out.e_rot, out.omega, true),
+            None => (
+                out.p,
+                out.v,
+                out.e_imp + out.e_fric + out.e_trans,
+                out.e_rot,
+                out.omega,
+                true,
+            ),
         };
         let (p, v, diss, rot, omega) = if i + 1 == n {
             (

@@ -138,15 +138,29 @@ mod tests {
         let mut rng = run_stream(1, 2);
         let n = 200_000;
         for (d, m, sd) in [
-            (Distribution::Uniform { min: 0.2, max: 0.4 }, 0.3, 0.2 / 12f64.sqrt()),
-            (Distribution::Normal { mean: 1.0, std: 0.5 }, 1.0, 0.5),
+            (
+                Distribution::Uniform { min: 0.2, max: 0.4 },
+                0.3,
+                0.2 / 12f64.sqrt(),
+            ),
+            (
+                Distribution::Normal {
+                    mean: 1.0,
+                    std: 0.5,
+                },
+                1.0,
+                0.5,
+            ),
         ] {
             let xs: Vec<f64> = (0..n).map(|_| sample(&d, &mut rng)).collect();
             let mean = xs.iter().sum::<f64>() / n as f64;
             let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
             // 5 standard errors
             assert!((mean - m).abs() < 5.0 * sd / (n as f64).sqrt(), "{mean}");
-            assert!((var.sqrt() - sd).abs() < 5.0 * sd / (2.0 * n as f64).sqrt(), "{var}");
+            assert!(
+                (var.sqrt() - sd).abs() < 5.0 * sd / (2.0 * n as f64).sqrt(),
+                "{var}"
+            );
         }
         let d = Distribution::TruncatedNormal {
             mean: 0.2,

@@ -325,7 +325,10 @@ impl GridFloor {
         let d = self.cells.d;
         let x = self.cells.x0 + j as f64 * d;
         let y = self.cells.y0 + i as f64 * d;
-        let (xe, ye) = (self.cells.x0 + (j + 1) as f64 * d, self.cells.y0 + (i + 1) as f64 * d);
+        let (xe, ye) = (
+            self.cells.x0 + (j + 1) as f64 * d,
+            self.cells.y0 + (i + 1) as f64 * d,
+        );
         let z00 = self.z[i * self.nx + j];
         let z10 = self.z[i * self.nx + j + 1];
         let z01 = self.z[(i + 1) * self.nx + j];
@@ -496,7 +499,11 @@ impl Floor {
 
     /// Contours resampled at most `resolution` apart and Delaunay-triangulated; the mean plane
     /// starts at the smallest x of all points, at the height of that point.
-    pub(crate) fn contours(dip: f64, lines: &[ContourLine], resolution: f64) -> PhysicsResult<Self> {
+    pub(crate) fn contours(
+        dip: f64,
+        lines: &[ContourLine],
+        resolution: f64,
+    ) -> PhysicsResult<Self> {
         let mut pts: Vec<HPoint> = Vec::new();
         for (c, line) in lines.iter().enumerate() {
             for (k, p) in line.points.iter().enumerate() {
@@ -541,9 +548,13 @@ impl Floor {
                 z_at_min = p.z;
             }
         }
-        let tri: DelaunayTriangulation<HPoint> = DelaunayTriangulation::bulk_load(pts)
-            .map_err(|e| {
-                PhysicsError::invalid("/face/floor/contours", 0.0, format!("cannot triangulate: {e}"))
+        let tri: DelaunayTriangulation<HPoint> =
+            DelaunayTriangulation::bulk_load(pts).map_err(|e| {
+                PhysicsError::invalid(
+                    "/face/floor/contours",
+                    0.0,
+                    format!("cannot triangulate: {e}"),
+                )
             })?;
         let n_all = tri.num_all_faces();
         let mut xyz = Vec::with_capacity(tri.num_vertices());
@@ -695,7 +706,11 @@ impl Floor {
                 let ci = CellGrid::axis_cell(ux, dx, c.ncx)?;
                 let cj = CellGrid::axis_cell(uy, dy, c.ncy)?;
                 let (fx, fy) = (ux - ci as f64, uy - cj as f64);
-                let half = if fx > fy || (fx == fy && dx > dy) { 0 } else { 1 };
+                let half = if fx > fy || (fx == fy && dx > dy) {
+                    0
+                } else {
+                    1
+                };
                 Some(g.facet(ci, cj, half))
             }
             FloorKind::Mesh(m) => {
@@ -728,7 +743,13 @@ impl Floor {
     }
 
     /// First strike of the parabola p + v t + ½ (0, 0, −g) t² on the floor within t ≤ t_max.
-    pub(crate) fn flight(&self, p: &Vector3<f64>, v: &Vector3<f64>, g: f64, t_max: f64) -> FlightEnd {
+    pub(crate) fn flight(
+        &self,
+        p: &Vector3<f64>,
+        v: &Vector3<f64>,
+        g: f64,
+        t_max: f64,
+    ) -> FlightEnd {
         let root = |pl: &FacetPlane| -> Option<f64> {
             let b = pl.height_rate(v);
             let r = descent_root(pl.height(p), b, g)?;
@@ -785,7 +806,8 @@ impl Floor {
     }
 
     /// First exit of the planar motion p + v t + ½ a t² from facet f through one of its edges
-    /// within t ≤ t_max: the time and the facet across that edge (None: off the floor).
+    /// within t ≤ t_max: the time, the facet across that edge (None: off the floor) and the
+    /// edge's end points in plan.
     pub(crate) fn slide_exit(
         &self,
         f: Facet,
@@ -793,7 +815,7 @@ impl Floor {
         v: &Vector3<f64>,
         a: &Vector3<f64>,
         t_max: f64,
-    ) -> Option<(f64, Option<Facet>)> {
+    ) -> Option<(f64, Option<Facet>, [[f64; 2]; 2])> {
         let (corners, neighbor): ([[f64; 2]; 3], Box<dyn Fn(usize) -> Option<Facet> + '_>) =
             match &self.kind {
                 FloorKind::Plane(_) => return None,
@@ -821,13 +843,13 @@ impl Floor {
                 best = Some((t, k));
             }
         }
-        best.map(|(t, k)| (t, neighbor(k)))
+        best.map(|(t, k)| (t, neighbor(k), [corners[k], corners[(k + 1) % 3]]))
     }
 }
 
 /// Smallest t ≥ 0 where f0 + f1 t + ½ f2 t² reaches 0 while increasing (leaving the half-plane
 /// f ≤ 0); t = 0 when already on or past the line and moving out.
-fn outward_root(f0: f64, f1: f64, f2: f64) -> Option<f64> {
+pub(crate) fn outward_root(f0: f64, f1: f64, f2: f64) -> Option<f64> {
     if f0 >= 0.0 && (f1 > 0.0 || (f1 == 0.0 && f2 > 0.0)) {
         return Some(0.0);
     }
@@ -849,7 +871,9 @@ fn outward_root(f0: f64, f1: f64, f2: f64) -> Option<f64> {
     roots
         .into_iter()
         .filter(|&r| r > 0.0 && f1 + f2 * r > 0.0)
-        .fold(None, |acc: Option<f64>, r| Some(acc.map_or(r, |b| b.min(r))))
+        .fold(None, |acc: Option<f64>, r| {
+            Some(acc.map_or(r, |b| b.min(r)))
+        })
 }
 
 #[cfg(test)]
@@ -881,7 +905,11 @@ mod tests {
     fn grid_plane_matches_heights() {
         let d = 0.5;
         let h: Vec<Vec<f64>> = (0..3)
-            .map(|i| (0..4).map(|j| 1.0 + 0.2 * j as f64 * d - 0.1 * i as f64 * d).collect())
+            .map(|i| {
+                (0..4)
+                    .map(|j| 1.0 + 0.2 * j as f64 * d - 0.1 * i as f64 * d)
+                    .collect()
+            })
             .collect();
         let f = Floor::grid(0.5, [2.0, -1.0], d, &h).unwrap();
         let id = f.locate(2.7, -0.6, 0.0, 0.0).unwrap();
