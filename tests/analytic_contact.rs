@@ -2,6 +2,8 @@
 //! a direct integration of m δ″ = −P(δ), the energy balance by quadrature, and the 50-digit
 //! reference implementation (reference.py, run through python3 + mpmath).
 
+#![allow(clippy::field_reassign_with_default)] // cases read as "the default, except …"
+
 mod common_oracle;
 
 use std::f64::consts::{E, PI};
