@@ -42,7 +42,8 @@ pub enum ImpactDetail {
 /// Maxima of a logarithmic line-contact impact (physics.md §A.5).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineImpact {
-    /// Dimensionless energy parameter G ∈ (0, 1].
+    /// Dimensionless energy parameter G ∈ [0, 1] (rounded; 0 or subnormal only when the true G is
+    /// below the f64 range, v ≲ 1e-140 — W, δ and P are then computed from ln G).
     pub energy_parameter: f64,
     /// W = W₋₁(−G/e) = −1 − u.
     pub lambert_w: f64,
