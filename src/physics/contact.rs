@@ -42,7 +42,8 @@ pub enum ImpactDetail {
 /// Maxima of a logarithmic line-contact impact (physics.md §A.5).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineImpact {
-    /// Dimensionless energy parameter G ∈ (0, 1].
+    /// Dimensionless energy parameter G ∈ [0, 1] (rounded; 0 or subnormal only when the true G is
+    /// below the f64 range, v ≲ 1e-140 — W, δ and P are then computed from ln G).
     pub energy_parameter: f64,
     /// W = W₋₁(−G/e) = −1 − u.
     pub lambert_w: f64,
@@ -107,6 +108,7 @@ pub enum ForceLaw {
 /// Full precision from mpmath (`4/5*beta(2/5, 1/2)` at 40 digits). physics.md §A.7 prints the
 /// value as 2.9432372…, a transposition: the Beta function, the reference and case P04 all give
 /// 2.9432751843….
+#[allow(clippy::excessive_precision)] // mpmath digits kept as computed
 pub const HERTZ_DURATION_FACTOR: f64 = 2.943_275_184_324_704_657_381_787_300_083;
 
 /// Relative error goal of the contact-duration quadrature (physics.md §A.6 asks for 1e-10).
@@ -123,7 +125,7 @@ struct Dd {
 }
 
 const DD_PI: Dd = Dd {
-    hi: 3.141_592_653_589_793,
+    hi: PI,
     lo: 1.224_646_799_147_353_2e-16,
 };
 const DD_E4: Dd = Dd {
@@ -420,7 +422,8 @@ fn solve_log(case: &ImpactCase, e_star: Dd) -> PhysicsResult<LogSolution> {
 ///   linear-spring limit is not reached, but the caller never passes it).
 ///
 /// # References
-/// physics.md §A.6 (parametrisation E(P) = ½mv² sin²θ; breakpoints 1e-6, 1e-3, 0.1).
+/// physics.md §A.6 (parametrisation E(P) = ½mv² sin²θ). Instead of the breakpoints 1e-6,
+/// 1e-3 near θ = 0 the piece (0, 0.1] is integrated in σ = −ln θ, where it is smooth.
 pub fn line_duration_integral(u0: f64) -> Integral {
     if !(u0 >= 0.0 && u0.is_finite()) {
         return Integral {
@@ -434,6 +437,7 @@ pub fn line_duration_integral(u0: f64) -> Integral {
     let y0 = u_minus_ln1p(u0);
     let q0 = -(-y0).exp_m1(); // 1 − G, accurate near G = 1
     let g = 1.0 - q0;
+    let a = 1.0 + u0;
     let f = |theta: f64| {
         let (sin, cos) = theta.sin_cos();
         let c2 = cos * cos;
@@ -442,13 +446,44 @@ pub fn line_duration_integral(u0: f64) -> Integral {
         } else {
             2.0 * sin.ln()
         };
-        let y = y0 - ln_s2;
-        let q = q0 + g * c2;
-        let u = if y > 0.0 { branch_u_parts(q, y) } else { 0.0 };
-        sin * (0.5 * (u - u0)).exp()
+        let du = if u0 < 64.0 {
+            let y = y0 - ln_s2;
+            let q = q0 + g * c2;
+            let u = if y > 0.0 { branch_u_parts(q, y) } else { 0.0 };
+            u - u0
+        } else {
+            // Large u₀ (G ≲ 1e-26): u(G sin²θ) − u₀ = Δ solves Δ − ln(1 + Δ/(1 + u₀)) = −ln sin²θ,
+            // well conditioned (slope ≥ 64/65), instead of a difference of two large numbers.
+            let c = -ln_s2;
+            let mut d = c + (c / a).ln_1p();
+            for _ in 0..20 {
+                let step = (d - (d / a).ln_1p() - c) * (a + d) / (u0 + d);
+                d -= step;
+                if step.abs() <= 1e-16 * d {
+                    break;
+                }
+            }
+            d
+        };
+        sin * (0.5 * du).exp()
     };
-    let mut points = [0.0, 1e-6, 1e-3, 0.1, 0.0, 0.0, FRAC_PI_2];
-    let mut n = 4;
+    let options = QuadOptions {
+        abs_tol: 0.0,
+        rel_tol: DURATION_REL_TOL,
+        max_intervals: 1000,
+    };
+    // θ ∈ (0, 0.1]: θ = e^{−σ} turns the √ln singularity at 0 into a smooth, exponentially
+    // decaying integrand on σ ∈ [ln 10, 40] (the rest is below 1e-34).
+    let near_zero = integrate(
+        |sigma: f64| {
+            let theta = (-sigma).exp();
+            f(theta) * theta
+        },
+        &[std::f64::consts::LN_10, 6.0, 40.0],
+        options,
+    );
+    let mut points = [0.1, 0.0, 0.0, FRAC_PI_2];
+    let mut n = 1;
     // Near the branch point the integrand varies on the scale √(1 − G) below π/2.
     let w = q0.sqrt();
     for scale in [10.0, 1.0] {
@@ -459,15 +494,14 @@ pub fn line_duration_integral(u0: f64) -> Integral {
         }
     }
     points[n] = FRAC_PI_2;
-    integrate(
-        f,
-        &points[..=n],
-        QuadOptions {
-            abs_tol: 0.0,
-            rel_tol: DURATION_REL_TOL,
-            max_intervals: 4000,
-        },
-    )
+    let rest = integrate(f, &points[..=n], options);
+    Integral {
+        value: near_zero.value + rest.value,
+        error: near_zero.error + rest.error,
+        evaluations: near_zero.evaluations + rest.evaluations,
+        intervals: near_zero.intervals + rest.intervals,
+        converged: near_zero.converged && rest.converged,
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -917,6 +951,7 @@ impl ForceLaw {
 }
 
 #[cfg(test)]
+#[allow(clippy::field_reassign_with_default)] // cases read as "the default, except …"
 mod tests {
     use super::*;
     use crate::physics::material::ContactModel;
@@ -1096,6 +1131,17 @@ mod tests {
                 .0
                 .is_empty()
         );
+    }
+
+    #[test]
+    fn duration_integral_limits_and_cost() {
+        // G → 0: P ∝ kδ/ln(…) is nearly linear, and J → π/2 (a half sine) as u₀ → ∞.
+        let j = line_duration_integral(1e6);
+        assert!(j.converged && (j.value - FRAC_PI_2).abs() < 1e-5, "{j:?}");
+        for u in [0.0, 1e-8, 0.3, 16.4, 1500.0] {
+            let j = line_duration_integral(u);
+            assert!(j.converged && j.evaluations < 1000, "u = {u}: {j:?}");
+        }
     }
 
     #[test]

@@ -19,12 +19,13 @@
 /// * `G == 1`: `Some(0.0)`.
 /// * `G == 0`: `Some(f64::INFINITY)`.
 /// * `1 − G < 1e-12`: the branch-point series alone (u ≈ √(2(1−G)) …), relative error ≲ 1e-16.
+/// * Elsewhere Halley's iteration from physics.md §A.5's starting values (cubic, 1–3 steps).
 ///
 /// # References
 /// physics.md §A.5 (series: the standard branch-point expansion of W₋₁, Corless et al. 1996,
 /// "On the Lambert W function", Adv. Comput. Math. 5, 329–359, doi:10.1007/BF02124750).
 pub fn branch_u(g: f64) -> Option<f64> {
-    if g.is_nan() || g > 1.0 || g < 0.0 {
+    if !(0.0..=1.0).contains(&g) {
         return None;
     }
     if g == 1.0 {
@@ -95,16 +96,18 @@ pub fn branch_u_parts(q: f64, y: f64) -> f64 {
     } else {
         (2.0 * y).sqrt() + 2.0 * y / 3.0
     };
-    // Newton on f(u) = u − ln(1 + u) − y, f'(u) = u/(1 + u).
+    // Halley on f(u) = u − ln(1 + u) − y: f' = u/(1 + u), f'' = 1/(1 + u)². Cubic convergence:
+    // once a step is below 1e-6·u the next error is below 1e-16·u, so that step is the last.
     for _ in 0..50 {
         let f = u_minus_ln1p(u) - y;
-        let mut next = u - f * (1.0 + u) / u;
+        let newton = f * (1.0 + u) / u;
+        let mut next = u - newton / (1.0 - f / (2.0 * u * u)).clamp(0.5, 2.0);
         if next <= 0.0 {
             next = 0.5 * u;
         }
         let du = (next - u).abs();
         u = next;
-        if du <= 4e-16 * u {
+        if du <= 1e-6 * u {
             break;
         }
     }
