@@ -146,7 +146,12 @@ pub struct FaceDto {
     #[schema(default = 45.0, minimum = 5.0, maximum = 80.0, example = 45.0)]
     pub dip_deg: f64,
     /// Face length along dip S, m, in (0, 10000].
-    #[schema(default = 120.0, exclusive_minimum = 0.0, maximum = 10000.0, example = 120.0)]
+    #[schema(
+        default = 120.0,
+        exclusive_minimum = 0.0,
+        maximum = 10000.0,
+        example = 120.0
+    )]
     pub length_m: f64,
     /// Floor: plane, grid or contours.
     pub floor: FloorDto,
@@ -329,7 +334,12 @@ impl DistributionDto {
             match v {
                 Some(x) => x,
                 None => {
-                    ck.push(p(f), Value::Null, format!("a {:?} distribution needs `{f}`", self.distribution).to_lowercase());
+                    ck.push(
+                        p(f),
+                        Value::Null,
+                        format!("a {:?} distribution needs `{f}`", self.distribution)
+                            .to_lowercase(),
+                    );
                     0.0
                 }
             }
@@ -378,7 +388,12 @@ impl DistributionDto {
                         );
                     }
                 }
-                Distribution::TruncatedNormal { mean, std, min, max }
+                Distribution::TruncatedNormal {
+                    mean,
+                    std,
+                    min,
+                    max,
+                }
             }
         }
     }
@@ -499,7 +514,11 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
     let p = |x: &str| format!("{base}/{x}");
     let stray = |ck: &mut Checker, name: &str, present: bool, kind: &str| {
         if present {
-            ck.push(p(name), Value::Null, format!("not a field of a {kind} floor"));
+            ck.push(
+                p(name),
+                Value::Null,
+                format!("not a field of a {kind} floor"),
+            );
         }
     };
     match f.kind {
@@ -524,7 +543,11 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
                     d
                 }
                 None => {
-                    ck.push(p("spacing_m"), Value::Null, "a grid floor needs spacing_m in [0.01, 100] m");
+                    ck.push(
+                        p("spacing_m"),
+                        Value::Null,
+                        "a grid floor needs spacing_m in [0.01, 100] m",
+                    );
                     1.0
                 }
             };
@@ -532,14 +555,34 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
             let rows = heights.len();
             let cols = heights.first().map_or(0, Vec::len);
             if !(2..=4096).contains(&rows) || !(2..=4096).contains(&cols) {
-                ck.push(p("heights_m"), json!([rows, cols]), "needs 2 to 4096 rows of 2 to 4096 heights each");
+                ck.push(
+                    p("heights_m"),
+                    json!([rows, cols]),
+                    "needs 2 to 4096 rows of 2 to 4096 heights each",
+                );
             } else if let Some(i) = heights.iter().position(|r| r.len() != cols) {
-                ck.push(p(&format!("heights_m/{i}")), json!(heights[i].len()), format!("every row needs {cols} heights, like row 0"));
-            } else if let Some((i, j)) = heights.iter().enumerate().find_map(|(i, r)| r.iter().position(|z| z.abs() > 1e6).map(|j| (i, j))) {
-                ck.push(p(&format!("heights_m/{i}/{j}")), num(heights[i][j]), "heights must lie in [−1e6, 1e6] m");
+                ck.push(
+                    p(&format!("heights_m/{i}")),
+                    json!(heights[i].len()),
+                    format!("every row needs {cols} heights, like row 0"),
+                );
+            } else if let Some((i, j)) = heights
+                .iter()
+                .enumerate()
+                .find_map(|(i, r)| r.iter().position(|z| z.abs() > 1e6).map(|j| (i, j)))
+            {
+                ck.push(
+                    p(&format!("heights_m/{i}/{j}")),
+                    num(heights[i][j]),
+                    "heights must lie in [−1e6, 1e6] m",
+                );
             }
             f.sha256 = Some(f.digest());
-            FloorSpec::Grid { origin, spacing, heights }
+            FloorSpec::Grid {
+                origin,
+                spacing,
+                heights,
+            }
         }
         FloorKind::Contours => {
             stray(ck, "origin_m", f.origin_m.is_some(), "contour");
@@ -549,27 +592,56 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
             ck.closed(&p("resolution_m"), resolution, 0.01, 100.0, "m");
             let lines = f.contours.clone().unwrap_or_default();
             if lines.is_empty() {
-                ck.push(p("contours"), Value::Null, "a contour floor needs at least one contour line");
+                ck.push(
+                    p("contours"),
+                    Value::Null,
+                    "a contour floor needs at least one contour line",
+                );
             }
             let mut total = 0usize;
             for (i, c) in lines.iter().enumerate() {
-                ck.closed(&p(&format!("contours/{i}/elevation_m")), c.elevation_m, -1e6, 1e6, "m");
+                ck.closed(
+                    &p(&format!("contours/{i}/elevation_m")),
+                    c.elevation_m,
+                    -1e6,
+                    1e6,
+                    "m",
+                );
                 if c.points_m.is_empty() {
-                    ck.push(p(&format!("contours/{i}/points_m")), json!(0), "needs at least one point");
+                    ck.push(
+                        p(&format!("contours/{i}/points_m")),
+                        json!(0),
+                        "needs at least one point",
+                    );
                 }
-                if let Some(j) = c.points_m.iter().position(|q| q[0].abs() > 1e6 || q[1].abs() > 1e6) {
-                    ck.push(p(&format!("contours/{i}/points_m/{j}")), Value::Null, "coordinates must lie in [−1e6, 1e6] m");
+                if let Some(j) = c
+                    .points_m
+                    .iter()
+                    .position(|q| q[0].abs() > 1e6 || q[1].abs() > 1e6)
+                {
+                    ck.push(
+                        p(&format!("contours/{i}/points_m/{j}")),
+                        Value::Null,
+                        "coordinates must lie in [−1e6, 1e6] m",
+                    );
                 }
                 total += c.points_m.len();
             }
             if total > 4_000_000 {
-                ck.push(p("contours"), json!(total), "at most 4 000 000 points in all");
+                ck.push(
+                    p("contours"),
+                    json!(total),
+                    "at most 4 000 000 points in all",
+                );
             }
             f.sha256 = Some(f.digest());
             FloorSpec::Contours {
                 contours: lines
                     .into_iter()
-                    .map(|c| ContourLine { elevation: c.elevation_m, points: c.points_m })
+                    .map(|c| ContourLine {
+                        elevation: c.elevation_m,
+                        points: c.points_m,
+                    })
                     .collect(),
                 resolution,
             }
@@ -592,16 +664,55 @@ impl MigrationRequest {
         let f = &mut self.face;
         ck.closed("/face/dip_deg", f.dip_deg, 5.0, 80.0, "°");
         ck.open_closed("/face/length_m", f.length_m, 0.0, 10000.0, "m");
-        ck.closed("/face/friction_coefficient", f.friction_coefficient, 0.0, 2.0, "");
-        ck.closed("/face/restitution_normal", f.restitution_normal, 0.0, 1.0, "");
-        ck.closed("/face/restitution_tangential", f.restitution_tangential, 0.0, 1.0, "");
-        ck.closed("/face/normal_stiffness_n_m", f.normal_stiffness_n_m, 1e3, 1e12, "N/m");
-        ck.closed("/face/shear_stiffness_n_m", f.shear_stiffness_n_m, 1e3, 1e12, "N/m");
-        ck.closed_open("/face/critical_damping_ratio", f.critical_damping_ratio, 0.0, 1.0, "");
+        ck.closed(
+            "/face/friction_coefficient",
+            f.friction_coefficient,
+            0.0,
+            2.0,
+            "",
+        );
+        ck.closed(
+            "/face/restitution_normal",
+            f.restitution_normal,
+            0.0,
+            1.0,
+            "",
+        );
+        ck.closed(
+            "/face/restitution_tangential",
+            f.restitution_tangential,
+            0.0,
+            1.0,
+            "",
+        );
+        ck.closed(
+            "/face/normal_stiffness_n_m",
+            f.normal_stiffness_n_m,
+            1e3,
+            1e12,
+            "N/m",
+        );
+        ck.closed(
+            "/face/shear_stiffness_n_m",
+            f.shear_stiffness_n_m,
+            1e3,
+            1e12,
+            "N/m",
+        );
+        ck.closed_open(
+            "/face/critical_damping_ratio",
+            f.critical_damping_ratio,
+            0.0,
+            1.0,
+            "",
+        );
         ck.closed_open("/face/local_damping", f.local_damping, 0.0, 1.0, "");
         let floor = resolve_floor(&mut f.floor, &mut ck);
         let rock = self.rock.resolve("/rock", false, &mut ck);
-        if matches!(self.rock.shape, super::common::ShapeKind::Polyhedron | super::common::ShapeKind::RandomPolyhedron) {
+        if matches!(
+            self.rock.shape,
+            super::common::ShapeKind::Polyhedron | super::common::ShapeKind::RandomPolyhedron
+        ) {
             ck.push(
                 "/rock/shape",
                 json!(self.rock.shape),
@@ -610,33 +721,71 @@ impl MigrationRequest {
         }
         let r = &self.release;
         ck.closed("/release/drop_height_m", r.drop_height_m, 0.0, 1000.0, "m");
-        ck.closed_open("/release/along_dip_m", r.along_dip_m, 0.0, self.face.length_m, "m (below length_m)");
+        ck.closed_open(
+            "/release/along_dip_m",
+            r.along_dip_m,
+            0.0,
+            self.face.length_m,
+            "m (below length_m)",
+        );
         ck.closed("/release/across_m", r.across_m, -1000.0, 1000.0, "m");
         ck.closed("/release/speed_m_s", r.speed_m_s, 0.0, 1000.0, "m/s");
-        ck.closed("/lumped_mass/stop_normal_speed_m_s", self.lumped_mass.stop_normal_speed_m_s, 0.0, 100.0, "m/s");
+        ck.closed(
+            "/lumped_mass/stop_normal_speed_m_s",
+            self.lumped_mass.stop_normal_speed_m_s,
+            0.0,
+            100.0,
+            "m/s",
+        );
         if let Some(dt) = self.rigid_block.time_step_s {
             ck.open_closed("/rigid_block/time_step_s", dt, 0.0, 1.0, "s");
         }
-        ck.open_closed("/rigid_block/time_step_safety", self.rigid_block.time_step_safety, 0.0, 1.0, "");
+        ck.open_closed(
+            "/rigid_block/time_step_safety",
+            self.rigid_block.time_step_safety,
+            0.0,
+            1.0,
+            "",
+        );
         if let Some(t) = self.end_time_s {
             ck.open_closed("/end_time_s", t, 0.0, 1e5, "s");
         }
         let o = &self.output;
-        ck.closed("/output/sample_interval_s", o.sample_interval_s, 1e-6, 100.0, "s");
+        ck.closed(
+            "/output/sample_interval_s",
+            o.sample_interval_s,
+            1e-6,
+            100.0,
+            "s",
+        );
         let monte_carlo = self.monte_carlo.as_ref().map(|mc| {
             ck.count("/monte_carlo/runs", mc.runs, 1, config.max_runs, "runs");
             MonteCarlo {
                 runs: mc.runs,
                 seed: mc.seed,
-                restitution_normal: mc.restitution_normal.resolve("/monte_carlo/restitution_normal", 0.0, 1.0, &mut ck),
-                restitution_tangential: mc.restitution_tangential.resolve("/monte_carlo/restitution_tangential", 0.0, 1.0, &mut ck),
+                restitution_normal: mc.restitution_normal.resolve(
+                    "/monte_carlo/restitution_normal",
+                    0.0,
+                    1.0,
+                    &mut ck,
+                ),
+                restitution_tangential: mc.restitution_tangential.resolve(
+                    "/monte_carlo/restitution_tangential",
+                    0.0,
+                    1.0,
+                    &mut ck,
+                ),
                 friction_coefficient: mc
                     .friction_coefficient
                     .map(|d| d.resolve("/monte_carlo/friction_coefficient", 0.0, 2.0, &mut ck)),
             }
         });
         if o.runs_csv && monte_carlo.is_none() {
-            ck.push("/output/runs_csv", json!(true), "per-run summaries need monte_carlo");
+            ck.push(
+                "/output/runs_csv",
+                json!(true),
+                "per-run summaries need monte_carlo",
+            );
         }
         ck.finish()?;
         Ok(MigrationCase {
@@ -928,7 +1077,11 @@ impl MigrationResponse {
             },
         ];
         let mut meta = Meta::new(plan);
-        meta.warnings = r.warnings.iter().map(|w| Warning::new(w.code, w.message.clone())).collect();
+        meta.warnings = r
+            .warnings
+            .iter()
+            .map(|w| Warning::new(w.code, w.message.clone()))
+            .collect();
         let a = &r.arrival;
         Self {
             method: MethodDto::LumpedMass,
