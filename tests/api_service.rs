@@ -55,3 +55,38 @@ async fn page_docs_and_openapi_are_served() {
     assert!(doc["openapi"].as_str().unwrap().starts_with("3.1"));
     assert!(doc["paths"]["/v1/impact"]["post"].is_object());
 }
+
+/// A large ensemble keeps a solver slot busy long enough to observe saturation and timeouts.
+fn big_ensemble() -> serde_json::Value {
+    serde_json::json!({"monte_carlo": {"runs": 1_000_000, "seed": 1}})
+}
+
+#[tokio::test]
+async fn saturated_slots_answer_503_with_retry_after() {
+    let app = gangue::app(gangue::config::Config {
+        max_concurrent: Some(1),
+        ..Default::default()
+    });
+    let busy_app = app.clone();
+    let busy = tokio::spawn(async move { common::post(&busy_app, "/v1/migration", &big_ensemble()).await });
+    tokio::time::sleep(std::time::Duration::from_millis(30)).await;
+    let r = common::post(&app, "/v1/impact", &serde_json::json!({})).await;
+    let p = assert_problem(&r, 503, "overloaded");
+    assert!(p["detail"].as_str().unwrap().contains("busy"));
+    let retry = r.headers.get("retry-after").expect("Retry-After header");
+    assert!(retry.to_str().unwrap().parse::<u64>().unwrap() >= 1);
+    // The busy request still completes normally.
+    assert_eq!(busy.await.unwrap().status, 200);
+}
+
+#[tokio::test]
+async fn past_the_time_limit_the_work_stops_with_504() {
+    let app = gangue::app(gangue::config::Config {
+        compute_timeout_s: 0.02,
+        ..Default::default()
+    });
+    let t0 = std::time::Instant::now();
+    let r = common::post(&app, "/v1/migration", &big_ensemble()).await;
+    assert_problem(&r, 504, "timeout");
+    assert!(t0.elapsed() < std::time::Duration::from_secs(2), "stopped promptly");
+}
