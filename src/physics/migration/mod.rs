@@ -339,6 +339,8 @@ pub struct RunSummary {
     pub max_bounce_height: f64,
     /// Why the run ended.
     pub stop_reason: StopReason,
+    /// Closed-form pieces the run took (flights, slide pieces, edge crossings).
+    pub steps: u64,
 }
 
 /// Ensemble statistics (api.md `statistics`).
@@ -496,11 +498,18 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
             };
             let (mut lo, mut hi) = (ext[0], ext[1]);
             let (flo, fhi) = (along_at(lo).ok_or_else(off)?, along_at(hi).ok_or_else(off)?);
-            if !(flo <= rel.along_dip && rel.along_dip <= fhi) {
+            if rel.along_dip > fhi {
                 return Err(off());
+            }
+            if rel.along_dip <= flo {
+                // above the floor's upper edge at this across_m: start on that edge
+                hi = lo;
             }
             for _ in 0..200 {
                 let mid = 0.5 * (lo + hi);
+                if hi == lo {
+                    break;
+                }
                 if mid <= lo || mid >= hi {
                     break;
                 }
@@ -754,7 +763,7 @@ fn sample_trajectory(
     let t_end = out.t;
     let n_grid = (t_end / dt).floor();
     let n = n_grid + 1.0 + if n_grid * dt < t_end { 1.0 } else { 0.0 };
-    if !(n <= case.output.max_samples as f64) {
+    if n.is_nan() || n > case.output.max_samples as f64 {
         return Err(PhysicsError::invalid(
             "/output/sample_interval_s",
             dt,
@@ -876,6 +885,7 @@ fn ensemble(
             runout: mean.along(&o.p) - pr.release_along,
             max_bounce_height: o.max_bounce,
             stop_reason: o.reason,
+            steps: o.steps,
         })
     };
     let chunks: Vec<PhysicsResult<Vec<RunSummary>>> = (0..n.div_ceil(CHUNK))
