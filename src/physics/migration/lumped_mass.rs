@@ -104,6 +104,8 @@ pub(crate) struct Segment {
     pub(crate) rolling: Option<Vector3<f64>>,
     /// Constant rotational energy per kg and angular velocity in flight.
     pub(crate) spin: (f64, Vector3<f64>),
+    /// On the floor (slide, roll or crease) rather than in flight.
+    pub(crate) on_floor: bool,
 }
 
 /// What a recorded run keeps for events and trajectories.
@@ -385,6 +387,7 @@ pub(crate) fn simulate(
                         diss0,
                         rolling: None,
                         spin: s.spin,
+                        on_floor: false,
                     });
                 }
                 s.p += s.v * dt + gv * (0.5 * dt * dt);
@@ -492,6 +495,7 @@ pub(crate) fn simulate(
                         diss0,
                         rolling: None,
                         spin: (0.0, Vector3::zeros()),
+                        on_floor: true,
                     });
                 }
                 s.p += c.e * du;
@@ -608,6 +612,7 @@ pub(crate) fn simulate(
                         diss0,
                         rolling: roll.then_some(n),
                         spin: (0.0, Vector3::zeros()),
+                        on_floor: true,
                     });
                 }
                 let dp = s.v * dt + a * (0.5 * dt * dt);

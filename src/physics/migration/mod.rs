@@ -797,17 +797,7 @@ fn sample_trajectory(
                     ),
                     None => s.spin,
                 };
-                (
-                    p,
-                    v,
-                    diss,
-                    rot,
-                    om,
-                    s.fric != Vector3::zeros()
-                        || s.rolling.is_some()
-                        || s.a.x != 0.0
-                        || s.a.y != 0.0,
-                )
+                (p, v, diss, rot, om, s.on_floor)
             }
             None => (
                 out.p,
