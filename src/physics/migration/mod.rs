@@ -496,7 +496,18 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
                     "the release point is not on the floor at this across_m",
                 )
             };
-            let (mut lo, mut hi) = (ext[0], ext[1]);
+            // the part of the line y = across that lies over the floor (a contour set's hull
+            // need not reach its bounding box)
+            const SCAN: usize = 4096;
+            let xs = |k: usize| ext[0] + (ext[1] - ext[0]) * k as f64 / SCAN as f64;
+            let first = (0..=SCAN)
+                .find(|&k| along_at(xs(k)).is_some())
+                .ok_or_else(off)?;
+            let last = (first..=SCAN)
+                .rev()
+                .find(|&k| along_at(xs(k)).is_some())
+                .ok_or_else(off)?;
+            let (mut lo, mut hi) = (xs(first), xs(last));
             let (flo, fhi) = (along_at(lo).ok_or_else(off)?, along_at(hi).ok_or_else(off)?);
             if rel.along_dip > fhi {
                 return Err(off());
