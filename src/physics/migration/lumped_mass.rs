@@ -104,6 +104,8 @@ pub(crate) struct Segment {
     pub(crate) rolling: Option<Vector3<f64>>,
     /// Constant rotational energy per kg and angular velocity in flight.
     pub(crate) spin: (f64, Vector3<f64>),
+    /// On the floor (slide, roll or crease) rather than in flight.
+    pub(crate) on_floor: bool,
 }
 
 /// What a recorded run keeps for events and trajectories.
@@ -147,6 +149,8 @@ pub(crate) struct RunOut {
     pub(crate) e_fric: f64,
     pub(crate) e_trans: f64,
     pub(crate) e_rot: f64,
+    /// Number of closed-form pieces (flights, slide pieces, edge crossings).
+    pub(crate) steps: u64,
     /// True when the last ground phase had no deceleration (a ≥ 0 along the motion) at the end.
     pub(crate) undecelerated: bool,
 }
@@ -338,7 +342,7 @@ pub(crate) fn simulate(
     let mut zero_steps = 0u32;
     let (phase, reason) = loop {
         steps += 1;
-        if steps % 4096 == 0
+        if steps.is_multiple_of(4096)
             && let Some(c) = control
         {
             c.check()?;
@@ -383,6 +387,7 @@ pub(crate) fn simulate(
                         diss0,
                         rolling: None,
                         spin: s.spin,
+                        on_floor: false,
                     });
                 }
                 s.p += s.v * dt + gv * (0.5 * dt * dt);
@@ -490,6 +495,7 @@ pub(crate) fn simulate(
                         diss0,
                         rolling: None,
                         spin: (0.0, Vector3::zeros()),
+                        on_floor: true,
                     });
                 }
                 s.p += c.e * du;
@@ -606,6 +612,7 @@ pub(crate) fn simulate(
                         diss0,
                         rolling: roll.then_some(n),
                         spin: (0.0, Vector3::zeros()),
+                        on_floor: true,
                     });
                 }
                 let dp = s.v * dt + a * (0.5 * dt * dt);
@@ -675,7 +682,7 @@ pub(crate) fn simulate(
                         let h = (dir.x * dir.x + dir.y * dir.y).sqrt();
                         if h > 0.0 {
                             let ext = floor.extent();
-                            let eps = 1e-9 * (ext[1] - ext[0]).abs().min(1e3).max(1e-3);
+                            let eps = 1e-9 * (ext[1] - ext[0]).abs().clamp(1e-3, 1e3);
                             s.p.x += eps * dir.x / h;
                             s.p.y += eps * dir.y / h;
                         }
@@ -747,5 +754,6 @@ pub(crate) fn simulate(
         e_trans: s.e_trans,
         e_rot,
         undecelerated: !stopped && s.ground.is_some() && s.undecelerated,
+        steps,
     })
 }

@@ -339,6 +339,8 @@ pub struct RunSummary {
     pub max_bounce_height: f64,
     /// Why the run ended.
     pub stop_reason: StopReason,
+    /// Closed-form pieces the run took (flights, slide pieces, edge crossings).
+    pub steps: u64,
 }
 
 /// Ensemble statistics (api.md `statistics`).
@@ -494,13 +496,31 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
                     "the release point is not on the floor at this across_m",
                 )
             };
-            let (mut lo, mut hi) = (ext[0], ext[1]);
+            // the part of the line y = across that lies over the floor (a contour set's hull
+            // need not reach its bounding box)
+            const SCAN: usize = 4096;
+            let xs = |k: usize| ext[0] + (ext[1] - ext[0]) * k as f64 / SCAN as f64;
+            let first = (0..=SCAN)
+                .find(|&k| along_at(xs(k)).is_some())
+                .ok_or_else(off)?;
+            let last = (first..=SCAN)
+                .rev()
+                .find(|&k| along_at(xs(k)).is_some())
+                .ok_or_else(off)?;
+            let (mut lo, mut hi) = (xs(first), xs(last));
             let (flo, fhi) = (along_at(lo).ok_or_else(off)?, along_at(hi).ok_or_else(off)?);
-            if !(flo <= rel.along_dip && rel.along_dip <= fhi) {
+            if rel.along_dip > fhi {
                 return Err(off());
+            }
+            if rel.along_dip <= flo {
+                // above the floor's upper edge at this across_m: start on that edge
+                hi = lo;
             }
             for _ in 0..200 {
                 let mid = 0.5 * (lo + hi);
+                if hi == lo {
+                    break;
+                }
                 if mid <= lo || mid >= hi {
                     break;
                 }
@@ -754,7 +774,7 @@ fn sample_trajectory(
     let t_end = out.t;
     let n_grid = (t_end / dt).floor();
     let n = n_grid + 1.0 + if n_grid * dt < t_end { 1.0 } else { 0.0 };
-    if !(n <= case.output.max_samples as f64) {
+    if n.is_nan() || n > case.output.max_samples as f64 {
         return Err(PhysicsError::invalid(
             "/output/sample_interval_s",
             dt,
@@ -788,17 +808,7 @@ fn sample_trajectory(
                     ),
                     None => s.spin,
                 };
-                (
-                    p,
-                    v,
-                    diss,
-                    rot,
-                    om,
-                    s.fric != Vector3::zeros()
-                        || s.rolling.is_some()
-                        || s.a.x != 0.0
-                        || s.a.y != 0.0,
-                )
+                (p, v, diss, rot, om, s.on_floor)
             }
             None => (
                 out.p,
@@ -876,6 +886,7 @@ fn ensemble(
             runout: mean.along(&o.p) - pr.release_along,
             max_bounce_height: o.max_bounce,
             stop_reason: o.reason,
+            steps: o.steps,
         })
     };
     let chunks: Vec<PhysicsResult<Vec<RunSummary>>> = (0..n.div_ceil(CHUNK))

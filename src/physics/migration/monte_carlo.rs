@@ -48,7 +48,7 @@ impl Distribution {
     pub fn lower_bound(&self) -> f64 {
         match *self {
             Distribution::Uniform { min, .. } | Distribution::TruncatedNormal { min, .. } => min,
-            Distribution::Normal { std, mean } if std == 0.0 => mean,
+            Distribution::Normal { std: 0.0, mean } => mean,
             Distribution::Normal { .. } => f64::NEG_INFINITY,
         }
     }

@@ -83,9 +83,36 @@ pub fn summarize(values: &[f64]) -> Option<Summary> {
         let ss: f64 = values.iter().map(|x| (x - mean) * (x - mean)).sum();
         (ss / (n - 1) as f64).sqrt()
     });
-    let mut sorted = values.to_vec();
-    sorted.sort_unstable_by(f64::total_cmp);
-    let (min, max) = (sorted[0], sorted[n - 1]);
+    let (min, max) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    // the order statistics the percentiles need, found by selection (O(n)) instead of a sort
+    let ps = [0.05, 0.50, 0.95, 0.99];
+    let mut idx: Vec<usize> = ps
+        .iter()
+        .flat_map(|p| {
+            let lo = ((n - 1) as f64 * p).floor() as usize;
+            [lo, (lo + 1).min(n - 1)]
+        })
+        .collect();
+    idx.sort_unstable();
+    idx.dedup();
+    let mut work = values.to_vec();
+    let mut start = 0;
+    for &k in &idx {
+        work[start..].select_nth_unstable_by(k - start, f64::total_cmp);
+        start = k + 1;
+    }
+    let pct = |p: f64| {
+        let h = (n - 1) as f64 * p;
+        let lo = h.floor() as usize;
+        if lo + 1 >= n {
+            return work[n - 1];
+        }
+        work[lo] + (h - lo as f64) * (work[lo + 1] - work[lo])
+    };
     let width = (max - min) / HISTOGRAM_BINS as f64;
     let edges: Vec<f64> = (0..=HISTOGRAM_BINS)
         .map(|k| {
@@ -97,7 +124,7 @@ pub fn summarize(values: &[f64]) -> Option<Summary> {
         })
         .collect();
     let mut counts = vec![0u64; HISTOGRAM_BINS];
-    for &x in &sorted {
+    for &x in values {
         let k = if width > 0.0 {
             (((x - min) / width) as usize).min(HISTOGRAM_BINS - 1)
         } else {
@@ -110,10 +137,10 @@ pub fn summarize(values: &[f64]) -> Option<Summary> {
         mean: mean.clamp(min, max),
         std,
         min,
-        p05: percentile_sorted(&sorted, 0.05),
-        p50: percentile_sorted(&sorted, 0.50),
-        p95: percentile_sorted(&sorted, 0.95),
-        p99: percentile_sorted(&sorted, 0.99),
+        p05: pct(0.05),
+        p50: pct(0.50),
+        p95: pct(0.95),
+        p99: pct(0.99),
         max,
         histogram: Histogram { edges, counts },
     })
@@ -144,6 +171,26 @@ mod tests {
         assert_eq!(s.histogram.edges.len(), 21);
         assert_eq!(s.histogram.counts[0], 2); // 1, 1 in [1, 1.4)
         assert_eq!(s.histogram.counts[19], 1); // 9
+    }
+
+    #[test]
+    fn selection_equals_sorting() {
+        let mut st = 3u64;
+        let xs: Vec<f64> = (0..1001)
+            .map(|_| {
+                st = st
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (st >> 11) as f64
+            })
+            .collect();
+        let s = summarize(&xs).unwrap();
+        let mut sorted = xs.clone();
+        sorted.sort_by(f64::total_cmp);
+        for (p, got) in [(0.05, s.p05), (0.5, s.p50), (0.95, s.p95), (0.99, s.p99)] {
+            assert_eq!(got, percentile_sorted(&sorted, p));
+        }
+        assert_eq!((s.min, s.max), (sorted[0], sorted[1000]));
     }
 
     #[test]

@@ -594,7 +594,7 @@ impl Floor {
         }
         let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
         let mut d = ((w * h) / tris.len() as f64).sqrt() * 1.5;
-        if !(d > 0.0) {
+        if d.is_nan() || d <= 0.0 {
             d = w.max(h);
         }
         d = d.max(w.max(h) / 4096.0);
@@ -755,7 +755,7 @@ impl Floor {
             let r = descent_root(pl.height(p), b, g)?;
             // a strike: the height decreases through zero (not a graze at the start)
             let slope = b - g * r;
-            (slope < -1e-12 * (1.0 + v.norm())).then_some(r)
+            (slope < -1e-12 * (1.0 + b.abs())).then_some(r)
         };
         match &self.kind {
             FloorKind::Plane(pl) => match root(pl) {
@@ -816,18 +816,11 @@ impl Floor {
         a: &Vector3<f64>,
         t_max: f64,
     ) -> Option<(f64, Option<Facet>, [[f64; 2]; 2])> {
-        let (corners, neighbor): ([[f64; 2]; 3], Box<dyn Fn(usize) -> Option<Facet> + '_>) =
-            match &self.kind {
-                FloorKind::Plane(_) => return None,
-                FloorKind::Grid(g) => (g.corners(f).0, Box::new(move |k| g.neighbor(f, k))),
-                FloorKind::Mesh(m) => (
-                    m.corners(f).0,
-                    Box::new(move |k| {
-                        let n = m.nbr[f as usize][k];
-                        (n != NONE).then_some(n)
-                    }),
-                ),
-            };
+        let corners = match &self.kind {
+            FloorKind::Plane(_) => return None,
+            FloorKind::Grid(g) => g.corners(f).0,
+            FloorKind::Mesh(m) => m.corners(f).0,
+        };
         let mut best: Option<(f64, usize)> = None;
         for k in 0..3 {
             let e0 = corners[k];
@@ -843,7 +836,17 @@ impl Floor {
                 best = Some((t, k));
             }
         }
-        best.map(|(t, k)| (t, neighbor(k), [corners[k], corners[(k + 1) % 3]]))
+        best.map(|(t, k)| {
+            let next = match &self.kind {
+                FloorKind::Grid(g) => g.neighbor(f, k),
+                FloorKind::Mesh(m) => {
+                    let n = m.nbr[f as usize][k];
+                    (n != NONE).then_some(n)
+                }
+                FloorKind::Plane(_) => None,
+            };
+            (t, next, [corners[k], corners[(k + 1) % 3]])
+        })
     }
 }
 
