@@ -47,7 +47,8 @@ fn compare(id: &str, body: &Value, case: &Value) -> Vec<String> {
                 let r = tol["rel"].as_f64().unwrap_or(0.0);
                 let a = tol["abs"].as_f64().unwrap_or(0.0);
                 let bound = a + r * e.abs();
-                if !((g - e).abs() <= bound) {
+                let within = (g - e).abs() <= bound;
+                if !within {
                     failures.push(format!(
                         "{id} {ptr}: got {g:e}, expected {e:e} (|Δ| = {:e} > {bound:e})",
                         (g - e).abs()
