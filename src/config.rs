@@ -1,1 +1,142 @@
 //! Server settings and limits: one struct, documented defaults, settable by flags or environment.
+
+use std::net::SocketAddr;
+
+use clap::Parser;
+
+/// Settings of the service. Every field has a flag and an environment variable; `--help` lists them.
+#[derive(Debug, Clone, Parser, PartialEq)]
+#[command(
+    name = "gangue",
+    version,
+    about = "Flying-gangue (rockfall) hazard calculation service"
+)]
+pub struct Config {
+    /// Address to listen on (default 127.0.0.1:8080).
+    #[arg(long, env = "GANGUE_BIND", default_value = "127.0.0.1:8080")]
+    pub bind: SocketAddr,
+
+    /// Threads for parallel ensembles (default: the number of cores; results do not depend on it).
+    #[arg(long, env = "GANGUE_SOLVER_THREADS")]
+    pub solver_threads: Option<usize>,
+
+    /// Computations allowed at once; more get 503 with Retry-After (default 2 × cores, at least 4).
+    #[arg(long, env = "GANGUE_MAX_CONCURRENT")]
+    pub max_concurrent: Option<usize>,
+
+    /// Largest request body, bytes (default 16 MiB).
+    #[arg(long, env = "GANGUE_MAX_BODY_BYTES", default_value_t = 16 * 1024 * 1024)]
+    pub max_body_bytes: usize,
+
+    /// Time limit of one computation, s (default 60); past it the work is stopped and 504 returned.
+    #[arg(long, env = "GANGUE_COMPUTE_TIMEOUT_S", default_value_t = 60.0)]
+    pub compute_timeout_s: f64,
+
+    /// Most Monte Carlo runs in one request (default 1 000 000).
+    #[arg(long, env = "GANGUE_MAX_RUNS", default_value_t = 1_000_000)]
+    pub max_runs: u64,
+
+    /// Most history or trajectory samples in one response (default 1 000 000).
+    #[arg(long, env = "GANGUE_MAX_SAMPLES", default_value_t = 1_000_000)]
+    pub max_samples: u64,
+
+    /// Most points of a force–approach curve (default 10 000).
+    #[arg(long, env = "GANGUE_MAX_CURVE_POINTS", default_value_t = 10_000)]
+    pub max_curve_points: u64,
+
+    /// Most Galerkin modes of the coupled column model (default 50).
+    #[arg(long, env = "GANGUE_MAX_MODES", default_value_t = 50)]
+    pub max_modes: u64,
+
+    /// Longest simulated end time of the coupled column model, s (default 1000).
+    #[arg(long, env = "GANGUE_MAX_END_TIME_S", default_value_t = 1e3)]
+    pub max_end_time_s: f64,
+
+    /// Most points per study curve (default 101).
+    #[arg(long, env = "GANGUE_MAX_STUDY_POINTS", default_value_t = 101)]
+    pub max_study_points: u64,
+
+    /// Most items in one batch (default 1000).
+    #[arg(long, env = "GANGUE_MAX_BATCH_ITEMS", default_value_t = 1000)]
+    pub max_batch_items: u64,
+
+    /// Most time steps of one rigid-block run (default 2e7).
+    #[arg(long, env = "GANGUE_MAX_RIGID_STEPS", default_value_t = 2e7)]
+    pub max_rigid_steps: f64,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self::parse_from(["gangue"])
+    }
+}
+
+impl Config {
+    /// Threads for parallel ensembles: the setting, or the number of cores.
+    pub fn solver_threads(&self) -> usize {
+        self.solver_threads.unwrap_or_else(cores).max(1)
+    }
+
+    /// Computations allowed at once: the setting, or max(4, 2 × cores).
+    pub fn max_concurrent(&self) -> usize {
+        self.max_concurrent
+            .unwrap_or_else(|| (2 * cores()).max(4))
+            .max(1)
+    }
+
+    /// Checks the settings for values that cannot work; the message names the flag.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.compute_timeout_s.is_finite() && self.compute_timeout_s > 0.0) {
+            return Err(format!(
+                "--compute-timeout-s must be a positive number of seconds, got {}",
+                self.compute_timeout_s
+            ));
+        }
+        if !(self.max_end_time_s.is_finite() && self.max_end_time_s > 0.0) {
+            return Err("--max-end-time-s must be positive".into());
+        }
+        if !(self.max_rigid_steps.is_finite() && self.max_rigid_steps >= 1.0) {
+            return Err("--max-rigid-steps must be at least 1".into());
+        }
+        if self.max_body_bytes < 1024 {
+            return Err("--max-body-bytes must be at least 1024".into());
+        }
+        Ok(())
+    }
+}
+
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_the_documented_ones() {
+        let c = Config::default();
+        assert_eq!(c.bind.to_string(), "127.0.0.1:8080");
+        assert_eq!(c.max_body_bytes, 16 * 1024 * 1024);
+        assert_eq!(c.compute_timeout_s, 60.0);
+        assert_eq!(c.max_runs, 1_000_000);
+        assert_eq!(c.max_samples, 1_000_000);
+        assert_eq!(c.max_study_points, 101);
+        assert_eq!(c.max_batch_items, 1000);
+        assert_eq!(c.max_rigid_steps, 2e7);
+        assert!(c.validate().is_ok());
+    }
+
+    #[test]
+    fn flags_override_defaults_and_bad_values_are_named() {
+        let c = Config::parse_from([
+            "gangue",
+            "--bind",
+            "0.0.0.0:9000",
+            "--compute-timeout-s",
+            "0",
+        ]);
+        assert_eq!(c.bind.port(), 9000);
+        assert!(c.validate().unwrap_err().contains("--compute-timeout-s"));
+    }
+}

@@ -6,3 +6,5 @@
 pub mod config;
 pub mod http;
 pub mod physics;
+
+pub use http::app;

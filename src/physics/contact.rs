@@ -126,3 +126,22 @@ impl ForceLaw {
         }
     }
 }
+
+/// Effective modulus E* of the contact, Pa (physics.md §A.2).
+pub fn effective_modulus(
+    _rock: &super::material::Rock,
+    _column: &super::material::Column,
+    _convention: ModulusConvention,
+) -> f64 {
+    todo!("effective modulus")
+}
+
+/// The force–approach law of a case.
+pub fn force_law(_case: &ImpactCase) -> PhysicsResult<ForceLaw> {
+    todo!("force law")
+}
+
+/// `n` points of P(δ) equally spaced in δ from 0 to `max_deformation`: (δ, P) in (m, N).
+pub fn force_curve(_law: &ForceLaw, _max_deformation: f64, _n: usize) -> (Vec<f64>, Vec<f64>) {
+    todo!("force curve")
+}

@@ -1,0 +1,7 @@
+//! Request and response types of the API (serde + utoipa schemas), their range checks, and the
+//! conversions into the plain physics structs.
+
+pub mod common;
+pub mod impact;
+
+pub use common::{Meta, PlanStep, Warning};

@@ -1,0 +1,350 @@
+//! `AppJson<T>`: the JSON body extractor. Malformed JSON, wrong types, unknown fields, a body that
+//! is too large and a wrong media type all become problem+json, each naming the field.
+
+use axum::body::Bytes;
+use axum::extract::{FromRequest, Request};
+use axum::http::{StatusCode, header};
+use serde::de::{self, DeserializeOwned, IntoDeserializer, Unexpected, Visitor};
+use serde_json::Value;
+
+use super::error::{ApiError, FieldError};
+
+/// JSON body extractor whose rejections are problems (400/413/415/422).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct AppJson<T>(pub T);
+
+impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for AppJson<T> {
+    type Rejection = ApiError;
+
+    async fn from_request(req: Request, state: &S) -> Result<Self, Self::Rejection> {
+        if !is_json(req.headers().get(header::CONTENT_TYPE)) {
+            return Err(ApiError::new(
+                "unsupported_media_type",
+                "send the body as Content-Type: application/json",
+            ));
+        }
+        let bytes = read_body(req, state).await?;
+        let value = parse_json(&bytes)?;
+        from_value(&value).map(AppJson)
+    }
+}
+
+/// True when the content type is `application/json` or `…+json` (parameters ignored).
+pub fn is_json(ct: Option<&header::HeaderValue>) -> bool {
+    let Some(ct) = ct.and_then(|v| v.to_str().ok()) else {
+        return false;
+    };
+    let essence = ct
+        .split(';')
+        .next()
+        .unwrap_or("")
+        .trim()
+        .to_ascii_lowercase();
+    essence == "application/json"
+        || (essence.starts_with("application/") && essence.ends_with("+json"))
+}
+
+/// Reads the whole body, mapping the body limit to 413.
+pub async fn read_body<S: Send + Sync>(req: Request, state: &S) -> Result<Bytes, ApiError> {
+    Bytes::from_request(req, state).await.map_err(|rej| {
+        if rej.status() == StatusCode::PAYLOAD_TOO_LARGE {
+            ApiError::new(
+                "payload_too_large",
+                "the request body is larger than the limit (see /v1/presets)",
+            )
+        } else {
+            ApiError::new("malformed_json", format!("could not read the body: {rej}"))
+        }
+    })
+}
+
+/// Parses bytes as JSON, mapping failures to 400 `malformed_json` with line and column.
+pub fn parse_json(bytes: &[u8]) -> Result<Value, ApiError> {
+    serde_json::from_slice(bytes)
+        .map_err(|e| ApiError::new("malformed_json", format!("the body is not valid JSON: {e}")))
+}
+
+/// Deserializes a parsed JSON value strictly: every object in the schema must be a JSON object,
+/// unknown fields and wrong types are problems naming the JSON Pointer of the field.
+pub fn from_value<T: DeserializeOwned>(value: &Value) -> Result<T, ApiError> {
+    serde_path_to_error::deserialize(Strict(value)).map_err(|err| {
+        let msg = err.inner().to_string();
+        let mut pointer = path_to_pointer(err.path());
+        let code = if msg.starts_with("unknown field") {
+            // The path ends at the object holding the unknown key; point at the key itself.
+            if let Some(name) = msg.split('`').nth(1)
+                && !pointer.ends_with(&format!("/{}", escape(name)))
+            {
+                pointer = format!("{pointer}/{}", escape(name));
+            }
+            "unknown_field"
+        } else if msg.starts_with("invalid type") || msg.starts_with("invalid length") {
+            "invalid_type"
+        } else {
+            "invalid_input"
+        };
+        let value_at = value.pointer(&pointer).cloned().unwrap_or(Value::Null);
+        ApiError::from_field_errors(
+            code,
+            vec![FieldError {
+                field: if pointer.is_empty() {
+                    "/".into()
+                } else {
+                    pointer
+                },
+                value: value_at,
+                message: msg,
+            }],
+        )
+    })
+}
+
+fn escape(seg: &str) -> String {
+    seg.replace('~', "~0").replace('/', "~1")
+}
+
+fn path_to_pointer(path: &serde_path_to_error::Path) -> String {
+    use serde_path_to_error::Segment;
+    let mut out = String::new();
+    for seg in path.iter() {
+        match seg {
+            Segment::Map { key } => {
+                out.push('/');
+                out.push_str(&escape(key));
+            }
+            Segment::Seq { index } => {
+                out.push('/');
+                out.push_str(&index.to_string());
+            }
+            Segment::Enum { .. } | Segment::Unknown => {}
+        }
+    }
+    out
+}
+
+fn unexpected(v: &Value) -> Unexpected<'_> {
+    match v {
+        Value::Null => Unexpected::Unit,
+        Value::Bool(b) => Unexpected::Bool(*b),
+        Value::Number(n) => n
+            .as_u64()
+            .map(Unexpected::Unsigned)
+            .or_else(|| n.as_i64().map(Unexpected::Signed))
+            .unwrap_or_else(|| Unexpected::Float(n.as_f64().unwrap_or(0.0))),
+        Value::String(s) => Unexpected::Str(s),
+        Value::Array(_) => Unexpected::Seq,
+        Value::Object(_) => Unexpected::Map,
+    }
+}
+
+/// A deserializer over a borrowed [`Value`] that, unlike serde_json's, refuses an array where a
+/// struct is expected (serde's derived structs accept sequences) and applies that at every depth.
+struct Strict<'a>(&'a Value);
+
+impl<'de> de::Deserializer<'de> for Strict<'_> {
+    type Error = serde_json::Error;
+
+    fn deserialize_any<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, Self::Error> {
+        match self.0 {
+            Value::Null => visitor.visit_unit(),
+            Value::Bool(b) => visitor.visit_bool(*b),
+            Value::Number(n) => {
+                if let Some(u) = n.as_u64() {
+                    visitor.visit_u64(u)
+                } else if let Some(i) = n.as_i64() {
+                    visitor.visit_i64(i)
+                } else {
+                    visitor.visit_f64(n.as_f64().unwrap_or(f64::NAN))
+                }
+            }
+            Value::String(s) => visitor.visit_str(s),
+            Value::Array(items) => {
+                let mut seq = SeqAccess(items.iter());
+                let out = visitor.visit_seq(&mut seq)?;
+                if seq.0.len() > 0 {
+                    return Err(de::Error::invalid_length(items.len(), &"fewer elements"));
+                }
+                Ok(out)
+            }
+            Value::Object(map) => visitor.visit_map(MapAccess {
+                iter: map.iter(),
+                value: None,
+            }),
+        }
+    }
+
+    fn deserialize_option<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, Self::Error> {
+        match self.0 {
+            Value::Null => visitor.visit_none(),
+            _ => visitor.visit_some(self),
+        }
+    }
+
+    fn deserialize_struct<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        _fields: &'static [&'static str],
+        visitor: V,
+    ) -> Result<V::Value, Self::Error> {
+        self.deserialize_map(visitor)
+    }
+
+    fn deserialize_map<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, Self::Error> {
+        match self.0 {
+            Value::Object(_) => self.deserialize_any(visitor),
+            other => Err(de::Error::invalid_type(unexpected(other), &"a JSON object")),
+        }
+    }
+
+    fn deserialize_enum<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        _variants: &'static [&'static str],
+        visitor: V,
+    ) -> Result<V::Value, Self::Error> {
+        match self.0 {
+            Value::String(s) => visitor.visit_enum(s.as_str().into_deserializer()),
+            other => Err(de::Error::invalid_type(unexpected(other), &"a string")),
+        }
+    }
+
+    fn deserialize_newtype_struct<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        visitor: V,
+    ) -> Result<V::Value, Self::Error> {
+        visitor.visit_newtype_struct(self)
+    }
+
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf unit
+        unit_struct seq tuple tuple_struct identifier ignored_any
+    }
+}
+
+struct SeqAccess<'a>(std::slice::Iter<'a, Value>);
+
+impl<'de> de::SeqAccess<'de> for SeqAccess<'_> {
+    type Error = serde_json::Error;
+
+    fn next_element_seed<T: de::DeserializeSeed<'de>>(
+        &mut self,
+        seed: T,
+    ) -> Result<Option<T::Value>, Self::Error> {
+        self.0
+            .next()
+            .map(|v| seed.deserialize(Strict(v)))
+            .transpose()
+    }
+
+    fn size_hint(&self) -> Option<usize> {
+        Some(self.0.len())
+    }
+}
+
+struct MapAccess<'a> {
+    iter: serde_json::map::Iter<'a>,
+    value: Option<&'a Value>,
+}
+
+impl<'de> de::MapAccess<'de> for MapAccess<'_> {
+    type Error = serde_json::Error;
+
+    fn next_key_seed<K: de::DeserializeSeed<'de>>(
+        &mut self,
+        seed: K,
+    ) -> Result<Option<K::Value>, Self::Error> {
+        match self.iter.next() {
+            Some((k, v)) => {
+                self.value = Some(v);
+                seed.deserialize(k.as_str().into_deserializer()).map(Some)
+            }
+            None => Ok(None),
+        }
+    }
+
+    fn next_value_seed<V: de::DeserializeSeed<'de>>(
+        &mut self,
+        seed: V,
+    ) -> Result<V::Value, Self::Error> {
+        let v = self
+            .value
+            .take()
+            .ok_or_else(|| <serde_json::Error as de::Error>::custom("value without a key"))?;
+        seed.deserialize(Strict(v))
+    }
+
+    fn size_hint(&self) -> Option<usize> {
+        Some(self.iter.len())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde::Deserialize;
+    use serde_json::json;
+
+    #[derive(Debug, Deserialize, PartialEq, Default)]
+    #[serde(deny_unknown_fields, default)]
+    struct Inner {
+        a: f64,
+    }
+
+    #[derive(Debug, Deserialize, PartialEq, Default)]
+    #[serde(deny_unknown_fields, default)]
+    struct Outer {
+        inner: Inner,
+        list: Vec<f64>,
+        opt: Option<f64>,
+    }
+
+    fn err(v: Value) -> ApiError {
+        from_value::<Outer>(&v).unwrap_err()
+    }
+
+    #[test]
+    fn accepts_objects_and_defaults() {
+        let o: Outer = from_value(&json!({"inner": {"a": 2}, "opt": null})).unwrap();
+        assert_eq!(o.inner.a, 2.0);
+        assert_eq!(o.opt, None);
+    }
+
+    #[test]
+    fn rejects_arrays_where_objects_belong_at_every_depth() {
+        let e = err(json!([]));
+        assert_eq!(e.code(), "invalid_type");
+        let e = err(json!({"inner": [1.0]}));
+        assert_eq!(e.code(), "invalid_type");
+        assert_eq!(e.errors()[0].field, "/inner");
+    }
+
+    #[test]
+    fn unknown_field_points_at_the_key() {
+        let e = err(json!({"inner": {"b": 1}}));
+        assert_eq!(e.code(), "unknown_field");
+        assert_eq!(e.errors()[0].field, "/inner/b");
+        assert_eq!(e.errors()[0].value, json!(1));
+    }
+
+    #[test]
+    fn wrong_type_and_null_are_invalid_type() {
+        let e = err(json!({"inner": {"a": "x"}}));
+        assert_eq!(e.code(), "invalid_type");
+        assert_eq!(e.errors()[0].field, "/inner/a");
+        let e = err(json!({"inner": {"a": null}}));
+        assert_eq!(e.code(), "invalid_type");
+        let e = err(json!({"list": [1, "x"]}));
+        assert_eq!(e.errors()[0].field, "/list/1");
+    }
+
+    #[test]
+    fn media_type_check() {
+        let h = |s: &'static str| header::HeaderValue::from_static(s);
+        assert!(is_json(Some(&h("application/json"))));
+        assert!(is_json(Some(&h("application/json; charset=utf-8"))));
+        assert!(is_json(Some(&h("application/problem+json"))));
+        assert!(!is_json(Some(&h("text/plain"))));
+        assert!(!is_json(None));
+    }
+}

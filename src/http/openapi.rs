@@ -1,0 +1,73 @@
+//! The OpenAPI 3.1 document, generated from the handlers and DTOs by utoipa.
+
+use serde::Serialize;
+use utoipa::{OpenApi, ToSchema};
+
+use crate::http::dto;
+use crate::http::error::FieldError;
+use crate::http::routes;
+
+/// RFC 9457 problem details, as every 4xx/5xx answers them (`application/problem+json`).
+#[derive(Debug, Serialize, ToSchema)]
+pub struct Problem {
+    /// `/problems/<code>`, e.g. `/problems/invalid_input`.
+    #[serde(rename = "type")]
+    #[schema(example = "/problems/invalid_input")]
+    pub type_: String,
+    /// Short title of the problem type.
+    pub title: String,
+    /// HTTP status.
+    pub status: u16,
+    /// What went wrong in this request.
+    pub detail: String,
+    /// Offending fields: JSON Pointer, value, message naming the valid range.
+    #[schema(value_type = Vec<FieldErrorDoc>)]
+    pub errors: Vec<FieldError>,
+    /// `capacity_exceeded` only: the largest impact speed the law can take, m/s.
+    pub max_velocity_m_s: Option<f64>,
+}
+
+/// One offending field of a request.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct FieldErrorDoc {
+    /// JSON Pointer into the request, e.g. `/rock/density_kg_m3`.
+    pub field: String,
+    /// The offending value.
+    pub value: serde_json::Value,
+    /// What is wrong, naming the valid range.
+    pub message: String,
+}
+
+/// The service's API document.
+#[derive(OpenApi)]
+#[openapi(
+    info(
+        title = "gangue",
+        description = "Flying-gangue (rockfall) hazard calculations for longwall faces in steeply \
+                       dipping coal seams: migration down the face, Hertz impact on a support \
+                       column, column energy. SI units throughout; every unit is named in the \
+                       field. Errors are RFC 9457 problem+json.",
+        license(name = "MIT OR Apache-2.0")
+    ),
+    paths(
+        routes::meta::healthz,
+        routes::meta::presets,
+        routes::meta::problem,
+        routes::impact::impact,
+    ),
+    components(schemas(Problem, FieldErrorDoc, dto::common::Warning, dto::common::PlanStep)),
+    tags(
+        (name = "impact", description = "Contact of the rock on the column"),
+        (name = "service", description = "Health, presets, problem types"),
+    )
+)]
+pub struct ApiDoc;
+
+/// The document as pretty JSON with a trailing newline (the committed `openapi/openapi.json`).
+pub fn openapi_json() -> String {
+    let mut s = ApiDoc::openapi()
+        .to_pretty_json()
+        .expect("the OpenAPI document serializes");
+    s.push('\n');
+    s
+}

@@ -1,0 +1,72 @@
+//! `POST /v1/impact`.
+
+use axum::extract::State;
+use axum::http::HeaderMap;
+use axum::response::{IntoResponse, Response};
+
+use crate::http::dto::common::{Meta, PlanStep};
+use crate::http::dto::impact::{CurveDto, ImpactRequest, ImpactResponse, impact_warnings};
+use crate::http::error::ApiError;
+use crate::http::json::AppJson;
+use crate::http::runner::{AppState, respond};
+use crate::physics::contact;
+use crate::physics::material::ImpactCase;
+
+/// Hertz contact of a rock on a column: maximum deformation, force, contact stress.
+#[utoipa::path(
+    post,
+    path = "/v1/impact",
+    tag = "impact",
+    request_body = ImpactRequest,
+    responses(
+        (status = 200, description = "Contact maxima, capacity and duration", body = ImpactResponse),
+        (status = "4XX", description = "Invalid request or capacity exceeded (problem+json)", body = crate::http::openapi::Problem, content_type = "application/problem+json"),
+        (status = "5XX", description = "Overloaded, timed out or internal (problem+json)", body = crate::http::openapi::Problem, content_type = "application/problem+json"),
+    )
+)]
+pub async fn impact(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    AppJson(mut req): AppJson<ImpactRequest>,
+) -> Response {
+    let case = match req.resolve(&state.config) {
+        Ok(c) => c,
+        Err(e) => return e.into_response(),
+    };
+    respond(&state, &headers, move |_control| solve(&case, req)).await
+}
+
+/// Solves a resolved impact request (also used by batch and scene).
+pub fn solve(case: &ImpactCase, req: ImpactRequest) -> Result<ImpactResponse, ApiError> {
+    let result = contact::solve_impact(case)?;
+    let n = req.output.curve_points as usize;
+    let mut plan = vec![PlanStep::ran(
+        "impact",
+        "closed-form maxima on the W₋₁ branch (log laws) or Hertz; duration by quadrature",
+    )];
+    let curve = if n > 0 {
+        let law = contact::force_law(case)?;
+        let (deformation_m, force_n) = contact::force_curve(&law, max_deformation(&result), n);
+        plan.push(PlanStep::ran(
+            "curve",
+            format!("{n} points of P(δ) from 0 to δmax"),
+        ));
+        Some(CurveDto {
+            deformation_m,
+            force_n,
+        })
+    } else {
+        plan.push(PlanStep::skipped("curve", "output.curve_points = 0"));
+        None
+    };
+    let mut meta = Meta::new(plan);
+    meta.warnings = impact_warnings(&result);
+    Ok(ImpactResponse::new(&result, curve, req, meta))
+}
+
+fn max_deformation(r: &contact::ImpactResult) -> f64 {
+    match &r.detail {
+        contact::ImpactDetail::Line(l) => l.max_deformation,
+        contact::ImpactDetail::Hertz(h) => h.max_deformation,
+    }
+}

@@ -1,0 +1,151 @@
+//! Service endpoints: health, presets, problem types, the page and its static files.
+
+use axum::extract::{Path, State};
+use axum::http::{HeaderValue, StatusCode, header};
+use axum::response::{Html, IntoResponse, Response};
+use include_dir::{Dir, include_dir};
+use serde_json::{Value, json};
+
+use crate::http::dto::common::MODEL_VERSION;
+use crate::http::error::{ApiError, problem_type};
+use crate::http::runner::AppState;
+
+/// The page and its assets, embedded at build time (no files needed at run time).
+static STATIC: Dir<'_> = include_dir!("$CARGO_MANIFEST_DIR/static");
+
+/// Liveness: answers at once, even while solvers are busy.
+#[utoipa::path(get, path = "/healthz", tag = "service",
+    responses((status = 200, description = "The service is up", body = Value, example = json!({"status": "ok", "version": "0.1.0"}))))]
+pub async fn healthz() -> Response {
+    axum::Json(json!({"status": "ok", "version": MODEL_VERSION})).into_response()
+}
+
+/// Named defaults (paper Tables 2–4), presets, the study ranges and the service's limits.
+#[utoipa::path(get, path = "/v1/presets", tag = "service",
+    responses((status = 200, description = "Tables 2–4, presets, study ranges, limits", body = Value)))]
+pub async fn presets(State(state): State<AppState>) -> Response {
+    axum::Json(presets_value(&state)).into_response()
+}
+
+fn presets_value(state: &AppState) -> Value {
+    let c = &state.config;
+    json!({
+        "rock": {
+            "source": "paper Table 2",
+            "density_kg_m3": 2500.0,
+            "elastic_modulus_pa": 5e9,
+            "poisson_ratio": 0.28,
+            "friction_coefficient": 0.2,
+            "side_length_m": 0.3,
+            "normal_stiffness_n_m": 1e8,
+            "shear_stiffness_n_m": 1e8,
+            "note": "Table 2 prints normal and tangential stiffness as 1 N/m, which cannot hold a 67.5 kg block; the service uses 1e8 N/m (physics.md §C.3)"
+        },
+        "face": {
+            "source": "paper Table 3",
+            "density_kg_m3": 2800.0,
+            "dip_deg": 45.0,
+            "internal_friction_angle_deg": 30.0,
+            "elastic_modulus_pa": 4.38e9,
+            "critical_damping_ratio": 0.35,
+            "length_m": 120.0
+        },
+        "column": {
+            "source": "paper Table 4, hydraulic support ZZ6500/22/48",
+            "support_type": "ZZ6500/22/48",
+            "first_stage": {"outer_diameter_m": 0.25, "inner_diameter_m": 0.235, "length_m": 1.31},
+            "second_stage": {"outer_diameter_m": 0.18, "inner_diameter_m": 0.16, "length_m": 1.285},
+            "elastic_modulus_pa": 208e9,
+            "poisson_ratio": 0.3,
+            "density_kg_m3": 7850.0,
+            "yield_stress_pa": 345e6,
+            "note": "Table 4's piston and rod diameters are read as outer and inner diameter of the first stage (physics.md §B.1)"
+        },
+        "presets": {
+            "paper": {
+                "contact": {"law": "paper", "effective_modulus": "paper"},
+                "galerkin": {"mode_shapes": "paper"},
+                "column": {"damping_coefficient_n_s_m2": 1.0}
+            },
+            "recommended": {
+                "contact": {"law": "johnson", "effective_modulus": "two_body"},
+                "galerkin": {"mode_shapes": "exact"},
+                "column": {"damping_ratio": 0.02},
+                "model": "coupled"
+            },
+            "calibrated_damping": {"column": {"damping_coefficient_n_s_m2": 725.0},
+                "note": "reproduces the paper's 'stops near 0.6 s' (physics.md §B.6)"}
+        },
+        "study": {
+            "parameters": [
+                {"name": "velocity_m_s", "min": 4.0, "max": 6.0},
+                {"name": "rock.side_length_m", "min": 0.2, "max": 0.3},
+                {"name": "rock.elastic_modulus_pa", "min": 4e9, "max": 6e9},
+                {"name": "rock.density_kg_m3", "min": 2000.0, "max": 3000.0}
+            ],
+            "x_values": [2.0 / 3.0, 0.75, 5.0 / 6.0, 11.0 / 12.0, 1.0]
+        },
+        "limits": {
+            "max_body_bytes": c.max_body_bytes,
+            "compute_timeout_s": c.compute_timeout_s,
+            "max_concurrent": c.max_concurrent(),
+            "solver_threads": c.solver_threads(),
+            "max_monte_carlo_runs": c.max_runs,
+            "max_samples": c.max_samples,
+            "max_curve_points": c.max_curve_points,
+            "max_modes": c.max_modes,
+            "max_end_time_s": c.max_end_time_s,
+            "max_study_points": c.max_study_points,
+            "max_batch_items": c.max_batch_items,
+            "max_rigid_block_steps": c.max_rigid_steps
+        }
+    })
+}
+
+/// A short page explaining one problem type (the `type` of error responses).
+#[utoipa::path(get, path = "/problems/{code}", tag = "service",
+    params(("code" = String, Path, description = "Problem code, e.g. capacity_exceeded")),
+    responses((status = 200, description = "HTML explanation", content_type = "text/html"),
+              (status = 404, description = "Unknown code", body = crate::http::openapi::Problem, content_type = "application/problem+json")))]
+pub async fn problem(Path(code): Path<String>) -> Response {
+    match problem_type(&code) {
+        Some(p) => Html(format!(
+            "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{code}</title>\
+             <link rel=\"stylesheet\" href=\"/static/style.css\"></head><body><main>\
+             <h1>{title}</h1><p><code>type: /problems/{code}</code> · HTTP {status}</p>\
+             <p>{expl}</p><p><a href=\"/\">gangue</a> · <a href=\"/docs\">API docs</a></p>\
+             </main></body></html>",
+            title = p.title,
+            status = p.status,
+            expl = p.explanation,
+        ))
+        .into_response(),
+        None => ApiError::new("not_found", format!("no problem type `{code}`")).into_response(),
+    }
+}
+
+/// The page.
+pub async fn index() -> Response {
+    asset("index.html")
+}
+
+/// Files of the page under `/static/`.
+pub async fn static_file(Path(path): Path<String>) -> Response {
+    asset(&path)
+}
+
+fn asset(path: &str) -> Response {
+    match STATIC.get_file(path) {
+        Some(f) => {
+            let mime = mime_guess::from_path(path).first_or_octet_stream();
+            let mut res = (StatusCode::OK, f.contents()).into_response();
+            if let Ok(v) = HeaderValue::from_str(mime.as_ref()) {
+                res.headers_mut().insert(header::CONTENT_TYPE, v);
+            }
+            res.headers_mut()
+                .insert(header::CACHE_CONTROL, HeaderValue::from_static("no-cache"));
+            res
+        }
+        None => ApiError::new("not_found", format!("no file `{path}`")).into_response(),
+    }
+}

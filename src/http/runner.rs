@@ -1,0 +1,316 @@
+//! Runs solvers off the async workers: a concurrency permit (saturated → 503), `spawn_blocking`
+//! inside the ensemble thread pool, and a [`Control`] whose deadline and cancel flag the solver
+//! polls. Dropping the request (client gone) or passing the time limit stops the work.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use axum::body::Body;
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use serde::Serialize;
+use tokio::sync::{OwnedSemaphorePermit, Semaphore};
+
+use super::error::ApiError;
+use super::finite::ensure_finite;
+use crate::config::Config;
+use crate::physics::Control;
+
+/// Media type of streamed progress answers and batch lines.
+pub const NDJSON: &str = "application/x-ndjson";
+
+/// Shared state of the service: settings, solver slots, the ensemble thread pool.
+#[derive(Clone)]
+pub struct AppState {
+    /// Settings and limits.
+    pub config: Arc<Config>,
+    permits: Arc<Semaphore>,
+    pool: Arc<rayon::ThreadPool>,
+}
+
+impl std::fmt::Debug for AppState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("AppState")
+            .field("config", &self.config)
+            .finish_non_exhaustive()
+    }
+}
+
+impl AppState {
+    /// Builds the state: `max_concurrent` permits and a rayon pool of `solver_threads` threads.
+    pub fn new(config: Config) -> Self {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(config.solver_threads())
+            .thread_name(|i| format!("gangue-solver-{i}"))
+            .build()
+            .expect("the solver thread pool can be built");
+        Self {
+            permits: Arc::new(Semaphore::new(config.max_concurrent())),
+            pool: Arc::new(pool),
+            config: Arc::new(config),
+        }
+    }
+
+    /// The time limit of one computation.
+    pub fn time_limit(&self) -> Duration {
+        Duration::from_secs_f64(self.config.compute_timeout_s)
+    }
+
+    fn acquire(&self) -> Result<OwnedSemaphorePermit, ApiError> {
+        self.permits
+            .clone()
+            .try_acquire_owned()
+            .map_err(|_| ApiError::overloaded(1))
+    }
+}
+
+/// Sets the cancel flag when dropped unless disarmed: a dropped request future stops its solver.
+struct CancelOnDrop(Option<Control>);
+
+impl CancelOnDrop {
+    fn disarm(mut self) {
+        self.0 = None;
+    }
+}
+
+impl Drop for CancelOnDrop {
+    fn drop(&mut self) {
+        if let Some(c) = self.0.take() {
+            c.cancel();
+        }
+    }
+}
+
+/// A started computation: its control handle and the blocking task.
+struct Running<T> {
+    control: Control,
+    handle: tokio::task::JoinHandle<Result<T, ApiError>>,
+}
+
+fn start<T, F>(state: &AppState, solve: F) -> Result<Running<T>, ApiError>
+where
+    T: Send + 'static,
+    F: FnOnce(&Control) -> Result<T, ApiError> + Send + 'static,
+{
+    let permit = state.acquire()?;
+    let control = Control::with_deadline(Some(Instant::now() + state.time_limit()));
+    let c = control.clone();
+    let pool = state.pool.clone();
+    let handle = tokio::task::spawn_blocking(move || {
+        let _permit = permit;
+        pool.install(|| solve(&c))
+    });
+    Ok(Running { control, handle })
+}
+
+async fn finish<T>(state: &AppState, run: Running<T>) -> Result<T, ApiError> {
+    let guard = CancelOnDrop(Some(run.control.clone()));
+    // The solver polls its deadline; the outer timeout is a backstop for one that does not.
+    let grace = Duration::from_secs(2);
+    let out = match tokio::time::timeout(state.time_limit() + grace, run.handle).await {
+        Ok(Ok(result)) => result,
+        Ok(Err(join)) => Err(ApiError::internal(format!("solver task failed: {join}"))),
+        Err(_) => {
+            run.control.cancel();
+            Err(ApiError::new(
+                "timeout",
+                "the computation passed the time limit and was stopped",
+            ))
+        }
+    };
+    guard.disarm();
+    out
+}
+
+/// Runs `solve` on the blocking pool under a permit and a deadline; returns its value.
+pub async fn run_solver<T, F>(state: &AppState, solve: F) -> Result<T, ApiError>
+where
+    T: Send + 'static,
+    F: FnOnce(&Control) -> Result<T, ApiError> + Send + 'static,
+{
+    let run = start(state, solve)?;
+    finish(state, run).await
+}
+
+/// True when the client asked for streamed progress (`Accept: application/x-ndjson`).
+pub fn wants_progress(headers: &HeaderMap) -> bool {
+    headers
+        .get_all(header::ACCEPT)
+        .iter()
+        .filter_map(|v| v.to_str().ok())
+        .any(|v| v.split(',').any(|t| t.trim().starts_with(NDJSON)))
+}
+
+/// Serializes a result to JSON bytes, refusing non-finite numbers (a bug, never sent as null).
+pub fn to_json_bytes<T: Serialize>(value: &T) -> Result<Vec<u8>, ApiError> {
+    ensure_finite(value).map_err(ApiError::internal)?;
+    serde_json::to_vec(value).map_err(ApiError::internal)
+}
+
+/// A 200 JSON response from bytes produced by [`to_json_bytes`].
+pub fn json_response(bytes: Vec<u8>) -> Response {
+    (
+        StatusCode::OK,
+        [(
+            header::CONTENT_TYPE,
+            HeaderValue::from_static("application/json"),
+        )],
+        bytes,
+    )
+        .into_response()
+}
+
+/// Runs a solver and answers either plain JSON or, when the client accepts NDJSON, a stream of
+/// `{"progress": {"done", "total"}}` lines followed by one `{"result": …}` or `{"problem": …}`.
+///
+/// The result is serialized on the blocking pool, not on the async workers.
+pub async fn respond<T, F>(state: &AppState, headers: &HeaderMap, solve: F) -> Response
+where
+    T: Serialize + Send + 'static,
+    F: FnOnce(&Control) -> Result<T, ApiError> + Send + 'static,
+{
+    let solve_bytes = move |c: &Control| solve(c).and_then(|v| to_json_bytes(&v));
+    if !wants_progress(headers) {
+        return match run_solver(state, solve_bytes).await {
+            Ok(bytes) => json_response(bytes),
+            Err(e) => e.into_response(),
+        };
+    }
+    let run = match start(state, solve_bytes) {
+        Ok(r) => r,
+        Err(e) => return e.into_response(),
+    };
+    let state = state.clone();
+    let control = run.control.clone();
+    let stream = async_stream::stream! {
+        let guard = CancelOnDrop(Some(control.clone()));
+        let mut fut = Box::pin(finish(&state, run));
+        let mut tick = tokio::time::interval(Duration::from_millis(250));
+        tick.tick().await;
+        let result = loop {
+            tokio::select! {
+                r = &mut fut => break r,
+                _ = tick.tick() => {
+                    let (done, total) = control.progress();
+                    let line = format!("{{\"progress\":{{\"done\":{done},\"total\":{total}}}}}\n");
+                    yield Ok::<_, std::convert::Infallible>(bytes::Bytes::from(line));
+                }
+            }
+        };
+        let mut line = match result {
+            Ok(bytes) => {
+                let mut l = b"{\"result\":".to_vec();
+                l.extend_from_slice(&bytes);
+                l.push(b'}');
+                l
+            }
+            Err(e) => {
+                let mut l = b"{\"problem\":".to_vec();
+                l.extend_from_slice(&serde_json::to_vec(&e.to_problem()).unwrap_or_default());
+                l.push(b'}');
+                l
+            }
+        };
+        line.push(b'\n');
+        guard.disarm();
+        yield Ok(bytes::Bytes::from(line));
+    };
+    (
+        StatusCode::OK,
+        [(header::CONTENT_TYPE, HeaderValue::from_static(NDJSON))],
+        Body::from_stream(stream),
+    )
+        .into_response()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::PhysicsError;
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+    fn state(timeout_s: f64, slots: usize) -> AppState {
+        AppState::new(Config {
+            compute_timeout_s: timeout_s,
+            max_concurrent: Some(slots),
+            solver_threads: Some(1),
+            ..Config::default()
+        })
+    }
+
+    /// A deliberately slow solver: spins until cancelled, counting its polls.
+    fn slow(
+        polls: Arc<AtomicU64>,
+        stopped: Arc<AtomicBool>,
+    ) -> impl FnOnce(&Control) -> Result<u8, ApiError> {
+        move |c: &Control| loop {
+            polls.fetch_add(1, Ordering::Relaxed);
+            if let Err(e) = c.check() {
+                stopped.store(true, Ordering::SeqCst);
+                return Err(ApiError::from(e));
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    #[tokio::test]
+    async fn deadline_stops_the_blocking_work() {
+        let s = state(0.2, 2);
+        let polls = Arc::new(AtomicU64::new(0));
+        let stopped = Arc::new(AtomicBool::new(false));
+        let t0 = Instant::now();
+        let r = run_solver(&s, slow(polls.clone(), stopped.clone())).await;
+        assert_eq!(r.unwrap_err().code(), "timeout");
+        assert!(stopped.load(Ordering::SeqCst), "the solver itself stopped");
+        assert!(t0.elapsed() < Duration::from_secs(2));
+        // No more polling after it returned.
+        let n = polls.load(Ordering::Relaxed);
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        assert_eq!(n, polls.load(Ordering::Relaxed));
+    }
+
+    #[tokio::test]
+    async fn dropping_the_request_cancels_the_work() {
+        let s = state(60.0, 2);
+        let polls = Arc::new(AtomicU64::new(0));
+        let stopped = Arc::new(AtomicBool::new(false));
+        let fut = run_solver(&s, slow(polls.clone(), stopped.clone()));
+        // Poll the request for a while, then drop it as a disconnecting client would.
+        let _ = tokio::time::timeout(Duration::from_millis(100), fut).await;
+        for _ in 0..100 {
+            if stopped.load(Ordering::SeqCst) {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+        assert!(
+            stopped.load(Ordering::SeqCst),
+            "a dropped request stops its solver"
+        );
+    }
+
+    #[tokio::test]
+    async fn saturated_slots_answer_overloaded() {
+        let s = state(60.0, 1);
+        let polls = Arc::new(AtomicU64::new(0));
+        let stopped = Arc::new(AtomicBool::new(false));
+        let s2 = s.clone();
+        let busy = tokio::spawn(async move { run_solver(&s2, slow(polls, stopped)).await });
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        let r = run_solver(&s, |_c: &Control| Ok::<_, ApiError>(1u8)).await;
+        let e = r.unwrap_err();
+        assert_eq!(e.code(), "overloaded");
+        assert_eq!(e.status(), StatusCode::SERVICE_UNAVAILABLE);
+        busy.abort();
+    }
+
+    #[tokio::test]
+    async fn physics_errors_pass_through() {
+        let s = state(60.0, 2);
+        let r = run_solver(&s, |_c: &Control| -> Result<u8, ApiError> {
+            Err(PhysicsError::invalid("/x", 1.0, "bad").into())
+        })
+        .await;
+        assert_eq!(r.unwrap_err().code(), "invalid_input");
+    }
+}
