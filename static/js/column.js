@@ -14,7 +14,7 @@ const COLUMN_GROUPS = [
     fields: [
       {
         local: 'models', label: 'Run', kind: 'select', value: 'both',
-        options: [['both', 'decoupled and coupled, side by side'], ['decoupled', 'decoupled only (paper)'], ['coupled', 'coupled only']],
+        options: [['both', 'both models'], ['decoupled', 'decoupled (paper)'], ['coupled', 'coupled']],
       },
     ],
   },
@@ -95,6 +95,7 @@ export function initColumn() {
   const table = document.getElementById('column-table');
   const empty = document.getElementById('column-empty');
   const wavePlot = document.getElementById('column-wave-plot');
+  const resultsBox = form.closest('[data-panel]').querySelector('.results');
   const energyPlots = {
     decoupled: document.getElementById('column-energy-decoupled'),
     coupled: document.getElementById('column-energy-coupled'),
@@ -137,6 +138,7 @@ export function initColumn() {
       else problems.push([model, answers[i].problem]);
     });
 
+    resultsBox.classList.toggle('stale', problems.length === models.length);
     if (problems.length) {
       const [model, problem] = problems[0];
       showProblem(status, problem, {

@@ -100,6 +100,7 @@ export function initImpact() {
   const empty = document.getElementById('impact-empty');
   const plotEl = document.getElementById('impact-plot');
   const capacity = document.getElementById('impact-capacity');
+  const results = form.closest('[data-panel]').querySelector('.results');
   buildForm(form, IMPACT_GROUPS);
 
   form.addEventListener('submit', async (event) => {
@@ -117,9 +118,11 @@ export function initImpact() {
     const answer = await postJson('v1/impact', request);
     if (!answer.ok) {
       showProblem(status, answer.problem, { forms: [form], endpoint: 'POST /v1/impact' });
+      results.classList.add('stale');
       return;
     }
     hideStatus(status);
+    results.classList.remove('stale');
     render(answer.data);
   });
 

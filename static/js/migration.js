@@ -121,6 +121,9 @@ export function initMigration() {
   const histogram = document.getElementById('migration-histogram');
   const percentiles = document.getElementById('migration-percentiles');
   const trajectoryBox = document.getElementById('migration-trajectory');
+  const results = form.closest('[data-panel]').querySelector('.results');
+  const statsCaption = document.getElementById('migration-stats-caption');
+  const percentilesCard = document.getElementById('migration-percentiles-card');
   const plots = {
     side: document.getElementById('migration-side-plot'),
     plan: document.getElementById('migration-plan-plot'),
@@ -192,9 +195,11 @@ export function initMigration() {
     }
     if (!answer.ok) {
       showProblem(status, answer.problem, { forms: [form], endpoint: 'POST /v1/migration' });
+      results.classList.add('stale');
       return;
     }
     hideStatus(status);
+    results.classList.remove('stale');
     render(answer.data);
   });
 
@@ -208,6 +213,7 @@ export function initMigration() {
 
   function renderStatistics(stats) {
     statsCard.hidden = !stats;
+    percentilesCard.hidden = !stats;
     if (!stats) {
       destroy(histogram);
       return;
@@ -228,8 +234,11 @@ export function initMigration() {
       plotMessage(histogram, 'No run reached the lower end.');
     }
 
+    statsCaption.textContent = `${stats.runs} runs, seed ${stats.seed}; ` +
+      `${fmt(stats.reached_fraction * 100, 4)} % reached the lower end. ` +
+      'Speed, energy and time over the runs that reached it; the rest over all runs.';
     percentiles.tHead.replaceChildren(h('tr', {},
-      h('th', {}, `${stats.runs} runs, seed ${stats.seed}; reached ${fmt(stats.reached_fraction * 100, 4)} %`),
+      h('th', {}, ''),
       STAT_COLUMNS.map((c) => h('th', { class: 'num' }, c)),
       h('th', {}, 'Unit')));
     const body = percentiles.tBodies[0];

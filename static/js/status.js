@@ -48,7 +48,7 @@ export function showProblem(el, problem, { forms = [], endpoint = '', label = ''
   head.append(h('strong', {}, `${status}${problem.title || 'Error'}`));
   if (problem.detail) head.append(' — ', problem.detail);
   const count = (problem.errors ?? []).length;
-  if (count) head.append(` (${count} field${count > 1 ? 's' : ''} marked below)`);
+  if (count) head.append(` (${count} field${count > 1 ? 's' : ''} marked in the form)`);
   el.append(head);
 
   if (problem.max_velocity_m_s !== undefined) {
