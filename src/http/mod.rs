@@ -18,7 +18,6 @@ use axum::routing::{get, post};
 use tower_http::compression::CompressionLayer;
 use tower_http::trace::TraceLayer;
 use tracing::Span;
-use utoipa::OpenApi;
 use utoipa_swagger_ui::SwaggerUi;
 
 pub use runner::AppState;
@@ -38,7 +37,7 @@ pub fn app(config: Config) -> Router {
         .route("/v1/impact", post(routes::impact::impact))
         .with_state(state);
     Router::new()
-        .merge(SwaggerUi::new("/docs").url("/openapi.json", openapi::ApiDoc::openapi()))
+        .merge(SwaggerUi::new("/docs").external_url_unchecked("/openapi.json", openapi::openapi_value()))
         .merge(api)
         .fallback(error::not_found)
         .method_not_allowed_fallback(method_not_allowed)

@@ -63,11 +63,61 @@ pub struct FieldErrorDoc {
 )]
 pub struct ApiDoc;
 
+/// Request fields whose documented default is `null` (they accept `null`); every other optional
+/// field may be omitted but not sent as null, and its default is described in words.
+const NULL_DEFAULTS: &[&str] = &[
+    "damping_ratio",
+    "initial_midpoint_displacement_m",
+    "end_time_s",
+    "output",
+    "monte_carlo",
+    "friction_coefficient",
+    "impact_velocity_m_s",
+    "release_zones",
+    "design_limits",
+    "time_step_s",
+];
+
+/// The served document: utoipa's, with derived defaults (which have no constant value) tidied.
+pub fn openapi_value() -> serde_json::Value {
+    let mut doc = serde_json::to_value(ApiDoc::openapi()).expect("the OpenAPI document serializes");
+    if let Some(schemas) = doc
+        .pointer_mut("/components/schemas")
+        .and_then(|s| s.as_object_mut())
+    {
+        for schema in schemas.values_mut() {
+            let Some(props) = schema.get_mut("properties").and_then(|p| p.as_object_mut()) else {
+                continue;
+            };
+            for (name, prop) in props.iter_mut() {
+                let Some(obj) = prop.as_object_mut() else {
+                    continue;
+                };
+                if obj.get("default") != Some(&serde_json::Value::Null)
+                    || NULL_DEFAULTS.contains(&name.as_str())
+                {
+                    continue;
+                }
+                obj.remove("default");
+                if let Some(types) = obj.get_mut("type").and_then(|t| t.as_array_mut()) {
+                    types.retain(|t| t != "null");
+                    if types.len() == 1 {
+                        let t = types[0].clone();
+                        obj.insert("type".into(), t);
+                    }
+                }
+                if let Some(one_of) = obj.get_mut("oneOf").and_then(|t| t.as_array_mut()) {
+                    one_of.retain(|t| t.get("type") != Some(&serde_json::json!("null")));
+                }
+            }
+        }
+    }
+    doc
+}
+
 /// The document as pretty JSON with a trailing newline (the committed `openapi/openapi.json`).
 pub fn openapi_json() -> String {
-    let mut s = ApiDoc::openapi()
-        .to_pretty_json()
-        .expect("the OpenAPI document serializes");
+    let mut s = serde_json::to_string_pretty(&openapi_value()).expect("the document serializes");
     s.push('\n');
     s
 }

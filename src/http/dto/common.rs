@@ -12,6 +12,16 @@ use crate::physics::material::{
 /// The crate version, reported as `model_version` in every result.
 pub const MODEL_VERSION: &str = env!("CARGO_PKG_VERSION");
 
+/// Deserializes an optional field that may be omitted but not sent as `null` (api.md: only fields
+/// shown with a null default accept null). Use with `#[serde(default, deserialize_with = "some")]`.
+pub fn some<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    T::deserialize(d).map(Some)
+}
+
 /// Collects range errors so that one answer names every bad field.
 #[derive(Debug, Default)]
 pub struct Checker {
@@ -176,17 +186,33 @@ pub struct RockDto {
     pub side_length_m: f64,
     /// Sphere radius, m (default side_length_m / 2).
     #[schema(minimum = 0.005, maximum = 2.5, example = 0.15)]
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        default,
+        deserialize_with = "some"
+    )]
     pub radius_m: Option<f64>,
     /// Cuboid edges [a, b, c], m, each in [0.01, 5].
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        default,
+        deserialize_with = "some"
+    )]
     #[schema(example = json!([0.4, 0.3, 0.2]))]
     pub dimensions_m: Option<[f64; 3]>,
     /// Convex polyhedron vertices (4–1000 points), m.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        default,
+        deserialize_with = "some"
+    )]
     pub vertices_m: Option<Vec<[f64; 3]>>,
     /// Random polyhedron parameters.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        default,
+        deserialize_with = "some"
+    )]
     pub random: Option<RandomShapeDto>,
     /// Density ρ, kg/m³.
     #[schema(default = 2500.0, minimum = 100.0, maximum = 20000.0, example = 2500.0)]
@@ -199,7 +225,11 @@ pub struct RockDto {
     pub poisson_ratio: f64,
     /// Rounded-corner radius r_c of `hertz_point`, m, in (0, L/2] (default min(0.02, L/2)).
     #[schema(exclusive_minimum = 0.0, maximum = 2.5, example = 0.02)]
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        default,
+        deserialize_with = "some"
+    )]
     pub corner_radius_m: Option<f64>,
 }
 
@@ -379,11 +409,19 @@ pub struct ColumnDto {
     pub yield_stress_pa: f64,
     /// Radius R of the cylinder at the contact, m (default D₁/2).
     #[schema(minimum = 0.001, maximum = 10.0, example = 0.125)]
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        default,
+        deserialize_with = "some"
+    )]
     pub contact_radius_m: Option<f64>,
     /// Viscous damping per unit length c, N·s/m² (default 1.0, the paper's value).
     #[schema(minimum = 0.0, maximum = 1e9, example = 1.0)]
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        default,
+        deserialize_with = "some"
+    )]
     pub damping_coefficient_n_s_m2: Option<f64>,
     /// Damping ratio ζ₁ of mode 1 instead of c (recommended 0.02); giving both is 422.
     #[schema(minimum = 0.0, maximum = 10.0, example = 0.02)]

@@ -1,0 +1,57 @@
+//! Service endpoints: health, presets, problem pages, the page, docs, 404/405 as problems.
+
+mod common;
+
+use axum::http::Method;
+use common::{assert_problem, get, send};
+
+#[tokio::test]
+async fn health_presets_and_problem_pages() {
+    let app = common::app();
+    let r = get(&app, "/healthz").await;
+    assert_eq!(r.status, 200);
+    assert_eq!(r.json()["status"], "ok");
+    let p = get(&app, "/v1/presets").await.json();
+    assert_eq!(p["column"]["support_type"], "ZZ6500/22/48");
+    assert_eq!(p["rock"]["density_kg_m3"], 2500.0);
+    assert_eq!(p["face"]["dip_deg"], 45.0);
+    assert_eq!(p["limits"]["max_monte_carlo_runs"], 1_000_000);
+    assert_eq!(p["limits"]["max_body_bytes"], 16 * 1024 * 1024);
+    assert_eq!(p["study"]["parameters"].as_array().unwrap().len(), 4);
+    for code in [
+        "capacity_exceeded",
+        "invalid_input",
+        "unknown_field",
+        "overloaded",
+        "timeout",
+    ] {
+        let r = get(&app, &format!("/problems/{code}")).await;
+        assert_eq!(r.status, 200, "{code}");
+        assert!(r.content_type().starts_with("text/html"));
+    }
+    assert_problem(&get(&app, "/problems/nonsense").await, 404, "not_found");
+}
+
+#[tokio::test]
+async fn unknown_paths_and_methods_are_problems() {
+    let app = common::app();
+    assert_problem(&get(&app, "/v1/nothing").await, 404, "not_found");
+    let r = send(&app, Method::GET, "/v1/impact", None, vec![], None).await;
+    assert_problem(&r, 405, "method_not_allowed");
+}
+
+#[tokio::test]
+async fn page_docs_and_openapi_are_served() {
+    let app = common::app();
+    let r = get(&app, "/").await;
+    assert_eq!(r.status, 200);
+    assert!(r.content_type().starts_with("text/html"));
+    assert!(String::from_utf8_lossy(&r.body).contains("gangue"));
+    let r = get(&app, "/docs/").await;
+    assert_eq!(r.status, 200, "swagger ui");
+    let r = get(&app, "/openapi.json").await;
+    assert_eq!(r.status, 200);
+    let doc = r.json();
+    assert!(doc["openapi"].as_str().unwrap().starts_with("3.1"));
+    assert!(doc["paths"]["/v1/impact"]["post"].is_object());
+}

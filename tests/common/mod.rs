@@ -1,0 +1,125 @@
+//! Helpers shared by the integration tests: the router without a socket, JSON requests.
+#![allow(dead_code, unreachable_pub)]
+
+use axum::Router;
+use axum::body::Body;
+use axum::http::{HeaderMap, Method, Request, StatusCode, header};
+use http_body_util::BodyExt;
+use serde_json::Value;
+use tower::ServiceExt;
+
+use gangue::config::Config;
+
+/// The service with default settings.
+pub fn app() -> Router {
+    gangue::app(Config::default())
+}
+
+/// A response: status, headers, body bytes.
+pub struct Reply {
+    pub status: StatusCode,
+    pub headers: HeaderMap,
+    pub body: Vec<u8>,
+}
+
+impl Reply {
+    /// The body as JSON (panics with the body text when it is not JSON).
+    pub fn json(&self) -> Value {
+        serde_json::from_slice(&self.body)
+            .unwrap_or_else(|e| panic!("not JSON ({e}): {}", String::from_utf8_lossy(&self.body)))
+    }
+
+    /// The content type.
+    pub fn content_type(&self) -> String {
+        self.headers
+            .get(header::CONTENT_TYPE)
+            .and_then(|v| v.to_str().ok())
+            .unwrap_or("")
+            .to_string()
+    }
+}
+
+/// Sends one request through the router.
+pub async fn send(
+    app: &Router,
+    method: Method,
+    path: &str,
+    ct: Option<&str>,
+    body: Vec<u8>,
+    accept: Option<&str>,
+) -> Reply {
+    let mut req = Request::builder().method(method).uri(path);
+    if let Some(ct) = ct {
+        req = req.header(header::CONTENT_TYPE, ct);
+    }
+    if let Some(a) = accept {
+        req = req.header(header::ACCEPT, a);
+    }
+    let res = app
+        .clone()
+        .oneshot(req.body(Body::from(body)).unwrap())
+        .await
+        .unwrap();
+    let status = res.status();
+    let headers = res.headers().clone();
+    let body = res.into_body().collect().await.unwrap().to_bytes().to_vec();
+    Reply {
+        status,
+        headers,
+        body,
+    }
+}
+
+/// POSTs JSON.
+pub async fn post(app: &Router, path: &str, body: &Value) -> Reply {
+    send(
+        app,
+        Method::POST,
+        path,
+        Some("application/json"),
+        serde_json::to_vec(body).unwrap(),
+        None,
+    )
+    .await
+}
+
+/// GETs a path.
+pub async fn get(app: &Router, path: &str) -> Reply {
+    send(app, Method::GET, path, None, Vec::new(), None).await
+}
+
+/// Asserts a problem+json answer with the given status and code; returns the problem.
+pub fn assert_problem(r: &Reply, status: u16, code: &str) -> Value {
+    assert_eq!(
+        r.status.as_u16(),
+        status,
+        "body: {}",
+        String::from_utf8_lossy(&r.body)
+    );
+    assert!(
+        r.content_type().starts_with("application/problem+json"),
+        "content type {}",
+        r.content_type()
+    );
+    let p = r.json();
+    assert_eq!(p["type"], format!("/problems/{code}"), "problem {p}");
+    assert_eq!(p["status"], status);
+    assert!(p["title"].is_string() && p["detail"].is_string());
+    p
+}
+
+/// Relative difference |a − b| / |b| (absolute when b = 0).
+pub fn rel(a: f64, b: f64) -> f64 {
+    if b == 0.0 {
+        a.abs()
+    } else {
+        ((a - b) / b).abs()
+    }
+}
+
+/// Directory of the shared specification and verification files.
+pub fn shared_dir() -> std::path::PathBuf {
+    std::env::var_os("GANGUE_SHARED")
+        .map(Into::into)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"))
+}
