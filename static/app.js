@@ -26,6 +26,16 @@ function initTabs() {
       showTab(tab.dataset.tab);
     });
   }
+  // Arrow keys move between tabs (WAI-ARIA tabs pattern).
+  document.querySelector('[role="tablist"]').addEventListener('keydown', (event) => {
+    const step = { ArrowRight: 1, ArrowLeft: -1 }[event.key];
+    if (!step) return;
+    const current = TABS.indexOf(document.querySelector('[aria-selected="true"]').dataset.tab);
+    const next = TABS[(current + step + TABS.length) % TABS.length];
+    history.replaceState(null, '', `#${next}`);
+    showTab(next);
+    document.getElementById(`tab-${next}`).focus();
+  });
   window.addEventListener('hashchange', () => showTab(location.hash.slice(1)));
   showTab(location.hash.slice(1));
 }

@@ -153,6 +153,26 @@ async function impactSection(page) {
 
   await screenshot(page, 'impact-error.png');
 
+  await check('impact: past the capacity the page shows 422 capacity_exceeded and max_velocity_m_s', async () => {
+    // L = 10 mm, ρ = 20000 kg/m³, E = 0.01 GPa: G = 0.18335 v², so v = 5 m/s is past
+    // the capacity (G > 1) and the largest velocity is 1/√0.18335 = 2.3354 m/s.
+    await form.locator('[data-pointer="/rock/density_kg_m3"]').fill('20000');
+    await form.locator('[data-pointer="/rock/side_length_m"]').fill('10');
+    await form.locator('[data-pointer="/rock/elastic_modulus_pa"]').fill('0.01');
+    const answer = page.waitForResponse((r) => r.url().endsWith('/v1/impact') && r.request().method() === 'POST');
+    await form.locator('button[type="submit"]').click();
+    const response = await answer;
+    const problem = await response.json();
+    assert(response.status() === 422 && problem.type?.endsWith('/capacity_exceeded'),
+      `answer ${response.status()} ${problem.type}`);
+    const extra = page.locator('#impact-status [data-out="max_velocity_m_s"]');
+    await extra.waitFor({ state: 'visible', timeout: WAIT_MS });
+    const text = await extra.textContent();
+    const value = parseShown(text.replace(/^[^\d]*/, ''));
+    assertClose(value, problem.max_velocity_m_s, 1e-4, 'max velocity shown (m/s)');
+    assertClose(value, 2.3354, 1e-3, 'max velocity (m/s)');
+  });
+
   await check('impact: Defaults clears the error and restores the density', async () => {
     await form.locator('button[type="reset"]').click();
     await page.waitForFunction(() => !document.querySelector('#impact-form .field.invalid'), null, { timeout: WAIT_MS });
