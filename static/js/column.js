@@ -95,6 +95,7 @@ export function initColumn() {
   const table = document.getElementById('column-table');
   const empty = document.getElementById('column-empty');
   const wavePlot = document.getElementById('column-wave-plot');
+  const plotsBox = document.getElementById('column-plots');
   const resultsBox = form.closest('[data-panel]').querySelector('.results');
   const energyPlots = {
     decoupled: document.getElementById('column-energy-decoupled'),
@@ -156,6 +157,7 @@ export function initColumn() {
 
   function render(results) {
     const shown = MODELS.filter((m) => results[m]);
+    plotsBox.hidden = !shown.length;
     if (!shown.length) {
       empty.hidden = false;
       table.tHead.replaceChildren();
