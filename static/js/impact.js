@@ -169,7 +169,12 @@ export function initImpact() {
       y: { label: 'force P (kN)' },
       series: [
         { label: 'P(δ)', values: ys },
-        { label: 'maximum', values: marker, points: 'only', color: '#c8423b' },
+        {
+          label: `maximum: δmax ${fmt(data.max_deformation_m * 1e3, 5)} mm, Pmax ${fmt(data.max_force_n * 1e-3, 5)} kN`,
+          values: marker,
+          points: 'only',
+          color: '#c8423b',
+        },
       ],
     });
   }
