@@ -1,8 +1,13 @@
 //! Contact of the rock block on the column: logarithmic line-contact laws (`paper`, `johnson`)
 //! on the W₋₁ branch, Hertz point contact, capacity, contact duration (physics.md §A).
 
-use super::error::PhysicsResult;
-use super::material::{ContactLaw, ImpactCase, ModulusConvention};
+use std::f64::consts::{E, FRAC_PI_2, PI};
+
+use super::elliptic::complete_elliptic_parts;
+use super::error::{PhysicsError, PhysicsResult};
+use super::lambert::{branch_u_log, branch_u_parts, u_minus_ln1p};
+use super::material::{Column, ContactLaw, ImpactCase, ModulusConvention, Rock, RockShape};
+use super::quadrature::{Integral, QuadOptions, integrate};
 
 /// Result of a normal impact against a rigid column.
 #[derive(Debug, Clone, PartialEq)]
@@ -97,22 +102,806 @@ pub enum ForceLaw {
     },
 }
 
-/// Solves the impact (maxima, capacity, duration). Errors with `CapacityExceeded` when G > 1.
-pub fn solve_impact(_case: &ImpactCase) -> PhysicsResult<ImpactResult> {
-    todo!("contact solver")
+/// t_c·v/δmax of a Hertz impact against a rigid body: (4/5)·B(2/5, 1/2), dimensionless.
+///
+/// Full precision from mpmath (`4/5*beta(2/5, 1/2)` at 40 digits). physics.md §A.7 prints the
+/// value as 2.9432372…, a transposition: the Beta function, the reference and case P04 all give
+/// 2.9432751843….
+pub const HERTZ_DURATION_FACTOR: f64 = 2.943_275_184_324_704_657_381_787_300_083;
+
+/// Relative error goal of the contact-duration quadrature (physics.md §A.6 asks for 1e-10).
+pub const DURATION_REL_TOL: f64 = 1e-11;
+
+// ---------------------------------------------------------------------------------------------
+// Double-double arithmetic for G: near the branch point P has condition (1+u)/(2u) in G, so G is
+// formed from the inputs with ~1e-30 relative error and 1 − G is taken before rounding.
+
+#[derive(Debug, Clone, Copy)]
+struct Dd {
+    hi: f64,
+    lo: f64,
+}
+
+const DD_PI: Dd = Dd {
+    hi: 3.141_592_653_589_793,
+    lo: 1.224_646_799_147_353_2e-16,
+};
+const DD_E4: Dd = Dd {
+    hi: 54.598_150_033_144_236,
+    lo: 2.874_157_801_584_411_5e-15,
+};
+
+#[inline]
+fn two_sum(a: f64, b: f64) -> Dd {
+    let s = a + b;
+    let bb = s - a;
+    Dd {
+        hi: s,
+        lo: (a - (s - bb)) + (b - bb),
+    }
+}
+
+#[inline]
+fn fast_two_sum(a: f64, b: f64) -> Dd {
+    let s = a + b;
+    Dd {
+        hi: s,
+        lo: b - (s - a),
+    }
+}
+
+#[inline]
+fn split(a: f64) -> (f64, f64) {
+    let t = 134_217_729.0 * a; // 2^27 + 1 (Dekker)
+    let hi = t - (t - a);
+    (hi, a - hi)
+}
+
+#[inline]
+fn two_prod(a: f64, b: f64) -> Dd {
+    let p = a * b;
+    let (ah, al) = split(a);
+    let (bh, bl) = split(b);
+    Dd {
+        hi: p,
+        lo: ((ah * bh - p) + ah * bl + al * bh) + al * bl,
+    }
+}
+
+impl Dd {
+    fn new(x: f64) -> Self {
+        Dd { hi: x, lo: 0.0 }
+    }
+    fn mul(self, o: Dd) -> Dd {
+        let p = two_prod(self.hi, o.hi);
+        fast_two_sum(p.hi, p.lo + (self.hi * o.lo + self.lo * o.hi))
+    }
+    fn mulf(self, o: f64) -> Dd {
+        self.mul(Dd::new(o))
+    }
+    fn add(self, o: Dd) -> Dd {
+        let s = two_sum(self.hi, o.hi);
+        fast_two_sum(s.hi, s.lo + self.lo + o.lo)
+    }
+    fn neg(self) -> Dd {
+        Dd {
+            hi: -self.hi,
+            lo: -self.lo,
+        }
+    }
+    fn div(self, o: Dd) -> Dd {
+        let q1 = self.hi / o.hi;
+        let r = self.add(o.mulf(q1).neg());
+        let q2 = r.hi / o.hi;
+        let r = r.add(o.mulf(q2).neg());
+        let q3 = r.hi / o.hi;
+        fast_two_sum(q1, q2).add(Dd::new(q3))
+    }
+    fn f64(self) -> f64 {
+        self.hi + self.lo
+    }
+}
+
+/// 1 − ν² in double-double.
+fn one_minus_sq(nu: f64) -> Dd {
+    Dd::new(1.0).add(two_prod(nu, nu).neg())
+}
+
+fn effective_modulus_dd(rock: &Rock, column: &Column, convention: ModulusConvention) -> Dd {
+    let rock_term = one_minus_sq(rock.poisson_ratio).div(Dd::new(rock.elastic_modulus));
+    match convention {
+        ModulusConvention::Paper => Dd::new(1.0).div(rock_term),
+        ModulusConvention::TwoBody => {
+            let col = one_minus_sq(column.poisson_ratio).div(Dd::new(column.elastic_modulus));
+            Dd::new(1.0).div(rock_term.add(col))
+        }
+    }
+}
+
+/// Effective modulus E* of the contact, Pa (physics.md §A.2).
+///
+/// `Paper`: E/(1 − ν²) of the rock only; `TwoBody`: 1/E* = (1 − ν²)/E + (1 − ν_s²)/E_s.
+///
+/// # Examples
+/// ```
+/// use gangue::physics::contact::effective_modulus;
+/// use gangue::physics::material::{Column, ModulusConvention, Rock};
+/// let e = effective_modulus(&Rock::default(), &Column::default(), ModulusConvention::TwoBody);
+/// assert!((e / 5.299_557_487e9 - 1.0).abs() < 1e-9);
+/// ```
+///
+/// # Special cases
+/// * Evaluated in double-double and rounded once: correctly rounded in practice.
+///
+/// # References
+/// physics.md §A.2 (Johnson's convention; E′ = 2E* is not used).
+pub fn effective_modulus(rock: &Rock, column: &Column, convention: ModulusConvention) -> f64 {
+    effective_modulus_dd(rock, column, convention).f64()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Input checks (the web layer checks the documented ranges first; these keep the solver total).
+
+fn check_positive(field: &str, value: f64) -> PhysicsResult<()> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(PhysicsError::invalid(
+            field,
+            value,
+            "must be a positive finite number",
+        ))
+    }
+}
+
+fn check_poisson(field: &str, value: f64) -> PhysicsResult<()> {
+    if (0.0..0.5).contains(&value) {
+        Ok(())
+    } else {
+        Err(PhysicsError::invalid(field, value, "must be in [0, 0.5)"))
+    }
+}
+
+fn check_case(case: &ImpactCase) -> PhysicsResult<()> {
+    check_positive("/velocity_m_s", case.velocity)?;
+    check_positive("/rock/side_length_m", case.rock.side_length)?;
+    check_positive("/rock/density_kg_m3", case.rock.density)?;
+    check_positive("/rock/elastic_modulus_pa", case.rock.elastic_modulus)?;
+    check_poisson("/rock/poisson_ratio", case.rock.poisson_ratio)?;
+    check_positive("/column/contact_radius_m", case.column.contact_radius)?;
+    if case.contact.modulus == ModulusConvention::TwoBody {
+        check_positive("/column/elastic_modulus_pa", case.column.elastic_modulus)?;
+        check_poisson("/column/poisson_ratio", case.column.poisson_ratio)?;
+    }
+    match (&case.rock.shape, case.contact.law) {
+        (RockShape::Sphere { radius }, ContactLaw::HertzPoint) => {
+            check_positive("/rock/radius_m", *radius)?
+        }
+        (RockShape::Sphere { .. }, _) => {
+            return Err(PhysicsError::invalid(
+                "/contact/law",
+                f64::NAN,
+                "a sphere rock has no flat face for a line contact: use the hertz_point law",
+            ));
+        }
+        (_, ContactLaw::HertzPoint) => {
+            check_positive("/rock/corner_radius_m", case.rock.corner_radius)?
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// Rock mass in double-double: ρL³ for a cube, else the shape's own mass.
+fn mass_dd(rock: &Rock) -> Dd {
+    match rock.shape {
+        RockShape::Cube => {
+            let l = rock.side_length;
+            Dd::new(rock.density).mulf(l).mulf(l).mulf(l)
+        }
+        _ => Dd::new(rock.mass()),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Logarithmic line contact (§A.5)
+
+/// The closed-form solution of a log-law impact, with the quantities the duration needs.
+#[derive(Debug, Clone, Copy)]
+struct LogSolution {
+    k: f64,
+    p_ref: f64,
+    g: f64,
+    u: f64,
+    p_max: f64,
+    d_max: f64,
+    p_cap: f64,
+}
+
+/// Solves ½mv² = E(Pmax) on W₋₁ for a line law with E* `e_star` (double-double).
+fn solve_log(case: &ImpactCase, e_star: Dd) -> PhysicsResult<LogSolution> {
+    let l = case.rock.side_length;
+    let r = case.column.contact_radius;
+    let v = case.velocity;
+    let m = mass_dd(&case.rock);
+    let es = e_star.f64();
+    let k = PI * l * es;
+    // c = G/v², and P_cap = P_ref/e.
+    let (c, p_cap, p_ref) = match case.contact.law {
+        ContactLaw::Paper => {
+            // G = 2 m R² v²/(π E* L⁵)
+            let num = m.mulf(2.0).mulf(r).mulf(r);
+            let l2 = two_prod(l, l);
+            let l5 = l2.mul(l2).mulf(l);
+            let den = DD_PI.mul(e_star).mul(l5);
+            let p_cap = PI * es * l * l * l / r;
+            (num.div(den), p_cap, E * p_cap)
+        }
+        _ => {
+            // G = e⁴ m v²/(8π L E* R²)
+            let num = DD_E4.mul(m);
+            let den = DD_PI.mulf(8.0).mulf(l).mul(e_star).mulf(r).mulf(r);
+            let p_cap = 4.0 * PI * l * es * r / (E * E);
+            (num.div(den), p_cap, 4.0 * PI * l * es * r / E)
+        }
+    };
+    let gdd = c.mulf(v).mulf(v);
+    if gdd.hi > 1.0 || (gdd.hi == 1.0 && gdd.lo > 0.0) {
+        let g = gdd.f64();
+        return Err(PhysicsError::CapacityExceeded {
+            energy_parameter: g,
+            max_velocity_m_s: v / g.sqrt(),
+            message: format!(
+                "the impact energy exceeds the capacity of the {} contact law (G = {g:.6} > 1): \
+                 the law stores at most {:.6e} J; the largest impact speed it can take with \
+                 these inputs is {:.6e} m/s",
+                if case.contact.law == ContactLaw::Paper {
+                    "paper"
+                } else {
+                    "johnson"
+                },
+                p_cap * p_cap / (4.0 * k),
+                v / g.sqrt()
+            ),
+        });
+    }
+    let (g, u) = if gdd.hi >= 1e-250 {
+        let q = Dd::new(1.0).add(gdd.neg()).f64();
+        if q == 0.0 {
+            (1.0, 0.0)
+        } else {
+            let y = if q < 0.5 {
+                -(-q).ln_1p()
+            } else {
+                -(gdd.hi.ln() + gdd.lo / gdd.hi)
+            };
+            (gdd.f64(), branch_u_parts(q, y))
+        }
+    } else {
+        // G is at or below the underflow threshold: work from ln G = ln c + 2 ln v.
+        let ln_g = c.hi.ln() + c.lo / c.hi + 2.0 * v.ln();
+        let u = branch_u_log(-ln_g).unwrap_or(f64::INFINITY);
+        (ln_g.exp(), u)
+    };
+    let p_max = if u < 1400.0 {
+        p_cap * (-0.5 * u).exp()
+    } else {
+        (p_cap.ln() - 0.5 * u).exp()
+    };
+    let d_max = p_max * (2.0 + u) / (2.0 * k);
+    Ok(LogSolution {
+        k,
+        p_ref,
+        g,
+        u,
+        p_max,
+        d_max,
+        p_cap,
+    })
+}
+
+/// J(u₀) = ∫₀^{π/2} sin θ · exp((u(G sin²θ) − u₀)/2) dθ, where u₀ = u(G): the log-law contact
+/// duration against a rigid column is t_c = (2 m v / Pmax)·J (dimensionless).
+///
+/// G enters only through u₀, so G below the f64 range (u₀ up to ~1e300) is handled: the
+/// integrand is formed from y = −ln(G sin²θ) = y₀ − ln sin²θ, and near the branch point from
+/// 1 − G sin²θ = (1 − G) + G cos²θ.
+///
+/// # Examples
+/// ```
+/// // At G → 0 the law tends to a linear spring with log corrections; J stays O(1).
+/// let j = gangue::physics::contact::line_duration_integral(17.432_269_118_399_564 - 1.0);
+/// assert!(j.converged && j.value > 1.0 && j.value < 2.0);
+/// ```
+///
+/// # Special cases
+/// * `u0 == 0` (G = 1): finite; the integrand has a √-type corner at θ = π/2.
+/// * Non-finite or negative `u0`: value NaN is never produced; such input gives J = 1 (the
+///   linear-spring limit is not reached, but the caller never passes it).
+///
+/// # References
+/// physics.md §A.6 (parametrisation E(P) = ½mv² sin²θ; breakpoints 1e-6, 1e-3, 0.1).
+pub fn line_duration_integral(u0: f64) -> Integral {
+    if !(u0 >= 0.0 && u0.is_finite()) {
+        return Integral {
+            value: 1.0,
+            error: 0.0,
+            evaluations: 0,
+            intervals: 0,
+            converged: false,
+        };
+    }
+    let y0 = u_minus_ln1p(u0);
+    let q0 = -(-y0).exp_m1(); // 1 − G, accurate near G = 1
+    let g = 1.0 - q0;
+    let f = |theta: f64| {
+        let (sin, cos) = theta.sin_cos();
+        let c2 = cos * cos;
+        let ln_s2 = if c2 < 0.5 {
+            (-c2).ln_1p()
+        } else {
+            2.0 * sin.ln()
+        };
+        let y = y0 - ln_s2;
+        let q = q0 + g * c2;
+        let u = if y > 0.0 { branch_u_parts(q, y) } else { 0.0 };
+        sin * (0.5 * (u - u0)).exp()
+    };
+    let mut points = [0.0, 1e-6, 1e-3, 0.1, 0.0, 0.0, FRAC_PI_2];
+    let mut n = 4;
+    // Near the branch point the integrand varies on the scale √(1 − G) below π/2.
+    let w = q0.sqrt();
+    for scale in [10.0, 1.0] {
+        let p = FRAC_PI_2 - scale * w;
+        if p > points[n - 1] && p < FRAC_PI_2 {
+            points[n] = p;
+            n += 1;
+        }
+    }
+    points[n] = FRAC_PI_2;
+    integrate(
+        f,
+        &points[..=n],
+        QuadOptions {
+            abs_tol: 0.0,
+            rel_tol: DURATION_REL_TOL,
+            max_intervals: 4000,
+        },
+    )
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hertz point contact (§A.7)
+
+/// Geometry and stiffness of the Hertz point contact of a rounded corner on the cylinder.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HertzGeometry {
+    /// κ in P = κδ^{3/2} as used (exact or equivalent radius), N/m^{3/2}.
+    pub stiffness: f64,
+    /// κ of the equivalent-radius form (4/3)E*√R_e, N/m^{3/2}.
+    pub stiffness_equivalent_radius: f64,
+    /// R_e = √(R′R″) = r_c √(R/(R + r_c)), m.
+    pub equivalent_radius: f64,
+    /// Squared eccentricity m_e = 1 − (b/a)² of the contact ellipse (0 for the equivalent
+    /// radius form), dimensionless.
+    pub eccentricity_squared: f64,
+    /// b/a ≤ 1 (1 for the equivalent-radius form), dimensionless.
+    pub axis_ratio: f64,
+    /// a²/δ: the major semi-axis at approach δ is a = √(factor·δ), m.
+    pub semi_axis_factor: f64,
+}
+
+/// ln of B/A − 1 = r_c/R as a function of the logit x = ln(m/(1 − m)) of the ellipse parameter,
+/// and the AGM parts at that m.
+fn hertz_log_ratio(x: f64) -> (f64, f64, f64, super::elliptic::CompleteElliptic) {
+    let m = 1.0 / (1.0 + (-x).exp());
+    let m1 = 1.0 / (1.0 + x.exp());
+    let r = complete_elliptic_parts(m, m1);
+    // B/A − 1 = m (1/2 − t(1 − m/2)) / (m₁ s), free of cancellation on the whole domain.
+    let num = 0.5 - r.t * (1.0 - 0.5 * m);
+    (m.ln() + num.ln() - m1.ln() - r.s.ln(), m, m1, r)
+}
+
+/// Brent's method on a bracketing interval [a, b] with f(a)·f(b) ≤ 0.
+fn brent<F: FnMut(f64) -> f64>(mut f: F, mut a: f64, mut b: f64, mut fa: f64, mut fb: f64) -> f64 {
+    if fa == 0.0 {
+        return a;
+    }
+    if fb == 0.0 {
+        return b;
+    }
+    let mut c = a;
+    let mut fc = fa;
+    let mut d = b - a;
+    let mut e = d;
+    for _ in 0..200 {
+        if (fb > 0.0) == (fc > 0.0) {
+            c = a;
+            fc = fa;
+            d = b - a;
+            e = d;
+        }
+        if fc.abs() < fb.abs() {
+            a = b;
+            b = c;
+            c = a;
+            fa = fb;
+            fb = fc;
+            fc = fa;
+        }
+        let tol = 2.0 * f64::EPSILON * b.abs().max(1.0);
+        let xm = 0.5 * (c - b);
+        if xm.abs() <= tol || fb == 0.0 {
+            return b;
+        }
+        if e.abs() >= tol && fa.abs() > fb.abs() {
+            let s = fb / fa;
+            let (mut p, mut q);
+            if a == c {
+                p = 2.0 * xm * s;
+                q = 1.0 - s;
+            } else {
+                let qq = fa / fc;
+                let r = fb / fc;
+                p = s * (2.0 * xm * qq * (qq - r) - (b - a) * (r - 1.0));
+                q = (qq - 1.0) * (r - 1.0) * (s - 1.0);
+            }
+            if p > 0.0 {
+                q = -q;
+            } else {
+                p = -p;
+            }
+            if 2.0 * p < (3.0 * xm * q - (tol * q).abs()).min((e * q).abs()) {
+                e = d;
+                d = p / q;
+            } else {
+                d = xm;
+                e = d;
+            }
+        } else {
+            d = xm;
+            e = d;
+        }
+        a = b;
+        fa = fb;
+        b += if d.abs() > tol { d } else { tol.copysign(xm) };
+        fb = f(b);
+    }
+    b
+}
+
+/// Hertz point-contact geometry of a rounded corner of radius `corner_radius` (m) on a cylinder
+/// of radius `contact_radius` (m), with E* `e_star` (Pa).
+///
+/// Curvatures A = 1/(2r_c) along the axis and B = (1/r_c + 1/R)/2 across it. `exact`: the
+/// elliptical Hertz κ = (2πE*/(3K))√((K − E)/(K m_e A)) with m_e solving
+/// B/A = [E/(1 − m_e) − K]/[K − E]; else κ = (4/3)E*√R_e.
+///
+/// # Examples
+/// ```
+/// let h = gangue::physics::contact::hertz_geometry(5.299_557_486_949_84e9, 0.02, 0.125, true);
+/// assert!((h.stiffness / 963_336_672.040_085_3 - 1.0).abs() < 1e-12); // case P04
+/// ```
+///
+/// # Special cases
+/// * r_c/R → 0 (circular contact): below r_c/R = e^{−40}, m_e = 4r_c/(3R) from the leading
+///   term (the next is O(m_e²)); κ → (4/3)E*√R_e. r_c/R underflowing to 0 gives m_e = 0.
+/// * r_c/R large (m_e → 1): solved for the logit of m_e, so 1 − m_e keeps full precision and
+///   K follows ln(4/√(1 − m_e)).
+///
+/// # References
+/// physics.md §A.7; K. L. Johnson, *Contact Mechanics* (CUP 1985) §4.2 and §3.4.
+pub fn hertz_geometry(
+    e_star: f64,
+    corner_radius: f64,
+    contact_radius: f64,
+    exact: bool,
+) -> HertzGeometry {
+    let rc = corner_radius;
+    let r = contact_radius;
+    let re = rc * (r / (rc + r)).sqrt();
+    let kappa_eq = 4.0 / 3.0 * e_star * re.sqrt();
+    if !exact {
+        return HertzGeometry {
+            stiffness: kappa_eq,
+            stiffness_equivalent_radius: kappa_eq,
+            equivalent_radius: re,
+            eccentricity_squared: 0.0,
+            axis_ratio: 1.0,
+            semi_axis_factor: re,
+        };
+    }
+    let target = rc.ln() - r.ln(); // ln(B/A − 1)
+    let (m, m1, parts) = if target < -40.0 {
+        let m = (target + (4.0f64 / 3.0).ln()).exp();
+        (m, 1.0 - m, complete_elliptic_parts(m, 1.0 - m))
+    } else {
+        // Initial guess from the asymptotes, then a widening bracket and Brent in x.
+        let rho = target.exp();
+        let x0 = if rho < 0.5 {
+            let m = 4.0 * rho / 3.0;
+            (m / (1.0 - m * 0.8)).ln()
+        } else {
+            let mut m1 = (1.0 / rho).min(0.5);
+            for _ in 0..3 {
+                m1 = (1.0 / (rho * ((4.0 / m1.sqrt()).ln() - 1.0).max(0.5))).min(0.5);
+            }
+            ((1.0 - m1) / m1).ln()
+        };
+        let mut g = |x: f64| hertz_log_ratio(x).0 - target;
+        let mut step = 0.25;
+        let (mut lo, mut hi) = (x0 - step, x0 + step);
+        let (mut glo, mut ghi) = (g(lo), g(hi));
+        for _ in 0..60 {
+            if glo <= 0.0 && ghi >= 0.0 {
+                break;
+            }
+            step *= 2.0;
+            if glo > 0.0 {
+                hi = lo;
+                ghi = glo;
+                lo -= step;
+                glo = g(lo);
+            } else {
+                lo = hi;
+                glo = ghi;
+                hi += step;
+                ghi = g(hi);
+            }
+        }
+        let x = brent(&mut g, lo, hi, glo, ghi);
+        let (_, m, m1, parts) = hertz_log_ratio(x);
+        (m, m1, parts)
+    };
+    // (K − E)/(K m A) = 2 r_c s.
+    let factor = 2.0 * rc * parts.s;
+    let kappa = 2.0 * PI * e_star / (3.0 * parts.k) * factor.sqrt();
+    HertzGeometry {
+        stiffness: kappa,
+        stiffness_equivalent_radius: kappa_eq,
+        equivalent_radius: re,
+        eccentricity_squared: m,
+        axis_ratio: m1.sqrt(),
+        semi_axis_factor: factor,
+    }
+}
+
+/// δmax = (5mv²/(4κ))^{2/5}, m, without forming v² (v may be 1e-300).
+fn hertz_max_deformation(mass: f64, v: f64, kappa: f64) -> f64 {
+    (1.25 * mass / kappa).powf(0.4) * v.powf(0.8)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Entry points
+
+/// The force–approach law P(δ) of a case (physics.md §A.5, §A.7): k = πLE* and P_ref for the log
+/// laws, κ for `hertz_point`.
+///
+/// # Errors
+/// `InvalidInput` for a sphere with a line law or a non-positive input.
+///
+/// # Examples
+/// ```
+/// use gangue::physics::contact::{force_law, ForceLaw};
+/// let law = force_law(&Default::default()).unwrap();
+/// let ForceLaw::Log { k, p_ref } = law else { panic!() };
+/// assert!((p_ref / (std::f64::consts::E * k) - 0.72).abs() < 1e-15); // δ_cap = L²/R
+/// ```
+///
+/// # Special cases
+/// * A sphere rock uses r_c = its radius.
+///
+/// # References
+/// physics.md §A.5 (paper: P_ref = eπE*L³/R; johnson: P_ref = 4πLE*R/e), §A.7.
+pub fn force_law(case: &ImpactCase) -> PhysicsResult<ForceLaw> {
+    check_case(case)?;
+    let es = effective_modulus(&case.rock, &case.column, case.contact.modulus);
+    let l = case.rock.side_length;
+    let r = case.column.contact_radius;
+    Ok(match case.contact.law {
+        ContactLaw::Paper => ForceLaw::Log {
+            k: PI * l * es,
+            p_ref: E * PI * es * l * l * l / r,
+        },
+        ContactLaw::Johnson => ForceLaw::Log {
+            k: PI * l * es,
+            p_ref: 4.0 * PI * l * es * r / E,
+        },
+        ContactLaw::HertzPoint => ForceLaw::Hertz {
+            kappa: hertz_geometry(es, corner_radius(case), r, case.contact.hertz_exact).stiffness,
+        },
+    })
+}
+
+fn corner_radius(case: &ImpactCase) -> f64 {
+    match case.rock.shape {
+        RockShape::Sphere { radius } => radius,
+        _ => case.rock.corner_radius,
+    }
+}
+
+/// The closed-form maxima of an impact against a rigid column (no duration): δmax, Pmax and
+/// the law-specific quantities.
+///
+/// # Errors
+/// `CapacityExceeded` when G > 1 (with the speed at which G = 1); `InvalidInput` as
+/// [`force_law`].
+///
+/// # Examples
+/// ```
+/// use gangue::physics::contact::{impact_maxima, ImpactDetail};
+/// let ImpactDetail::Line(l) = impact_maxima(&Default::default()).unwrap() else { panic!() };
+/// assert!((l.max_deformation / 1.793_326_647_367_473_2e-3 - 1.0).abs() < 1e-12); // P01
+/// ```
+///
+/// # Special cases
+/// * G = 1 exactly: u = 0, δmax = δ_cap.
+/// * G below the f64 range (v → 1e-300): computed from ln G; `energy_parameter` is then the
+///   rounded (possibly 0) G, while W, δ, P stay exact.
+/// * Hertz at v → 1e-300: Pmax ∝ v^{6/5} underflows to 0 when its true value is below 1e-308.
+///
+/// # References
+/// physics.md §A.5 (closed form on W₋₁ through u(G)), §A.7.
+pub fn impact_maxima(case: &ImpactCase) -> PhysicsResult<ImpactDetail> {
+    check_case(case)?;
+    let e_star = effective_modulus_dd(&case.rock, &case.column, case.contact.modulus);
+    let es = e_star.f64();
+    let r = case.column.contact_radius;
+    let l = case.rock.side_length;
+    match case.contact.law {
+        ContactLaw::Paper | ContactLaw::Johnson => {
+            let s = solve_log(case, e_star)?;
+            // √Pmax directly, so that a and p₀ = √(P E*/(πRL)) survive an underflowing Pmax.
+            let sqrt_p = if s.u < 1400.0 {
+                s.p_cap.sqrt() * (-0.25 * s.u).exp()
+            } else {
+                (0.5 * s.p_cap.ln() - 0.25 * s.u).exp()
+            };
+            let half_width = 2.0 * sqrt_p * (r / s.k).sqrt();
+            Ok(ImpactDetail::Line(LineImpact {
+                energy_parameter: s.g,
+                lambert_w: -1.0 - s.u,
+                u: s.u,
+                max_deformation: s.d_max,
+                max_force: s.p_max,
+                half_width,
+                max_pressure: sqrt_p * (s.k / r).sqrt() / (PI * l),
+                energy_capacity: s.p_cap * s.p_cap / (4.0 * s.k),
+                deformation_capacity: s.p_ref / (E * s.k),
+                force_capacity: s.p_cap,
+            }))
+        }
+        ContactLaw::HertzPoint => {
+            let mass = case.rock.mass();
+            let v = case.velocity;
+            let h = hertz_geometry(es, corner_radius(case), r, case.contact.hertz_exact);
+            let d = hertz_max_deformation(mass, v, h.stiffness);
+            let a = h.semi_axis_factor.sqrt() * d.sqrt();
+            Ok(ImpactDetail::Hertz(HertzImpact {
+                max_deformation: d,
+                max_force: h.stiffness * d * d.sqrt(),
+                stiffness: h.stiffness,
+                equivalent_radius: h.equivalent_radius,
+                max_deformation_equivalent_radius: hertz_max_deformation(
+                    mass,
+                    v,
+                    h.stiffness_equivalent_radius,
+                ),
+                axis_ratio: h.axis_ratio,
+                semi_axes: [a, a * h.axis_ratio],
+                // 3P/(2πab) = 3κ√δ/(2π·factor·(b/a)), without forming P (it may underflow).
+                max_pressure: 3.0 * h.stiffness * d.sqrt()
+                    / (2.0 * PI * h.semi_axis_factor * h.axis_ratio),
+            }))
+        }
+    }
+}
+
+/// Solves the impact of the case against a rigid column: maxima, capacity and contact duration.
+///
+/// # Errors
+/// `CapacityExceeded` when G > 1 for a log law; `InvalidInput` for a sphere with a line law or a
+/// non-positive input.
+///
+/// # Examples
+/// ```
+/// let r = gangue::physics::contact::solve_impact(&Default::default()).unwrap();
+/// assert!((r.contact_duration / 1.108_170_537_036_032_3e-3 - 1.0).abs() < 1e-9); // P01
+/// ```
+///
+/// # Special cases
+/// * See [`impact_maxima`]; the duration is finite and positive on the whole valid domain.
+///
+/// # References
+/// physics.md §A.5–§A.7.
+pub fn solve_impact(case: &ImpactCase) -> PhysicsResult<ImpactResult> {
+    let detail = impact_maxima(case)?;
+    let mass = case.rock.mass();
+    let v = case.velocity;
+    let contact_duration = match &detail {
+        ImpactDetail::Line(l) => {
+            let j = line_duration_integral(l.u).value;
+            if l.max_force > 1e-280 {
+                2.0 * mass * v / l.max_force * j
+            } else {
+                // v/Pmax from logarithms: at v ~ 5e-324 Pmax itself underflows.
+                2.0 * mass * j * (v.ln() - l.force_capacity.ln() + 0.5 * l.u).exp()
+            }
+        }
+        ImpactDetail::Hertz(h) => HERTZ_DURATION_FACTOR * h.max_deformation / v,
+    };
+    Ok(ImpactResult {
+        mass,
+        kinetic_energy: 0.5 * mass * v * v,
+        effective_modulus: effective_modulus(&case.rock, &case.column, case.contact.modulus),
+        contact_radius: case.column.contact_radius,
+        law: case.contact.law,
+        modulus: case.contact.modulus,
+        detail,
+        contact_duration,
+    })
+}
+
+/// `n` points of the force–approach curve P(δ), δ equally spaced from 0 to `max_deformation`
+/// (m): (δ in m, P in N). For the log laws δ is clamped to δ_cap.
+///
+/// # Examples
+/// ```
+/// use gangue::physics::contact::{force_curve, ForceLaw};
+/// let (d, p) = force_curve(&ForceLaw::Hertz { kappa: 1e9 }, 1e-3, 3);
+/// assert_eq!(d, vec![0.0, 5e-4, 1e-3]);
+/// assert!((p[2] - 1e9 * 1e-3f64.powf(1.5)).abs() < 1e-6);
+/// ```
+///
+/// # Special cases
+/// * `n == 0`: empty; `n == 1`: the single point (0, 0).
+///
+/// # References
+/// physics.md §A.5 (P(δ) = kδ/(−W₋₁(−kδ/P_ref))).
+pub fn force_curve(law: &ForceLaw, max_deformation: f64, n: usize) -> (Vec<f64>, Vec<f64>) {
+    let cap = law.deformation_capacity().unwrap_or(f64::INFINITY);
+    let mut deltas = Vec::with_capacity(n);
+    let mut forces = Vec::with_capacity(n);
+    for i in 0..n {
+        let d = if i + 1 == n && n > 1 {
+            max_deformation
+        } else if n > 1 {
+            max_deformation * (i as f64 / (n - 1) as f64)
+        } else {
+            0.0
+        };
+        let d = d.min(cap);
+        let p = law.force(d).unwrap_or(match *law {
+            ForceLaw::Log { p_ref, .. } => p_ref / E,
+            ForceLaw::Hertz { .. } => 0.0,
+        });
+        deltas.push(d);
+        forces.push(p);
+    }
+    (deltas, forces)
 }
 
 impl ForceLaw {
     /// Contact force P(δ) at approach δ ≥ 0, N; 0 for δ ≤ 0. For the log laws this is the W₋₁
-    /// inverse P = kδ/(1 + u(e·kδ/P_ref)); past the capacity δ_cap it returns `None`.
+    /// inverse P = kδ/(1 + u(e·kδ/P_ref)); past the capacity δ_cap (by more than the rounding of
+    /// e·kδ/P_ref, 8 ulp) it returns `None`.
     pub fn force(&self, delta: f64) -> Option<f64> {
         if delta <= 0.0 {
             return Some(0.0);
         }
         match *self {
             ForceLaw::Log { k, p_ref } => {
-                let g = std::f64::consts::E * k * delta / p_ref;
-                super::lambert::branch_u(g).map(|u| k * delta / (1.0 + u))
+                let g = E * k * delta / p_ref;
+                let u = if g > 1.0 && g <= 1.0 + 8.0 * f64::EPSILON {
+                    // δ_cap itself, rounded just past the branch point.
+                    Some(0.0)
+                } else if g >= 1e-250 {
+                    super::lambert::branch_u(g)
+                } else {
+                    // G underflows: u from ln G.
+                    branch_u_log(-((E * k / p_ref).ln() + delta.ln()))
+                };
+                u.map(|u| k * delta / (1.0 + u))
             }
             ForceLaw::Hertz { kappa } => Some(kappa * delta * delta.sqrt()),
         }
@@ -121,27 +910,199 @@ impl ForceLaw {
     /// Approach at the capacity δ_cap = P_ref/(e k), m; `None` for Hertz (unbounded).
     pub fn deformation_capacity(&self) -> Option<f64> {
         match *self {
-            ForceLaw::Log { k, p_ref } => Some(p_ref / (std::f64::consts::E * k)),
+            ForceLaw::Log { k, p_ref } => Some(p_ref / (E * k)),
             ForceLaw::Hertz { .. } => None,
         }
     }
 }
 
-/// Effective modulus E* of the contact, Pa (physics.md §A.2).
-pub fn effective_modulus(
-    _rock: &super::material::Rock,
-    _column: &super::material::Column,
-    _convention: ModulusConvention,
-) -> f64 {
-    todo!("effective modulus")
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::material::ContactModel;
 
-/// The force–approach law of a case.
-pub fn force_law(_case: &ImpactCase) -> PhysicsResult<ForceLaw> {
-    todo!("force law")
-}
+    fn rel(a: f64, b: f64) -> f64 {
+        ((a - b) / b).abs()
+    }
 
-/// `n` points of P(δ) equally spaced in δ from 0 to `max_deformation`: (δ, P) in (m, N).
-pub fn force_curve(_law: &ForceLaw, _max_deformation: f64, _n: usize) -> (Vec<f64>, Vec<f64>) {
-    todo!("force curve")
+    fn line(case: &ImpactCase) -> (ImpactResult, LineImpact) {
+        let r = solve_impact(case).unwrap();
+        let ImpactDetail::Line(l) = r.detail else {
+            panic!("not a line result")
+        };
+        (r, l)
+    }
+
+    /// Verification case P01 (physics.md §A.8), expected values from cases.json.
+    #[test]
+    fn p01_paper_base() {
+        let (r, l) = line(&ImpactCase::default());
+        assert!(rel(r.mass, 67.5) < 1e-15);
+        assert!(rel(r.kinetic_energy, 843.75) < 1e-15);
+        assert!(rel(r.effective_modulus, 5_425_347_222.222_222) < 1e-15);
+        assert!(rel(l.energy_parameter, 1.273_239_544_735_162_8e-6) < 1e-15);
+        assert!(rel(l.lambert_w, -17.432_269_118_399_564) < 1e-15);
+        assert!(rel(l.max_deformation, 0.001_793_326_647_367_473_2) < 1e-14);
+        assert!(rel(l.max_force, 994_968.337_247_573_7) < 1e-14);
+        assert!(rel(l.half_width, 0.009_863_710_098_875_706) < 1e-14);
+        assert!(rel(l.max_pressure, 214_056_208.742_962_4) < 1e-14);
+        assert!(rel(l.energy_capacity, 662_679_700.366_596_9) < 1e-14);
+        assert!(rel(l.deformation_capacity, 0.72) < 1e-15);
+        assert!(rel(l.force_capacity, 3_681_553_890.925_538_5) < 1e-15);
+        assert!(rel(r.contact_duration, 0.001_108_170_537_036_032_3) < 1e-10);
+    }
+
+    #[test]
+    fn p02_paper_two_body_low_corner() {
+        let mut c = ImpactCase::default();
+        c.velocity = 4.0;
+        c.rock.side_length = 0.2;
+        c.rock.elastic_modulus = 4e9;
+        c.rock.density = 2000.0;
+        c.contact.modulus = ModulusConvention::TwoBody;
+        let (r, l) = line(&c);
+        assert!(rel(r.mass, 16.000_000_000_000_004) < 1e-15);
+        assert!(rel(r.effective_modulus, 4_259_397_295.282_717_7) < 1e-15);
+        assert!(rel(l.energy_parameter, 1.868_280_088_219_986e-6) < 1e-15);
+        assert!(rel(l.lambert_w, -17.025_186_070_461_633) < 1e-15);
+        assert!(rel(l.max_deformation, 0.000_955_377_036_336_523_4) < 1e-14);
+        assert!(rel(l.max_force, 283_695.898_135_343_74) < 1e-14);
+        assert!(rel(l.half_width, 0.007_280_270_582_855_752) < 1e-14);
+        assert!(rel(l.max_pressure, 124_038_259.318_168_49) < 1e-14);
+        assert!(rel(l.energy_capacity, 68_512_211.208_091_78) < 1e-14);
+        assert!(rel(l.deformation_capacity, 0.320_000_000_000_000_06) < 1e-15);
+        assert!(rel(l.force_capacity, 856_402_640.101_147) < 1e-15);
+        assert!(rel(r.contact_duration, 0.000_737_681_190_870_758_8) < 1e-10);
+    }
+
+    #[test]
+    fn p03_johnson_two_body() {
+        let mut c = ImpactCase::default();
+        c.contact = ContactModel {
+            law: ContactLaw::Johnson,
+            modulus: ModulusConvention::TwoBody,
+            hertz_exact: true,
+        };
+        let (r, l) = line(&c);
+        assert!(rel(r.effective_modulus, 5_299_557_486.949_84) < 1e-15);
+        assert!(rel(l.energy_parameter, 0.000_147_570_979_927_310_92) < 1e-15);
+        assert!(rel(l.lambert_w, -12.333_522_216_823_81) < 1e-15);
+        assert!(rel(l.max_deformation, 0.001_560_460_766_915_467_6) < 1e-14);
+        assert!(rel(l.max_force, 1_169_092.019_221_179_7) < 1e-14);
+        assert!(rel(l.half_width, 0.010_818_174_504_044_884) < 1e-14);
+        assert!(rel(l.max_pressure, 229_326_150.752_163_74) < 1e-14);
+        assert!(rel(l.energy_capacity, 5_717_587.566_441_628) < 1e-14);
+        assert!(rel(l.deformation_capacity, 0.067_667_641_618_306_35) < 1e-15);
+        assert!(rel(l.force_capacity, 337_980_602.231_884_54) < 1e-15);
+        assert!(rel(r.contact_duration, 0.000_958_156_107_119_769) < 1e-10);
+    }
+
+    #[test]
+    fn p04_hertz_point_exact() {
+        let mut c = ImpactCase::default();
+        c.contact.law = ContactLaw::HertzPoint;
+        c.contact.modulus = ModulusConvention::TwoBody;
+        c.rock.corner_radius = 0.02;
+        let r = solve_impact(&c).unwrap();
+        let ImpactDetail::Hertz(h) = r.detail else {
+            panic!()
+        };
+        assert!(rel(h.stiffness, 963_336_672.040_085_3) < 1e-13);
+        assert!(rel(h.max_deformation, 0.005_446_911_017_075_47) < 1e-13);
+        assert!(rel(h.max_force, 387_260.778_336_077_1) < 1e-13);
+        assert!(rel(h.equivalent_radius, 0.018_569_533_817_705_187) < 1e-15);
+        assert!(
+            rel(
+                h.max_deformation_equivalent_radius,
+                0.005_447_910_697_006_21
+            ) < 1e-14
+        );
+        assert!(rel(h.axis_ratio, 0.905_800_144_462_170_7) < 1e-13);
+        assert!(rel(r.contact_duration, 0.003_206_351_605_556_613_6) < 1e-13);
+        // p₀ = 3P/(2πab) and the semi-axes are consistent with P.
+        let [a, b] = h.semi_axes;
+        assert!(rel(h.max_pressure, 3.0 * h.max_force / (2.0 * PI * a * b)) < 1e-14);
+        assert!(rel(b / a, h.axis_ratio) < 1e-15);
+    }
+
+    #[test]
+    fn p14_capacity_exceeded_reports_the_limit_speed() {
+        let mut c = ImpactCase::default();
+        c.velocity = 400.0;
+        c.rock.side_length = 0.05;
+        c.rock.elastic_modulus = 5e8;
+        let Err(PhysicsError::CapacityExceeded {
+            energy_parameter,
+            max_velocity_m_s,
+            ..
+        }) = solve_impact(&c)
+        else {
+            panic!("expected capacity_exceeded")
+        };
+        assert!(energy_parameter > 1.0);
+        // At the reported speed G = 1 (to rounding): just below it solves, just above it fails.
+        c.velocity = max_velocity_m_s * (1.0 - 1e-12);
+        let (_, l) = line(&c);
+        assert!(l.u < 1e-5 && l.energy_parameter <= 1.0);
+        c.velocity = max_velocity_m_s * (1.0 + 1e-12);
+        assert!(matches!(
+            solve_impact(&c),
+            Err(PhysicsError::CapacityExceeded { .. })
+        ));
+    }
+
+    #[test]
+    fn sphere_allows_only_hertz() {
+        let mut c = ImpactCase::default();
+        c.rock.shape = RockShape::Sphere { radius: 0.1 };
+        let Err(PhysicsError::InvalidInput { field, .. }) = solve_impact(&c) else {
+            panic!()
+        };
+        assert_eq!(field, "/contact/law");
+        c.contact.law = ContactLaw::HertzPoint;
+        let r = solve_impact(&c).unwrap();
+        assert!(rel(r.mass, 2500.0 * 4.0 / 3.0 * PI * 1e-3) < 1e-15);
+        let ImpactDetail::Hertz(h) = r.detail else {
+            panic!()
+        };
+        // r_c = the sphere's radius, not the default corner radius.
+        let g = hertz_geometry(r.effective_modulus, 0.1, 0.125, true);
+        assert_eq!(h.stiffness, g.stiffness, "{h:?} {g:?}");
+    }
+
+    #[test]
+    fn force_curve_ends_at_the_maximum() {
+        for law in [
+            ContactLaw::Paper,
+            ContactLaw::Johnson,
+            ContactLaw::HertzPoint,
+        ] {
+            let mut c = ImpactCase::default();
+            c.contact.law = law;
+            let f = force_law(&c).unwrap();
+            let (dmax, pmax) = match impact_maxima(&c).unwrap() {
+                ImpactDetail::Line(l) => (l.max_deformation, l.max_force),
+                ImpactDetail::Hertz(h) => (h.max_deformation, h.max_force),
+            };
+            let (d, p) = force_curve(&f, dmax, 101);
+            assert_eq!((d.len(), p.len()), (101, 101));
+            assert_eq!((d[0], p[0]), (0.0, 0.0));
+            assert_eq!(d[100], dmax);
+            assert!(rel(p[100], pmax) < 1e-14, "{law:?}");
+            assert!(p.windows(2).all(|w| w[1] > w[0]));
+        }
+        assert!(
+            force_curve(&ForceLaw::Hertz { kappa: 1.0 }, 1.0, 0)
+                .0
+                .is_empty()
+        );
+    }
+
+    #[test]
+    fn duration_at_the_branch_point_is_finite() {
+        let j0 = line_duration_integral(0.0);
+        let j1 = line_duration_integral(1e-9);
+        assert!(j0.converged && j1.converged);
+        assert!(j0.value.is_finite() && (j0.value - j1.value).abs() < 1e-6);
+    }
 }

@@ -33,8 +33,49 @@ pub fn branch_u(g: f64) -> Option<f64> {
     if g == 0.0 {
         return Some(f64::INFINITY);
     }
-    let q = 1.0 - g;
-    let y = -g.ln();
+    Some(branch_u_parts(1.0 - g, -g.ln()))
+}
+
+/// u ≥ 0 solving u − ln(1 + u) = y, i.e. (1 + u)e^{−u} = G with y = −ln G ≥ 0 given directly.
+///
+/// Use this when G itself underflows (G < 1e-308 needs y > 709): δ, P and the contact duration
+/// stay finite and correct because they depend on G only through u.
+///
+/// # Examples
+/// ```
+/// // G = e^{-2000} is not representable, its logarithm is.
+/// let u = gangue::physics::lambert::branch_u_log(2000.0).unwrap();
+/// assert!((u - u.ln_1p() - 2000.0).abs() < 1e-12);
+/// ```
+///
+/// # Special cases
+/// * `y < 0` or NaN: `None` (G > 1).
+/// * `y == 0`: `Some(0.0)` (the branch point); `y == +∞`: `Some(+∞)`.
+///
+/// # References
+/// physics.md §A.5.
+pub fn branch_u_log(y: f64) -> Option<f64> {
+    if y.is_nan() || y < 0.0 {
+        return None;
+    }
+    if y == 0.0 {
+        return Some(0.0);
+    }
+    if y == f64::INFINITY {
+        return Some(f64::INFINITY);
+    }
+    Some(branch_u_parts(-(-y).exp_m1(), y))
+}
+
+/// Core of [`branch_u`]: u from q = 1 − G and y = −ln G, both given (q is used only near the
+/// branch point, where it must be accurate). Requires 0 < q ≤ 1 and 0 < y < ∞, consistent.
+///
+/// # Special cases
+/// * `q < 1e-12`: the branch-point series alone.
+///
+/// # References
+/// physics.md §A.5.
+pub fn branch_u_parts(q: f64, y: f64) -> f64 {
     let mut u = if q < 2e-3 {
         let s = (2.0 * q).sqrt();
         let series = s
@@ -46,7 +87,7 @@ pub fn branch_u(g: f64) -> Option<f64> {
                                 + s * (221.0 / 8505.0
                                     + s * (680863.0 / 43545600.0 + s * (1963.0 / 204120.0))))))));
         if q < 1e-12 {
-            return Some(series);
+            return series;
         }
         series
     } else if y > 1.0 {
@@ -56,7 +97,7 @@ pub fn branch_u(g: f64) -> Option<f64> {
     };
     // Newton on f(u) = u − ln(1 + u) − y, f'(u) = u/(1 + u).
     for _ in 0..50 {
-        let f = u - u.ln_1p() - y;
+        let f = u_minus_ln1p(u) - y;
         let mut next = u - f * (1.0 + u) / u;
         if next <= 0.0 {
             next = 0.5 * u;
@@ -67,7 +108,39 @@ pub fn branch_u(g: f64) -> Option<f64> {
             break;
         }
     }
-    Some(u)
+    u
+}
+
+/// y = −ln G = u − ln(1 + u) for u ≥ 0 (the inverse of [`branch_u_log`]), without
+/// cancellation at small u.
+///
+/// # Examples
+/// ```
+/// let y = gangue::physics::lambert::u_minus_ln1p(1e-8);
+/// assert!((y / 5e-17 - 1.0).abs() < 1e-7); // u²/2 − u³/3 …
+/// ```
+///
+/// # Special cases
+/// * `u == 0`: 0; `u == +∞`: +∞.
+///
+/// # References
+/// Below u = 0.25 it uses ln(1 + u) = 2 atanh(w), w = u/(2 + u), so that
+/// u − ln(1 + u) = u²/(2 + u) − 2(w³/3 + w⁵/5 + …), a sum without cancellation.
+pub fn u_minus_ln1p(u: f64) -> f64 {
+    if u < 0.25 {
+        let w = u / (2.0 + u);
+        let w2 = w * w;
+        // 2 Σ_{j≥1} w^{2j+1}/(2j+1): w² ≤ 0.0124, 9 terms reach 1e-17 relative.
+        let mut tail = 0.0;
+        for j in (1..=9).rev() {
+            tail = w2 * (1.0 / (2 * j + 1) as f64 + tail);
+        }
+        u * u / (2.0 + u) - 2.0 * w * tail
+    } else if u.is_finite() {
+        u - u.ln_1p()
+    } else {
+        u
+    }
 }
 
 /// W₋₁(−G/e) = −1 − u(G) for G ∈ [0, 1]; `None` outside.

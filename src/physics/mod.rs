@@ -5,9 +5,11 @@
 
 pub mod contact;
 pub mod control;
+pub mod elliptic;
 pub mod error;
 pub mod lambert;
 pub mod material;
+pub mod quadrature;
 
 pub use control::Control;
 pub use error::{PhysicsError, PhysicsResult};
