@@ -64,9 +64,9 @@ export function fillTable(tbody, rows, data, prefix = '') {
     if (raw === undefined) continue;
     const value = scaled(raw, row.scale ?? 1);
     const cell = h('td', { class: 'num', dataset: { out: prefix + row.key } }, fmtValue(value, row.sig));
-    const unit = h('td', { class: 'unit' }, row.unit ?? '');
+    const unit = h('td', { class: 'unit', html: row.unit ?? '' });
     if (row.alt && typeof raw === 'number') {
-      unit.append(h('span', { class: 'alt' }, ` = ${fmt(raw * row.alt.scale, row.sig)} ${row.alt.unit}`));
+      unit.append(h('span', { class: 'alt' }, `= ${fmt(raw * row.alt.scale, row.sig)} ${row.alt.unit}`));
     }
     tbody.append(
       h('tr', {},

@@ -50,11 +50,12 @@ export const IMPACT_GROUPS = [
     fields: [
       {
         pointer: '/contact/law', label: 'Contact law', kind: 'select', value: 'paper',
-        options: [['paper', 'paper (line, Eq. 4)'], ['johnson', 'johnson (line)'], ['hertz_point', 'hertz_point (rounded corner)']],
+        options: [['paper', 'paper (Eq. 4)'], ['johnson', 'johnson'], ['hertz_point', 'hertz_point']],
+        hint: 'line contact of the edge, or Hertz point contact of a rounded corner',
       },
       {
         pointer: '/contact/effective_modulus', label: 'Effective modulus <i>E</i>*', kind: 'select', value: 'paper',
-        options: [['paper', 'paper (rock only)'], ['two_body', 'two_body (rock and steel)']],
+        options: [['paper', 'paper (rock only)'], ['two_body', 'two_body']],
       },
       { pointer: '/contact/hertz_exact', label: 'Exact elliptical Hertz <i>κ</i>', kind: 'checkbox', value: true },
     ],
