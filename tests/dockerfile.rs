@@ -21,7 +21,9 @@ fn multi_stage_release_build() {
     assert!(froms.len() >= 2, "multi-stage: {froms:?}");
     assert!(froms[0].ends_with(" AS build"), "first stage named build");
     assert!(
-        lines.iter().any(|l| l.starts_with("RUN cargo build --release") && l.contains("--locked")),
+        lines
+            .iter()
+            .any(|l| l.starts_with("RUN cargo build --release") && l.contains("--locked")),
         "release build with the lock file"
     );
 }
@@ -31,7 +33,10 @@ fn runs_as_non_root_on_port_8080() {
     let lines = dockerfile();
     let last_from = lines.iter().rposition(|l| l.starts_with("FROM ")).unwrap();
     let runtime = &lines[last_from..];
-    let user = runtime.iter().find(|l| l.starts_with("USER ")).expect("USER in the runtime stage");
+    let user = runtime
+        .iter()
+        .find(|l| l.starts_with("USER "))
+        .expect("USER in the runtime stage");
     let name = user.trim_start_matches("USER ").trim();
     assert!(name != "root" && name != "0", "non-root user, got {name}");
     assert!(runtime.iter().any(|l| l == "EXPOSE 8080"));
@@ -48,10 +53,19 @@ fn binary_path_and_copied_sources_exist() {
     let parts: Vec<&str> = copy.split_whitespace().collect();
     assert_eq!(parts[2], "/src/target/release/gangue");
     let dest = parts[3];
-    let entry = lines.iter().find(|l| l.starts_with("ENTRYPOINT")).expect("ENTRYPOINT");
-    assert!(entry.contains(&format!("\"{dest}\"")), "{entry} runs {dest}");
+    let entry = lines
+        .iter()
+        .find(|l| l.starts_with("ENTRYPOINT"))
+        .expect("ENTRYPOINT");
+    assert!(
+        entry.contains(&format!("\"{dest}\"")),
+        "{entry} runs {dest}"
+    );
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    for l in lines.iter().filter(|l| l.starts_with("COPY ") && !l.contains("--from")) {
+    for l in lines
+        .iter()
+        .filter(|l| l.starts_with("COPY ") && !l.contains("--from"))
+    {
         let parts: Vec<&str> = l.split_whitespace().collect();
         for src in &parts[1..parts.len() - 1] {
             assert!(root.join(src).exists(), "COPY source {src} is missing");

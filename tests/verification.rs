@@ -8,10 +8,6 @@ use serde_json::Value;
 
 /// Cases whose endpoint or method is not implemented yet, with the reason.
 const PENDING: &[(&str, &str)] = &[
-    ("P05_column_exact", "POST /v1/column"),
-    ("P06_column_paper_constants", "POST /v1/column"),
-    ("P07_decoupled_base", "POST /v1/column"),
-    ("P08_coupled_base_n3", "POST /v1/column"),
     ("P10_etm_deterministic", "POST /v1/migration"),
     ("P11_lumped_mass_monte_carlo", "POST /v1/migration"),
     ("P12_table1", "POST /v1/spalling"),

@@ -54,10 +54,12 @@ pub struct FieldErrorDoc {
         routes::meta::presets,
         routes::meta::problem,
         routes::impact::impact,
+        routes::column::column,
     ),
     components(schemas(Problem, FieldErrorDoc, dto::common::Warning, dto::common::PlanStep)),
     tags(
         (name = "impact", description = "Contact of the rock on the column"),
+        (name = "column", description = "Column vibration and energy after an impact"),
         (name = "service", description = "Health, presets, problem types"),
     )
 )]

@@ -3,12 +3,16 @@
 //! Nothing in here knows about HTTP, JSON or async runtimes. Every solver takes plain parameter
 //! structs (SI units) and a [`Control`] handle it polls for cancellation and deadlines.
 
+pub mod beam;
+pub mod column;
 pub mod contact;
 pub mod control;
+pub mod coupled;
 pub mod elliptic;
 pub mod error;
 pub mod lambert;
 pub mod material;
+pub mod ode;
 pub mod quadrature;
 
 pub use control::Control;

@@ -1,6 +1,7 @@
 //! Request and response types of the API (serde + utoipa schemas), their range checks, and the
 //! conversions into the plain physics structs.
 
+pub mod column;
 pub mod common;
 pub mod impact;
 

@@ -1,5 +1,6 @@
 //! One file per endpoint family; handlers are thin: validate → solve on the blocking pool →
 //! serialize.
 
+pub mod column;
 pub mod impact;
 pub mod meta;

@@ -1,0 +1,130 @@
+//! Column benchmarks: the decoupled closed-form history (10⁴ samples) and the coupled impact's
+//! run time against its error over integrator tolerances 1e-4 … 1e-12 (3 modes, base case).
+
+use std::f64::consts::{E, PI};
+use std::hint::black_box;
+use std::time::Instant;
+
+use criterion::Criterion;
+use gangue::physics::Control;
+use gangue::physics::column::{
+    ColumnCase, ColumnDetail, ColumnModel, HistoryRequest, solve_column_with_impact,
+};
+use gangue::physics::contact::{ImpactDetail, ImpactResult, LineImpact};
+use gangue::physics::material::{ContactLaw, ModulusConvention};
+
+/// The base-case rigid impact (paper law, paper E*; physics.md §A.8).
+fn base_impact() -> ImpactResult {
+    let estar = 5e9 / (1.0 - 0.28f64 * 0.28);
+    let (l, r) = (0.3f64, 0.125f64);
+    let k = PI * l * estar;
+    let p_ref = E * PI * estar * l.powi(3) / r;
+    ImpactResult {
+        mass: 67.5,
+        kinetic_energy: 843.75,
+        effective_modulus: estar,
+        contact_radius: r,
+        law: ContactLaw::Paper,
+        modulus: ModulusConvention::Paper,
+        detail: ImpactDetail::Line(LineImpact {
+            energy_parameter: 1.2732395e-6,
+            lambert_w: -17.4322691,
+            u: 16.4322691,
+            max_deformation: 0.0017933266473674732,
+            max_force: 994968.3372475737,
+            half_width: 9.8637e-3,
+            max_pressure: 214.06e6,
+            energy_capacity: p_ref * p_ref / (4.0 * E * E * k),
+            deformation_capacity: p_ref / (E * k),
+            force_capacity: p_ref / E,
+        }),
+        contact_duration: 1.1081705e-3,
+    }
+}
+
+fn coupled_case(tol: f64) -> ColumnCase {
+    ColumnCase {
+        model: ColumnModel::Coupled,
+        modes: Some(3),
+        tolerance: tol,
+        ..ColumnCase::default()
+    }
+}
+
+fn benches(c: &mut Criterion) {
+    let imp = base_impact();
+    let ctl = Control::unlimited();
+    let dec = ColumnCase {
+        output: HistoryRequest::Uniform {
+            duration: Some(0.6),
+            samples: Some(10_000),
+        },
+        ..ColumnCase::default()
+    };
+    c.bench_function("decoupled_history_1e4_samples", |b| {
+        b.iter(|| solve_column_with_impact(black_box(&dec), &imp, &ctl).unwrap())
+    });
+    for tol in [1e-6, 1e-8] {
+        let case = coupled_case(tol);
+        c.bench_function(&format!("coupled_3_modes_tol_{tol:e}"), |b| {
+            b.iter(|| solve_column_with_impact(black_box(&case), &imp, &ctl).unwrap())
+        });
+    }
+}
+
+/// Largest relative error of the reported coupled quantities against a run at 1e-13.
+fn tolerance_table() {
+    let imp = base_impact();
+    let ctl = Control::unlimited();
+    let get = |tol: f64| {
+        let r = solve_column_with_impact(&coupled_case(tol), &imp, &ctl).unwrap();
+        match r.detail {
+            ColumnDetail::Coupled(d) => d,
+            ColumnDetail::Decoupled(_) => unreachable!(),
+        }
+    };
+    let reference = get(1e-13);
+    println!("\ncoupled impact, 3 modes, base case (window 50 t_c = 55.4 ms)");
+    println!("| tolerance | steps | rejected | time (ms) | max rel. error | energy residual |");
+    println!("|---|---|---|---|---|---|");
+    for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12] {
+        let d = get(tol);
+        let reps = 20;
+        let start = Instant::now();
+        for _ in 0..reps {
+            black_box(get(tol));
+        }
+        let ms = start.elapsed().as_secs_f64() * 1e3 / reps as f64;
+        let e = |a: f64, b: f64| ((a - b) / b).abs();
+        let err = [
+            e(d.max_force, reference.max_force),
+            e(d.max_contact_deformation, reference.max_contact_deformation),
+            e(
+                d.max_midpoint_displacement,
+                reference.max_midpoint_displacement,
+            ),
+            e(
+                d.first_contact_duration.unwrap(),
+                reference.first_contact_duration.unwrap(),
+            ),
+            e(d.rebound_velocity, reference.rebound_velocity),
+            e(
+                d.column_energy_after_contact,
+                reference.column_energy_after_contact,
+            ),
+        ]
+        .into_iter()
+        .fold(0.0f64, f64::max);
+        println!(
+            "| {tol:.0e} | {} | {} | {ms:.3} | {err:.2e} | {:.2e} |",
+            d.steps, d.rejected_steps, d.estimated_error
+        );
+    }
+}
+
+fn main() {
+    let mut c = Criterion::default().configure_from_args();
+    benches(&mut c);
+    c.final_summary();
+    tolerance_table();
+}

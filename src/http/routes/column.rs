@@ -1,0 +1,38 @@
+//! `POST /v1/column`.
+
+use axum::extract::State;
+use axum::http::HeaderMap;
+use axum::response::{IntoResponse, Response};
+
+use crate::http::dto::column::{ColumnRequest, ColumnResponse};
+use crate::http::json::AppJson;
+use crate::http::runner::{AppState, respond};
+use crate::physics::column::solve_column;
+
+/// Column vibration after an impact: midpoint history, energies, absorbed energy, stress.
+#[utoipa::path(
+    post,
+    path = "/v1/column",
+    tag = "column",
+    request_body = ColumnRequest,
+    responses(
+        (status = 200, description = "Modal data, energies, stresses, optional history", body = ColumnResponse),
+        (status = "4XX", description = "Invalid request or capacity exceeded (problem+json)", body = crate::http::openapi::Problem, content_type = "application/problem+json"),
+        (status = "5XX", description = "Overloaded, timed out or internal (problem+json)", body = crate::http::openapi::Problem, content_type = "application/problem+json"),
+    )
+)]
+pub async fn column(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    AppJson(mut req): AppJson<ColumnRequest>,
+) -> Response {
+    let case = match req.resolve(&state.config) {
+        Ok(c) => c,
+        Err(e) => return e.into_response(),
+    };
+    respond(&state, &headers, move |control| {
+        let r = solve_column(&case, control)?;
+        Ok(ColumnResponse::new(r, req))
+    })
+    .await
+}

@@ -1,0 +1,243 @@
+//! `POST /v1/column` through the router: both models, histories, warnings, bad input.
+
+mod common;
+
+use common::{assert_problem, post, rel};
+use serde_json::{Value, json};
+
+#[tokio::test]
+async fn decoupled_default_warns_about_energy_and_damping() {
+    let app = common::app();
+    let r = post(&app, "/v1/column", &json!({})).await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    assert_eq!(b["model"], "decoupled");
+    assert!(rel(b["energy_ratio"].as_f64().unwrap(), 1.4712097663375543) < 1e-9);
+    let codes: Vec<&str> = b["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["code"].as_str().unwrap())
+        .collect();
+    assert!(codes.contains(&"energy_ratio_above_one"), "{codes:?}");
+    assert!(codes.contains(&"paper_damping"), "{codes:?}");
+    assert!(b.get("history").is_none(), "no history unless asked");
+    assert!(b.get("integrator").is_none());
+    assert_eq!(b["inputs"]["galerkin"]["modes"], 1);
+    assert!(b["stress_utilisation"].as_f64().unwrap() > 0.0);
+}
+
+#[tokio::test]
+async fn decoupled_history_default_sampling_and_energy_balance() {
+    let app = common::app();
+    let r = post(&app, "/v1/column", &json!({"output": {"duration_s": 0.01}})).await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    let f1 = b["natural_frequencies_hz"][0].as_f64().unwrap();
+    let h = &b["history"];
+    let n = h["time_s"].as_array().unwrap().len();
+    assert_eq!(n, (40.0 * f1 * 0.01_f64).ceil() as usize + 1);
+    let u0 = b["absorbed_energy_j"].as_f64().unwrap();
+    for i in 0..n {
+        let t = h["kinetic_energy_j"][i].as_f64().unwrap()
+            + h["strain_energy_j"][i].as_f64().unwrap()
+            + h["dissipated_energy_j"][i].as_f64().unwrap();
+        assert!(rel(t, u0) < 1e-9, "sample {i}: {t} vs {u0}");
+    }
+}
+
+#[tokio::test]
+async fn coupled_reports_integrator_and_balances_energy() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/column",
+        &json!({"model": "coupled", "output": {"samples": 200}}),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    assert!(rel(b["energy_ratio"].as_f64().unwrap(), 0.11422144736664007) < 1e-5);
+    assert_eq!(b["natural_frequencies_hz"].as_array().unwrap().len(), 3);
+    assert!(b["integrator"]["steps"].as_u64().unwrap() > 10);
+    assert_eq!(b["inputs"]["galerkin"]["modes"], 3);
+    let h = &b["history"];
+    let n = h["time_s"].as_array().unwrap().len();
+    assert_eq!(n, 200);
+    let ke = b["kinetic_energy_j"].as_f64().unwrap();
+    for i in 0..n {
+        let total: f64 = [
+            "kinetic_energy_j",
+            "strain_energy_j",
+            "dissipated_energy_j",
+            "rock_kinetic_energy_j",
+            "contact_energy_j",
+        ]
+        .iter()
+        .map(|k| h[k][i].as_f64().unwrap())
+        .sum();
+        assert!(rel(total, ke) < 1e-6, "sample {i}: {total} vs {ke}");
+    }
+    assert_eq!(
+        h["time_s"][n - 1].as_f64().unwrap(),
+        b["end_time_s"].as_f64().unwrap()
+    );
+}
+
+#[tokio::test]
+async fn zero_damping_gives_null_decay_time_with_warning() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/column",
+        &json!({"column": {"damping_coefficient_n_s_m2": 0.0}}),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    assert!(b["decay_time_1pct_s"].is_null());
+    assert!(!b["warnings"].as_array().unwrap().is_empty());
+}
+
+#[tokio::test]
+async fn damping_ratio_converts_through_exact_mode_one() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/column",
+        &json!({"column": {"damping_ratio": 0.02}}),
+    )
+    .await;
+    assert_eq!(r.status, 200);
+    let b = r.json();
+    // physics.md §B.6: ζ₁ = 0.02 gives c = 10 597 N·s/m² and t_1% = 0.0410 s.
+    assert!((b["damping_coefficient_n_s_m2"].as_f64().unwrap() - 10597.0).abs() < 1.0);
+    assert!((b["decay_time_1pct_s"].as_f64().unwrap() - 0.0410).abs() < 1e-4);
+    assert!(rel(b["damping_ratios"][0].as_f64().unwrap(), 0.02) < 1e-9);
+}
+
+#[tokio::test]
+async fn invalid_combinations_name_the_field() {
+    let app = common::app();
+    let cases: Vec<(Value, &str, &str)> = vec![
+        (
+            json!({"galerkin": {"modes": 3}}),
+            "/galerkin/modes",
+            "invalid_input",
+        ),
+        (
+            json!({"model": "coupled", "galerkin": {"modes": 51}}),
+            "/galerkin/modes",
+            "invalid_input",
+        ),
+        (
+            json!({"model": "coupled", "galerkin": {"modes": 0}}),
+            "/galerkin/modes",
+            "invalid_input",
+        ),
+        (
+            json!({"model": "coupled", "galerkin": {"mode_shapes": "paper"}}),
+            "/galerkin/mode_shapes",
+            "invalid_input",
+        ),
+        (json!({"end_time_s": 0.1}), "/end_time_s", "invalid_input"),
+        (
+            json!({"model": "coupled", "end_time_s": 0.0}),
+            "/end_time_s",
+            "invalid_input",
+        ),
+        (
+            json!({"model": "coupled", "end_time_s": 1e4}),
+            "/end_time_s",
+            "invalid_input",
+        ),
+        (
+            json!({"model": "coupled", "initial_midpoint_displacement_m": 0.001}),
+            "/initial_midpoint_displacement_m",
+            "invalid_input",
+        ),
+        (
+            json!({"initial_midpoint_displacement_m": 2.0}),
+            "/initial_midpoint_displacement_m",
+            "invalid_input",
+        ),
+        (
+            json!({"column": {"damping_coefficient_n_s_m2": 1.0, "damping_ratio": 0.02}}),
+            "/column/damping_ratio",
+            "invalid_input",
+        ),
+        (
+            json!({"column": {"damping_ratio": 11.0}}),
+            "/column/damping_ratio",
+            "invalid_input",
+        ),
+        (
+            json!({"column": {"damping_coefficient_n_s_m2": -1.0}}),
+            "/column/damping_coefficient_n_s_m2",
+            "invalid_input",
+        ),
+        (
+            json!({"output": {"times_s": [0.0], "duration_s": 1.0}}),
+            "/output/times_s",
+            "invalid_input",
+        ),
+        (
+            json!({"output": {"times_s": [-1.0]}}),
+            "/output/times_s/0",
+            "invalid_input",
+        ),
+        (
+            json!({"output": {"duration_s": 0.0}}),
+            "/output/duration_s",
+            "invalid_input",
+        ),
+        (
+            json!({"output": {"duration_s": 1.0, "samples": 1}}),
+            "/output/samples",
+            "invalid_input",
+        ),
+        (
+            json!({"output": {"duration_s": 1.0, "samples": 2_000_000}}),
+            "/output/samples",
+            "invalid_input",
+        ),
+        (json!({"output": {}}), "/output/duration_s", "invalid_input"),
+        (json!({"output": []}), "/output", "invalid_type"),
+        (
+            json!({"galerkin": {"modes": 1, "shapes": "exact"}}),
+            "/galerkin/shapes",
+            "unknown_field",
+        ),
+        (
+            json!({"model": "decoupled_fast"}),
+            "/model",
+            "invalid_input",
+        ),
+    ];
+    for (body, field, code) in cases {
+        let r = post(&app, "/v1/column", &body).await;
+        let p = assert_problem(&r, 422, code);
+        assert!(
+            p["errors"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|e| e["field"] == field),
+            "{body}: {field} not named in {p}"
+        );
+    }
+}
+
+#[tokio::test]
+async fn capacity_is_checked_before_the_column() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/column",
+        &json!({"velocity_m_s": 400, "rock": {"side_length_m": 0.05, "elastic_modulus_pa": 5e8}}),
+    )
+    .await;
+    assert_problem(&r, 422, "capacity_exceeded");
+    let r = post(&app, "/v1/column", &json!({"model": "coupled", "velocity_m_s": 400, "rock": {"side_length_m": 0.05, "elastic_modulus_pa": 5e8}})).await;
+    assert_problem(&r, 422, "capacity_exceeded");
+}
