@@ -169,11 +169,10 @@ export function initColumn() {
     }
     empty.hidden = true;
     renderTable(results, shown);
-    const allWarnings = shown.flatMap((m) =>
-      (results[m].warnings ?? []).map((w) => ({ code: `${m}: ${w.code}`, message: w.message })));
-    showWarnings(warnings, allWarnings);
+    showWarnings(warnings, mergeWarnings(results, shown));
     renderWave(results, shown);
     for (const model of MODELS) {
+      energyPlots[model].closest('.card').hidden = !results[model];
       if (results[model]) renderEnergy(energyPlots[model], results[model], model);
       else destroy(energyPlots[model]);
     }
@@ -244,12 +243,25 @@ export function initColumn() {
       ['contact', hist.contact_energy_j],
     ].filter(([, values]) => values);
     linePlot(el, {
-      x: { label: `time (ms) — ${model}`, values: hist.time_s.map((t) => t * 1e3) },
+      x: { label: 'time (ms)', values: hist.time_s.map((t) => t * 1e3) },
       y: { label: 'energy (J)' },
       series: series.map(([label, values], i) => ({ label, values, color: COLORS[(i + 2) % COLORS.length] })),
-      height: 220,
+      height: 240,
     });
   }
+}
+
+/** One entry per distinct warning, naming the models that gave it. */
+function mergeWarnings(results, shown) {
+  const merged = new Map();
+  for (const model of shown) {
+    for (const w of results[model].warnings ?? []) {
+      const key = `${w.code}\n${w.message}`;
+      if (!merged.has(key)) merged.set(key, { ...w, models: [] });
+      merged.get(key).models.push(model);
+    }
+  }
+  return [...merged.values()].map((w) => ({ code: `${w.models.join(', ')}: ${w.code}`, message: w.message }));
 }
 
 /** The request for one model: fields the other model owns are left out. */
