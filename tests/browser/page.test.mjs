@@ -215,6 +215,20 @@ async function columnSection(page) {
   });
 
   await screenshot(page, 'column.png');
+
+  await check('column: an error in the shared case is marked on the Impact tab', async () => {
+    await page.locator('#tab-impact').click();
+    await page.locator('#impact-form [data-pointer="/rock/density_kg_m3"]').fill('-1');
+    await page.locator('#tab-column').click();
+    await page.locator('#column-form button[type="submit"]').click();
+    await page.locator('#column-status.error').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await page.waitForSelector('#tab-impact.has-error', { state: 'attached', timeout: WAIT_MS });
+    const message = await page.locator(
+      '#impact-form .field:has([data-pointer="/rock/density_kg_m3"]) .field-error').textContent();
+    assert(message.trim().length > 0, 'no message beside the density field on the Impact tab');
+    await page.locator('#tab-impact').click();
+    await page.locator('#impact-form button[type="reset"]').click();
+  });
 }
 
 async function migrationSection(page) {
