@@ -8,8 +8,6 @@ use serde_json::Value;
 
 /// Cases whose endpoint or method is not implemented yet, with the reason.
 const PENDING: &[(&str, &str)] = &[
-    ("P10_etm_deterministic", "POST /v1/migration"),
-    ("P11_lumped_mass_monte_carlo", "POST /v1/migration"),
     ("P12_table1", "POST /v1/spalling"),
     ("P13_sensitivity_paper", "POST /v1/study"),
     (

@@ -36,6 +36,7 @@ pub fn app(config: Config) -> Router {
         .route("/problems/{code}", get(routes::meta::problem))
         .route("/v1/impact", post(routes::impact::impact))
         .route("/v1/column", post(routes::column::column))
+        .route("/v1/migration", post(routes::migration::migration))
         .with_state(state);
     Router::new()
         .merge(SwaggerUi::new("/docs").external_url_unchecked("/openapi.json", openapi::openapi_value()))

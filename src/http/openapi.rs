@@ -55,11 +55,13 @@ pub struct FieldErrorDoc {
         routes::meta::problem,
         routes::impact::impact,
         routes::column::column,
+        routes::migration::migration,
     ),
     components(schemas(Problem, FieldErrorDoc, dto::common::Warning, dto::common::PlanStep)),
     tags(
         (name = "impact", description = "Contact of the rock on the column"),
         (name = "column", description = "Column vibration and energy after an impact"),
+        (name = "migration", description = "Rockfall migration down the face"),
         (name = "service", description = "Health, presets, problem types"),
     )
 )]

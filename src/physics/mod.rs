@@ -12,6 +12,7 @@ pub mod elliptic;
 pub mod error;
 pub mod lambert;
 pub mod material;
+pub mod migration;
 pub mod ode;
 pub mod quadrature;
 

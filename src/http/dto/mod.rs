@@ -4,5 +4,6 @@
 pub mod column;
 pub mod common;
 pub mod impact;
+pub mod migration;
 
 pub use common::{Meta, PlanStep, Warning};

@@ -4,3 +4,4 @@
 pub mod column;
 pub mod impact;
 pub mod meta;
+pub mod migration;

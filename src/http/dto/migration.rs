@@ -1,0 +1,1006 @@
+//! `POST /v1/migration`: request, response, validation.
+
+use serde::{Deserialize, Serialize};
+use serde_json::{Value, json};
+use sha2::{Digest, Sha256};
+use utoipa::ToSchema;
+
+use super::common::{Checker, Meta, PlanStep, RockDto, Warning, some};
+use crate::config::Config;
+use crate::http::error::{ApiError, num};
+use crate::physics::migration::{
+    self, ContourLine, Distribution, EventKind, Face, FloorSpec, LumpedMassOptions, Method,
+    MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase, Release, StopReason,
+    Summary,
+};
+
+/// Migration method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum MethodDto {
+    /// Point mass, energy tracking method (physics.md §C.2).
+    #[default]
+    LumpedMass,
+    /// Rigid polyhedral block, DEM (physics.md §C.3).
+    RigidBlock,
+}
+
+/// Kind of floor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum FloorKind {
+    /// The plane z = −x·tan θ.
+    #[default]
+    Plane,
+    /// A height grid.
+    Grid,
+    /// Contour polylines, triangulated.
+    Contours,
+}
+
+/// One contour line.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ContourDto {
+    /// Elevation z of the line, m.
+    pub elevation_m: f64,
+    /// Plan points [x, y] of the polyline, m.
+    pub points_m: Vec<[f64; 2]>,
+}
+
+/// The floor of the face. In `inputs` a grid or contour floor is echoed as
+/// `{"kind", "sha256"}`: the SHA-256 of the floor object re-serialized as compact JSON with its
+/// fields in schema order.
+#[derive(Debug, Clone, PartialEq, Deserialize, ToSchema, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct FloorDto {
+    /// Kind of floor.
+    #[schema(default = "plane")]
+    pub kind: FloorKind,
+    /// Grid origin [x₀, y₀], m (default [0, 0]).
+    #[serde(deserialize_with = "some")]
+    #[schema(example = json!([0.0, -5.0]))]
+    pub origin_m: Option<[f64; 2]>,
+    /// Grid spacing d, m, in [0.01, 100].
+    #[serde(deserialize_with = "some")]
+    #[schema(minimum = 0.01, maximum = 100.0, example = 0.5)]
+    pub spacing_m: Option<f64>,
+    /// Grid heights: `heights_m[i][j]` is z at (x₀ + j·d, y₀ + i·d), m; at most 4096 × 4096.
+    #[serde(deserialize_with = "some")]
+    pub heights_m: Option<Vec<Vec<f64>>>,
+    /// Contour polylines with elevations.
+    #[serde(deserialize_with = "some")]
+    pub contours: Option<Vec<ContourDto>>,
+    /// Largest spacing of resampled contour points, m, in [0.01, 100] (default 1).
+    #[serde(deserialize_with = "some")]
+    #[schema(minimum = 0.01, maximum = 100.0, example = 1.0)]
+    pub resolution_m: Option<f64>,
+    /// SHA-256 of the floor as received (set when resolved; echoed in `inputs`).
+    #[serde(skip)]
+    #[schema(ignore)]
+    pub sha256: Option<String>,
+}
+
+#[derive(Serialize)]
+struct FloorFull<'a> {
+    kind: FloorKind,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    origin_m: &'a Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    spacing_m: &'a Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    heights_m: &'a Option<Vec<Vec<f64>>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    contours: &'a Option<Vec<ContourDto>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    resolution_m: &'a Option<f64>,
+}
+
+impl FloorDto {
+    fn digest(&self) -> String {
+        let full = FloorFull {
+            kind: self.kind,
+            origin_m: &self.origin_m,
+            spacing_m: &self.spacing_m,
+            heights_m: &self.heights_m,
+            contours: &self.contours,
+            resolution_m: &self.resolution_m,
+        };
+        let bytes = serde_json::to_vec(&full).unwrap_or_default();
+        Sha256::digest(&bytes)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
+    }
+}
+
+impl Serialize for FloorDto {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(None)?;
+        m.serialize_entry("kind", &self.kind)?;
+        if self.kind != FloorKind::Plane {
+            let d = self.sha256.clone().unwrap_or_else(|| self.digest());
+            m.serialize_entry("sha256", &d)?;
+        }
+        m.end()
+    }
+}
+
+/// Normal contact law of the rigid block.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactModelDto {
+    /// Linear spring–dashpot (PFC linear model).
+    #[default]
+    Linear,
+    /// Hertz normal law from the moduli of rock and floor.
+    Hertz,
+}
+
+/// The working face (paper Table 3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct FaceDto {
+    /// Dip θ, degrees, in [5, 80].
+    #[schema(default = 45.0, minimum = 5.0, maximum = 80.0, example = 45.0)]
+    pub dip_deg: f64,
+    /// Face length along dip S, m, in (0, 10000].
+    #[schema(default = 120.0, exclusive_minimum = 0.0, maximum = 10000.0, example = 120.0)]
+    pub length_m: f64,
+    /// Floor: plane, grid or contours.
+    pub floor: FloorDto,
+    /// Coulomb friction μ, in [0, 2].
+    #[schema(default = 0.2, minimum = 0.0, maximum = 2.0, example = 0.2)]
+    pub friction_coefficient: f64,
+    /// Normal restitution e_n, in [0, 1].
+    #[schema(default = 0.3, minimum = 0.0, maximum = 1.0, example = 0.3)]
+    pub restitution_normal: f64,
+    /// Tangential restitution e_t, in [0, 1].
+    #[schema(default = 0.8, minimum = 0.0, maximum = 1.0, example = 0.8)]
+    pub restitution_tangential: f64,
+    /// Normal contact stiffness k_n (rigid block), N/m, in [1e3, 1e12].
+    #[schema(default = 1e8, minimum = 1e3, maximum = 1e12, example = 1e8)]
+    pub normal_stiffness_n_m: f64,
+    /// Shear contact stiffness k_s (rigid block), N/m, in [1e3, 1e12].
+    #[schema(default = 1e8, minimum = 1e3, maximum = 1e12, example = 1e8)]
+    pub shear_stiffness_n_m: f64,
+    /// Critical damping ratio β of the contact dashpot (rigid block), in [0, 1).
+    #[schema(default = 0.35, minimum = 0.0, exclusive_maximum = 1.0, example = 0.35)]
+    pub critical_damping_ratio: f64,
+    /// PFC local damping α (rigid block), in [0, 1).
+    #[schema(default = 0.0, minimum = 0.0, exclusive_maximum = 1.0, example = 0.0)]
+    pub local_damping: f64,
+    /// Normal contact law (rigid block).
+    #[schema(default = "linear")]
+    pub contact_model: ContactModelDto,
+}
+
+impl Default for FaceDto {
+    fn default() -> Self {
+        Self {
+            dip_deg: 45.0,
+            length_m: 120.0,
+            floor: FloorDto::default(),
+            friction_coefficient: 0.2,
+            restitution_normal: 0.3,
+            restitution_tangential: 0.8,
+            normal_stiffness_n_m: 1e8,
+            shear_stiffness_n_m: 1e8,
+            critical_damping_ratio: 0.35,
+            local_damping: 0.0,
+            contact_model: ContactModelDto::Linear,
+        }
+    }
+}
+
+/// Where and how the rock is released.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReleaseDto {
+    /// Vertical lift above the floor point, m, in [0, 1000] (0: starts on the floor).
+    #[schema(default = 3.27, minimum = 0.0, maximum = 1000.0, example = 3.27)]
+    pub drop_height_m: f64,
+    /// Along-dip position of the floor point, m, in [0, length_m).
+    #[schema(default = 0.0, minimum = 0.0, example = 0.0)]
+    pub along_dip_m: f64,
+    /// Across-face position y, m, in [−1000, 1000].
+    #[schema(default = 0.0, minimum = -1000.0, maximum = 1000.0, example = 0.0)]
+    pub across_m: f64,
+    /// Initial speed along the floor's down-dip direction, m/s, in [0, 1000].
+    #[schema(default = 0.0, minimum = 0.0, maximum = 1000.0, example = 0.0)]
+    pub speed_m_s: f64,
+}
+
+impl Default for ReleaseDto {
+    fn default() -> Self {
+        Self {
+            drop_height_m: 3.27,
+            along_dip_m: 0.0,
+            across_m: 0.0,
+            speed_m_s: 0.0,
+        }
+    }
+}
+
+/// Ground motion of the point mass.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum MotionDto {
+    /// Coulomb sliding.
+    #[default]
+    Slide,
+    /// Rolling without slip as a sphere (needs μ ≥ (2/7) tan θ).
+    Roll,
+}
+
+/// Options of the lumped-mass method.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct LumpedMassDto {
+    /// Ground motion.
+    #[schema(default = "slide")]
+    pub motion: MotionDto,
+    /// Normal rebound speed below which the ground phase starts, m/s, in [0, 100].
+    #[schema(default = 0.5, minimum = 0.0, maximum = 100.0, example = 0.5)]
+    pub stop_normal_speed_m_s: f64,
+}
+
+impl Default for LumpedMassDto {
+    fn default() -> Self {
+        Self {
+            motion: MotionDto::Slide,
+            stop_normal_speed_m_s: 0.5,
+        }
+    }
+}
+
+/// Options of the rigid-block method.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct RigidBlockDto {
+    /// Time step, s, in (0, Δt_crit] (default: safety × Δt_crit).
+    #[schema(default = json!(null), exclusive_minimum = 0.0, example = 1e-5)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_step_s: Option<f64>,
+    /// Safety factor on the critical time step, in (0, 1].
+    #[schema(default = 0.2, exclusive_minimum = 0.0, maximum = 1.0, example = 0.2)]
+    pub time_step_safety: f64,
+}
+
+impl Default for RigidBlockDto {
+    fn default() -> Self {
+        Self {
+            time_step_s: None,
+            time_step_safety: 0.2,
+        }
+    }
+}
+
+/// Kind of distribution.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum DistributionKind {
+    /// Uniform on [min, max].
+    #[default]
+    Uniform,
+    /// Normal {mean, std}.
+    Normal,
+    /// Normal {mean, std} resampled until inside [min, max].
+    TruncatedNormal,
+}
+
+/// A distribution of an uncertain parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct DistributionDto {
+    /// Kind of distribution.
+    #[schema(default = "uniform")]
+    pub distribution: DistributionKind,
+    /// Lower bound (uniform, truncated_normal).
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    pub min: Option<f64>,
+    /// Upper bound (uniform, truncated_normal).
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    pub max: Option<f64>,
+    /// Mean (normal, truncated_normal).
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    pub mean: Option<f64>,
+    /// Standard deviation ≥ 0 (normal, truncated_normal).
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    pub std: Option<f64>,
+}
+
+impl DistributionDto {
+    fn uniform(min: f64, max: f64) -> Self {
+        Self {
+            distribution: DistributionKind::Uniform,
+            min: Some(min),
+            max: Some(max),
+            mean: None,
+            std: None,
+        }
+    }
+
+    /// Checks the fields the kind needs (bounds within [lo, hi]) and converts.
+    fn resolve(&self, base: &str, lo: f64, hi: f64, ck: &mut Checker) -> Distribution {
+        let p = |f: &str| format!("{base}/{f}");
+        let need = |v: Option<f64>, f: &str, ck: &mut Checker| -> f64 {
+            match v {
+                Some(x) => x,
+                None => {
+                    ck.push(p(f), Value::Null, format!("a {:?} distribution needs `{f}`", self.distribution).to_lowercase());
+                    0.0
+                }
+            }
+        };
+        let bounds = |ck: &mut Checker| {
+            let a = need(self.min, "min", ck);
+            let b = need(self.max, "max", ck);
+            let ok_a = ck.closed(&p("min"), a, lo, hi, "");
+            let ok_b = ck.closed(&p("max"), b, lo, hi, "");
+            if ok_a && ok_b && a > b {
+                ck.push(p("max"), num(b), format!("must be at least min = {a}"));
+            }
+            (a, b)
+        };
+        let normal = |ck: &mut Checker| {
+            let m = need(self.mean, "mean", ck);
+            let s = need(self.std, "std", ck);
+            ck.closed(&p("mean"), m, -1e3, 1e3, "");
+            ck.closed(&p("std"), s, 0.0, 1e3, "");
+            (m, s)
+        };
+        match self.distribution {
+            DistributionKind::Uniform => {
+                let (min, max) = bounds(ck);
+                Distribution::Uniform { min, max }
+            }
+            DistributionKind::Normal => {
+                let (mean, std) = normal(ck);
+                Distribution::Normal { mean, std }
+            }
+            DistributionKind::TruncatedNormal => {
+                let (mean, std) = normal(ck);
+                let (min, max) = bounds(ck);
+                // Resampling must terminate: the interval has to carry real probability.
+                if ck.is_ok() {
+                    let reachable = if std == 0.0 {
+                        (min..=max).contains(&mean)
+                    } else {
+                        (min - mean) / std < 6.0 && (max - mean) / std > -6.0 && max > min
+                    };
+                    if !reachable {
+                        ck.push(
+                            p("max"),
+                            num(max),
+                            "the interval [min, max] must lie within 6 standard deviations of the mean (resampling would not end)",
+                        );
+                    }
+                }
+                Distribution::TruncatedNormal { mean, std, min, max }
+            }
+        }
+    }
+}
+
+/// A seeded Monte Carlo ensemble.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct MonteCarloDto {
+    /// Number of runs, in [1, limit] (default limit 1 000 000).
+    #[schema(default = 200, minimum = 1, example = 200)]
+    pub runs: u64,
+    /// Seed (any u64); the same request and seed give the same bytes.
+    #[schema(default = 42, example = 42)]
+    pub seed: u64,
+    /// e_n, drawn at every impact, clipped to [0, 1] (default U[0.2, 0.4]).
+    pub restitution_normal: DistributionDto,
+    /// e_t, drawn at every impact after e_n, clipped to [0, 1] (default U[0.7, 0.9]).
+    pub restitution_tangential: DistributionDto,
+    /// μ, drawn once per run (null: the face's μ for every run).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_coefficient: Option<DistributionDto>,
+}
+
+impl Default for MonteCarloDto {
+    fn default() -> Self {
+        Self {
+            runs: 200,
+            seed: 42,
+            restitution_normal: DistributionDto::uniform(0.2, 0.4),
+            restitution_tangential: DistributionDto::uniform(0.7, 0.9),
+            friction_coefficient: None,
+        }
+    }
+}
+
+/// What to report besides the arrival.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct MigrationOutputDto {
+    /// Sample the (nominal) trajectory.
+    #[schema(default = false)]
+    pub trajectory: bool,
+    /// Trajectory sample interval, s, in [1e-6, 100].
+    #[schema(default = 0.01, minimum = 1e-6, maximum = 100.0, example = 0.01)]
+    pub sample_interval_s: f64,
+    /// Report the events of the (nominal) run.
+    #[schema(default = true)]
+    pub events: bool,
+    /// Per-run summaries as CSV (Monte Carlo).
+    #[schema(default = false)]
+    pub runs_csv: bool,
+}
+
+impl Default for MigrationOutputDto {
+    fn default() -> Self {
+        Self {
+            trajectory: false,
+            sample_interval_s: 0.01,
+            events: true,
+            runs_csv: false,
+        }
+    }
+}
+
+/// Rockfall migration down the face: one trajectory, or a seeded Monte Carlo ensemble.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct MigrationRequest {
+    /// Method.
+    #[schema(default = "lumped_mass")]
+    pub method: MethodDto,
+    /// Gravity g, m/s², in [0.1, 100].
+    #[schema(default = 9.81, minimum = 0.1, maximum = 100.0, example = 9.81)]
+    pub gravity_m_s2: f64,
+    /// The working face.
+    pub face: FaceDto,
+    /// The rock block (its shape's own mass is used).
+    pub rock: RockDto,
+    /// The release.
+    pub release: ReleaseDto,
+    /// Lumped-mass options.
+    pub lumped_mass: LumpedMassDto,
+    /// Rigid-block options.
+    pub rigid_block: RigidBlockDto,
+    /// Stop at this time instead of the lower end, s, in (0, 1e5].
+    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1e5, example = 2.0)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub end_time_s: Option<f64>,
+    /// Monte Carlo ensemble (null: one deterministic run).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub monte_carlo: Option<MonteCarloDto>,
+    /// Optional outputs.
+    pub output: MigrationOutputDto,
+}
+
+impl Default for MigrationRequest {
+    fn default() -> Self {
+        Self {
+            method: MethodDto::LumpedMass,
+            gravity_m_s2: 9.81,
+            face: FaceDto::default(),
+            rock: RockDto::default(),
+            release: ReleaseDto::default(),
+            lumped_mass: LumpedMassDto::default(),
+            rigid_block: RigidBlockDto::default(),
+            end_time_s: None,
+            monte_carlo: None,
+            output: MigrationOutputDto::default(),
+        }
+    }
+}
+
+fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
+    let base = "/face/floor";
+    let p = |x: &str| format!("{base}/{x}");
+    let stray = |ck: &mut Checker, name: &str, present: bool, kind: &str| {
+        if present {
+            ck.push(p(name), Value::Null, format!("not a field of a {kind} floor"));
+        }
+    };
+    match f.kind {
+        FloorKind::Plane => {
+            stray(ck, "origin_m", f.origin_m.is_some(), "plane");
+            stray(ck, "spacing_m", f.spacing_m.is_some(), "plane");
+            stray(ck, "heights_m", f.heights_m.is_some(), "plane");
+            stray(ck, "contours", f.contours.is_some(), "plane");
+            stray(ck, "resolution_m", f.resolution_m.is_some(), "plane");
+            FloorSpec::Plane
+        }
+        FloorKind::Grid => {
+            stray(ck, "contours", f.contours.is_some(), "grid");
+            stray(ck, "resolution_m", f.resolution_m.is_some(), "grid");
+            let origin = *f.origin_m.get_or_insert([0.0, 0.0]);
+            for (i, o) in origin.iter().enumerate() {
+                ck.closed(&p(&format!("origin_m/{i}")), *o, -1e6, 1e6, "m");
+            }
+            let spacing = match f.spacing_m {
+                Some(d) => {
+                    ck.closed(&p("spacing_m"), d, 0.01, 100.0, "m");
+                    d
+                }
+                None => {
+                    ck.push(p("spacing_m"), Value::Null, "a grid floor needs spacing_m in [0.01, 100] m");
+                    1.0
+                }
+            };
+            let heights = f.heights_m.clone().unwrap_or_default();
+            let rows = heights.len();
+            let cols = heights.first().map_or(0, Vec::len);
+            if !(2..=4096).contains(&rows) || !(2..=4096).contains(&cols) {
+                ck.push(p("heights_m"), json!([rows, cols]), "needs 2 to 4096 rows of 2 to 4096 heights each");
+            } else if let Some(i) = heights.iter().position(|r| r.len() != cols) {
+                ck.push(p(&format!("heights_m/{i}")), json!(heights[i].len()), format!("every row needs {cols} heights, like row 0"));
+            } else if let Some((i, j)) = heights.iter().enumerate().find_map(|(i, r)| r.iter().position(|z| z.abs() > 1e6).map(|j| (i, j))) {
+                ck.push(p(&format!("heights_m/{i}/{j}")), num(heights[i][j]), "heights must lie in [−1e6, 1e6] m");
+            }
+            f.sha256 = Some(f.digest());
+            FloorSpec::Grid { origin, spacing, heights }
+        }
+        FloorKind::Contours => {
+            stray(ck, "origin_m", f.origin_m.is_some(), "contour");
+            stray(ck, "spacing_m", f.spacing_m.is_some(), "contour");
+            stray(ck, "heights_m", f.heights_m.is_some(), "contour");
+            let resolution = *f.resolution_m.get_or_insert(1.0);
+            ck.closed(&p("resolution_m"), resolution, 0.01, 100.0, "m");
+            let lines = f.contours.clone().unwrap_or_default();
+            if lines.is_empty() {
+                ck.push(p("contours"), Value::Null, "a contour floor needs at least one contour line");
+            }
+            let mut total = 0usize;
+            for (i, c) in lines.iter().enumerate() {
+                ck.closed(&p(&format!("contours/{i}/elevation_m")), c.elevation_m, -1e6, 1e6, "m");
+                if c.points_m.is_empty() {
+                    ck.push(p(&format!("contours/{i}/points_m")), json!(0), "needs at least one point");
+                }
+                if let Some(j) = c.points_m.iter().position(|q| q[0].abs() > 1e6 || q[1].abs() > 1e6) {
+                    ck.push(p(&format!("contours/{i}/points_m/{j}")), Value::Null, "coordinates must lie in [−1e6, 1e6] m");
+                }
+                total += c.points_m.len();
+            }
+            if total > 4_000_000 {
+                ck.push(p("contours"), json!(total), "at most 4 000 000 points in all");
+            }
+            f.sha256 = Some(f.digest());
+            FloorSpec::Contours {
+                contours: lines
+                    .into_iter()
+                    .map(|c| ContourLine { elevation: c.elevation_m, points: c.points_m })
+                    .collect(),
+                resolution,
+            }
+        }
+    }
+}
+
+impl MigrationRequest {
+    /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
+    pub fn resolve(&mut self, config: &Config) -> Result<MigrationCase, ApiError> {
+        let mut ck = Checker::new();
+        if self.method == MethodDto::RigidBlock {
+            ck.push(
+                "/method",
+                json!("rigid_block"),
+                "the rigid-block method is not available in this version; use lumped_mass",
+            );
+        }
+        ck.closed("/gravity_m_s2", self.gravity_m_s2, 0.1, 100.0, "m/s²");
+        let f = &mut self.face;
+        ck.closed("/face/dip_deg", f.dip_deg, 5.0, 80.0, "°");
+        ck.open_closed("/face/length_m", f.length_m, 0.0, 10000.0, "m");
+        ck.closed("/face/friction_coefficient", f.friction_coefficient, 0.0, 2.0, "");
+        ck.closed("/face/restitution_normal", f.restitution_normal, 0.0, 1.0, "");
+        ck.closed("/face/restitution_tangential", f.restitution_tangential, 0.0, 1.0, "");
+        ck.closed("/face/normal_stiffness_n_m", f.normal_stiffness_n_m, 1e3, 1e12, "N/m");
+        ck.closed("/face/shear_stiffness_n_m", f.shear_stiffness_n_m, 1e3, 1e12, "N/m");
+        ck.closed_open("/face/critical_damping_ratio", f.critical_damping_ratio, 0.0, 1.0, "");
+        ck.closed_open("/face/local_damping", f.local_damping, 0.0, 1.0, "");
+        let floor = resolve_floor(&mut f.floor, &mut ck);
+        let rock = self.rock.resolve("/rock", false, &mut ck);
+        if matches!(self.rock.shape, super::common::ShapeKind::Polyhedron | super::common::ShapeKind::RandomPolyhedron) {
+            ck.push(
+                "/rock/shape",
+                json!(self.rock.shape),
+                "polyhedra belong to the rigid-block method; the lumped mass takes cube, sphere or cuboid",
+            );
+        }
+        let r = &self.release;
+        ck.closed("/release/drop_height_m", r.drop_height_m, 0.0, 1000.0, "m");
+        ck.closed_open("/release/along_dip_m", r.along_dip_m, 0.0, self.face.length_m, "m (below length_m)");
+        ck.closed("/release/across_m", r.across_m, -1000.0, 1000.0, "m");
+        ck.closed("/release/speed_m_s", r.speed_m_s, 0.0, 1000.0, "m/s");
+        ck.closed("/lumped_mass/stop_normal_speed_m_s", self.lumped_mass.stop_normal_speed_m_s, 0.0, 100.0, "m/s");
+        if let Some(dt) = self.rigid_block.time_step_s {
+            ck.open_closed("/rigid_block/time_step_s", dt, 0.0, 1.0, "s");
+        }
+        ck.open_closed("/rigid_block/time_step_safety", self.rigid_block.time_step_safety, 0.0, 1.0, "");
+        if let Some(t) = self.end_time_s {
+            ck.open_closed("/end_time_s", t, 0.0, 1e5, "s");
+        }
+        let o = &self.output;
+        ck.closed("/output/sample_interval_s", o.sample_interval_s, 1e-6, 100.0, "s");
+        let monte_carlo = self.monte_carlo.as_ref().map(|mc| {
+            ck.count("/monte_carlo/runs", mc.runs, 1, config.max_runs, "runs");
+            MonteCarlo {
+                runs: mc.runs,
+                seed: mc.seed,
+                restitution_normal: mc.restitution_normal.resolve("/monte_carlo/restitution_normal", 0.0, 1.0, &mut ck),
+                restitution_tangential: mc.restitution_tangential.resolve("/monte_carlo/restitution_tangential", 0.0, 1.0, &mut ck),
+                friction_coefficient: mc
+                    .friction_coefficient
+                    .map(|d| d.resolve("/monte_carlo/friction_coefficient", 0.0, 2.0, &mut ck)),
+            }
+        });
+        if o.runs_csv && monte_carlo.is_none() {
+            ck.push("/output/runs_csv", json!(true), "per-run summaries need monte_carlo");
+        }
+        ck.finish()?;
+        Ok(MigrationCase {
+            method: Method::LumpedMass,
+            gravity: self.gravity_m_s2,
+            face: Face {
+                dip_deg: self.face.dip_deg,
+                length: self.face.length_m,
+                floor,
+                friction_coefficient: self.face.friction_coefficient,
+                restitution_normal: self.face.restitution_normal,
+                restitution_tangential: self.face.restitution_tangential,
+            },
+            rock,
+            release: Release {
+                drop_height: self.release.drop_height_m,
+                along_dip: self.release.along_dip_m,
+                across: self.release.across_m,
+                speed: self.release.speed_m_s,
+            },
+            lumped_mass: LumpedMassOptions {
+                motion: match self.lumped_mass.motion {
+                    MotionDto::Slide => Motion::Slide,
+                    MotionDto::Roll => Motion::Roll,
+                },
+                stop_normal_speed: self.lumped_mass.stop_normal_speed_m_s,
+            },
+            end_time: self.end_time_s,
+            monte_carlo,
+            output: OutputOptions {
+                trajectory: o.trajectory,
+                sample_interval: o.sample_interval_s,
+                events: o.events,
+                runs_csv: o.runs_csv,
+                max_samples: config.max_samples as usize,
+            },
+            ..MigrationCase::default()
+        })
+    }
+}
+
+/// The state at the end of the (nominal) run.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct ArrivalDto {
+    /// Motion at the end: flight, slide, roll or stopped.
+    pub phase: String,
+    /// Why the run ended: lower_end, at_rest, end_time or left_floor.
+    pub stop_reason: String,
+    /// Time since release, s.
+    pub time_s: f64,
+    /// Speed, m/s.
+    pub speed_m_s: f64,
+    /// Velocity along the (mean) plane's down-dip direction, m/s.
+    pub along_dip_velocity_m_s: f64,
+    /// Velocity along the (mean) plane's outward normal, m/s.
+    pub normal_velocity_m_s: f64,
+    /// Along-dip position, m.
+    pub along_dip_m: f64,
+    /// Height of the centre above its resting height, m.
+    pub normal_offset_m: f64,
+    /// Position [x, y, z], m.
+    pub position_m: [f64; 3],
+    /// Angular speed, rad/s.
+    pub angular_speed_rad_s: f64,
+    /// Kinetic energy, translation + rotation, J.
+    pub kinetic_energy_j: f64,
+    /// Rotational kinetic energy, J.
+    pub rotational_energy_j: f64,
+}
+
+/// Energy bookkeeping of the (nominal) run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, ToSchema)]
+pub struct EnergyDto {
+    /// Kinetic + potential energy at release (potential zero at the lower end), J.
+    pub total_start_j: f64,
+    /// Lost in impacts, J.
+    pub impacts_j: f64,
+    /// Lost to friction, J.
+    pub friction_j: f64,
+    /// Lost at transitions (start of sliding or rolling, edges), J.
+    pub transition_j: f64,
+    /// Lost to contact and local damping (rigid block), J.
+    pub damping_j: f64,
+    /// KE + PE + losses − total at start (rounding only), J.
+    pub residual_j: f64,
+}
+
+/// An event of the (nominal) run.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct EventDto {
+    /// Time, s.
+    pub time_s: f64,
+    /// impact, slide_start, roll_start, take_off or stop.
+    pub kind: String,
+    /// Position [x, y, z], m.
+    pub position_m: [f64; 3],
+    /// Along-dip position, m.
+    pub along_dip_m: f64,
+    /// Speed before, m/s.
+    pub speed_before_m_s: f64,
+    /// Speed after, m/s.
+    pub speed_after_m_s: f64,
+    /// Energy lost in the event, J.
+    pub energy_lost_j: f64,
+}
+
+/// Sampled trajectory: equal-length arrays.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct TrajectoryDto {
+    /// Times, s.
+    pub time_s: Vec<f64>,
+    /// Positions [x, y, z], m.
+    pub position_m: Vec<[f64; 3]>,
+    /// Along-dip positions, m.
+    pub along_dip_m: Vec<f64>,
+    /// Heights above the floor along its normal, m.
+    pub height_m: Vec<f64>,
+    /// Velocities [vx, vy, vz], m/s.
+    pub velocity_m_s: Vec<[f64; 3]>,
+    /// Speeds, m/s.
+    pub speed_m_s: Vec<f64>,
+    /// Angular velocities, rad/s.
+    pub angular_velocity_rad_s: Vec<[f64; 3]>,
+    /// Kinetic energies (translation + rotation), J.
+    pub kinetic_energy_j: Vec<f64>,
+    /// Rotational energies, J.
+    pub rotational_energy_j: Vec<f64>,
+    /// Potential energies (zero at the lower end), J.
+    pub potential_energy_j: Vec<f64>,
+    /// Energy dissipated so far (impacts, friction, transitions, damping), J.
+    pub dissipated_energy_j: Vec<f64>,
+}
+
+/// Histogram: 21 edges, 20 equal bins from min to max.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct HistogramDto {
+    /// Bin edges.
+    pub edges: Vec<f64>,
+    /// Counts per bin.
+    pub counts: Vec<u64>,
+}
+
+/// Summary statistics of one quantity over an ensemble.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct SummaryDto {
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (N − 1); null for one value.
+    pub std: Option<f64>,
+    /// Minimum.
+    pub min: f64,
+    /// 5th percentile (Hyndman–Fan type 7).
+    pub p05: f64,
+    /// Median.
+    pub p50: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// Maximum.
+    pub max: f64,
+    /// Histogram.
+    pub histogram: HistogramDto,
+}
+
+impl From<&Summary> for SummaryDto {
+    fn from(s: &Summary) -> Self {
+        Self {
+            mean: s.mean,
+            std: s.std,
+            min: s.min,
+            p05: s.p05,
+            p50: s.p50,
+            p95: s.p95,
+            p99: s.p99,
+            max: s.max,
+            histogram: HistogramDto {
+                edges: s.histogram.edges.clone(),
+                counts: s.histogram.counts.clone(),
+            },
+        }
+    }
+}
+
+/// Monte Carlo statistics.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct StatisticsDto {
+    /// Number of runs.
+    pub runs: u64,
+    /// Seed.
+    pub seed: u64,
+    /// Fraction of runs that reached the lower end.
+    pub reached_fraction: f64,
+    /// Arrival speed over the runs that reached the lower end (null if none did), m/s.
+    pub speed_m_s: Option<SummaryDto>,
+    /// Arrival kinetic energy over the runs that reached the lower end, J.
+    pub kinetic_energy_j: Option<SummaryDto>,
+    /// Arrival time over the runs that reached the lower end, s.
+    pub time_s: Option<SummaryDto>,
+    /// Number of impacts over all runs.
+    pub impact_count: SummaryDto,
+    /// Final along-dip position minus the release's, over all runs, m.
+    pub runout_m: SummaryDto,
+    /// Largest bounce height over all runs, m.
+    pub max_bounce_height_m: SummaryDto,
+}
+
+/// Result of a migration.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct MigrationResponse {
+    /// The method run.
+    pub method: MethodDto,
+    /// Rock mass, kg.
+    pub mass_kg: f64,
+    /// State at the end of the (nominal) run.
+    pub arrival: ArrivalDto,
+    /// Number of impacts.
+    pub impact_count: u64,
+    /// Where the ground phase (slide or roll) began, m (null: it never did).
+    pub slide_start_along_dip_m: Option<f64>,
+    /// Where the rock stopped, m (null: it did not stop).
+    pub stop_along_dip_m: Option<f64>,
+    /// Largest apex after the first impact, m.
+    pub max_bounce_height_m: f64,
+    /// Energy bookkeeping.
+    pub energy: EnergyDto,
+    /// Events of the (nominal) run (when `output.events`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub events: Option<Vec<EventDto>>,
+    /// Sampled trajectory (when `output.trajectory`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trajectory: Option<TrajectoryDto>,
+    /// Monte Carlo statistics.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub statistics: Option<StatisticsDto>,
+    /// Per-run summaries as CSV (when `output.runs_csv`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub runs_csv: Option<String>,
+    /// Named warnings.
+    pub warnings: Vec<Warning>,
+    /// Stages run or skipped.
+    pub plan: Vec<PlanStep>,
+    /// The fully resolved request.
+    pub inputs: MigrationRequest,
+    /// Version of the service and its models.
+    pub model_version: String,
+}
+
+fn phase_name(p: Phase) -> &'static str {
+    match p {
+        Phase::Flight => "flight",
+        Phase::Slide => "slide",
+        Phase::Roll => "roll",
+        Phase::Stopped => "stopped",
+    }
+}
+
+fn event_name(k: EventKind) -> &'static str {
+    match k {
+        EventKind::Impact => "impact",
+        EventKind::SlideStart => "slide_start",
+        EventKind::RollStart => "roll_start",
+        EventKind::TakeOff => "take_off",
+        EventKind::Stop => "stop",
+    }
+}
+
+fn stop_name(s: StopReason) -> &'static str {
+    migration::stop_reason_name(s)
+}
+
+impl MigrationResponse {
+    /// Builds the response from the physics result and the resolved request.
+    pub fn new(r: MigrationResult, inputs: MigrationRequest) -> Self {
+        let mc = inputs.monte_carlo.is_some();
+        let plan = vec![
+            PlanStep::ran(
+                "migration",
+                if mc {
+                    "energy tracking method, seeded Monte Carlo ensemble (closed-form flights and slides)"
+                } else {
+                    "energy tracking method, one deterministic run (closed-form flights and slides)"
+                },
+            ),
+            if r.trajectory.is_some() {
+                PlanStep::ran("trajectory", "sampled from the closed forms")
+            } else {
+                PlanStep::skipped("trajectory", "output.trajectory is false")
+            },
+        ];
+        let mut meta = Meta::new(plan);
+        meta.warnings = r.warnings.iter().map(|w| Warning::new(w.code, w.message.clone())).collect();
+        let a = &r.arrival;
+        Self {
+            method: MethodDto::LumpedMass,
+            mass_kg: r.mass,
+            arrival: ArrivalDto {
+                phase: phase_name(a.phase).into(),
+                stop_reason: stop_name(a.stop_reason).into(),
+                time_s: a.time,
+                speed_m_s: a.speed,
+                along_dip_velocity_m_s: a.along_dip_velocity,
+                normal_velocity_m_s: a.normal_velocity,
+                along_dip_m: a.along_dip,
+                normal_offset_m: a.normal_offset,
+                position_m: a.position,
+                angular_speed_rad_s: a.angular_speed,
+                kinetic_energy_j: a.kinetic_energy,
+                rotational_energy_j: a.rotational_energy,
+            },
+            impact_count: r.impact_count,
+            slide_start_along_dip_m: r.slide_start_along_dip,
+            stop_along_dip_m: r.stop_along_dip,
+            max_bounce_height_m: r.max_bounce_height,
+            energy: EnergyDto {
+                total_start_j: r.energy.total_start,
+                impacts_j: r.energy.impacts,
+                friction_j: r.energy.friction,
+                transition_j: r.energy.transition,
+                damping_j: r.energy.damping,
+                residual_j: r.energy.residual,
+            },
+            events: r.events.map(|ev| {
+                ev.iter()
+                    .map(|e| EventDto {
+                        time_s: e.time,
+                        kind: event_name(e.kind).into(),
+                        position_m: e.position,
+                        along_dip_m: e.along_dip,
+                        speed_before_m_s: e.speed_before,
+                        speed_after_m_s: e.speed_after,
+                        energy_lost_j: e.energy_lost,
+                    })
+                    .collect()
+            }),
+            trajectory: r.trajectory.map(|t| TrajectoryDto {
+                time_s: t.time,
+                position_m: t.position,
+                along_dip_m: t.along_dip,
+                height_m: t.height,
+                velocity_m_s: t.velocity,
+                speed_m_s: t.speed,
+                angular_velocity_rad_s: t.angular_velocity,
+                kinetic_energy_j: t.kinetic_energy,
+                rotational_energy_j: t.rotational_energy,
+                potential_energy_j: t.potential_energy,
+                dissipated_energy_j: t.dissipated_energy,
+            }),
+            statistics: r.statistics.as_ref().map(|s| StatisticsDto {
+                runs: s.runs,
+                seed: s.seed,
+                reached_fraction: s.reached_fraction,
+                speed_m_s: s.speed.as_ref().map(Into::into),
+                kinetic_energy_j: s.kinetic_energy.as_ref().map(Into::into),
+                time_s: s.time.as_ref().map(Into::into),
+                impact_count: (&s.impact_count).into(),
+                runout_m: (&s.runout).into(),
+                max_bounce_height_m: (&s.max_bounce_height).into(),
+            }),
+            runs_csv: r.runs_csv,
+            warnings: meta.warnings,
+            plan: meta.plan,
+            inputs,
+            model_version: meta.model_version,
+        }
+    }
+}

@@ -1,0 +1,751 @@
+//! Lumped-mass energy tracking method (physics.md §C.2), event driven with closed-form phases.
+//!
+//! The rock is a point mass. Flights are parabolas whose first strike of the floor is a root of a
+//! quadratic; an impact applies the normal and tangential restitution in the struck facet's frame;
+//! a rebound slower than the stop speed starts the ground phase (slide, or roll as a sphere). On a
+//! facet the acceleration is constant while the friction direction is fixed, so a slide moves in
+//! closed form from event to event: a facet edge, the lower end, the end time, the moment the
+//! speed along the friction direction reaches zero, or — only when gravity's in-plane part is not
+//! parallel to the velocity — a turn of the velocity by [`MAX_TURN`] rad, after which the friction
+//! direction is renewed. On a plane and on any slide straight down a facet the friction direction
+//! never turns, and the method is exact. Every energy term is computed in its own right (work of
+//! friction as μ g_n f̂·Δp, impact and transition losses from the velocity jumps), so the balance
+//! KE + PE + losses − E_start is a genuine check.
+//!
+//! Energies here are per unit mass (J/kg); the caller multiplies by the rock's mass.
+
+use nalgebra::Vector3;
+
+use super::terrain::{Facet, FlightEnd, Floor};
+use crate::physics::control::Control;
+use crate::physics::error::{PhysicsError, PhysicsResult};
+
+/// Largest turn of the velocity, rad, over which the friction direction is held fixed on a facet.
+pub const MAX_TURN: f64 = 0.02;
+/// Normal rebound speed, m/s, below which bouncing ends even when the stop speed is 0.
+pub const MIN_REBOUND: f64 = 1e-6;
+/// Speed, m/s, below which a sliding rock counts as momentarily at rest.
+const REST_SPEED: f64 = 1e-9;
+
+/// Motion on the floor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Motion {
+    /// Coulomb sliding, a = g(sin θ − μ cos θ) on a plane.
+    Slide,
+    /// Rolling without slip as a sphere: spin-up ×5/7, a = 5/7 g sin θ, KE = 0.7 m v².
+    Roll,
+}
+
+/// Motion at the end of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// In the air.
+    Flight,
+    /// Sliding on the floor.
+    Slide,
+    /// Rolling on the floor.
+    Roll,
+    /// At rest.
+    Stopped,
+}
+
+/// Why a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// `along_dip_m` reached the face length.
+    LowerEnd,
+    /// The rock came to rest.
+    AtRest,
+    /// `end_time_s` was reached.
+    EndTime,
+    /// The rock left the floor's extent.
+    LeftFloor,
+}
+
+/// Kind of a recorded event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventKind {
+    /// A strike on the floor with restitution.
+    Impact,
+    /// Start of sliding.
+    SlideStart,
+    /// Start of rolling (with the spin-up).
+    RollStart,
+    /// Take-off at a convex edge.
+    TakeOff,
+    /// The rock came to rest.
+    Stop,
+}
+
+/// One event of a run (energies per kg until scaled by the caller).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct EventRec {
+    pub(crate) t: f64,
+    pub(crate) kind: EventKind,
+    pub(crate) p: Vector3<f64>,
+    pub(crate) speed_before: f64,
+    pub(crate) speed_after: f64,
+    pub(crate) lost: f64,
+}
+
+/// A closed-form piece of the trajectory: p(τ) = p₀ + v₀ τ + ½ a τ² for τ in [0, dt].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Segment {
+    pub(crate) t0: f64,
+    pub(crate) dt: f64,
+    pub(crate) p0: Vector3<f64>,
+    pub(crate) v0: Vector3<f64>,
+    pub(crate) a: Vector3<f64>,
+    /// Friction force per kg (μ g_n f̂); its dot with the displacement is the friction work.
+    pub(crate) fric: Vector3<f64>,
+    /// Energy dissipated per kg before the segment.
+    pub(crate) diss0: f64,
+    /// Rolling on a facet with this unit normal (rotation follows the velocity).
+    pub(crate) rolling: Option<Vector3<f64>>,
+    /// Constant rotational energy per kg and angular velocity in flight.
+    pub(crate) spin: (f64, Vector3<f64>),
+}
+
+/// What a recorded run keeps for events and trajectories.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Recording {
+    pub(crate) segments: Vec<Segment>,
+    pub(crate) events: Vec<EventRec>,
+}
+
+/// Fixed inputs of a run.
+#[derive(Debug, Clone)]
+pub(crate) struct Setup<'a> {
+    pub(crate) floor: &'a Floor,
+    pub(crate) g: f64,
+    pub(crate) motion: Motion,
+    pub(crate) v_stop: f64,
+    pub(crate) radius: f64,
+    pub(crate) length: f64,
+    pub(crate) end_time: Option<f64>,
+    pub(crate) max_steps: u64,
+    /// Release point (lifted), velocity and, for a release on the floor, its facet.
+    pub(crate) p0: Vector3<f64>,
+    pub(crate) v0: Vector3<f64>,
+    pub(crate) on_floor: Option<Facet>,
+}
+
+/// Outcome of a run; energies per kg.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct RunOut {
+    pub(crate) t: f64,
+    pub(crate) p: Vector3<f64>,
+    pub(crate) v: Vector3<f64>,
+    pub(crate) omega: Vector3<f64>,
+    pub(crate) phase: Phase,
+    pub(crate) reason: StopReason,
+    pub(crate) impacts: u64,
+    pub(crate) slide_start: Option<f64>,
+    pub(crate) stop_along: Option<f64>,
+    pub(crate) max_bounce: f64,
+    pub(crate) e_imp: f64,
+    pub(crate) e_fric: f64,
+    pub(crate) e_trans: f64,
+    pub(crate) e_rot: f64,
+    /// True when the last ground phase had no deceleration (a ≥ 0 along the motion) at the end.
+    pub(crate) undecelerated: bool,
+}
+
+struct St {
+    t: f64,
+    p: Vector3<f64>,
+    v: Vector3<f64>,
+    ground: Option<Facet>,
+    impacts: u64,
+    slide_start: Option<f64>,
+    max_bounce: f64,
+    e_imp: f64,
+    e_fric: f64,
+    e_trans: f64,
+    spin: (f64, Vector3<f64>),
+    undecelerated: bool,
+    crease: Option<Crease>,
+}
+
+/// A concave edge (V-shaped crease) that holds the rock: it slides along the edge line.
+#[derive(Debug, Clone, Copy)]
+struct Crease {
+    /// Edge end points (3-D).
+    ends: [Vector3<f64>; 2],
+    /// Unit direction from ends[0] to ends[1].
+    e: Vector3<f64>,
+    /// Total normal force per kg of the two faces, N_A + N_B.
+    n_tot: f64,
+}
+
+/// Largest time, s, for the rock to ride up the far face of a concave edge and come back, below
+/// which it is taken to slide along the edge (the alternative is an endless zig-zag across it).
+const CREASE_RETURN_TIME: f64 = 1e-4;
+
+/// The crease at the concave edge `ends` between facets with normals na (the one the rock
+/// comes from) and nb, when both faces slope down towards the edge and the rock, moving into b
+/// with in-plane speed w across the edge, would come back within [`CREASE_RETURN_TIME`].
+fn crease_of(
+    ends: [Vector3<f64>; 2],
+    na: &Vector3<f64>,
+    nb: &Vector3<f64>,
+    out_a: &Vector3<f64>,
+    v: &Vector3<f64>,
+    g: f64,
+) -> Option<Crease> {
+    let e = (ends[1] - ends[0]).try_normalize(0.0)?;
+    let kink = na.cross(nb).dot(&e);
+    if kink.abs() < 1e-6 {
+        return None;
+    }
+    let gv = Vector3::new(0.0, 0.0, -g);
+    let mut mb = nb.cross(&e);
+    if mb.dot(out_a) < 0.0 {
+        mb = -mb;
+    }
+    let mut ma = na.cross(&e);
+    if ma.dot(out_a) > 0.0 {
+        ma = -ma;
+    }
+    let gb = gv.dot(&mb); // gravity along b, away from the edge
+    let ga = gv.dot(&ma); // gravity along a, away from the edge
+    if !(gb < -1e-9 * g && ga < -1e-9 * g) {
+        return None;
+    }
+    let w = v.dot(&mb).max(0.0);
+    if 2.0 * w / -gb > CREASE_RETURN_TIME {
+        return None;
+    }
+    // N_A n_A + N_B n_B = −g_⊥ in the plane normal to e
+    let gp = gv - e * gv.dot(&e);
+    let n_a = -(gp.cross(nb)).dot(&e) / kink;
+    let n_b = -(na.cross(&gp)).dot(&e) / kink;
+    Some(Crease {
+        ends,
+        e,
+        n_tot: n_a.max(0.0) + n_b.max(0.0),
+    })
+}
+
+/// Moves the rock to height `z` (a rounding-level correction onto a facet or edge) and keeps
+/// KE + PE unchanged by rescaling the speed; what the kinetic energy cannot cover is booked as a
+/// (signed) transition term, so the balance stays exact.
+fn set_height(s: &mut St, z: f64, g: f64, ke_factor: f64) {
+    let dpe = g * (z - s.p.z);
+    s.p.z = z;
+    if dpe == 0.0 {
+        return;
+    }
+    let ke = 0.5 * ke_factor * s.v.norm_squared();
+    if ke > 0.0 && ke >= dpe {
+        s.v *= ((ke - dpe) / ke).sqrt();
+    } else {
+        s.e_trans -= dpe - ke;
+        s.v = Vector3::zeros();
+    }
+}
+
+/// Smallest positive root of ½ c t² + b t − s = 0 (s > 0), or +∞.
+fn reach_time(s: f64, b: f64, c: f64) -> f64 {
+    if s <= 0.0 {
+        return 0.0;
+    }
+    if c == 0.0 {
+        return if b > 0.0 { s / b } else { f64::INFINITY };
+    }
+    let disc = b * b + 2.0 * c * s;
+    if disc < 0.0 {
+        return f64::INFINITY;
+    }
+    let sq = disc.sqrt();
+    if b + sq > 0.0 {
+        // root with the well-conditioned form; it is the smallest positive one
+        2.0 * s / (b + sq)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Runs one trajectory. `draw` gives (e_n, e_t) at each impact, e_n first.
+pub(crate) fn simulate(
+    su: &Setup<'_>,
+    mu: f64,
+    draw: &mut impl FnMut() -> (f64, f64),
+    mut rec: Option<&mut Recording>,
+    control: Option<&Control>,
+) -> PhysicsResult<RunOut> {
+    let floor = su.floor;
+    let mean = floor.mean;
+    let g = su.g;
+    let gv = Vector3::new(0.0, 0.0, -g);
+    let dip = mean.dip_dir();
+    let roll = su.motion == Motion::Roll;
+    let ke_factor = if roll { 1.4 } else { 1.0 };
+    let mut s = St {
+        t: 0.0,
+        p: su.p0,
+        v: su.v0,
+        ground: None,
+        impacts: 0,
+        slide_start: None,
+        max_bounce: 0.0,
+        e_imp: 0.0,
+        e_fric: 0.0,
+        e_trans: 0.0,
+        spin: (0.0, Vector3::zeros()),
+        undecelerated: false,
+        crease: None,
+    };
+    let push_event = |rec: &mut Option<&mut Recording>, ev: EventRec| {
+        if let Some(r) = rec.as_deref_mut() {
+            r.events.push(ev);
+        }
+    };
+    // start the ground phase on facet f (slide or roll, with the roll's spin-up)
+    let enter_ground = |s: &mut St, f: Facet, rec: &mut Option<&mut Recording>| {
+        s.ground = Some(f);
+        if s.slide_start.is_none() {
+            s.slide_start = Some(mean.along(&s.p));
+        }
+        let v2 = s.v.norm_squared();
+        let mut lost = 0.0;
+        if roll {
+            lost = 0.5 * v2 * (2.0 / 7.0);
+            s.e_trans += lost;
+            s.v *= 5.0 / 7.0;
+        }
+        s.spin = (0.0, Vector3::zeros());
+        push_event(
+            rec,
+            EventRec {
+                t: s.t,
+                kind: if roll {
+                    EventKind::RollStart
+                } else {
+                    EventKind::SlideStart
+                },
+                p: s.p,
+                speed_before: v2.sqrt(),
+                speed_after: s.v.norm(),
+                lost,
+            },
+        );
+    };
+    if let Some(f) = su.on_floor {
+        enter_ground(&mut s, f, &mut rec);
+    }
+    let mut steps: u64 = 0;
+    let mut zero_steps = 0u32;
+    let (phase, reason) = loop {
+        steps += 1;
+        if steps % 4096 == 0
+            && let Some(c) = control
+        {
+            c.check()?;
+        }
+        if steps > su.max_steps {
+            return Err(PhysicsError::TooManySteps {
+                estimated: steps as f64,
+                limit: su.max_steps as f64,
+            });
+        }
+        let t_left = su.end_time.map_or(f64::INFINITY, |te| te - s.t);
+        let s_left = su.length - mean.along(&s.p);
+        let moving = match s.ground {
+            None => Phase::Flight,
+            Some(_) if roll => Phase::Roll,
+            Some(_) => Phase::Slide,
+        };
+        if s_left <= 0.0 {
+            break (moving, StopReason::LowerEnd);
+        }
+        if t_left <= 0.0 {
+            break (moving, StopReason::EndTime);
+        }
+        let diss0 = s.e_imp + s.e_fric + s.e_trans;
+        match s.ground {
+            None => {
+                let t_s = reach_time(s_left, s.v.dot(&dip), gv.dot(&dip));
+                let t_lim = t_s.min(t_left);
+                let end = floor.flight(&s.p, &s.v, g, t_lim);
+                let dt = match end {
+                    FlightEnd::Hit { t, .. } | FlightEnd::Leaves { t } => t,
+                    FlightEnd::Clear => t_lim,
+                };
+                if let Some(r) = rec.as_deref_mut() {
+                    r.segments.push(Segment {
+                        t0: s.t,
+                        dt,
+                        p0: s.p,
+                        v0: s.v,
+                        a: gv,
+                        fric: Vector3::zeros(),
+                        diss0,
+                        rolling: None,
+                        spin: s.spin,
+                    });
+                }
+                s.p += s.v * dt + gv * (0.5 * dt * dt);
+                s.v += gv * dt;
+                s.t += dt;
+                match end {
+                    FlightEnd::Leaves { .. } => break (Phase::Flight, StopReason::LeftFloor),
+                    FlightEnd::Clear => {
+                        if t_s <= t_left {
+                            break (Phase::Flight, StopReason::LowerEnd);
+                        }
+                        break (Phase::Flight, StopReason::EndTime);
+                    }
+                    FlightEnd::Hit { facet, .. } => {
+                        let pl = floor.facet_plane(facet);
+                        let n = pl.normal();
+                        let z = pl.z(s.p.x, s.p.y);
+                        set_height(&mut s, z, g, 1.0);
+                        let vn = s.v.dot(&n);
+                        let vt = s.v - n * vn;
+                        let (en, et) = draw();
+                        s.impacts += 1;
+                        let speed_before = s.v.norm();
+                        let lost = 0.5
+                            * ((1.0 - en * en) * vn * vn + (1.0 - et * et) * vt.norm_squared())
+                            + s.spin.0;
+                        s.e_imp += lost;
+                        s.spin = (0.0, Vector3::zeros());
+                        let r = -en * vn;
+                        let rebound = vt * et + n * r;
+                        push_event(
+                            &mut rec,
+                            EventRec {
+                                t: s.t,
+                                kind: EventKind::Impact,
+                                p: s.p,
+                                speed_before,
+                                speed_after: rebound.norm(),
+                                lost,
+                            },
+                        );
+                        if r < su.v_stop || r < MIN_REBOUND {
+                            s.e_trans += 0.5 * r * r;
+                            s.v = vt * et;
+                            let ke_before = rebound.norm();
+                            enter_ground(&mut s, facet, &mut rec);
+                            if let Some(rr) = rec.as_deref_mut()
+                                && let Some(ev) = rr.events.last_mut()
+                            {
+                                ev.speed_before = ke_before;
+                                ev.lost += 0.5 * r * r;
+                            }
+                        } else {
+                            s.v = rebound;
+                            s.max_bounce = s.max_bounce.max(r * r / (2.0 * g * n.z));
+                        }
+                    }
+                }
+            }
+            Some(_) if s.crease.is_some() => {
+                let c = s.crease.expect("checked");
+                let ve = s.v.dot(&c.e);
+                let ge = gv.dot(&c.e);
+                let (ae, dir) = if roll {
+                    (ge * (5.0 / 7.0), 0.0)
+                } else {
+                    let dir = if ve.abs() <= REST_SPEED {
+                        s.e_fric += 0.5 * s.v.norm_squared();
+                        s.v = Vector3::zeros();
+                        if ge.abs() <= mu * c.n_tot * (1.0 + 1e-12) || ge.abs() <= 1e-12 * g {
+                            break (Phase::Stopped, StopReason::AtRest);
+                        }
+                        ge.signum()
+                    } else {
+                        ve.signum()
+                    };
+                    (ge - dir * mu * c.n_tot, dir)
+                };
+                let ve = s.v.dot(&c.e);
+                let t_s = reach_time(s_left, ve * c.e.dot(&dip), ae * c.e.dot(&dip));
+                let mut t_max = t_s.min(t_left);
+                let mut stop_at = f64::INFINITY;
+                if !roll && ae * dir < 0.0 {
+                    stop_at = ve.abs() / ae.abs();
+                }
+                t_max = t_max.min(stop_at);
+                let u0 = (s.p - c.ends[0]).dot(&c.e);
+                let len = (c.ends[1] - c.ends[0]).dot(&c.e);
+                let t_end_edge = super::terrain::outward_root(u0 - len, ve, ae)
+                    .into_iter()
+                    .chain(super::terrain::outward_root(-u0, -ve, -ae))
+                    .fold(f64::INFINITY, f64::min);
+                let at_vertex = t_end_edge <= t_max;
+                let dt = if at_vertex { t_end_edge } else { t_max };
+                let du = ve * dt + 0.5 * ae * dt * dt;
+                s.undecelerated = ae * ve >= 0.0;
+                if let Some(r) = rec.as_deref_mut() {
+                    r.segments.push(Segment {
+                        t0: s.t,
+                        dt,
+                        p0: s.p,
+                        v0: c.e * ve,
+                        a: c.e * ae,
+                        fric: c.e * (dir * mu * c.n_tot),
+                        diss0,
+                        rolling: None,
+                        spin: (0.0, Vector3::zeros()),
+                    });
+                }
+                s.p += c.e * du;
+                s.v = c.e * (ve + ae * dt);
+                s.t += dt;
+                if !roll {
+                    s.e_fric += dir * mu * c.n_tot * du;
+                }
+                if at_vertex {
+                    s.crease = None;
+                    let d3 = if s.v.norm() > 0.0 { s.v } else { c.e * ae };
+                    match floor.locate(s.p.x, s.p.y, d3.x, d3.y) {
+                        None => break (moving, StopReason::LeftFloor),
+                        Some(fb) => {
+                            let plb = floor.facet_plane(fb);
+                            let nb = plb.normal();
+                            let z = plb.z(s.p.x, s.p.y);
+                            set_height(&mut s, z, g, ke_factor);
+                            let vn = s.v.dot(&nb);
+                            let sp = s.v.norm();
+                            if vn > 1e-9 * sp + 1e-12 {
+                                s.ground = None;
+                                if roll {
+                                    s.spin = (0.2 * sp * sp, nb.cross(&s.v) / su.radius);
+                                }
+                                push_event(
+                                    &mut rec,
+                                    EventRec {
+                                        t: s.t,
+                                        kind: EventKind::TakeOff,
+                                        p: s.p,
+                                        speed_before: sp,
+                                        speed_after: sp,
+                                        lost: 0.0,
+                                    },
+                                );
+                            } else {
+                                let vp = s.v - nb * vn;
+                                s.e_trans += 0.5 * ke_factor * (sp * sp - vp.norm_squared());
+                                s.v = vp;
+                                s.ground = Some(fb);
+                            }
+                        }
+                    }
+                    continue;
+                }
+                if dt == t_s && t_s <= t_left {
+                    break (moving, StopReason::LowerEnd);
+                }
+                if dt == t_left {
+                    break (moving, StopReason::EndTime);
+                }
+                if dt == stop_at {
+                    s.e_fric += 0.5 * s.v.norm_squared();
+                    s.v = Vector3::zeros();
+                }
+            }
+            Some(f) => {
+                let pl = floor.facet_plane(f);
+                let n = pl.normal();
+                let gn = g * n.z;
+                let gt = gv + n * (g * n.z);
+                let speed = s.v.norm();
+                let (a, fdir) = if roll {
+                    if speed <= REST_SPEED && gt.norm() <= 1e-12 * g {
+                        s.v = Vector3::zeros();
+                        break (Phase::Stopped, StopReason::AtRest);
+                    }
+                    (gt * (5.0 / 7.0), Vector3::zeros())
+                } else {
+                    let fdir = if speed <= REST_SPEED {
+                        s.e_fric += 0.5 * speed * speed;
+                        s.v = Vector3::zeros();
+                        let gtn = gt.norm();
+                        if gtn <= mu * gn * (1.0 + 1e-12) || gtn <= 1e-12 * g {
+                            break (Phase::Stopped, StopReason::AtRest);
+                        }
+                        gt / gtn
+                    } else {
+                        s.v / speed
+                    };
+                    (gt - fdir * (mu * gn), fdir)
+                };
+                // candidate ends of this constant-acceleration piece
+                let t_s = reach_time(s_left, s.v.dot(&dip), a.dot(&dip));
+                let mut t_max = t_s.min(t_left);
+                let mut stop_at = f64::INFINITY;
+                let mut turn_at = f64::INFINITY;
+                if !roll {
+                    let ad = a.dot(&fdir);
+                    if ad < 0.0 {
+                        stop_at = s.v.dot(&fdir) / -ad;
+                    }
+                    let aperp = (a - fdir * ad).norm();
+                    if aperp > 1e-12 * g {
+                        turn_at = MAX_TURN * s.v.norm().max(REST_SPEED) / aperp;
+                    }
+                    s.undecelerated = ad >= 0.0;
+                } else {
+                    s.undecelerated = a.dot(&s.v) >= 0.0;
+                }
+                t_max = t_max.min(stop_at).min(turn_at);
+                let exit = floor.slide_exit(f, &s.p, &s.v, &a, t_max);
+                let dt = exit.map_or(t_max, |e| e.0);
+                let fric = fdir * (mu * gn);
+                if let Some(r) = rec.as_deref_mut() {
+                    r.segments.push(Segment {
+                        t0: s.t,
+                        dt,
+                        p0: s.p,
+                        v0: s.v,
+                        a,
+                        fric,
+                        diss0,
+                        rolling: roll.then_some(n),
+                        spin: (0.0, Vector3::zeros()),
+                    });
+                }
+                let dp = s.v * dt + a * (0.5 * dt * dt);
+                s.p += dp;
+                s.v += a * dt;
+                s.t += dt;
+                if !roll {
+                    s.e_fric += fric.dot(&dp);
+                }
+                if dt == 0.0 {
+                    zero_steps += 1;
+                } else {
+                    zero_steps = 0;
+                }
+                if let Some((_, next, edge)) = exit {
+                    let Some(fb) = next else {
+                        break (moving, StopReason::LeftFloor);
+                    };
+                    let plb = floor.facet_plane(fb);
+                    let nb = plb.normal();
+                    let z = plb.z(s.p.x, s.p.y);
+                    set_height(&mut s, z, g, ke_factor);
+                    let vn = s.v.dot(&nb);
+                    let sp = s.v.norm();
+                    if vn > 1e-9 * sp + 1e-12 {
+                        // convex edge: the new facet falls away faster than the free parabola
+                        s.ground = None;
+                        if roll {
+                            s.spin = (0.2 * sp * sp, n.cross(&s.v) / su.radius);
+                        }
+                        push_event(
+                            &mut rec,
+                            EventRec {
+                                t: s.t,
+                                kind: EventKind::TakeOff,
+                                p: s.p,
+                                speed_before: sp,
+                                speed_after: sp,
+                                lost: 0.0,
+                            },
+                        );
+                    } else {
+                        let vp = s.v - nb * vn;
+                        s.e_trans += 0.5 * ke_factor * (sp * sp - vp.norm_squared());
+                        s.v = vp;
+                        s.ground = Some(fb);
+                        let ends = edge.map(|q| Vector3::new(q[0], q[1], plb.z(q[0], q[1])));
+                        let d = ends[1] - ends[0];
+                        let out_a = Vector3::new(d.y, -d.x, 0.0);
+                        if let Some(c) = crease_of(ends, &n, &nb, &out_a, &s.v, g) {
+                            let ve = s.v.dot(&c.e);
+                            let before = s.v.norm_squared();
+                            s.v = c.e * ve;
+                            s.e_trans += 0.5 * ke_factor * (before - ve * ve);
+                            // on the edge line through the crossing point
+                            let u = (s.p - c.ends[0]).dot(&c.e);
+                            let q = c.ends[0] + c.e * u;
+                            s.p.x = q.x;
+                            s.p.y = q.y;
+                            set_height(&mut s, q.z, g, ke_factor);
+                            s.crease = Some(c);
+                        }
+                    }
+                    if zero_steps > 16 {
+                        // stuck on a vertex by rounding: move a hair along the motion
+                        let dir = if s.v.norm() > 0.0 { s.v } else { a };
+                        let h = (dir.x * dir.x + dir.y * dir.y).sqrt();
+                        if h > 0.0 {
+                            let ext = floor.extent();
+                            let eps = 1e-9 * (ext[1] - ext[0]).abs().min(1e3).max(1e-3);
+                            s.p.x += eps * dir.x / h;
+                            s.p.y += eps * dir.y / h;
+                        }
+                        match floor.locate(s.p.x, s.p.y, dir.x, dir.y) {
+                            Some(fc) => {
+                                if s.ground.is_some() {
+                                    s.ground = Some(fc);
+                                }
+                                let z = floor.facet_plane(fc).z(s.p.x, s.p.y);
+                                set_height(&mut s, z, g, ke_factor);
+                            }
+                            None => break (moving, StopReason::LeftFloor),
+                        }
+                        zero_steps = 0;
+                    }
+                    continue;
+                }
+                if dt == t_s && t_s <= t_left {
+                    break (moving, StopReason::LowerEnd);
+                }
+                if dt == t_left {
+                    break (moving, StopReason::EndTime);
+                }
+                if dt == stop_at {
+                    // the speed along the friction direction is zero: keep the rest
+                    let vd = s.v.dot(&fdir);
+                    let before = s.v.norm_squared();
+                    s.v -= fdir * vd;
+                    s.e_fric += 0.5 * (before - s.v.norm_squared());
+                }
+            }
+        }
+    };
+    let stopped = phase == Phase::Stopped;
+    if stopped {
+        push_event(
+            &mut rec,
+            EventRec {
+                t: s.t,
+                kind: EventKind::Stop,
+                p: s.p,
+                speed_before: 0.0,
+                speed_after: 0.0,
+                lost: 0.0,
+            },
+        );
+    }
+    let (e_rot, omega) = match (phase, s.ground) {
+        (Phase::Roll, Some(f)) => {
+            let n = floor.facet_plane(f).normal();
+            (0.2 * s.v.norm_squared(), n.cross(&s.v) / su.radius)
+        }
+        (Phase::Flight, _) => s.spin,
+        _ => (0.0, Vector3::zeros()),
+    };
+    Ok(RunOut {
+        t: s.t,
+        p: s.p,
+        v: s.v,
+        omega,
+        phase,
+        reason,
+        impacts: s.impacts,
+        slide_start: s.slide_start,
+        stop_along: stopped.then(|| mean.along(&s.p)),
+        max_bounce: s.max_bounce,
+        e_imp: s.e_imp,
+        e_fric: s.e_fric,
+        e_trans: s.e_trans,
+        e_rot,
+        undecelerated: !stopped && s.ground.is_some() && s.undecelerated,
+    })
+}

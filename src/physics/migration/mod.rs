@@ -1,0 +1,925 @@
+//! Rockfall migration down the face (physics.md §C, api.md `POST /v1/migration`).
+//!
+//! [`run`] is the single entry: it builds the floor, runs the nominal trajectory (with events and
+//! a sampled trajectory when asked) and, with [`MigrationCase::monte_carlo`], a seeded ensemble
+//! with its statistics. Only the lumped-mass energy tracking method exists so far; the rigid-block
+//! DEM (physics.md §C.3) is named in [`Method`] so that it can be added beside it.
+//!
+//! Coordinates (api.md): x horizontal down-dip, y along strike, z up; the plane floor is
+//! z = −x tan θ; `along_dip` is measured in the face's mean plane from its upper end; potential
+//! energy is m g (z − z_end) with z_end the mean plane's height at `along_dip` = length.
+
+mod lumped_mass;
+pub mod monte_carlo;
+pub mod stats;
+mod terrain;
+
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+pub use lumped_mass::{EventKind, MAX_TURN, MIN_REBOUND, Motion, Phase, StopReason};
+pub use monte_carlo::Distribution;
+pub use stats::{Histogram, Summary};
+pub use terrain::ContourLine;
+
+use self::lumped_mass::{Recording, RunOut, Setup, simulate};
+use self::terrain::Floor;
+use super::control::Control;
+use super::error::{PhysicsError, PhysicsResult};
+use super::material::{Rock, RockShape};
+
+/// Migration method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// Point mass, energy tracking method (physics.md §C.2).
+    #[default]
+    LumpedMass,
+    /// Rigid polyhedral block, DEM (physics.md §C.3); not available yet.
+    RigidBlock,
+}
+
+/// Floor of the face.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum FloorSpec {
+    /// The plane z = −x tan θ (from `dip_deg` and `length_m`).
+    #[default]
+    Plane,
+    /// Height grid: `heights[i][j]` is z at (x₀ + j d, y₀ + i d), m.
+    Grid {
+        /// [x₀, y₀], m (default [0, 0]).
+        origin: [f64; 2],
+        /// Spacing d, m.
+        spacing: f64,
+        /// Rows of heights, m (row i at y₀ + i d).
+        heights: Vec<Vec<f64>>,
+    },
+    /// Contour polylines, resampled at most `resolution` apart and Delaunay-triangulated.
+    Contours {
+        /// The contour lines.
+        contours: Vec<ContourLine>,
+        /// Largest spacing of resampled points, m (default 1).
+        resolution: f64,
+    },
+}
+
+/// The working face.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Face {
+    /// Dip θ, degrees (default 45).
+    pub dip_deg: f64,
+    /// Face length along dip S, m (default 120).
+    pub length: f64,
+    /// Floor (default plane).
+    pub floor: FloorSpec,
+    /// Coulomb friction μ (default 0.2).
+    pub friction_coefficient: f64,
+    /// Normal restitution e_n (default 0.3).
+    pub restitution_normal: f64,
+    /// Tangential restitution e_t (default 0.8).
+    pub restitution_tangential: f64,
+}
+
+impl Default for Face {
+    fn default() -> Self {
+        Self {
+            dip_deg: 45.0,
+            length: 120.0,
+            floor: FloorSpec::Plane,
+            friction_coefficient: 0.2,
+            restitution_normal: 0.3,
+            restitution_tangential: 0.8,
+        }
+    }
+}
+
+/// Where and how the rock is released.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Release {
+    /// Vertical lift above the floor point, m (default 3.27).
+    pub drop_height: f64,
+    /// Along-dip position of the floor point, m (default 0).
+    pub along_dip: f64,
+    /// Across-face position y of the floor point, m (default 0).
+    pub across: f64,
+    /// Initial speed along the floor's down-dip direction, m/s (default 0).
+    pub speed: f64,
+}
+
+impl Default for Release {
+    fn default() -> Self {
+        Self {
+            drop_height: 3.27,
+            along_dip: 0.0,
+            across: 0.0,
+            speed: 0.0,
+        }
+    }
+}
+
+/// Options of the lumped-mass method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LumpedMassOptions {
+    /// Ground motion (default slide).
+    pub motion: Motion,
+    /// Normal rebound speed below which the ground phase starts, m/s (default 0.5).
+    pub stop_normal_speed: f64,
+}
+
+impl Default for LumpedMassOptions {
+    fn default() -> Self {
+        Self {
+            motion: Motion::Slide,
+            stop_normal_speed: 0.5,
+        }
+    }
+}
+
+/// A seeded Monte Carlo ensemble.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MonteCarlo {
+    /// Number of runs (default 200).
+    pub runs: u64,
+    /// Seed (default 42).
+    pub seed: u64,
+    /// e_n, drawn at every impact and clipped to [0, 1] (default U[0.2, 0.4]).
+    pub restitution_normal: Distribution,
+    /// e_t, drawn at every impact after e_n and clipped to [0, 1] (default U[0.7, 0.9]).
+    pub restitution_tangential: Distribution,
+    /// μ, drawn once per run and clipped to ≥ 0 (default: the face's μ for every run).
+    pub friction_coefficient: Option<Distribution>,
+}
+
+impl Default for MonteCarlo {
+    fn default() -> Self {
+        Self {
+            runs: 200,
+            seed: 42,
+            restitution_normal: Distribution::Uniform { min: 0.2, max: 0.4 },
+            restitution_tangential: Distribution::Uniform { min: 0.7, max: 0.9 },
+            friction_coefficient: None,
+        }
+    }
+}
+
+/// What to report besides the arrival.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputOptions {
+    /// Sample the nominal trajectory (default false).
+    pub trajectory: bool,
+    /// Sample interval, s (default 0.01).
+    pub sample_interval: f64,
+    /// Report the nominal run's events (default true).
+    pub events: bool,
+    /// Per-run summaries and their CSV (Monte Carlo; default false).
+    pub runs_csv: bool,
+    /// Largest number of trajectory samples (the service's limit, default 1 000 000).
+    pub max_samples: usize,
+}
+
+impl Default for OutputOptions {
+    fn default() -> Self {
+        Self {
+            trajectory: false,
+            sample_interval: 0.01,
+            events: true,
+            runs_csv: false,
+            max_samples: 1_000_000,
+        }
+    }
+}
+
+/// A migration request (api.md `POST /v1/migration`), SI units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MigrationCase {
+    /// Method (default lumped mass).
+    pub method: Method,
+    /// Gravity g, m/s² (default 9.81).
+    pub gravity: f64,
+    /// The face.
+    pub face: Face,
+    /// The rock (its shape's own mass is used).
+    pub rock: Rock,
+    /// The release.
+    pub release: Release,
+    /// Lumped-mass options.
+    pub lumped_mass: LumpedMassOptions,
+    /// Stop at this time instead of the lower end, s (default none).
+    pub end_time: Option<f64>,
+    /// Monte Carlo ensemble (default none).
+    pub monte_carlo: Option<MonteCarlo>,
+    /// Output options.
+    pub output: OutputOptions,
+    /// Largest number of events (flights, impacts, slide pieces) per run (default 1e7).
+    pub max_steps_per_run: u64,
+}
+
+impl Default for MigrationCase {
+    fn default() -> Self {
+        Self {
+            method: Method::LumpedMass,
+            gravity: 9.81,
+            face: Face::default(),
+            rock: Rock::default(),
+            release: Release::default(),
+            lumped_mass: LumpedMassOptions::default(),
+            end_time: None,
+            monte_carlo: None,
+            output: OutputOptions::default(),
+            max_steps_per_run: 10_000_000,
+        }
+    }
+}
+
+/// State at the end of the nominal run (api.md `arrival`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Arrival {
+    /// Motion at the end.
+    pub phase: Phase,
+    /// Why the run ended.
+    pub stop_reason: StopReason,
+    /// Time since release, s.
+    pub time: f64,
+    /// Speed, m/s.
+    pub speed: f64,
+    /// Velocity along the mean plane's down-dip direction, m/s.
+    pub along_dip_velocity: f64,
+    /// Velocity along the mean plane's outward normal, m/s.
+    pub normal_velocity: f64,
+    /// Along-dip position, m.
+    pub along_dip: f64,
+    /// Height above the floor along its normal, m (0 on the floor).
+    pub normal_offset: f64,
+    /// Position [x, y, z], m.
+    pub position: [f64; 3],
+    /// Angular speed, rad/s (rolling sphere or its spin in flight; else 0).
+    pub angular_speed: f64,
+    /// Kinetic energy, translation + rotation, J.
+    pub kinetic_energy: f64,
+    /// Rotational kinetic energy, J.
+    pub rotational_energy: f64,
+}
+
+/// Energy budget of the nominal run, J.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnergyBudget {
+    /// Kinetic + potential energy at release, J.
+    pub total_start: f64,
+    /// Lost in impacts (restitution), J.
+    pub impacts: f64,
+    /// Work of sliding friction, J.
+    pub friction: f64,
+    /// Lost at transitions (normal rebound below the stop speed, roll spin-up, edge projection), J.
+    pub transition: f64,
+    /// Damping (rigid block only; 0 here), J.
+    pub damping: f64,
+    /// KE + PE + losses − total_start at the end, J (rounding only).
+    pub residual: f64,
+}
+
+/// One event of the nominal run (api.md `events`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Event {
+    /// Time, s.
+    pub time: f64,
+    /// Kind.
+    pub kind: EventKind,
+    /// Position [x, y, z], m.
+    pub position: [f64; 3],
+    /// Along-dip position, m.
+    pub along_dip: f64,
+    /// Speed before, m/s.
+    pub speed_before: f64,
+    /// Speed after, m/s.
+    pub speed_after: f64,
+    /// Energy lost at the event, J.
+    pub energy_lost: f64,
+}
+
+/// Trajectory sampled from the closed forms (api.md `trajectory`), equal-length arrays.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Trajectory {
+    /// Times, s.
+    pub time: Vec<f64>,
+    /// Positions [x, y, z], m.
+    pub position: Vec<[f64; 3]>,
+    /// Along-dip positions, m.
+    pub along_dip: Vec<f64>,
+    /// Heights above the floor along its normal, m.
+    pub height: Vec<f64>,
+    /// Velocities, m/s.
+    pub velocity: Vec<[f64; 3]>,
+    /// Speeds, m/s.
+    pub speed: Vec<f64>,
+    /// Angular velocities, rad/s (zero for the sliding point mass).
+    pub angular_velocity: Vec<[f64; 3]>,
+    /// Kinetic energy, translation + rotation, J.
+    pub kinetic_energy: Vec<f64>,
+    /// Rotational energy, J.
+    pub rotational_energy: Vec<f64>,
+    /// Potential energy m g (z − z_end), J.
+    pub potential_energy: Vec<f64>,
+    /// Energy dissipated so far (impacts, friction, transitions), J.
+    pub dissipated_energy: Vec<f64>,
+}
+
+/// Summary of one Monte Carlo run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunSummary {
+    /// Time at the end, s.
+    pub time: f64,
+    /// Speed at the end, m/s.
+    pub speed: f64,
+    /// Kinetic energy at the end (translation + rotation), J.
+    pub kinetic_energy: f64,
+    /// Number of impacts.
+    pub impact_count: u64,
+    /// Final along-dip position minus the release's, m.
+    pub runout: f64,
+    /// Largest apex height after the first impact, m.
+    pub max_bounce_height: f64,
+    /// Why the run ended.
+    pub stop_reason: StopReason,
+}
+
+/// Ensemble statistics (api.md `statistics`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Statistics {
+    /// Number of runs.
+    pub runs: u64,
+    /// Seed.
+    pub seed: u64,
+    /// Fraction of runs that reached the lower end.
+    pub reached_fraction: f64,
+    /// Arrival speed over the runs that reached the lower end, m/s (None if none did).
+    pub speed: Option<Summary>,
+    /// Arrival kinetic energy over the runs that reached the lower end, J.
+    pub kinetic_energy: Option<Summary>,
+    /// Arrival time over the runs that reached the lower end, s.
+    pub time: Option<Summary>,
+    /// Impact count over all runs.
+    pub impact_count: Summary,
+    /// Runout over all runs, m.
+    pub runout: Summary,
+    /// Largest bounce height over all runs, m.
+    pub max_bounce_height: Summary,
+}
+
+/// A named warning (api.md `warnings`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Warning {
+    /// Machine-readable code.
+    pub code: &'static str,
+    /// Explanation.
+    pub message: String,
+}
+
+/// Result of a migration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MigrationResult {
+    /// Method used.
+    pub method: Method,
+    /// Rock mass, kg.
+    pub mass: f64,
+    /// End state of the nominal run.
+    pub arrival: Arrival,
+    /// Impacts of the nominal run.
+    pub impact_count: u64,
+    /// Along-dip position where the ground phase began, m (None: never on the ground).
+    pub slide_start_along_dip: Option<f64>,
+    /// Along-dip position where the rock came to rest, m (None: it did not).
+    pub stop_along_dip: Option<f64>,
+    /// Largest apex height above the struck floor after the first impact, m.
+    pub max_bounce_height: f64,
+    /// Energy budget of the nominal run.
+    pub energy: EnergyBudget,
+    /// Events of the nominal run (when asked).
+    pub events: Option<Vec<Event>>,
+    /// Sampled trajectory of the nominal run (when asked).
+    pub trajectory: Option<Trajectory>,
+    /// Monte Carlo statistics.
+    pub statistics: Option<Statistics>,
+    /// Per-run summaries (Monte Carlo with `runs_csv`).
+    pub runs: Option<Vec<RunSummary>>,
+    /// The per-run summaries as CSV (api.md header).
+    pub runs_csv: Option<String>,
+    /// Warnings.
+    pub warnings: Vec<Warning>,
+}
+
+/// The api.md name of a stop reason.
+pub fn stop_reason_name(r: StopReason) -> &'static str {
+    match r {
+        StopReason::LowerEnd => "lower_end",
+        StopReason::AtRest => "at_rest",
+        StopReason::EndTime => "end_time",
+        StopReason::LeftFloor => "left_floor",
+    }
+}
+
+/// CSV of per-run summaries with api.md's header; numbers in shortest round-trip form, runs
+/// numbered from 0 (the run index of the random stream).
+pub fn runs_csv(runs: &[RunSummary]) -> String {
+    let mut s = String::from(
+        "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason\n",
+    );
+    for (i, r) in runs.iter().enumerate() {
+        s.push_str(&format!(
+            "{i},{},{},{},{},{},{},{}\n",
+            r.time,
+            r.speed,
+            r.kinetic_energy,
+            r.impact_count,
+            r.runout,
+            r.max_bounce_height,
+            stop_reason_name(r.stop_reason)
+        ));
+    }
+    s
+}
+
+/// Everything a run needs that does not change between Monte Carlo runs.
+struct Prepared {
+    floor: Floor,
+    mass: f64,
+    g: f64,
+    p0: Vector3<f64>,
+    v0: Vector3<f64>,
+    on_floor: Option<u32>,
+    release_along: f64,
+    z_end: f64,
+    e0: f64,
+}
+
+fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
+    let face = &case.face;
+    let dip = face.dip_deg.to_radians();
+    let floor = match &face.floor {
+        FloorSpec::Plane => Floor::plane(dip),
+        FloorSpec::Grid {
+            origin,
+            spacing,
+            heights,
+        } => Floor::grid(dip, *origin, *spacing, heights)?,
+        FloorSpec::Contours {
+            contours,
+            resolution,
+        } => Floor::contours(dip, contours, *resolution)?,
+    };
+    let rel = &case.release;
+    let mean = floor.mean;
+    let y = rel.across;
+    let (x, facet) = match face.floor {
+        FloorSpec::Plane => (rel.along_dip * mean.cos, 0),
+        _ => {
+            let ext = floor.extent();
+            if !(y >= ext[2] && y <= ext[3]) {
+                return Err(PhysicsError::invalid(
+                    "/release/across_m",
+                    y,
+                    format!(
+                        "the release must be over the floor: y in [{}, {}] m",
+                        ext[2], ext[3]
+                    ),
+                ));
+            }
+            let along_at = |x: f64| -> Option<f64> {
+                let f = floor.locate(x, y, 0.0, 0.0)?;
+                let z = floor.facet_plane(f).z(x, y);
+                Some(mean.along(&Vector3::new(x, y, z)))
+            };
+            let off = || {
+                PhysicsError::invalid(
+                    "/release/along_dip_m",
+                    rel.along_dip,
+                    "the release point is not on the floor at this across_m",
+                )
+            };
+            let (mut lo, mut hi) = (ext[0], ext[1]);
+            let (flo, fhi) = (along_at(lo).ok_or_else(off)?, along_at(hi).ok_or_else(off)?);
+            if !(flo <= rel.along_dip && rel.along_dip <= fhi) {
+                return Err(off());
+            }
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if mid <= lo || mid >= hi {
+                    break;
+                }
+                match along_at(mid) {
+                    Some(a) if a < rel.along_dip => lo = mid,
+                    Some(_) => hi = mid,
+                    None => return Err(off()),
+                }
+            }
+            let x = if along_at(hi).is_some_and(|a| a == rel.along_dip) {
+                hi
+            } else {
+                lo
+            };
+            let f = floor
+                .locate(x, y, 1.0, 0.0)
+                .or_else(|| floor.locate(x, y, 0.0, 0.0));
+            (x, f.ok_or_else(off)?)
+        }
+    };
+    let pl = floor.facet_plane(facet);
+    let z_floor = pl.z(x, y);
+    let p0 = Vector3::new(x, y, z_floor + rel.drop_height);
+    let v0 = pl.down_dip() * rel.speed;
+    let g = case.gravity;
+    let z_end = mean.z_at(face.length);
+    let e0 = 0.5 * rel.speed * rel.speed + g * (p0.z - z_end);
+    Ok(Prepared {
+        release_along: mean.along(&Vector3::new(x, y, z_floor)),
+        on_floor: (rel.drop_height == 0.0).then_some(facet),
+        floor,
+        mass: case.rock.mass(),
+        g,
+        p0,
+        v0,
+        z_end,
+        e0,
+    })
+}
+
+fn roll_radius(rock: &Rock) -> f64 {
+    match rock.shape {
+        RockShape::Sphere { radius } => radius,
+        _ => rock.side_length / 2.0,
+    }
+}
+
+fn setup<'a>(case: &MigrationCase, pr: &'a Prepared) -> Setup<'a> {
+    Setup {
+        floor: &pr.floor,
+        g: pr.g,
+        motion: case.lumped_mass.motion,
+        v_stop: case.lumped_mass.stop_normal_speed,
+        radius: roll_radius(&case.rock),
+        length: case.face.length,
+        end_time: case.end_time,
+        max_steps: case.max_steps_per_run,
+        p0: pr.p0,
+        v0: pr.v0,
+        on_floor: pr.on_floor,
+    }
+}
+
+fn v3(v: &Vector3<f64>) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+
+/// Runs a migration case: the nominal trajectory and, when asked, the Monte Carlo ensemble.
+///
+/// Errors: `InvalidInput` for a roll with μ < (2/7) tan θ (`/face/friction_coefficient`, or
+/// `/monte_carlo/friction_coefficient` when the drawn μ can fall below it), a release off a grid
+/// or contour floor, a malformed floor, too many trajectory samples (`/output/sample_interval_s`)
+/// or the rigid-block method (`/method`, not available yet); `TooManySteps` past
+/// `max_steps_per_run`; `Cancelled`/`TimedOut` from the control.
+///
+/// # Special cases
+/// A drop height of 0 starts the ground phase at once (no impact). A slide with zero acceleration
+/// and zero speed is at rest at once. Normal rebounds slower than max(v_stop, [`MIN_REBOUND`])
+/// end the bouncing.
+///
+/// # References
+/// physics.md §C.1–C.2; api.md `POST /v1/migration`.
+///
+/// # Examples
+/// ```
+/// use gangue::physics::{Control, migration::{run, MigrationCase}};
+/// let r = run(&MigrationCase::default(), &Control::unlimited()).unwrap();
+/// assert_eq!(r.impact_count, 3);
+/// assert!((r.arrival.speed - 36.35233409073599).abs() < 1e-8);
+/// ```
+pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationResult> {
+    if case.method == Method::RigidBlock {
+        return Err(PhysicsError::invalid(
+            "/method",
+            0.0,
+            "the rigid_block method is not available yet; use lumped_mass",
+        ));
+    }
+    let face = &case.face;
+    let dip = face.dip_deg.to_radians();
+    let mu_roll = 2.0 / 7.0 * dip.tan();
+    if case.lumped_mass.motion == Motion::Roll {
+        if face.friction_coefficient < mu_roll {
+            return Err(PhysicsError::invalid(
+                "/face/friction_coefficient",
+                face.friction_coefficient,
+                format!("rolling without slip needs μ ≥ (2/7) tan θ = {mu_roll:.6}"),
+            ));
+        }
+        if let Some(d) = case.monte_carlo.and_then(|m| m.friction_coefficient)
+            && d.lower_bound() < mu_roll
+        {
+            return Err(PhysicsError::invalid(
+                "/monte_carlo/friction_coefficient",
+                d.lower_bound(),
+                format!("rolling without slip needs every drawn μ ≥ (2/7) tan θ = {mu_roll:.6}"),
+            ));
+        }
+    }
+    let pr = prepare(case)?;
+    let su = setup(case, &pr);
+    let m = pr.mass;
+    let (en, et) = (face.restitution_normal, face.restitution_tangential);
+    let mut rec = Recording::default();
+    let want_rec = case.output.events || case.output.trajectory;
+    let out = simulate(
+        &su,
+        face.friction_coefficient,
+        &mut || (en, et),
+        want_rec.then_some(&mut rec),
+        Some(control),
+    )?;
+    let mean = pr.floor.mean;
+    let mut warnings = Vec::new();
+    let trajectory = if case.output.trajectory {
+        Some(sample_trajectory(case, &pr, &out, &rec.segments)?)
+    } else {
+        None
+    };
+    let arrival = arrival_of(&pr, &out);
+    let (imp, fric, trans) = (out.e_imp * m, out.e_fric * m, out.e_trans * m);
+    let pe = m * pr.g * (out.p.z - pr.z_end);
+    let total_start = m * pr.e0;
+    let residual = arrival.kinetic_energy + pe + imp + fric + trans - total_start;
+    if out.reason == StopReason::EndTime && out.undecelerated {
+        warnings.push(Warning {
+            code: "stop_distance_infinite",
+            message: "the rock was still on the floor without deceleration at end_time: it would \
+                      not stop, so stop_along_dip_m is null"
+                .into(),
+        });
+    }
+    let events = case.output.events.then(|| {
+        rec.events
+            .iter()
+            .map(|e| Event {
+                time: e.t,
+                kind: e.kind,
+                position: v3(&e.p),
+                along_dip: mean.along(&e.p),
+                speed_before: e.speed_before,
+                speed_after: e.speed_after,
+                energy_lost: e.lost * m,
+            })
+            .collect()
+    });
+    let (statistics, runs) = match &case.monte_carlo {
+        Some(mc) => {
+            let runs = ensemble(case, &pr, mc, control)?;
+            let st = statistics_of(mc, &runs);
+            if st.speed.is_none() {
+                warnings.push(Warning {
+                    code: "no_run_reached_lower_end",
+                    message: "no run reached the lower end: speed, kinetic energy and time \
+                              statistics are null"
+                        .into(),
+                });
+            }
+            (Some(st), case.output.runs_csv.then_some(runs))
+        }
+        None => {
+            control.set_total(1);
+            control.add_done(1);
+            (None, None)
+        }
+    };
+    Ok(MigrationResult {
+        method: case.method,
+        mass: m,
+        arrival,
+        impact_count: out.impacts,
+        slide_start_along_dip: out.slide_start,
+        stop_along_dip: out.stop_along,
+        max_bounce_height: out.max_bounce,
+        energy: EnergyBudget {
+            total_start,
+            impacts: imp,
+            friction: fric,
+            transition: trans,
+            damping: 0.0,
+            residual,
+        },
+        events,
+        trajectory,
+        runs_csv: runs.as_deref().map(runs_csv),
+        runs,
+        statistics,
+        warnings,
+    })
+}
+
+fn height_above_floor(floor: &Floor, p: &Vector3<f64>, v: &Vector3<f64>) -> f64 {
+    floor.locate(p.x, p.y, v.x, v.y).map_or(0.0, |f| {
+        let pl = floor.facet_plane(f);
+        pl.height(p) * pl.normal().z
+    })
+}
+
+fn arrival_of(pr: &Prepared, out: &RunOut) -> Arrival {
+    let m = pr.mass;
+    let mean = pr.floor.mean;
+    let ke = 0.5 * m * out.v.norm_squared() + m * out.e_rot;
+    let on_floor = matches!(out.phase, Phase::Slide | Phase::Roll | Phase::Stopped);
+    Arrival {
+        phase: out.phase,
+        stop_reason: out.reason,
+        time: out.t,
+        speed: out.v.norm(),
+        along_dip_velocity: out.v.dot(&mean.dip_dir()),
+        normal_velocity: out.v.dot(&mean.normal()),
+        along_dip: mean.along(&out.p),
+        normal_offset: if on_floor {
+            0.0
+        } else {
+            height_above_floor(&pr.floor, &out.p, &out.v)
+        },
+        position: v3(&out.p),
+        angular_speed: out.omega.norm(),
+        kinetic_energy: ke,
+        rotational_energy: m * out.e_rot,
+    }
+}
+
+fn sample_trajectory(
+    case: &MigrationCase,
+    pr: &Prepared,
+    out: &RunOut,
+    segs: &[lumped_mass::Segment],
+) -> PhysicsResult<Trajectory> {
+    let dt = case.output.sample_interval;
+    let t_end = out.t;
+    let n_grid = (t_end / dt).floor();
+    let n = n_grid + 1.0 + if n_grid * dt < t_end { 1.0 } else { 0.0 };
+    if !(n <= case.output.max_samples as f64) {
+        return Err(PhysicsError::invalid(
+            "/output/sample_interval_s",
+            dt,
+            format!(
+                "the trajectory of {t_end:.6} s would need {n} samples, more than the limit {}",
+                case.output.max_samples
+            ),
+        ));
+    }
+    let n = n as usize;
+    let m = pr.mass;
+    let g = pr.g;
+    let mean = pr.floor.mean;
+    let mut tr = Trajectory::default();
+    let mut k = 0usize;
+    for i in 0..n {
+        let t = if i + 1 == n { t_end } else { i as f64 * dt };
+        while k + 1 < segs.len() && segs[k].t0 + segs[k].dt < t {
+            k += 1;
+        }
+        let (p, v, diss, rot, omega, on_floor) = match segs.get(k) {
+            Some(s) => {
+                let tau = (t - s.t0).clamp(0.0, s.dt);
+                let p = s.p0 + s.v0 * tau + s.a * (0.5 * tau * tau);
+                let v = s.v0 + s.a * tau;
+                let diss = s.diss0 + s.fric.dot(&(p - s.p0));
+                let (rot, om) = match s.rolling {
+                    Some(nrm) => (
+                        0.2 * v.norm_squared(),
+                        nrm.cross(&v) / roll_radius(&case.rock),
+                    ),
+                    None => s.spin,
+                };
+                (
+                    p,
+                    v,
+                    diss,
+                    rot,
+                    om,
+                    s.fric != Vector3::zeros()
+                        || s.rolling.is_some()
+                        || s.a.x != 0.0
+                        || s.a.y != 0.0,
+                )
+            }
+            None => (
+                out.p,
+                out.v,
+                out.e_imp + out.e_fric + out.e_trans,
+                out.e_rot,
+                out.omega,
+                true,
+            ),
+        };
+        let (p, v, diss, rot, omega) = if i + 1 == n {
+            (
+                out.p,
+                out.v,
+                out.e_imp + out.e_fric + out.e_trans,
+                out.e_rot,
+                out.omega,
+            )
+        } else {
+            (p, v, diss, rot, omega)
+        };
+        let on_floor = if i + 1 == n {
+            matches!(out.phase, Phase::Slide | Phase::Roll | Phase::Stopped)
+        } else {
+            on_floor
+        };
+        tr.time.push(t);
+        tr.position.push(v3(&p));
+        tr.along_dip.push(mean.along(&p));
+        tr.height.push(if on_floor {
+            0.0
+        } else {
+            height_above_floor(&pr.floor, &p, &v)
+        });
+        tr.velocity.push(v3(&v));
+        tr.speed.push(v.norm());
+        tr.angular_velocity.push(v3(&omega));
+        tr.kinetic_energy.push(m * (0.5 * v.norm_squared() + rot));
+        tr.rotational_energy.push(m * rot);
+        tr.potential_energy.push(m * g * (p.z - pr.z_end));
+        tr.dissipated_energy.push(m * diss);
+    }
+    Ok(tr)
+}
+
+fn ensemble(
+    case: &MigrationCase,
+    pr: &Prepared,
+    mc: &MonteCarlo,
+    control: &Control,
+) -> PhysicsResult<Vec<RunSummary>> {
+    const CHUNK: u64 = 256;
+    let su = setup(case, pr);
+    let n = mc.runs;
+    control.set_total(n);
+    let mean = pr.floor.mean;
+    let m = pr.mass;
+    let one = |i: u64| -> PhysicsResult<RunSummary> {
+        let mut rng = monte_carlo::run_stream(mc.seed, i);
+        let mu = match &mc.friction_coefficient {
+            Some(d) => monte_carlo::sample(d, &mut rng).max(0.0),
+            None => case.face.friction_coefficient,
+        };
+        let mut draw = || {
+            let en = monte_carlo::sample(&mc.restitution_normal, &mut rng).clamp(0.0, 1.0);
+            let et = monte_carlo::sample(&mc.restitution_tangential, &mut rng).clamp(0.0, 1.0);
+            (en, et)
+        };
+        let o = simulate(&su, mu, &mut draw, None, Some(control))?;
+        Ok(RunSummary {
+            time: o.t,
+            speed: o.v.norm(),
+            kinetic_energy: m * (0.5 * o.v.norm_squared() + o.e_rot),
+            impact_count: o.impacts,
+            runout: mean.along(&o.p) - pr.release_along,
+            max_bounce_height: o.max_bounce,
+            stop_reason: o.reason,
+        })
+    };
+    let chunks: Vec<PhysicsResult<Vec<RunSummary>>> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            control.check()?;
+            let range = c * CHUNK..((c + 1) * CHUNK).min(n);
+            let len = range.end - range.start;
+            let v = range.map(one).collect::<PhysicsResult<Vec<_>>>()?;
+            control.add_done(len);
+            Ok(v)
+        })
+        .collect();
+    let mut all = Vec::with_capacity(n as usize);
+    for c in chunks {
+        all.extend(c?);
+    }
+    Ok(all)
+}
+
+fn statistics_of(mc: &MonteCarlo, runs: &[RunSummary]) -> Statistics {
+    let reached: Vec<&RunSummary> = runs
+        .iter()
+        .filter(|r| r.stop_reason == StopReason::LowerEnd)
+        .collect();
+    let col = |f: &dyn Fn(&RunSummary) -> f64, only: bool| -> Vec<f64> {
+        if only {
+            reached.iter().map(|r| f(r)).collect()
+        } else {
+            runs.iter().map(f).collect()
+        }
+    };
+    let all = |f: &dyn Fn(&RunSummary) -> f64| {
+        stats::summarize(&col(f, false)).expect("an ensemble has at least one run")
+    };
+    Statistics {
+        runs: runs.len() as u64,
+        seed: mc.seed,
+        reached_fraction: reached.len() as f64 / runs.len().max(1) as f64,
+        speed: stats::summarize(&col(&|r| r.speed, true)),
+        kinetic_energy: stats::summarize(&col(&|r| r.kinetic_energy, true)),
+        time: stats::summarize(&col(&|r| r.time, true)),
+        impact_count: all(&|r| r.impact_count as f64),
+        runout: all(&|r| r.runout),
+        max_bounce_height: all(&|r| r.max_bounce_height),
+    }
+}

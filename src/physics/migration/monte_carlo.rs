@@ -1,0 +1,173 @@
+//! Seeded Monte Carlo ensembles: distributions, one random stream per run, parallel runs reduced
+//! in run order.
+//!
+//! **Generator.** Run i of seed s draws from its own PCG-64 stream (`rand_pcg::Pcg64`, O'Neill's
+//! XSL-RR 128/64 LCG). Its 128-bit state and its stream constant are the first three outputs of a
+//! SplitMix64 generator started at s ⊕ (i · 0x9E3779B97F4A7C15): state = (z₁ ≪ 64) | z₂,
+//! stream = z₃. A uniform deviate is (next_u64 ≫ 11)·2⁻⁵³ ∈ [0, 1); a normal deviate comes from
+//! Marsaglia's polar method (one deviate per accepted pair, the second discarded so that a draw
+//! never depends on an earlier one). Friction is drawn first (once per run), then e_n and e_t at
+//! each impact. Because the stream depends only on (seed, run index) and the results are
+//! collected in run order, an ensemble gives the same bits on any number of threads.
+
+use rand::RngCore;
+use rand_pcg::Pcg64;
+
+/// A probability distribution for an uncertain input.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Distribution {
+    /// Uniform on [min, max].
+    Uniform {
+        /// Lower bound.
+        min: f64,
+        /// Upper bound.
+        max: f64,
+    },
+    /// Normal with the given mean and standard deviation.
+    Normal {
+        /// Mean.
+        mean: f64,
+        /// Standard deviation (≥ 0).
+        std: f64,
+    },
+    /// Normal restricted to [min, max] by resampling until inside.
+    TruncatedNormal {
+        /// Mean of the parent normal.
+        mean: f64,
+        /// Standard deviation of the parent normal (≥ 0).
+        std: f64,
+        /// Lower bound.
+        min: f64,
+        /// Upper bound.
+        max: f64,
+    },
+}
+
+impl Distribution {
+    /// Smallest value the distribution can give (−∞ for the normal).
+    pub fn lower_bound(&self) -> f64 {
+        match *self {
+            Distribution::Uniform { min, .. } | Distribution::TruncatedNormal { min, .. } => min,
+            Distribution::Normal { std, mean } if std == 0.0 => mean,
+            Distribution::Normal { .. } => f64::NEG_INFINITY,
+        }
+    }
+}
+
+/// SplitMix64 step (Steele, Lea & Flood 2014), as in physics.md §C.2.
+pub fn splitmix64(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The random stream of run `index` of an ensemble with `seed`.
+pub fn run_stream(seed: u64, index: u64) -> Pcg64 {
+    let mut sm = seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let hi = splitmix64(&mut sm) as u128;
+    let lo = splitmix64(&mut sm) as u128;
+    let stream = splitmix64(&mut sm) as u128;
+    Pcg64::new((hi << 64) | lo, stream)
+}
+
+/// Uniform deviate in [0, 1) with 53 random bits.
+pub fn uniform01(rng: &mut Pcg64) -> f64 {
+    (rng.next_u64() >> 11) as f64 * (1.0 / 9_007_199_254_740_992.0)
+}
+
+fn standard_normal(rng: &mut Pcg64) -> f64 {
+    loop {
+        let u = 2.0 * uniform01(rng) - 1.0;
+        let v = 2.0 * uniform01(rng) - 1.0;
+        let s = u * u + v * v;
+        if s > 0.0 && s < 1.0 {
+            return u * (-2.0 * s.ln() / s).sqrt();
+        }
+    }
+}
+
+/// Draws one value of `d` from `rng`.
+///
+/// # Special cases
+/// A truncated normal whose window holds almost no probability (more than 10 000 rejections)
+/// returns a uniform draw on [min, max] instead of looping for ever.
+pub fn sample(d: &Distribution, rng: &mut Pcg64) -> f64 {
+    match *d {
+        Distribution::Uniform { min, max } => min + (max - min) * uniform01(rng),
+        Distribution::Normal { mean, std } => mean + std * standard_normal(rng),
+        Distribution::TruncatedNormal {
+            mean,
+            std,
+            min,
+            max,
+        } => {
+            for _ in 0..10_000 {
+                let x = mean + std * standard_normal(rng);
+                if (min..=max).contains(&x) {
+                    return x;
+                }
+            }
+            min + (max - min) * uniform01(rng)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn splitmix_matches_reference_sequence() {
+        // physics.md §C.2 SplitMix64 from state 0: first output 0xE220A8397B1DCDAF
+        let mut s = 0u64;
+        assert_eq!(splitmix64(&mut s), 0xE220_A839_7B1D_CDAF);
+    }
+
+    #[test]
+    fn streams_differ_by_index_and_repeat_by_seed() {
+        let a = run_stream(42, 0).next_u64();
+        let b = run_stream(42, 1).next_u64();
+        assert_ne!(a, b);
+        assert_eq!(a, run_stream(42, 0).next_u64());
+    }
+
+    #[test]
+    fn distributions_have_their_moments() {
+        let mut rng = run_stream(1, 2);
+        let n = 200_000;
+        for (d, m, sd) in [
+            (
+                Distribution::Uniform { min: 0.2, max: 0.4 },
+                0.3,
+                0.2 / 12f64.sqrt(),
+            ),
+            (
+                Distribution::Normal {
+                    mean: 1.0,
+                    std: 0.5,
+                },
+                1.0,
+                0.5,
+            ),
+        ] {
+            let xs: Vec<f64> = (0..n).map(|_| sample(&d, &mut rng)).collect();
+            let mean = xs.iter().sum::<f64>() / n as f64;
+            let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+            // 5 standard errors
+            assert!((mean - m).abs() < 5.0 * sd / (n as f64).sqrt(), "{mean}");
+            assert!(
+                (var.sqrt() - sd).abs() < 5.0 * sd / (2.0 * n as f64).sqrt(),
+                "{var}"
+            );
+        }
+        let d = Distribution::TruncatedNormal {
+            mean: 0.2,
+            std: 0.02,
+            min: 0.19,
+            max: 0.25,
+        };
+        assert!((0..10_000).all(|_| (0.19..=0.25).contains(&sample(&d, &mut rng))));
+    }
+}

@@ -1,0 +1,158 @@
+//! Ensemble statistics: mean, sample standard deviation, Hyndman–Fan type 7 percentiles and an
+//! equal-bin histogram.
+
+/// Number of histogram bins (api.md: 20 equal bins, 21 edges).
+pub const HISTOGRAM_BINS: usize = 20;
+
+/// Histogram with equal bins from the minimum to the maximum.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Histogram {
+    /// Bin edges (21), in the unit of the data.
+    pub edges: Vec<f64>,
+    /// Counts per bin (20); the last bin is closed on the right.
+    pub counts: Vec<u64>,
+}
+
+/// Summary of one quantity over an ensemble, in the unit of the data.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// Number of values.
+    pub count: u64,
+    /// Arithmetic mean.
+    pub mean: f64,
+    /// Sample standard deviation (N − 1); None for a single value.
+    pub std: Option<f64>,
+    /// Smallest value.
+    pub min: f64,
+    /// 5th percentile (type 7).
+    pub p05: f64,
+    /// Median (type 7).
+    pub p50: f64,
+    /// 95th percentile (type 7).
+    pub p95: f64,
+    /// 99th percentile (type 7).
+    pub p99: f64,
+    /// Largest value.
+    pub max: f64,
+    /// 20 equal bins from min to max.
+    pub histogram: Histogram,
+}
+
+/// Percentile of sorted data by linear interpolation between order statistics (Hyndman–Fan
+/// type 7): h = (n − 1) p, x[⌊h⌋] + (h − ⌊h⌋)(x[⌊h⌋+1] − x[⌊h⌋]).
+///
+/// # Special cases
+/// Empty data gives NaN; one value gives that value; p is clamped to [0, 1].
+///
+/// # References
+/// Hyndman & Fan (1996), Am. Stat. 50(4), definition 7; api.md "Percentiles".
+///
+/// # Examples
+/// ```
+/// use gangue::physics::migration::stats::percentile_sorted;
+/// assert_eq!(percentile_sorted(&[1.0, 2.0, 3.0, 4.0], 0.5), 2.5);
+/// ```
+pub fn percentile_sorted(sorted: &[f64], p: f64) -> f64 {
+    let n = sorted.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    let h = (n - 1) as f64 * p.clamp(0.0, 1.0);
+    let lo = h.floor() as usize;
+    if lo + 1 >= n {
+        return sorted[n - 1];
+    }
+    let f = h - lo as f64;
+    sorted[lo] + f * (sorted[lo + 1] - sorted[lo])
+}
+
+/// Summary of `values` (in their given order for the sums), or None when empty.
+///
+/// # Special cases
+/// One value: std None; equal values: all counts in the first bin, edges all equal.
+///
+/// # References
+/// api.md `POST /v1/migration` (statistics).
+pub fn summarize(values: &[f64]) -> Option<Summary> {
+    let n = values.len();
+    if n == 0 {
+        return None;
+    }
+    let mean = values.iter().sum::<f64>() / n as f64;
+    let std = (n > 1).then(|| {
+        let ss: f64 = values.iter().map(|x| (x - mean) * (x - mean)).sum();
+        (ss / (n - 1) as f64).sqrt()
+    });
+    let mut sorted = values.to_vec();
+    sorted.sort_unstable_by(f64::total_cmp);
+    let (min, max) = (sorted[0], sorted[n - 1]);
+    let width = (max - min) / HISTOGRAM_BINS as f64;
+    let edges: Vec<f64> = (0..=HISTOGRAM_BINS)
+        .map(|k| {
+            if k == HISTOGRAM_BINS {
+                max
+            } else {
+                min + k as f64 * width
+            }
+        })
+        .collect();
+    let mut counts = vec![0u64; HISTOGRAM_BINS];
+    for &x in &sorted {
+        let k = if width > 0.0 {
+            (((x - min) / width) as usize).min(HISTOGRAM_BINS - 1)
+        } else {
+            0
+        };
+        counts[k] += 1;
+    }
+    Some(Summary {
+        count: n as u64,
+        mean: mean.clamp(min, max),
+        std,
+        min,
+        p05: percentile_sorted(&sorted, 0.05),
+        p50: percentile_sorted(&sorted, 0.50),
+        p95: percentile_sorted(&sorted, 0.95),
+        p99: percentile_sorted(&sorted, 0.99),
+        max,
+        histogram: Histogram { edges, counts },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn type7_matches_r_quantile() {
+        // R: quantile(c(3, 1, 4, 1, 5, 9, 2, 6), c(.05, .5, .95, .99), type = 7)
+        let s = summarize(&[3.0, 1.0, 4.0, 1.0, 5.0, 9.0, 2.0, 6.0]).unwrap();
+        assert!((s.p05 - 1.0).abs() < 1e-15);
+        assert!((s.p50 - 3.5).abs() < 1e-15);
+        assert!((s.p95 - 7.95).abs() < 1e-12);
+        assert!((s.p99 - 8.79).abs() < 1e-12);
+        assert_eq!(s.mean, 31.0 / 8.0);
+        // sample variance: Σ(x − m)² / 7
+        let m = 31.0 / 8.0;
+        let v: f64 = [3.0, 1.0, 4.0, 1.0, 5.0, 9.0, 2.0, 6.0]
+            .iter()
+            .map(|x: &f64| (x - m).powi(2))
+            .sum::<f64>()
+            / 7.0;
+        assert!((s.std.unwrap() - v.sqrt()).abs() < 1e-15);
+        assert_eq!(s.histogram.counts.iter().sum::<u64>(), 8);
+        assert_eq!(s.histogram.edges.len(), 21);
+        assert_eq!(s.histogram.counts[0], 2); // 1, 1 in [1, 1.4)
+        assert_eq!(s.histogram.counts[19], 1); // 9
+    }
+
+    #[test]
+    fn single_and_constant_values() {
+        let s = summarize(&[2.5]).unwrap();
+        assert_eq!((s.min, s.p50, s.max, s.std), (2.5, 2.5, 2.5, None));
+        let s = summarize(&[1.0, 1.0, 1.0]).unwrap();
+        assert_eq!(s.histogram.counts[0], 3);
+        assert_eq!(s.std, Some(0.0));
+        assert!(summarize(&[]).is_none());
+    }
+}

@@ -1,0 +1,919 @@
+//! Floors of the face: the analytic plane, a regular height grid and a Delaunay-triangulated
+//! contour set, with the queries the energy tracking method needs.
+//!
+//! Every floor is a height field z = h(x, y) made of planar facets (the plane is one facet). The
+//! horizontal projection of a free-flight parabola is a straight line, so a flight's first hit is
+//! found by walking the cells of a uniform grid along that line (cost ∝ path length, not floor
+//! size) and, in each cell, taking the descending root of the quadratic height above each
+//! candidate facet. A slide on one facet has constant acceleration, so its exit through an edge is
+//! the smallest outward root of a quadratic per edge.
+//!
+//! References: physics.md §C.2 ("On a triangulated floor …"), api.md `POST /v1/migration` (floors).
+
+use nalgebra::Vector3;
+use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
+
+use crate::physics::error::{PhysicsError, PhysicsResult};
+
+/// Identifier of one planar facet of a floor (the plane floor has the single facet 0).
+pub(crate) type Facet = u32;
+
+/// A planar facet z = z_r + b_x (x − x_r) + b_y (y − y_r), heights in m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct FacetPlane {
+    xr: f64,
+    yr: f64,
+    zr: f64,
+    bx: f64,
+    by: f64,
+}
+
+impl FacetPlane {
+    /// Height of the facet's plane at (x, y), m.
+    pub(crate) fn z(&self, x: f64, y: f64) -> f64 {
+        self.zr + self.bx * (x - self.xr) + self.by * (y - self.yr)
+    }
+
+    /// Unit normal pointing up (n_z > 0).
+    pub(crate) fn normal(&self) -> Vector3<f64> {
+        let k = 1.0 / (1.0 + self.bx * self.bx + self.by * self.by).sqrt();
+        Vector3::new(-self.bx * k, -self.by * k, k)
+    }
+
+    /// Vertical height of p above the plane, m.
+    pub(crate) fn height(&self, p: &Vector3<f64>) -> f64 {
+        p.z - self.z(p.x, p.y)
+    }
+
+    /// Rate of change of the vertical height for velocity v, m/s.
+    pub(crate) fn height_rate(&self, v: &Vector3<f64>) -> f64 {
+        v.z - self.bx * v.x - self.by * v.y
+    }
+
+    /// Unit vector in the plane whose horizontal part points along +x (the local down-dip).
+    pub(crate) fn down_dip(&self) -> Vector3<f64> {
+        Vector3::new(1.0, 0.0, self.bx).normalize()
+    }
+}
+
+/// Descending root of h0 + b t − ½ g t² (the larger root), or None when the parabola stays below.
+fn descent_root(h0: f64, b: f64, g: f64) -> Option<f64> {
+    let d = b * b + 2.0 * g * h0;
+    if d < 0.0 {
+        return None;
+    }
+    let s = d.sqrt();
+    if b >= 0.0 {
+        Some((b + s) / g)
+    } else if s - b > 0.0 {
+        Some(2.0 * h0 / (s - b))
+    } else {
+        Some(0.0)
+    }
+}
+
+/// Result of a flight query.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum FlightEnd {
+    /// The parabola strikes facet `facet` after `t` s.
+    Hit {
+        /// Time of flight, s.
+        t: f64,
+        /// Struck facet.
+        facet: Facet,
+    },
+    /// The horizontal path leaves the floor's extent after `t` s without a hit.
+    Leaves {
+        /// Time of flight, s.
+        t: f64,
+    },
+    /// No hit within the time asked for.
+    Clear,
+}
+
+/// The face's mean plane (dip θ) used for `along_dip_m` and the potential-energy zero.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct MeanPlane {
+    /// x of the upper end, m.
+    pub(crate) x0: f64,
+    /// Height of the mean plane at x₀, m.
+    pub(crate) z_ref: f64,
+    /// cos θ.
+    pub(crate) cos: f64,
+    /// sin θ.
+    pub(crate) sin: f64,
+}
+
+impl MeanPlane {
+    /// Distance along dip of the foot of the perpendicular from p to the mean plane, m.
+    pub(crate) fn along(&self, p: &Vector3<f64>) -> f64 {
+        (p.x - self.x0) * self.cos - (p.z - self.z_ref) * self.sin
+    }
+
+    /// Unit down-dip vector of the mean plane.
+    pub(crate) fn dip_dir(&self) -> Vector3<f64> {
+        Vector3::new(self.cos, 0.0, -self.sin)
+    }
+
+    /// Unit outward normal of the mean plane.
+    pub(crate) fn normal(&self) -> Vector3<f64> {
+        Vector3::new(self.sin, 0.0, self.cos)
+    }
+
+    /// Height of the mean plane where `along_dip` = s, m.
+    pub(crate) fn z_at(&self, s: f64) -> f64 {
+        self.z_ref - s * self.sin
+    }
+}
+
+/// Uniform cell grid over a rectangle, used to walk a straight horizontal line cell by cell.
+#[derive(Debug, Clone, Copy)]
+struct CellGrid {
+    x0: f64,
+    y0: f64,
+    d: f64,
+    ncx: usize,
+    ncy: usize,
+}
+
+impl CellGrid {
+    fn x_max(&self) -> f64 {
+        self.x0 + self.ncx as f64 * self.d
+    }
+    fn y_max(&self) -> f64 {
+        self.y0 + self.ncy as f64 * self.d
+    }
+
+    /// Cell index along one axis for coordinate u (in cells) moving with rate r, or None outside.
+    fn axis_cell(u: f64, r: f64, n: usize) -> Option<usize> {
+        // points a rounding error outside the extent count as on its boundary
+        let u = if u < 0.0 && u > -1e-9 {
+            0.0
+        } else if u > n as f64 && u < n as f64 + 1e-9 {
+            n as f64
+        } else {
+            u
+        };
+        if !(u >= 0.0 && u <= n as f64) {
+            return None;
+        }
+        let mut c = u.floor();
+        if c == u && r < 0.0 {
+            c -= 1.0;
+        }
+        if c >= n as f64 {
+            // on the far boundary: inside only when moving back in (or not moving)
+            if r > 0.0 {
+                return None;
+            }
+            c = n as f64 - 1.0;
+        }
+        if c < 0.0 {
+            return None;
+        }
+        Some(c as usize)
+    }
+
+    /// Walks the cells crossed by (x, y) + (vx, vy) t for t in [0, t_max]; `visit(ci, cj, t0, t1)`
+    /// returns a hit inside the cell's time window or None to go on.
+    fn walk(
+        &self,
+        x: f64,
+        y: f64,
+        vx: f64,
+        vy: f64,
+        t_max: f64,
+        mut visit: impl FnMut(usize, usize, f64, f64) -> Option<(f64, Facet)>,
+    ) -> FlightEnd {
+        let ux = (x - self.x0) / self.d;
+        let uy = (y - self.y0) / self.d;
+        let rx = vx / self.d;
+        let ry = vy / self.d;
+        let (Some(mut ci), Some(mut cj)) = (
+            Self::axis_cell(ux, rx, self.ncx),
+            Self::axis_cell(uy, ry, self.ncy),
+        ) else {
+            return FlightEnd::Leaves { t: 0.0 };
+        };
+        let mut t0 = 0.0_f64;
+        loop {
+            let tx = if rx > 0.0 {
+                ((ci + 1) as f64 - ux) / rx
+            } else if rx < 0.0 {
+                (ci as f64 - ux) / rx
+            } else {
+                f64::INFINITY
+            };
+            let ty = if ry > 0.0 {
+                ((cj + 1) as f64 - uy) / ry
+            } else if ry < 0.0 {
+                (cj as f64 - uy) / ry
+            } else {
+                f64::INFINITY
+            };
+            let t1 = tx.min(ty).max(t0);
+            if let Some((t, f)) = visit(ci, cj, t0, t1.min(t_max)) {
+                return FlightEnd::Hit { t, facet: f };
+            }
+            if t1 >= t_max {
+                return FlightEnd::Clear;
+            }
+            // step to the next cell (both axes when the line passes a corner)
+            if tx <= ty {
+                if rx > 0.0 {
+                    ci += 1;
+                    if ci >= self.ncx {
+                        return FlightEnd::Leaves { t: t1 };
+                    }
+                } else {
+                    if ci == 0 {
+                        return FlightEnd::Leaves { t: t1 };
+                    }
+                    ci -= 1;
+                }
+            }
+            if ty <= tx {
+                if ry > 0.0 {
+                    cj += 1;
+                    if cj >= self.ncy {
+                        return FlightEnd::Leaves { t: t1 };
+                    }
+                } else {
+                    if cj == 0 {
+                        return FlightEnd::Leaves { t: t1 };
+                    }
+                    cj -= 1;
+                }
+            }
+            t0 = t1;
+        }
+    }
+}
+
+/// Regular height grid: heights[i][j] is z at (x₀ + j d, y₀ + i d); each cell is split along
+/// its (j, i)–(j+1, i+1) diagonal into two triangles.
+#[derive(Debug, Clone)]
+pub(crate) struct GridFloor {
+    cells: CellGrid,
+    nx: usize,
+    z: Vec<f64>,
+}
+
+/// Triangulated contour set with a bucket grid for point and line queries.
+#[derive(Debug, Clone)]
+pub(crate) struct MeshFloor {
+    xyz: Vec<[f64; 3]>,
+    tris: Vec<[u32; 3]>,
+    nbr: Vec<[u32; 3]>,
+    cells: CellGrid,
+    bucket_start: Vec<u32>,
+    bucket_items: Vec<u32>,
+    bbox: [f64; 4],
+}
+
+const NONE: u32 = u32::MAX;
+
+/// A floor of the face.
+#[derive(Debug, Clone)]
+pub(crate) enum FloorKind {
+    /// The plane z = −x tan θ.
+    Plane(FacetPlane),
+    /// A regular height grid.
+    Grid(GridFloor),
+    /// Delaunay-triangulated contours.
+    Mesh(MeshFloor),
+}
+
+/// A floor with its mean plane.
+#[derive(Debug, Clone)]
+pub(crate) struct Floor {
+    /// The facets.
+    pub(crate) kind: FloorKind,
+    /// Mean plane for `along_dip_m` and the energy zero.
+    pub(crate) mean: MeanPlane,
+}
+
+fn inside_tri(c: &[[f64; 2]; 3], x: f64, y: f64, tol: f64) -> bool {
+    (0..3).all(|k| {
+        let a = c[k];
+        let b = c[(k + 1) % 3];
+        let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+        let len = (ex * ex + ey * ey).sqrt();
+        // outward normal of a ccw edge is (ey, −ex)
+        (ey * (x - a[0]) - ex * (y - a[1])) <= tol * len
+    })
+}
+
+fn plane_of(c: &[[f64; 2]; 3], z: &[f64; 3]) -> FacetPlane {
+    let (ax, ay) = (c[1][0] - c[0][0], c[1][1] - c[0][1]);
+    let (bx, by) = (c[2][0] - c[0][0], c[2][1] - c[0][1]);
+    let (az, bz) = (z[1] - z[0], z[2] - z[0]);
+    let det = ax * by - ay * bx;
+    FacetPlane {
+        xr: c[0][0],
+        yr: c[0][1],
+        zr: z[0],
+        bx: (az * by - bz * ay) / det,
+        by: (ax * bz - bx * az) / det,
+    }
+}
+
+impl GridFloor {
+    fn corners(&self, f: Facet) -> ([[f64; 2]; 3], [f64; 3]) {
+        let cell = (f >> 1) as usize;
+        let (i, j) = (cell / (self.nx - 1), cell % (self.nx - 1));
+        let d = self.cells.d;
+        let x = self.cells.x0 + j as f64 * d;
+        let y = self.cells.y0 + i as f64 * d;
+        let (xe, ye) = (
+            self.cells.x0 + (j + 1) as f64 * d,
+            self.cells.y0 + (i + 1) as f64 * d,
+        );
+        let z00 = self.z[i * self.nx + j];
+        let z10 = self.z[i * self.nx + j + 1];
+        let z01 = self.z[(i + 1) * self.nx + j];
+        let z11 = self.z[(i + 1) * self.nx + j + 1];
+        if f & 1 == 0 {
+            ([[x, y], [xe, y], [xe, ye]], [z00, z10, z11])
+        } else {
+            ([[x, y], [xe, ye], [x, ye]], [z00, z11, z01])
+        }
+    }
+
+    fn plane(&self, f: Facet) -> FacetPlane {
+        let cell = (f >> 1) as usize;
+        let (i, j) = (cell / (self.nx - 1), cell % (self.nx - 1));
+        let d = self.cells.d;
+        let z00 = self.z[i * self.nx + j];
+        let z10 = self.z[i * self.nx + j + 1];
+        let z01 = self.z[(i + 1) * self.nx + j];
+        let z11 = self.z[(i + 1) * self.nx + j + 1];
+        let (bx, by) = if f & 1 == 0 {
+            ((z10 - z00) / d, (z11 - z10) / d)
+        } else {
+            ((z11 - z01) / d, (z01 - z00) / d)
+        };
+        FacetPlane {
+            xr: self.cells.x0 + j as f64 * d,
+            yr: self.cells.y0 + i as f64 * d,
+            zr: z00,
+            bx,
+            by,
+        }
+    }
+
+    fn facet(&self, ci: usize, cj: usize, half: u32) -> Facet {
+        (((cj * (self.nx - 1) + ci) as u32) << 1) | half
+    }
+
+    fn neighbor(&self, f: Facet, edge: usize) -> Option<Facet> {
+        let cell = (f >> 1) as usize;
+        let ncx = self.nx - 1;
+        let (i, j) = (cell / ncx, cell % ncx);
+        let ncy = self.cells.ncy;
+        match (f & 1, edge) {
+            (0, 0) => (i > 0).then(|| self.facet(j, i - 1, 1)),
+            (0, 1) => (j + 1 < ncx).then(|| self.facet(j + 1, i, 1)),
+            (0, _) => Some(f | 1),
+            (_, 0) => Some(f & !1),
+            (_, 1) => (i + 1 < ncy).then(|| self.facet(j, i + 1, 0)),
+            _ => (j > 0).then(|| self.facet(j - 1, i, 0)),
+        }
+    }
+}
+
+impl MeshFloor {
+    fn corners(&self, f: Facet) -> ([[f64; 2]; 3], [f64; 3]) {
+        let t = self.tris[f as usize];
+        let p = t.map(|k| self.xyz[k as usize]);
+        (p.map(|q| [q[0], q[1]]), p.map(|q| q[2]))
+    }
+
+    fn bucket(&self, ci: usize, cj: usize) -> &[u32] {
+        let b = cj * self.cells.ncx + ci;
+        &self.bucket_items[self.bucket_start[b] as usize..self.bucket_start[b + 1] as usize]
+    }
+}
+
+/// A contour line: an elevation and a polyline in plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContourLine {
+    /// Elevation z of the line, m.
+    pub elevation: f64,
+    /// Plan points [x, y] of the polyline, m.
+    pub points: Vec<[f64; 2]>,
+}
+
+struct HPoint {
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+impl HasPosition for HPoint {
+    type Scalar = f64;
+    fn position(&self) -> Point2<f64> {
+        Point2::new(self.x, self.y)
+    }
+}
+
+impl Floor {
+    /// The plane z = −x tan θ.
+    pub(crate) fn plane(dip: f64) -> Self {
+        let (sin, cos) = dip.sin_cos();
+        Floor {
+            kind: FloorKind::Plane(FacetPlane {
+                xr: 0.0,
+                yr: 0.0,
+                zr: 0.0,
+                bx: -sin / cos,
+                by: 0.0,
+            }),
+            mean: MeanPlane {
+                x0: 0.0,
+                z_ref: 0.0,
+                cos,
+                sin,
+            },
+        }
+    }
+
+    /// A regular height grid; the mean plane passes through the mean height of column j = 0.
+    pub(crate) fn grid(
+        dip: f64,
+        origin: [f64; 2],
+        spacing: f64,
+        heights: &[Vec<f64>],
+    ) -> PhysicsResult<Self> {
+        let ny = heights.len();
+        let nx = heights.first().map_or(0, Vec::len);
+        if ny < 2 || nx < 2 {
+            return Err(PhysicsError::invalid(
+                "/face/floor/heights_m",
+                ny.min(nx) as f64,
+                "a grid needs at least 2 × 2 points",
+            ));
+        }
+        let mut z = Vec::with_capacity(nx * ny);
+        for (i, row) in heights.iter().enumerate() {
+            if row.len() != nx {
+                return Err(PhysicsError::invalid(
+                    format!("/face/floor/heights_m/{i}"),
+                    row.len() as f64,
+                    format!("every row must have {nx} heights, like row 0"),
+                ));
+            }
+            for (j, &h) in row.iter().enumerate() {
+                if !h.is_finite() {
+                    return Err(PhysicsError::invalid(
+                        format!("/face/floor/heights_m/{i}/{j}"),
+                        0.0,
+                        "heights must be finite numbers (m)",
+                    ));
+                }
+            }
+            z.extend_from_slice(row);
+        }
+        let z_ref = heights.iter().map(|r| r[0]).sum::<f64>() / ny as f64;
+        let (sin, cos) = dip.sin_cos();
+        Ok(Floor {
+            kind: FloorKind::Grid(GridFloor {
+                cells: CellGrid {
+                    x0: origin[0],
+                    y0: origin[1],
+                    d: spacing,
+                    ncx: nx - 1,
+                    ncy: ny - 1,
+                },
+                nx,
+                z,
+            }),
+            mean: MeanPlane {
+                x0: origin[0],
+                z_ref,
+                cos,
+                sin,
+            },
+        })
+    }
+
+    /// Contours resampled at most `resolution` apart and Delaunay-triangulated; the mean plane
+    /// starts at the smallest x of all points, at the height of that point.
+    pub(crate) fn contours(
+        dip: f64,
+        lines: &[ContourLine],
+        resolution: f64,
+    ) -> PhysicsResult<Self> {
+        let mut pts: Vec<HPoint> = Vec::new();
+        for (c, line) in lines.iter().enumerate() {
+            for (k, p) in line.points.iter().enumerate() {
+                if !(p[0].is_finite() && p[1].is_finite()) {
+                    return Err(PhysicsError::invalid(
+                        format!("/face/floor/contours/{c}/points_m/{k}"),
+                        0.0,
+                        "points must be finite numbers (m)",
+                    ));
+                }
+                if k > 0 {
+                    let q = line.points[k - 1];
+                    let len = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                    let n = (len / resolution).ceil().max(1.0) as usize;
+                    for s in 1..n {
+                        let f = s as f64 / n as f64;
+                        pts.push(HPoint {
+                            x: q[0] + f * (p[0] - q[0]),
+                            y: q[1] + f * (p[1] - q[1]),
+                            z: line.elevation,
+                        });
+                    }
+                }
+                pts.push(HPoint {
+                    x: p[0],
+                    y: p[1],
+                    z: line.elevation,
+                });
+            }
+        }
+        if pts.len() > 50_000_000 {
+            return Err(PhysicsError::invalid(
+                "/face/floor/resolution_m",
+                resolution,
+                "the resampled contours have more than 5e7 points: use a coarser resolution_m",
+            ));
+        }
+        let (mut x_min, mut z_at_min) = (f64::INFINITY, 0.0);
+        for p in &pts {
+            if p.x < x_min {
+                x_min = p.x;
+                z_at_min = p.z;
+            }
+        }
+        let tri: DelaunayTriangulation<HPoint> =
+            DelaunayTriangulation::bulk_load(pts).map_err(|e| {
+                PhysicsError::invalid(
+                    "/face/floor/contours",
+                    0.0,
+                    format!("cannot triangulate: {e}"),
+                )
+            })?;
+        let n_all = tri.num_all_faces();
+        let mut xyz = Vec::with_capacity(tri.num_vertices());
+        for v in tri.vertices() {
+            let d = v.data();
+            xyz.push([d.x, d.y, d.z]);
+        }
+        // face index k ≥ 1 (0 is the outer face) → facet k − 1
+        let mut tris = vec![[0u32; 3]; n_all.saturating_sub(1)];
+        let mut nbr = vec![[NONE; 3]; n_all.saturating_sub(1)];
+        for f in tri.inner_faces() {
+            let id = f.fix().index() - 1;
+            let vs = f.vertices();
+            tris[id] = vs.map(|v| v.fix().index() as u32);
+            let es = f.adjacent_edges();
+            for k in 0..3 {
+                nbr[id][k] = es[k]
+                    .rev()
+                    .face()
+                    .as_inner()
+                    .map_or(NONE, |g| (g.fix().index() - 1) as u32);
+            }
+        }
+        if tris.is_empty() {
+            return Err(PhysicsError::invalid(
+                "/face/floor/contours",
+                xyz.len() as f64,
+                "the contours do not span a surface (need at least 3 points not on one line)",
+            ));
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in &xyz {
+            for a in 0..2 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
+        let mut d = ((w * h) / tris.len() as f64).sqrt() * 1.5;
+        if !(d > 0.0) {
+            d = w.max(h);
+        }
+        d = d.max(w.max(h) / 4096.0);
+        let ncx = ((w / d).ceil() as usize).max(1);
+        let ncy = ((h / d).ceil() as usize).max(1);
+        let cells = CellGrid {
+            x0: lo[0],
+            y0: lo[1],
+            d,
+            ncx,
+            ncy,
+        };
+        let mut counts = vec![0u32; ncx * ncy + 1];
+        let range = |t: &[u32; 3]| {
+            let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for &k in t {
+                for q in 0..2 {
+                    a[q] = a[q].min(xyz[k as usize][q]);
+                    b[q] = b[q].max(xyz[k as usize][q]);
+                }
+            }
+            let c = |v: f64, o: f64, n: usize| (((v - o) / d).floor().max(0.0) as usize).min(n - 1);
+            (
+                c(a[0], lo[0], ncx),
+                c(b[0], lo[0], ncx),
+                c(a[1], lo[1], ncy),
+                c(b[1], lo[1], ncy),
+            )
+        };
+        for t in &tris {
+            let (i0, i1, j0, j1) = range(t);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    counts[j * ncx + i + 1] += 1;
+                }
+            }
+        }
+        for k in 1..counts.len() {
+            counts[k] += counts[k - 1];
+        }
+        let mut fill = counts.clone();
+        let mut items = vec![0u32; counts[ncx * ncy] as usize];
+        for (id, t) in tris.iter().enumerate() {
+            let (i0, i1, j0, j1) = range(t);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let b = j * ncx + i;
+                    items[fill[b] as usize] = id as u32;
+                    fill[b] += 1;
+                }
+            }
+        }
+        let (sin, cos) = dip.sin_cos();
+        Ok(Floor {
+            kind: FloorKind::Mesh(MeshFloor {
+                xyz,
+                tris,
+                nbr,
+                cells,
+                bucket_start: counts,
+                bucket_items: items,
+                bbox: [lo[0], hi[0], lo[1], hi[1]],
+            }),
+            mean: MeanPlane {
+                x0: x_min,
+                z_ref: z_at_min,
+                cos,
+                sin,
+            },
+        })
+    }
+
+    /// The facet's plane.
+    pub(crate) fn facet_plane(&self, f: Facet) -> FacetPlane {
+        match &self.kind {
+            FloorKind::Plane(p) => *p,
+            FloorKind::Grid(g) => g.plane(f),
+            FloorKind::Mesh(m) => {
+                let (c, z) = m.corners(f);
+                plane_of(&c, &z)
+            }
+        }
+    }
+
+    /// Plan extent [x_min, x_max, y_min, y_max] (infinite for the plane), m.
+    pub(crate) fn extent(&self) -> [f64; 4] {
+        match &self.kind {
+            FloorKind::Plane(_) => [
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+            ],
+            FloorKind::Grid(GridFloor { cells, .. }) => {
+                [cells.x0, cells.x_max(), cells.y0, cells.y_max()]
+            }
+            FloorKind::Mesh(m) => m.bbox,
+        }
+    }
+
+    /// The facet under (x, y), preferring the one the direction (dx, dy) moves into.
+    pub(crate) fn locate(&self, x: f64, y: f64, dx: f64, dy: f64) -> Option<Facet> {
+        match &self.kind {
+            FloorKind::Plane(_) => Some(0),
+            FloorKind::Grid(g) => {
+                let c = &g.cells;
+                let ux = (x - c.x0) / c.d;
+                let uy = (y - c.y0) / c.d;
+                let ci = CellGrid::axis_cell(ux, dx, c.ncx)?;
+                let cj = CellGrid::axis_cell(uy, dy, c.ncy)?;
+                let (fx, fy) = (ux - ci as f64, uy - cj as f64);
+                let half = if fx > fy || (fx == fy && dx > dy) {
+                    0
+                } else {
+                    1
+                };
+                Some(g.facet(ci, cj, half))
+            }
+            FloorKind::Mesh(m) => {
+                let c = &m.cells;
+                let ci = CellGrid::axis_cell((x - c.x0) / c.d, dx, c.ncx)?;
+                let cj = CellGrid::axis_cell((y - c.y0) / c.d, dy, c.ncy)?;
+                let eps = 1e-9 * c.d;
+                let n = (dx * dx + dy * dy).sqrt();
+                let (qx, qy) = if n > 0.0 {
+                    (x + eps * dx / n, y + eps * dy / n)
+                } else {
+                    (x, y)
+                };
+                let cand = m.bucket(ci, cj);
+                for tol in [0.0, 1e-9 * c.d] {
+                    for &f in cand {
+                        if inside_tri(&m.corners(f).0, qx, qy, tol) {
+                            return Some(f);
+                        }
+                    }
+                }
+                for &f in cand {
+                    if inside_tri(&m.corners(f).0, x, y, 1e-9 * c.d) {
+                        return Some(f);
+                    }
+                }
+                None
+            }
+        }
+    }
+
+    /// First strike of the parabola p + v t + ½ (0, 0, −g) t² on the floor within t ≤ t_max.
+    pub(crate) fn flight(
+        &self,
+        p: &Vector3<f64>,
+        v: &Vector3<f64>,
+        g: f64,
+        t_max: f64,
+    ) -> FlightEnd {
+        let root = |pl: &FacetPlane| -> Option<f64> {
+            let b = pl.height_rate(v);
+            let r = descent_root(pl.height(p), b, g)?;
+            // a strike: the height decreases through zero (not a graze at the start)
+            let slope = b - g * r;
+            (slope < -1e-12 * (1.0 + v.norm())).then_some(r)
+        };
+        match &self.kind {
+            FloorKind::Plane(pl) => match root(pl) {
+                Some(t) if t <= t_max => FlightEnd::Hit { t, facet: 0 },
+                _ => FlightEnd::Clear,
+            },
+            FloorKind::Grid(gr) => {
+                let tol = 1e-9 * gr.cells.d;
+                gr.cells.walk(p.x, p.y, v.x, v.y, t_max, |ci, cj, t0, t1| {
+                    let mut best: Option<(f64, Facet)> = None;
+                    for half in 0..2 {
+                        let f = gr.facet(ci, cj, half);
+                        let pl = gr.plane(f);
+                        if let Some(r) = root(&pl)
+                            && r >= t0 - 1e-12 * (1.0 + t0)
+                            && r <= t1
+                            && best.is_none_or(|b| r < b.0)
+                        {
+                            let (c, _) = gr.corners(f);
+                            if inside_tri(&c, p.x + v.x * r, p.y + v.y * r, tol) {
+                                best = Some((r.max(0.0), f));
+                            }
+                        }
+                    }
+                    best
+                })
+            }
+            FloorKind::Mesh(m) => {
+                let tol = 1e-9 * m.cells.d;
+                m.cells.walk(p.x, p.y, v.x, v.y, t_max, |ci, cj, t0, t1| {
+                    let mut best: Option<(f64, Facet)> = None;
+                    for &f in m.bucket(ci, cj) {
+                        let (c, z) = m.corners(f);
+                        let pl = plane_of(&c, &z);
+                        if let Some(r) = root(&pl)
+                            && r >= t0 - 1e-12 * (1.0 + t0)
+                            && r <= t1 + 1e-12 * (1.0 + t1)
+                            && best.is_none_or(|b| r < b.0)
+                            && inside_tri(&c, p.x + v.x * r, p.y + v.y * r, tol)
+                        {
+                            best = Some((r.max(0.0), f));
+                        }
+                    }
+                    best
+                })
+            }
+        }
+    }
+
+    /// First exit of the planar motion p + v t + ½ a t² from facet f through one of its edges
+    /// within t ≤ t_max: the time, the facet across that edge (None: off the floor) and the
+    /// edge's end points in plan.
+    pub(crate) fn slide_exit(
+        &self,
+        f: Facet,
+        p: &Vector3<f64>,
+        v: &Vector3<f64>,
+        a: &Vector3<f64>,
+        t_max: f64,
+    ) -> Option<(f64, Option<Facet>, [[f64; 2]; 2])> {
+        let (corners, neighbor): ([[f64; 2]; 3], Box<dyn Fn(usize) -> Option<Facet> + '_>) =
+            match &self.kind {
+                FloorKind::Plane(_) => return None,
+                FloorKind::Grid(g) => (g.corners(f).0, Box::new(move |k| g.neighbor(f, k))),
+                FloorKind::Mesh(m) => (
+                    m.corners(f).0,
+                    Box::new(move |k| {
+                        let n = m.nbr[f as usize][k];
+                        (n != NONE).then_some(n)
+                    }),
+                ),
+            };
+        let mut best: Option<(f64, usize)> = None;
+        for k in 0..3 {
+            let e0 = corners[k];
+            let e1 = corners[(k + 1) % 3];
+            let (sx, sy) = (e1[1] - e0[1], -(e1[0] - e0[0]));
+            let f0 = sx * (p.x - e0[0]) + sy * (p.y - e0[1]);
+            let f1 = sx * v.x + sy * v.y;
+            let f2 = sx * a.x + sy * a.y;
+            if let Some(t) = outward_root(f0, f1, f2)
+                && t <= t_max
+                && best.is_none_or(|b| t < b.0)
+            {
+                best = Some((t, k));
+            }
+        }
+        best.map(|(t, k)| (t, neighbor(k), [corners[k], corners[(k + 1) % 3]]))
+    }
+}
+
+/// Smallest t ≥ 0 where f0 + f1 t + ½ f2 t² reaches 0 while increasing (leaving the half-plane
+/// f ≤ 0); t = 0 when already on or past the line and moving out.
+pub(crate) fn outward_root(f0: f64, f1: f64, f2: f64) -> Option<f64> {
+    if f0 >= 0.0 && (f1 > 0.0 || (f1 == 0.0 && f2 > 0.0)) {
+        return Some(0.0);
+    }
+    if f2 == 0.0 {
+        return (f1 > 0.0).then(|| (-f0 / f1).max(0.0));
+    }
+    let disc = f1 * f1 - 2.0 * f2 * f0;
+    if disc < 0.0 {
+        return None;
+    }
+    let s = disc.sqrt();
+    let q = -(f1 + f1.signum() * s);
+    let mut roots = [f64::NAN; 2];
+    if q != 0.0 {
+        roots = [q / f2, 2.0 * f0 / q];
+    } else if f0 == 0.0 {
+        roots = [0.0, 0.0];
+    }
+    roots
+        .into_iter()
+        .filter(|&r| r > 0.0 && f1 + f2 * r > 0.0)
+        .fold(None, |acc: Option<f64>, r| {
+            Some(acc.map_or(r, |b| b.min(r)))
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn descent_root_is_the_flight_time() {
+        // from the floor with vertical height rate b: 2b/g
+        let r = descent_root(0.0, 3.0, 9.81).unwrap();
+        assert!((r - 6.0 / 9.81).abs() < 1e-15);
+        // dropped from h at rest: √(2h/g)
+        let r = descent_root(3.27, 0.0, 9.81).unwrap();
+        assert!((r - (2.0 * 3.27 / 9.81_f64).sqrt()).abs() < 1e-15);
+        assert!(descent_root(-1.0, -1.0, 9.81).is_none());
+    }
+
+    #[test]
+    fn outward_root_picks_the_leaving_crossing() {
+        // f = −1 + 0 t + ½·2 t²: leaves at t = 1
+        assert!((outward_root(-1.0, 0.0, 2.0).unwrap() - 1.0).abs() < 1e-15);
+        // moving in and decelerating back out: f = −t + ½ t² … roots 0 (entering) and 2
+        assert!((outward_root(0.0, -1.0, 1.0).unwrap() - 2.0).abs() < 1e-15);
+        // moving in for ever
+        assert!(outward_root(-1.0, -1.0, 0.0).is_none());
+    }
+
+    #[test]
+    fn grid_plane_matches_heights() {
+        let d = 0.5;
+        let h: Vec<Vec<f64>> = (0..3)
+            .map(|i| {
+                (0..4)
+                    .map(|j| 1.0 + 0.2 * j as f64 * d - 0.1 * i as f64 * d)
+                    .collect()
+            })
+            .collect();
+        let f = Floor::grid(0.5, [2.0, -1.0], d, &h).unwrap();
+        let id = f.locate(2.7, -0.6, 0.0, 0.0).unwrap();
+        let pl = f.facet_plane(id);
+        assert!((pl.z(2.7, -0.6) - (1.0 + 0.2 * 0.7 - 0.1 * 0.4)).abs() < 1e-14);
+    }
+}
