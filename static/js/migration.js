@@ -5,7 +5,7 @@ import { postJson } from './api.js';
 import { buildForm, clearErrors, markLocalErrors, readForm } from './form.js';
 import { fillTable, fmt, h, showWarnings } from './format.js';
 import { destroy, linePlot, plotMessage } from './plot.js';
-import { hideStatus, showBusy, showInfo, showProblem } from './status.js';
+import { bringIntoView, hideStatus, showBusy, showInfo, showProblem } from './status.js';
 
 const PROGRESS_AFTER_MS = 1000;
 
@@ -168,7 +168,10 @@ export function initMigration() {
     const controller = new AbortController();
     running = controller;
     showBusy(status, mc ? `Running ${mc.runs ?? 200} runs…` : 'Computing…');
-    const timer = mc ? setTimeout(() => { progress.hidden = false; }, PROGRESS_AFTER_MS) : null;
+    const timer = mc ? setTimeout(() => {
+      progress.hidden = false;
+      bringIntoView(progress);
+    }, PROGRESS_AFTER_MS) : null;
     progressBar.value = 0;
     progressText.textContent = '';
 

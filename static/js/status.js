@@ -8,6 +8,13 @@ export function showBusy(el, text) {
   el.hidden = false;
   el.className = 'status busy';
   el.replaceChildren(h('span', { class: 'spinner', 'aria-hidden': 'true' }), text);
+  bringIntoView(el);
+}
+
+/** Scrolls the status line of a results column into view when it is off screen. */
+export function bringIntoView(el) {
+  const box = el.getBoundingClientRect();
+  if (box.top < 0 || box.bottom > window.innerHeight) el.scrollIntoView({ block: 'nearest' });
 }
 
 export function showInfo(el, text) {
@@ -33,6 +40,7 @@ export function showProblem(el, problem, { forms = [], endpoint = '', label = ''
   el.className = 'status error';
   el.replaceChildren();
   el.dataset.problem = problemCode(problem);
+  bringIntoView(el);
 
   const status = problem.status ? `${problem.status} ` : '';
   const head = h('p', { class: 'summary' });

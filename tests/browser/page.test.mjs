@@ -251,7 +251,10 @@ async function migrationSection(page) {
 
   await check('migration: seeded ensemble of 200 runs shows its histogram and percentiles', async () => {
     await page.locator('#migration-form input[name="monte_carlo"]').check();
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/migration') && r.method() === 'POST');
     await page.locator('#migration-form button[type="submit"]').click();
+    const accept = (await request).headers().accept ?? '';
+    assert(accept.includes('application/x-ndjson'), `the ensemble was asked for with Accept: ${accept}`);
     const mean = await shown(page, 'statistics.speed_m_s.mean');
     const tolerance = (5 * EXPECTED.ensembleStdSpeed) / Math.sqrt(200);
     assert(Math.abs(mean - EXPECTED.ensembleMeanSpeed) <= tolerance,
