@@ -1,0 +1,215 @@
+// Forms described as data. Every input carries `data-pointer`, the JSON
+// Pointer of its request field (api.md), and `data-exp`, the power of ten
+// from the unit shown to SI (mm → -3, GPa → 9). Reading a form builds the
+// request; a problem's `errors[].field` pointers lead back to the inputs.
+
+import { h } from './format.js';
+
+let nextId = 0;
+
+/**
+ * Builds fieldsets into `form .form-fields` from groups:
+ * `{legend, id?, toggle?: {label, checked}, note?, fields: [field]}` where a
+ * field is `{pointer | local, label, unit?, exp?, value?, kind?, options?,
+ * placeholder?, hint?}` and kind is number (default), integer, select or
+ * checkbox. `local` names a control that shapes the request but is not a
+ * field itself. A group with `toggle` is sent only while its box is ticked.
+ */
+export function buildForm(form, groups) {
+  const container = form.querySelector('.form-fields');
+  for (const group of groups) {
+    const fieldset = h('fieldset', { dataset: group.pointer ? { group: group.pointer } : {} });
+    const legend = h('legend', {});
+    if (group.toggle) {
+      const box = h('input', { type: 'checkbox', name: group.toggle.name, checked: group.toggle.checked });
+      legend.append(h('label', { class: 'toggle' }, box, ' ', group.legend));
+      const sync = () => { fieldset.disabled = !box.checked; };
+      box.addEventListener('change', sync);
+      form.addEventListener('reset', () => setTimeout(sync));
+      sync();
+    } else {
+      legend.textContent = group.legend;
+    }
+    fieldset.append(legend, h('p', { class: 'group-error', hidden: true }));
+    if (group.note) fieldset.append(h('p', { class: 'note', html: group.note }));
+    for (const field of group.fields) fieldset.append(buildField(field));
+    container.append(fieldset);
+  }
+  form.addEventListener('reset', () => setTimeout(() => clearErrors(form)));
+}
+
+function buildField(field) {
+  const id = `f${++nextId}`;
+  const data = {};
+  if (field.pointer) data.pointer = field.pointer;
+  if (field.local) data.local = field.local;
+  if (field.exp) data.exp = String(field.exp);
+  const kind = field.kind ?? 'number';
+  data.kind = kind;
+
+  let control;
+  if (kind === 'select') {
+    control = h('select', { id, dataset: data },
+      field.options.map(([value, label]) =>
+        h('option', { value, selected: String(value) === String(field.value) }, label)));
+  } else if (kind === 'checkbox') {
+    control = h('input', { id, type: 'checkbox', dataset: data, checked: Boolean(field.value) });
+  } else {
+    control = h('input', {
+      id,
+      type: 'number',
+      step: kind === 'integer' ? '1' : 'any',
+      inputmode: kind === 'integer' ? 'numeric' : 'decimal',
+      value: field.value ?? undefined,
+      placeholder: field.placeholder,
+      dataset: data,
+    });
+  }
+
+  const label = h('label', { for: id, html: field.label });
+  const wrapper = h('div', { class: `field field-${kind}` });
+  if (kind === 'checkbox') {
+    wrapper.append(h('div', { class: 'check' }, control, label));
+  } else {
+    wrapper.append(label, h('div', { class: 'control' }, control, h('span', { class: 'unit', html: field.unit ?? '' })));
+  }
+  if (field.hint) wrapper.append(h('p', { class: 'hint', html: field.hint }));
+  wrapper.append(h('p', { class: 'field-error', hidden: true, role: 'alert' }));
+  return wrapper;
+}
+
+/**
+ * Reads the enabled controls of a form into a request object (SI units).
+ * Empty number inputs are left out, so the server's default applies.
+ * Returns `{request, local, errors}`; `errors` lists inputs that hold
+ * something that is not a number (nothing is sent then).
+ */
+export function readForm(form) {
+  const request = {};
+  const local = {};
+  const errors = [];
+  for (const el of form.querySelectorAll('[data-pointer], [data-local]')) {
+    if (el.matches(':disabled')) continue;
+    let value;
+    const kind = el.dataset.kind;
+    if (kind === 'checkbox') value = el.checked;
+    else if (kind === 'select') value = el.value;
+    else {
+      if (el.validity.badInput) {
+        errors.push({ el, message: 'not a number' });
+        continue;
+      }
+      if (el.value.trim() === '') continue;
+      value = toSi(el.value, Number(el.dataset.exp ?? 0));
+      if (kind === 'integer' && !Number.isInteger(value)) {
+        errors.push({ el, message: 'must be a whole number' });
+        continue;
+      }
+    }
+    if (el.dataset.local) local[el.dataset.local] = value;
+    else setPointer(request, el.dataset.pointer, value);
+  }
+  return { request, local, errors };
+}
+
+/**
+ * Decimal text in a display unit → SI, by shifting the decimal exponent in
+ * the text so that "235" mm becomes exactly the double nearest 0.235.
+ */
+export function toSi(text, exp) {
+  const m = /^\s*([+-]?(?:\d+\.?\d*|\.\d+))(?:e([+-]?\d+))?\s*$/i.exec(text);
+  if (!m) return Number(text);
+  return Number(`${m[1]}e${Number(m[2] ?? 0) + exp}`);
+}
+
+/** Sets `obj` at a JSON Pointer, creating objects on the way. */
+export function setPointer(obj, pointer, value) {
+  const keys = pointer.split('/').slice(1).map((k) => k.replace(/~1/g, '/').replace(/~0/g, '~'));
+  let node = obj;
+  keys.slice(0, -1).forEach((key) => {
+    if (typeof node[key] !== 'object' || node[key] === null) node[key] = {};
+    node = node[key];
+  });
+  node[keys[keys.length - 1]] = value;
+}
+
+/** Deep merge of plain objects (b wins); returns a new object. */
+export function merge(a, b) {
+  const out = { ...a };
+  for (const [key, value] of Object.entries(b)) {
+    const both = value && typeof value === 'object' && !Array.isArray(value) &&
+      out[key] && typeof out[key] === 'object' && !Array.isArray(out[key]);
+    out[key] = both ? merge(out[key], value) : value;
+  }
+  return out;
+}
+
+/** Removes every field error mark from the forms. */
+export function clearErrors(...forms) {
+  for (const form of forms) {
+    for (const p of form.querySelectorAll('.field-error, .group-error')) {
+      p.hidden = true;
+      p.textContent = '';
+    }
+    for (const el of form.querySelectorAll('.invalid')) el.classList.remove('invalid');
+    for (const el of form.querySelectorAll('[aria-invalid]')) el.removeAttribute('aria-invalid');
+    const panel = form.closest('[data-panel]');
+    if (panel) document.querySelector(`[data-tab="${panel.dataset.panel}"]`)?.classList.remove('has-error');
+  }
+}
+
+/**
+ * Finds the control (or group) that a JSON Pointer names in the first of
+ * `forms` that has it, going up the pointer until something matches:
+ * `/face/floor/kind` falls back to a `/face` group if there is no input.
+ */
+export function locate(pointer, forms) {
+  const keys = pointer.split('/');
+  for (let n = keys.length; n > 1; n--) {
+    const prefix = keys.slice(0, n).join('/');
+    for (const form of forms) {
+      const input = form.querySelector(`[data-pointer="${CSS.escape(prefix)}"]`);
+      if (input) return { form, input, target: input.closest('.field') };
+      const group = form.querySelector(`[data-group="${CSS.escape(prefix)}"]`);
+      if (group) return { form, input: null, target: group };
+    }
+  }
+  return null;
+}
+
+/**
+ * Marks the fields that a problem's `errors` name. Returns the errors that
+ * no field on the page matched, for the summary.
+ */
+export function markErrors(errors, forms) {
+  const unmatched = [];
+  for (const error of errors ?? []) {
+    const message = error.message ?? 'invalid';
+    const found = error.field ? locate(error.field, forms) : null;
+    if (!found) {
+      unmatched.push(error);
+      continue;
+    }
+    const { input, target } = found;
+    const p = target.querySelector(input ? '.field-error' : '.group-error');
+    p.textContent = p.textContent ? `${p.textContent}; ${message}` : message;
+    p.hidden = false;
+    target.classList.add('invalid');
+    if (input) input.setAttribute('aria-invalid', 'true');
+    const panel = found.form.closest('[data-panel]');
+    if (panel) document.querySelector(`[data-tab="${panel.dataset.panel}"]`)?.classList.add('has-error');
+  }
+  return unmatched;
+}
+
+/** Marks inputs that could not be read (see readForm). */
+export function markLocalErrors(errors) {
+  for (const { el, message } of errors) {
+    const field = el.closest('.field');
+    const p = field.querySelector('.field-error');
+    p.textContent = message;
+    p.hidden = false;
+    field.classList.add('invalid');
+    el.setAttribute('aria-invalid', 'true');
+  }
+}

@@ -1,0 +1,96 @@
+// Number formatting and result tables. Values arrive in SI; each row names
+// the engineering unit it is shown in and the factor from SI to that unit.
+
+const SUPERSCRIPT = { '-': '⁻', '+': '', 0: '⁰', 1: '¹', 2: '²', 3: '³', 4: '⁴', 5: '⁵', 6: '⁶', 7: '⁷', 8: '⁸', 9: '⁹' };
+
+/** A number with `sig` significant digits; × 10ⁿ outside [1e-3, 1e6). */
+export function fmt(x, sig = 5) {
+  if (x === null || x === undefined) return '—';
+  if (typeof x !== 'number') return String(x);
+  if (!Number.isFinite(x)) return String(x);
+  if (x === 0) return '0';
+  const a = Math.abs(x);
+  if (a >= 1e-3 && a < 1e6) return trimZeros(x.toPrecision(sig));
+  const [mantissa, exponent] = x.toExponential(sig - 1).split('e');
+  const power = [...exponent].map((c) => SUPERSCRIPT[c] ?? c).join('');
+  return `${trimZeros(mantissa)} × 10${power}`;
+}
+
+function trimZeros(s) {
+  if (s.includes('e') || !s.includes('.')) return s;
+  return s.replace(/0+$/, '').replace(/\.$/, '');
+}
+
+/** Scales an SI value (number, array or null) for display. */
+export function scaled(value, scale = 1) {
+  if (value === null || value === undefined) return value;
+  if (Array.isArray(value)) return value.map((v) => scaled(v, scale));
+  return typeof value === 'number' ? value * scale : value;
+}
+
+/** Text for a value that may be an array ([a, b] → "a × b" style list). */
+export function fmtValue(value, sig) {
+  if (Array.isArray(value)) return value.map((v) => fmt(v, sig)).join(', ');
+  return fmt(value, sig);
+}
+
+/** Creates an element with attributes and children (strings or nodes). */
+export function h(tag, attrs = {}, ...children) {
+  const el = document.createElement(tag);
+  for (const [key, value] of Object.entries(attrs)) {
+    if (value === undefined || value === null || value === false) continue;
+    if (key === 'class') el.className = value;
+    else if (key === 'html') el.innerHTML = value;
+    else if (key === 'dataset') Object.assign(el.dataset, value);
+    else el.setAttribute(key, value === true ? '' : value);
+  }
+  for (const child of children.flat()) {
+    if (child === null || child === undefined || child === false) continue;
+    el.append(child instanceof Node ? child : document.createTextNode(String(child)));
+  }
+  return el;
+}
+
+/**
+ * Fills a table body with rows `{key, label, symbol, unit, scale, sig, alt}`
+ * for the keys present in `data`. `key` may be a dotted path; `alt` is an
+ * optional second unit `{unit, scale}`. The value cell carries
+ * `data-out="<prefix><key>"` so that tests and scripts can find it.
+ */
+export function fillTable(tbody, rows, data, prefix = '') {
+  tbody.replaceChildren();
+  for (const row of rows) {
+    const raw = row.get ? row.get(data) : pick(data, row.key);
+    if (raw === undefined) continue;
+    const value = scaled(raw, row.scale ?? 1);
+    const cell = h('td', { class: 'num', dataset: { out: prefix + row.key } }, fmtValue(value, row.sig));
+    const unit = h('td', { class: 'unit', html: row.unit ?? '' });
+    if (row.alt && typeof raw === 'number') {
+      unit.append(h('span', { class: 'alt' }, `= ${fmt(raw * row.alt.scale, row.sig)} ${row.alt.unit}`));
+    }
+    tbody.append(
+      h('tr', {},
+        h('th', { scope: 'row' }, row.label),
+        h('td', { class: 'sym', html: row.symbol ?? '' }),
+        cell,
+        unit),
+    );
+  }
+}
+
+/** `pick(obj, "a.b")` → obj.a.b, or undefined. */
+export function pick(obj, path) {
+  return path.split('.').reduce((o, k) => (o === null || o === undefined ? undefined : o[k]), obj);
+}
+
+/** Shows `warnings` ([{code, message}]) in a box, or hides it. */
+export function showWarnings(el, warnings, heading = 'Warnings') {
+  const list = (warnings ?? []).filter(Boolean);
+  el.hidden = list.length === 0;
+  el.replaceChildren();
+  if (!list.length) return;
+  el.append(
+    h('strong', {}, heading),
+    h('ul', {}, list.map((w) => h('li', {}, h('code', {}, w.code), ' ', w.message))),
+  );
+}

@@ -1,0 +1,314 @@
+// Migration tab: POST /v1/migration with the lumped-mass method: one
+// trajectory, or a seeded Monte Carlo ensemble streamed with progress.
+
+import { postJson } from './api.js';
+import { buildForm, clearErrors, markLocalErrors, readForm } from './form.js';
+import { fillTable, fmt, h, showWarnings } from './format.js';
+import { destroy, linePlot, plotMessage } from './plot.js';
+import { bringIntoView, hideStatus, showBusy, showInfo, showProblem } from './status.js';
+
+const PROGRESS_AFTER_MS = 1000;
+
+const MIGRATION_GROUPS = [
+  {
+    legend: 'Working face',
+    pointer: '/face',
+    fields: [
+      { pointer: '/face/dip_deg', label: 'Dip <i>θ</i>', unit: '°', value: 45 },
+      { pointer: '/face/length_m', label: 'Length along the dip', unit: 'm', value: 120 },
+      { pointer: '/face/friction_coefficient', label: 'Friction coefficient <i>μ</i>', unit: '', value: 0.2 },
+      { pointer: '/face/restitution_normal', label: 'Normal restitution <i>e</i><sub>n</sub>', unit: '', value: 0.3 },
+      { pointer: '/face/restitution_tangential', label: 'Tangential restitution <i>e</i><sub>t</sub>', unit: '', value: 0.8 },
+    ],
+  },
+  {
+    legend: 'Rock',
+    pointer: '/rock',
+    fields: [
+      { pointer: '/rock/side_length_m', label: 'Cube side <i>L</i>', unit: 'mm', exp: -3, value: 300 },
+      { pointer: '/rock/density_kg_m3', label: 'Density <i>ρ</i>', unit: 'kg/m³', value: 2500 },
+      {
+        pointer: '/lumped_mass/motion', label: 'Ground motion', kind: 'select', value: 'slide',
+        options: [['slide', 'slide'], ['roll', 'roll (sphere, no slip)']],
+      },
+    ],
+  },
+  {
+    legend: 'Release',
+    pointer: '/release',
+    fields: [
+      { pointer: '/release/drop_height_m', label: 'Drop height', unit: 'm', value: 3.27 },
+      { pointer: '/release/along_dip_m', label: 'Along the dip', unit: 'm', value: 0 },
+      { pointer: '/release/across_m', label: 'Across the face', unit: 'm', value: 0 },
+      { pointer: '/release/speed_m_s', label: 'Initial speed (down-dip)', unit: 'm/s', value: 0 },
+    ],
+  },
+  {
+    legend: 'Monte Carlo ensemble',
+    pointer: '/monte_carlo',
+    toggle: { name: 'monte_carlo', checked: false },
+    note: 'Restitution drawn uniformly at every impact.',
+    fields: [
+      { pointer: '/monte_carlo/runs', label: 'Runs', kind: 'integer', value: 200 },
+      { pointer: '/monte_carlo/seed', label: 'Seed', kind: 'integer', value: 42 },
+      { pointer: '/monte_carlo/restitution_normal/min', label: '<i>e</i><sub>n</sub> min', unit: '', value: 0.2 },
+      { pointer: '/monte_carlo/restitution_normal/max', label: '<i>e</i><sub>n</sub> max', unit: '', value: 0.4 },
+      { pointer: '/monte_carlo/restitution_tangential/min', label: '<i>e</i><sub>t</sub> min', unit: '', value: 0.7 },
+      { pointer: '/monte_carlo/restitution_tangential/max', label: '<i>e</i><sub>t</sub> max', unit: '', value: 0.9 },
+    ],
+  },
+  {
+    legend: 'Friction spread (ensemble)',
+    pointer: '/monte_carlo/friction_coefficient',
+    toggle: { name: 'friction_spread', checked: false },
+    note: 'Truncated normal, drawn once per run.',
+    fields: [
+      { pointer: '/monte_carlo/friction_coefficient/mean', label: 'Mean', unit: '', value: 0.2 },
+      { pointer: '/monte_carlo/friction_coefficient/std', label: 'Standard deviation', unit: '', value: 0.02 },
+      { pointer: '/monte_carlo/friction_coefficient/min', label: 'Min', unit: '', value: 0 },
+      { pointer: '/monte_carlo/friction_coefficient/max', label: 'Max', unit: '', value: 1 },
+    ],
+  },
+  {
+    legend: 'Output',
+    pointer: '/output',
+    fields: [
+      { pointer: '/output/trajectory', label: 'Trajectory', kind: 'checkbox', value: true },
+      { pointer: '/output/sample_interval_s', label: 'Sample interval', unit: 's', value: 0.01 },
+    ],
+  },
+];
+
+const ROWS = [
+  { key: 'arrival.speed_m_s', label: 'Speed', symbol: '<i>v</i>', unit: 'm/s', sig: 6 },
+  { key: 'arrival.time_s', label: 'Time (with the fall)', symbol: '<i>t</i>', unit: 's', sig: 6 },
+  { key: 'arrival.kinetic_energy_j', label: 'Kinetic energy', symbol: 'KE', unit: 'kJ', scale: 1e-3, sig: 5 },
+  { key: 'arrival.along_dip_velocity_m_s', label: 'Down-dip velocity', symbol: '<i>v</i><sub>s</sub>', unit: 'm/s', sig: 5 },
+  { key: 'arrival.normal_velocity_m_s', label: 'Normal velocity', symbol: '<i>v</i><sub>n</sub>', unit: 'm/s', sig: 5 },
+  { key: 'arrival.phase', label: 'Motion at the end', symbol: '' },
+  { key: 'arrival.stop_reason', label: 'Stop reason', symbol: '' },
+  { key: 'arrival.along_dip_m', label: 'Final position along the dip', symbol: '<i>s</i>', unit: 'm', sig: 5 },
+  { key: 'impact_count', label: 'Impacts', symbol: '' },
+  { key: 'slide_start_along_dip_m', label: 'Ground phase starts at', symbol: '<i>s</i>', unit: 'm', sig: 6 },
+  { key: 'max_bounce_height_m', label: 'Highest bounce', symbol: '<i>h</i><sub>max</sub>', unit: 'm', sig: 5 },
+  { key: 'energy.total_start_j', label: 'Energy at the start', symbol: '<i>E</i>₀', unit: 'kJ', scale: 1e-3, sig: 6 },
+  { key: 'energy.impacts_j', label: 'Lost in impacts', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
+  { key: 'energy.friction_j', label: 'Lost to friction', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
+  { key: 'energy.transition_j', label: 'Lost at the flight–ground transition', symbol: '', unit: 'J', sig: 4 },
+  { key: 'energy.residual_j', label: 'Energy residual', symbol: '', unit: 'J', sig: 3 },
+];
+
+const STATS = [
+  ['speed_m_s', 'Arrival speed', 'm/s', 1],
+  ['kinetic_energy_j', 'Arrival kinetic energy', 'kJ', 1e-3],
+  ['time_s', 'Arrival time', 's', 1],
+  ['impact_count', 'Impacts', '', 1],
+  ['runout_m', 'Run-out', 'm', 1],
+  ['max_bounce_height_m', 'Highest bounce', 'm', 1],
+];
+const STAT_COLUMNS = ['mean', 'std', 'min', 'p05', 'p50', 'p95', 'p99', 'max'];
+
+export function initMigration() {
+  const form = document.getElementById('migration-form');
+  const status = document.getElementById('migration-status');
+  const warnings = document.getElementById('migration-warnings');
+  const tbody = document.querySelector('#migration-table tbody');
+  const empty = document.getElementById('migration-empty');
+  const progress = document.getElementById('migration-progress');
+  const progressBar = progress.querySelector('progress');
+  const progressText = progress.querySelector('.progress-text');
+  const statsCard = document.getElementById('migration-stats-card');
+  const histogram = document.getElementById('migration-histogram');
+  const percentiles = document.getElementById('migration-percentiles');
+  const trajectoryBox = document.getElementById('migration-trajectory');
+  const results = form.closest('[data-panel]').querySelector('.results');
+  const statsCaption = document.getElementById('migration-stats-caption');
+  const percentilesCard = document.getElementById('migration-percentiles-card');
+  const plots = {
+    side: document.getElementById('migration-side-plot'),
+    plan: document.getElementById('migration-plan-plot'),
+    energy: document.getElementById('migration-energy-plot'),
+  };
+  buildForm(form, MIGRATION_GROUPS);
+
+  const mcBox = form.querySelector('input[name="monte_carlo"]');
+  const frictionBox = form.querySelector('input[name="friction_spread"]');
+  const frictionSet = frictionBox.closest('fieldset');
+  const syncFriction = () => {
+    frictionBox.disabled = !mcBox.checked;
+    frictionSet.disabled = !mcBox.checked || !frictionBox.checked;
+  };
+  mcBox.addEventListener('change', syncFriction);
+  frictionBox.addEventListener('change', syncFriction);
+  form.addEventListener('reset', () => setTimeout(syncFriction));
+  syncFriction();
+
+  let running = null;
+  document.getElementById('migration-cancel').addEventListener('click', () => running?.abort());
+
+  form.addEventListener('submit', async (event) => {
+    event.preventDefault();
+    running?.abort();
+    clearErrors(form);
+    const { request, errors } = readForm(form);
+    if (errors.length) {
+      markLocalErrors(errors);
+      showInfo(status, 'Some inputs are not numbers; nothing was sent.');
+      return;
+    }
+    request.method = 'lumped_mass';
+    const mc = request.monte_carlo;
+    if (mc) {
+      for (const key of ['restitution_normal', 'restitution_tangential']) {
+        if (mc[key]) mc[key] = { distribution: 'uniform', ...mc[key] };
+      }
+      if (mc.friction_coefficient) mc.friction_coefficient = { distribution: 'truncated_normal', ...mc.friction_coefficient };
+    }
+
+    const controller = new AbortController();
+    running = controller;
+    showBusy(status, mc ? `Running ${mc.runs ?? 200} runs…` : 'Computing…');
+    const timer = mc ? setTimeout(() => {
+      progress.hidden = false;
+      bringIntoView(progress);
+    }, PROGRESS_AFTER_MS) : null;
+    progressBar.value = 0;
+    progressText.textContent = '';
+
+    let answer;
+    try {
+      answer = await postJson('v1/migration', request, {
+        signal: controller.signal,
+        onProgress: mc ? ({ done, total }) => {
+          progressBar.max = total || 1;
+          progressBar.value = done;
+          progressText.textContent = `${done} / ${total} runs`;
+        } : undefined,
+      });
+    } catch (err) {
+      if (err.name !== 'AbortError') throw err;
+      if (running === controller) showInfo(status, 'Cancelled.');
+      return;
+    } finally {
+      clearTimeout(timer);
+      if (running === controller) {
+        progress.hidden = true;
+        running = null;
+      }
+    }
+    if (!answer.ok) {
+      showProblem(status, answer.problem, { forms: [form], endpoint: 'POST /v1/migration' });
+      results.classList.add('stale');
+      return;
+    }
+    hideStatus(status);
+    results.classList.remove('stale');
+    render(answer.data);
+  });
+
+  function render(data) {
+    empty.hidden = true;
+    fillTable(tbody, ROWS.map((r) => ({ ...r, label: span(r.label) })), data);
+    showWarnings(warnings, data.warnings);
+    renderStatistics(data.statistics);
+    renderTrajectory(data.trajectory);
+  }
+
+  function renderStatistics(stats) {
+    statsCard.hidden = !stats;
+    percentilesCard.hidden = !stats;
+    if (!stats) {
+      destroy(histogram);
+      return;
+    }
+    const hist = stats.speed_m_s?.histogram;
+    if (hist && hist.counts?.length) {
+      const centres = hist.counts.map((_, i) => (hist.edges[i] + hist.edges[i + 1]) / 2);
+      const lo = hist.edges[0];
+      const hi = hist.edges[hist.edges.length - 1];
+      const pad = hi > lo ? 0 : Math.max(Math.abs(lo) * 1e-3, 1e-3);
+      linePlot(histogram, {
+        x: { label: 'arrival speed (m/s)', values: centres, range: [lo - pad, hi + pad] },
+        y: { label: 'runs', range: [0, Math.max(...hist.counts) * 1.1 || 1] },
+        series: [{ label: 'runs', values: hist.counts, bars: true }],
+        height: 220,
+      });
+    } else {
+      plotMessage(histogram, 'No run reached the lower end.');
+    }
+
+    statsCaption.textContent = `${stats.runs} runs, seed ${stats.seed}; ` +
+      `${fmt(stats.reached_fraction * 100, 4)} % reached the lower end. ` +
+      'Speed, energy and time over the runs that reached it; the rest over all runs.';
+    percentiles.tHead.replaceChildren(h('tr', {},
+      h('th', {}, ''),
+      STAT_COLUMNS.map((c) => h('th', { class: 'num' }, c)),
+      h('th', {}, 'Unit')));
+    const body = percentiles.tBodies[0];
+    body.replaceChildren();
+    for (const [key, label, unit, scale] of STATS) {
+      const s = stats[key];
+      if (!s) continue;
+      body.append(h('tr', {},
+        h('th', { scope: 'row' }, label),
+        STAT_COLUMNS.map((c) => h('td', { class: 'num', dataset: { out: `statistics.${key}.${c}` } },
+          fmt(s[c] === null || s[c] === undefined ? s[c] : s[c] * scale, 5))),
+        h('td', { class: 'unit' }, unit)));
+    }
+  }
+
+  function renderTrajectory(tr) {
+    trajectoryBox.hidden = !tr;
+    if (!tr) {
+      Object.values(plots).forEach(destroy);
+      return;
+    }
+    const s = tr.along_dip_m;
+    const sRange = range(s);
+    linePlot(plots.side, {
+      x: { label: 'along the dip (m)', values: s, range: sRange },
+      y: { label: 'height above the floor (m)' },
+      series: [{ label: 'height', values: tr.height_m }],
+    });
+
+    const xs = tr.position_m.map((p) => p[0]);
+    const ys = tr.position_m.map((p) => p[1]);
+    linePlot(plots.plan, {
+      x: { label: 'x, down the dip (m)', values: xs, range: range(xs) },
+      y: { label: 'y, across the face (m)', range: range(ys, 1) },
+      series: [{ label: 'path', values: ys }],
+    });
+
+    const kJ = (a) => a?.map((v) => v * 1e-3);
+    const energySeries = [
+      { label: 'speed (m/s)', values: tr.speed_m_s, axis: 'y' },
+      { label: 'kinetic (kJ)', values: kJ(tr.kinetic_energy_j), axis: 'y2' },
+      { label: 'potential (kJ)', values: kJ(tr.potential_energy_j), axis: 'y2' },
+      { label: 'dissipated (kJ)', values: kJ(tr.dissipated_energy_j), axis: 'y2' },
+    ].filter((x) => x.values);
+    linePlot(plots.energy, {
+      x: { label: 'along the dip (m)', values: s, range: sRange },
+      y: { label: 'speed (m/s)' },
+      y2: { label: 'energy (kJ)' },
+      series: energySeries,
+    });
+  }
+}
+
+/** [min, max] of an array, widened by `pad` when flat. */
+function range(values, pad = 0) {
+  let lo = Infinity;
+  let hi = -Infinity;
+  for (const v of values) {
+    if (v < lo) lo = v;
+    if (v > hi) hi = v;
+  }
+  if (!(hi > lo)) return [lo - (pad || 1), hi + (pad || 1)];
+  return [lo, hi];
+}
+
+function span(html) {
+  const el = document.createElement('span');
+  el.innerHTML = html;
+  return el;
+}
