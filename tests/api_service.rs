@@ -68,7 +68,10 @@ async fn saturated_slots_answer_503_with_retry_after() {
         ..Default::default()
     });
     let busy_app = app.clone();
-    let busy = tokio::spawn(async move { common::post(&busy_app, "/v1/migration", &big_ensemble()).await });
+    let busy =
+        tokio::spawn(
+            async move { common::post(&busy_app, "/v1/migration", &big_ensemble()).await },
+        );
     tokio::time::sleep(std::time::Duration::from_millis(30)).await;
     let r = common::post(&app, "/v1/impact", &serde_json::json!({})).await;
     let p = assert_problem(&r, 503, "overloaded");
@@ -88,5 +91,8 @@ async fn past_the_time_limit_the_work_stops_with_504() {
     let t0 = std::time::Instant::now();
     let r = common::post(&app, "/v1/migration", &big_ensemble()).await;
     assert_problem(&r, 504, "timeout");
-    assert!(t0.elapsed() < std::time::Duration::from_secs(2), "stopped promptly");
+    assert!(
+        t0.elapsed() < std::time::Duration::from_secs(2),
+        "stopped promptly"
+    );
 }
