@@ -39,7 +39,7 @@ pub struct CompleteElliptic {
 /// * E near m = 1 is K(1 − m s): relative error ≲ K·ε (a few ulp on any practical m₁).
 ///
 /// # References
-/// DLMF §19.8 (AGM for K and E), https://dlmf.nist.gov/19.8; cₙ₊₁ = cₙ²/(4aₙ₊₁) avoids the
+/// DLMF §19.8 (AGM for K and E), <https://dlmf.nist.gov/19.8>; cₙ₊₁ = cₙ²/(4aₙ₊₁) avoids the
 /// cancellation in (aₙ − bₙ)/2.
 pub fn complete_elliptic_parts(m: f64, m1: f64) -> CompleteElliptic {
     if m1 <= 0.0 {

@@ -152,7 +152,7 @@ pub fn kronrod15<F: FnMut(f64) -> f64>(f: &mut F, a: f64, b: f64) -> (f64, f64) 
     (value, err)
 }
 
-/// ∫ f over [points[0], points[last]], with the inner points as breakpoints;
+/// ∫ f over `[points[0], points[last]]`, with the inner points as breakpoints;
 /// the result is in the integrand's unit times the variable's.
 ///
 /// # Examples
