@@ -12,9 +12,12 @@ use std::time::Duration;
 
 use axum::Router;
 use axum::body::Body;
+use axum::error_handling::HandleErrorLayer;
 use axum::extract::DefaultBodyLimit;
 use axum::http::{Request, Response};
 use axum::routing::{get, post};
+use tower::ServiceBuilder;
+use tower::timeout::TimeoutLayer;
 use tower_http::compression::CompressionLayer;
 use tower_http::trace::TraceLayer;
 use tracing::Span;
@@ -28,6 +31,9 @@ use crate::config::Config;
 pub fn app(config: Config) -> Router {
     let state = AppState::new(config);
     let body_limit = state.config.max_body_bytes;
+    // The whole request (reading the body, queueing, solving, writing) gets the computation
+    // limit plus a margin; solvers stop themselves at the computation limit.
+    let request_limit = state.time_limit() + Duration::from_secs(30);
     let api = Router::new()
         .route("/", get(routes::meta::index))
         .route("/static/{*path}", get(routes::meta::static_file))
@@ -44,6 +50,13 @@ pub fn app(config: Config) -> Router {
         .fallback(error::not_found)
         .method_not_allowed_fallback(method_not_allowed)
         .layer(DefaultBodyLimit::max(body_limit))
+        .layer(
+            ServiceBuilder::new()
+                .layer(HandleErrorLayer::new(|_: tower::BoxError| async {
+                    error::ApiError::new("timeout", "the request passed the time limit")
+                }))
+                .layer(TimeoutLayer::new(request_limit)),
+        )
         .layer(CompressionLayer::new())
         .layer(
             TraceLayer::new_for_http()
