@@ -123,3 +123,19 @@ pub fn shared_dir() -> std::path::PathBuf {
         .map(Into::into)
         .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"))
 }
+
+/// Sends each body and asserts a 422 of the given code naming the given field.
+pub async fn assert_rejections(app: &Router, path: &str, cases: Vec<(Value, &str, &str)>) {
+    for (body, field, code) in cases {
+        let r = post(app, path, &body).await;
+        let p = assert_problem(&r, 422, code);
+        assert!(
+            p["errors"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|e| e["field"] == field),
+            "{body}: {field} not named in {p}"
+        );
+    }
+}
