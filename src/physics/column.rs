@@ -531,7 +531,15 @@ fn decoupled(
         Grid::Times(t) => t.iter().map(|&t| fv.sample(t)).collect(),
     });
     let history = samples.map(|samples: Vec<_>| {
-        let mut h = ColumnHistory::default();
+        let n = samples.len();
+        let mut h = ColumnHistory {
+            time: Vec::with_capacity(n),
+            midpoint_displacement: Vec::with_capacity(n),
+            kinetic_energy: Vec::with_capacity(n),
+            strain_energy: Vec::with_capacity(n),
+            dissipated_energy: Vec::with_capacity(n),
+            rock: None,
+        };
         for s in samples {
             let t = s.time;
             h.time.push(t);

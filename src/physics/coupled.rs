@@ -623,37 +623,3 @@ mod tests {
         }
     }
 }
-#[cfg(test)]
-mod explore {
-    use super::tests_support::*;
-    #[test]
-    #[ignore]
-    fn explore_tolerance() {
-        for n in [3usize, 10] {
-            let reference = solve_coupled(&base_input(n, 1e-13), &Control::unlimited()).unwrap();
-            for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12] {
-                let t = std::time::Instant::now();
-                let r = solve_coupled(&base_input(n, tol), &Control::unlimited()).unwrap();
-                let el = t.elapsed();
-                let e = |a: f64, b: f64| ((a - b) / b).abs();
-                let err = e(r.max_force, reference.max_force)
-                    .max(e(
-                        r.column_energy_after_contact,
-                        reference.column_energy_after_contact,
-                    ))
-                    .max(e(
-                        r.first_contact_duration.unwrap(),
-                        reference.first_contact_duration.unwrap(),
-                    ))
-                    .max(e(
-                        r.max_midpoint_displacement,
-                        reference.max_midpoint_displacement,
-                    ));
-                println!(
-                    "n={n} tol={tol:e} steps={} rej={} resid={:.2e} err={:.2e} time={:?}",
-                    r.steps, r.rejected_steps, r.energy_residual, err, el
-                );
-            }
-        }
-    }
-}
