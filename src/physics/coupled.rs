@@ -193,6 +193,12 @@ impl OdeSystem for System {
 /// the clamp and the midpoint. A terminal event ends the step there and the integration restarts
 /// with the other right-hand side, so no step straddles the switch of the contact law.
 ///
+/// # Special cases
+/// * The Hertz law has no capacity; the log laws stop at δ_cap.
+/// * A first contact that lasts past `end_time` leaves `first_contact_duration` at `None` and
+///   reports the rebound velocity and column energy at the end.
+/// * History samples at t = 0 are the initial state (rock at the column, at speed v).
+///
 /// # Errors
 /// * `CapacityExceeded` when the approach reaches the log law's capacity δ_cap.
 /// * `TooManySteps` past `max_steps`; `Cancelled`/`TimedOut` from `control`.
@@ -377,11 +383,14 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
             (&f_cm_rate, &f_cm, 2),
         ] {
             let cr = st.functional(rate);
-            let cv = st.functional(val);
             let g = |th: f64| Dopri5::eval_functional(&cr, th);
             let mut best = apply(val, y1).abs();
-            for th in find_roots(g, apply(rate, y0), apply(rate, y1), 0, sub, false) {
-                best = best.max(Dopri5::eval_functional(&cv, th).abs());
+            let roots = find_roots(g, apply(rate, y0), apply(rate, y1), 0, sub, false);
+            if !roots.is_empty() {
+                let cv = st.functional(val);
+                for th in roots {
+                    best = best.max(Dopri5::eval_functional(&cv, th).abs());
+                }
             }
             let target = match slot {
                 0 => &mut res.max_midpoint_displacement,
