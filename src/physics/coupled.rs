@@ -136,7 +136,8 @@ struct System {
     m: f64,
     law: ForceLaw,
     phi: Vec<f64>,
-    minv: DMatrix<f64>,
+    /// M⁻¹ row-major, n × n.
+    minv: Vec<f64>,
     k: Vec<f64>,
     c: Vec<f64>,
     n: usize,
@@ -174,12 +175,9 @@ impl OdeSystem for System {
             dis += self.c[j] * wd * wd;
             dy[2 + j] = wd;
         }
-        for i in 0..n {
-            let mut s = 0.0;
-            for j in 0..n {
-                s += self.minv[(i, j)] * f[j];
-            }
-            dy[2 + n + i] = s;
+        let f = &f[..n];
+        for (i, row) in self.minv.chunks_exact(n).enumerate() {
+            dy[2 + n + i] = row.iter().zip(f).map(|(a, b)| a * b).sum();
         }
         dy[2 + 2 * n] = dis;
         true
@@ -222,7 +220,7 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
         m: input.rock_mass,
         law: input.law,
         phi: active.iter().map(|&i| g.midpoint[i]).collect(),
-        minv,
+        minv: (0..n * n).map(|k| minv[(k / n, k % n)]).collect(),
         k: active.iter().map(|&i| g.stiffness[(i, i)]).collect(),
         c: active.iter().map(|&i| g.damping[(i, i)]).collect(),
         n,
