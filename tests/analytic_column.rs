@@ -833,3 +833,82 @@ fn verification_cases_through_solve_column() {
     // the default window is 50 × the rigid contact duration (1.1081705 ms)
     close("window", c.end_time, 50.0 * 1.1081705e-3, 1e-7, 0.0);
 }
+
+/// Re-contact: a slender column (D 0.15/0.12 m, l = 2.5 and 4 m) struck by a 81 kg rock
+/// swings back into it; contact counts and all maxima against reference.py (`coupled`,
+/// n_modes 3, zeta1 0.01, rho_rock 3000, R 0.075, t_window 0.03).
+#[test]
+fn multiple_contacts_match_reference() {
+    let rows = [
+        (
+            2.5,
+            5u32,
+            [
+                537860.6806225762,
+                0.0010878741785311022,
+                0.006211685033863703,
+                0.0008719500959472883,
+                1.89679686604717,
+                857.662377386053,
+                -4.350564329768802,
+                120.78864862651581,
+            ],
+        ),
+        (
+            4.0,
+            4,
+            [
+                619085.3027653979,
+                0.0012351303631822955,
+                0.012057917445353315,
+                0.0007854518651571942,
+                1.3389367568588613,
+                936.3496470248072,
+                -4.718483604461201,
+                44.131179295919836,
+            ],
+        ),
+    ];
+    for (l, contacts, want) in rows {
+        let case = ColumnCase {
+            impact: ImpactCase {
+                rock: Rock {
+                    density: 3000.0,
+                    ..Rock::default()
+                },
+                column: Column {
+                    outer_diameter: 0.15,
+                    inner_diameter: 0.12,
+                    length: l,
+                    contact_radius: 0.075,
+                    damping: Damping::Ratio(0.01),
+                    ..Column::default()
+                },
+                ..ImpactCase::default()
+            },
+            model: ColumnModel::Coupled,
+            modes: Some(3),
+            end_time: Some(0.03),
+            tolerance: 1e-10,
+            ..ColumnCase::default()
+        };
+        let r = run(&case);
+        let ColumnDetail::Coupled(d) = r.detail else {
+            panic!()
+        };
+        assert_eq!(d.contact_count, contacts, "l = {l}");
+        let got = [
+            d.max_force,
+            d.max_contact_deformation,
+            d.max_midpoint_displacement,
+            d.first_contact_duration.unwrap(),
+            d.rebound_velocity,
+            d.column_energy_after_contact,
+            d.rock_velocity_end,
+            d.column_energy_end,
+        ];
+        for (i, (g, w)) in got.iter().zip(want).enumerate() {
+            close(&format!("l={l}[{i}]"), *g, w, 1e-5, 0.0);
+        }
+    }
+}

@@ -419,6 +419,7 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
     };
 
     let mut in_contact = true;
+    let mut switches: u64 = 0;
     while t < t_end {
         if st.steps % 1000 == 999 {
             control.check()?;
@@ -446,9 +447,24 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
             4,
             true,
         );
-        if let Some(&th) = hit.first() {
-            let (t0, h) = st.last_step();
-            let te = (t0 + th * h).max(t_save);
+        let (t0, h) = st.last_step();
+        // An event must move time forward (a grazing δ ≈ 0 at the very start of a step would
+        // otherwise switch back and forth without progress).
+        let event = hit
+            .first()
+            .map(|&th| t0 + th * h)
+            .filter(|&te| te > t_save + 1e-13 * h.max(t_save.abs() * 1e-3));
+        if let Some(te) = event {
+            switches += 1;
+            if switches % 64 == 0 {
+                control.check()?;
+            }
+            if switches > input.max_steps {
+                return Err(PhysicsError::TooManySteps {
+                    estimated: switches as f64 * t_end / t_save.max(f64::MIN_POSITIVE),
+                    limit: input.max_steps as f64,
+                });
+            }
             // Redo the integration from the start of the step to the event exactly.
             y.copy_from_slice(&ysave);
             t = t_save;
