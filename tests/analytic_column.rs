@@ -912,3 +912,111 @@ fn multiple_contacts_match_reference() {
         }
     }
 }
+
+/// Johnson law with two-body E* and the Hertz corner (r_c = 0.02, exact elliptical κ), n = 3,
+/// default window, end to end through `solve_column`, against reference.py (`coupled`).
+#[test]
+fn johnson_and_hertz_coupled_match_reference() {
+    use gangue::physics::column::solve_column;
+    let rows = [
+        (
+            ContactLaw::Johnson,
+            [
+                853041.3992321247,
+                0.0011924363834180398,
+                0.0013340691487332271,
+                0.0013017234825012523,
+                -4.617894417409472,
+                124.03002863492566,
+                123.9077012301608,
+            ],
+            0.04790780535598845,
+        ),
+        (
+            ContactLaw::HertzPoint,
+            [
+                361906.2996703555,
+                0.0052064939306911825,
+                0.0005216430914639299,
+                0.003387354080647496,
+                -4.992074103099993,
+                2.672631025400526,
+                2.663767495750376,
+            ],
+            0.1603175802778307,
+        ),
+    ];
+    for (law, want, window) in rows {
+        let case = ColumnCase {
+            impact: ImpactCase {
+                contact: ContactModel {
+                    law,
+                    modulus: ModulusConvention::TwoBody,
+                    hertz_exact: true,
+                },
+                ..ImpactCase::default()
+            },
+            model: ColumnModel::Coupled,
+            modes: Some(3),
+            tolerance: 1e-10,
+            ..ColumnCase::default()
+        };
+        let r = solve_column(&case, &Control::unlimited()).unwrap();
+        let ColumnDetail::Coupled(d) = r.detail else {
+            panic!()
+        };
+        close("window", d.end_time, window, 1e-7, 0.0);
+        assert_eq!(d.contact_count, 1);
+        let got = [
+            d.max_force,
+            d.max_contact_deformation,
+            d.max_midpoint_displacement,
+            d.first_contact_duration.unwrap(),
+            d.rebound_velocity,
+            d.column_energy_after_contact,
+            d.column_energy_end,
+        ];
+        for (i, (g, w)) in got.iter().zip(want).enumerate() {
+            close(&format!("{law:?}[{i}]"), *g, w, 1e-5, 0.0);
+        }
+    }
+}
+
+/// Coupled stresses: with one mode the curvature is proportional to w_mid, so the located
+/// curvature extrema must equal w_mid_max·φ₁″(x)/(φ₁(½)l²) (x = 0: φ₁″ = 2λ₁²).
+#[test]
+fn coupled_single_mode_stress_is_consistent() {
+    use gangue::physics::beam::BeamMode;
+    let r = run(&coupled_case(1));
+    let ColumnDetail::Coupled(d) = r.detail else {
+        panic!()
+    };
+    let m = BeamMode::clamped(1);
+    let (l, es, d1) = (1.31f64, 208e9, 0.25);
+    let f = es * d1 / 2.0 / (l * l) * d.max_midpoint_displacement / m.shape(0.5);
+    let lam = m.lambda;
+    close(
+        "clamp",
+        r.max_bending_stress.clamp,
+        f * 2.0 * lam * lam,
+        1e-9,
+        0.0,
+    );
+    close(
+        "mid",
+        r.max_bending_stress.midpoint,
+        f * m.curvature(0.5).abs(),
+        1e-9,
+        0.0,
+    );
+    close(
+        "utilisation",
+        r.stress_utilisation,
+        r.max_bending_stress
+            .clamp
+            .max(r.max_bending_stress.midpoint)
+            / 345e6,
+        1e-15,
+        0.0,
+    );
+}
