@@ -102,11 +102,13 @@ fn tolerance_table() {
     println!("|---|---|---|---|---|---|---|");
     for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12] {
         let d = get(tol);
-        let reps = ((2000.0 / d.steps as f64).ceil() as usize).clamp(20, 400);
+        // repeat for at least 1.5 s so that the 10 ms CPU-time ticks resolve to 1 %
         let cpu0 = thread_cpu_seconds();
         let start = Instant::now();
-        for _ in 0..reps {
+        let mut reps = 0usize;
+        while reps < 5 || start.elapsed().as_secs_f64() < 1.5 {
             black_box(get(tol));
+            reps += 1;
         }
         let ms = start.elapsed().as_secs_f64() * 1e3 / reps as f64;
         let cpu = match (cpu0, thread_cpu_seconds()) {
