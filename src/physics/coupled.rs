@@ -184,6 +184,108 @@ impl OdeSystem for System {
     }
 }
 
+/// Exact propagator of the free column (no contact): z = [w, ẇ], z′ = A z.
+///
+/// Φ = e^{Ah} and the dissipation Gramian G = ∫₀ʰ e^{Aᵀs} Q e^{As} ds (Q = diag(0, C)) come
+/// from one matrix exponential each (Van Loan's block form), so a step costs a mat-vec and a
+/// quadratic form; within a step the state is the Taylor series of e^{Aτ}z (‖Aτ‖ ≲ 0.8).
+struct FreeFlight {
+    a: DMatrix<f64>,
+    phi: DMatrix<f64>,
+    gram: DMatrix<f64>,
+    h: f64,
+    c: Vec<f64>,
+    n: usize,
+}
+
+impl FreeFlight {
+    fn new(minv: &DMatrix<f64>, k: &[f64], c: &[f64], omega_max: f64) -> Self {
+        let n = k.len();
+        let mut a = DMatrix::zeros(2 * n, 2 * n);
+        for i in 0..n {
+            a[(i, n + i)] = 1.0;
+            for j in 0..n {
+                a[(n + i, j)] = -minv[(i, j)] * k[j];
+                a[(n + i, n + j)] = -minv[(i, j)] * c[j];
+            }
+        }
+        // Eight steps per period of the highest mode (and at most 1/(4ζω) for heavy damping).
+        let rate = (0..n).map(|i| -a[(n + i, n + i)]).fold(0.0f64, f64::max);
+        let h = (2.0 * std::f64::consts::PI / omega_max / 8.0).min(0.25 / rate.max(1e-300));
+        let phi = (&a * h).exp();
+        let mut big = DMatrix::zeros(4 * n, 4 * n);
+        for i in 0..2 * n {
+            for j in 0..2 * n {
+                big[(i, j)] = -a[(j, i)] * h;
+                big[(2 * n + i, 2 * n + j)] = a[(i, j)] * h;
+            }
+        }
+        for i in 0..n {
+            big[(n + i, 3 * n + i)] = c[i] * h;
+        }
+        let e = big.exp();
+        let f12 = e.view((0, 2 * n), (2 * n, 2 * n)).into_owned();
+        let f22 = e.view((2 * n, 2 * n), (2 * n, 2 * n)).into_owned();
+        let gram = f22.transpose() * f12;
+        let gram = (&gram + gram.transpose()) * 0.5;
+        Self {
+            a,
+            phi,
+            gram,
+            h,
+            c: c.to_vec(),
+            n,
+        }
+    }
+
+    /// e^{Aτ}z and (when `dissipation`) ∫₀^τ ẇᵀCẇ ds for 0 ≤ τ ≤ h, by 30 Taylor terms.
+    fn taylor(&self, z: &[f64], tau: f64, dissipation: bool) -> (DVector<f64>, f64) {
+        const TERMS: usize = 30;
+        let n = self.n;
+        let mut terms: Vec<DVector<f64>> = Vec::with_capacity(TERMS);
+        terms.push(DVector::from_column_slice(z));
+        for k in 1..TERMS {
+            let next = (&self.a * &terms[k - 1]) * (tau / k as f64);
+            terms.push(next);
+        }
+        let mut out = DVector::zeros(2 * n);
+        for t in terms.iter().rev() {
+            out += t;
+        }
+        let mut d = 0.0;
+        if !dissipation {
+            return (out, 0.0);
+        }
+        for (j, tj) in terms.iter().enumerate() {
+            for (k, tk) in terms.iter().enumerate() {
+                let mut s = 0.0;
+                for i in 0..n {
+                    s += self.c[i] * tj[n + i] * tk[n + i];
+                }
+                d += s / (j + k + 1) as f64;
+            }
+        }
+        (out, d * tau)
+    }
+}
+
+/// A linear functional Σ aᵢ·y_{idxᵢ} of the state, as (index, coefficient) pairs.
+type Functional = Vec<(usize, f64)>;
+/// Records one history sample (result, time, state, in contact).
+type Recorder<'a> = dyn Fn(&mut CoupledResult, f64, &[f64], bool) + 'a;
+/// Applies a functional to a state.
+type Apply<'a> = dyn Fn(&[(usize, f64)], &[f64]) -> f64 + 'a;
+
+/// Cubic Hermite interpolant on θ ∈ [0, 1] from end values and end slopes (per unit θ).
+fn hermite(g0: f64, d0: f64, g1: f64, d1: f64, th: f64) -> f64 {
+    let t2 = th * th;
+    let t3 = t2 * th;
+    (2.0 * t3 - 3.0 * t2 + 1.0) * g0
+        + (t3 - 2.0 * t2 + th) * d0
+        + (-2.0 * t3 + 3.0 * t2) * g1
+        + (t3 - t2) * d1
+}
+
 /// Runs the coupled impact (physics.md §B.7) over [0, end_time].
 ///
 /// Events located on the dense output: separation (δ ↓ 0, terminal), re-contact (δ ↑ 0,
@@ -420,7 +522,46 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
 
     let mut in_contact = true;
     let mut switches: u64 = 0;
+    let omega_max = 2.0
+        * std::f64::consts::PI
+        * super::beam::generalized_frequencies(
+            &mass,
+            &DMatrix::from_diagonal(&DVector::from_column_slice(&sys.k)),
+        )
+        .last()
+        .copied()
+        .unwrap_or(0.0);
+    let mut free: Option<FreeFlight> = None;
     while t < t_end {
+        if !in_contact && omega_max > 0.0 {
+            let ff = free.get_or_insert_with(|| FreeFlight::new(&minv, &sys.k, &sys.c, omega_max));
+            let (recontact, t_new) = free_flight(
+                ff,
+                &sys,
+                &mut y,
+                t,
+                t_end,
+                &mut res,
+                &mut next_sample,
+                samples,
+                &record,
+                &apply,
+                &[&f_wmid, &f_c0, &f_cm],
+                &[&f_wmid_rate, &f_c0_rate, &f_cm_rate],
+                &mut st,
+                control,
+                input.max_steps,
+            )?;
+            t = t_new;
+            if recontact {
+                res.contact_count += 1;
+                in_contact = true;
+                sys.in_contact.set(true);
+                st.reset();
+                st.h = st.h.max(input.time_scale * 1e-6);
+            }
+            continue;
+        }
         if st.steps % 1000 == 999 {
             control.check()?;
         }
@@ -549,6 +690,147 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
     res.steps = st.steps;
     res.rejected_steps = st.rejected;
     Ok(res)
+}
+
+/// Free flight of the rock beside the freely vibrating column, from (t, y) until re-contact
+/// (δ ↑ 0, returns `true`) or `t_end`, by the exact propagator; records extrema and samples.
+#[allow(clippy::too_many_arguments)]
+fn free_flight(
+    ff: &FreeFlight,
+    sys: &System,
+    y: &mut [f64],
+    mut t: f64,
+    t_end: f64,
+    res: &mut CoupledResult,
+    next_sample: &mut usize,
+    samples: &[f64],
+    record: &Recorder,
+    apply: &Apply,
+    values: &[&Functional; 3],
+    rates: &[&Functional; 3],
+    st: &mut Dopri5,
+    control: &Control,
+    max_steps: u64,
+) -> PhysicsResult<(bool, f64)> {
+    let n = ff.n;
+    let zl = 2 * n;
+    let dim = y.len();
+    let delta = |yy: &[f64]| yy[0] - (0..n).map(|j| sys.phi[j] * yy[2 + j]).sum::<f64>();
+    // ẏ of the free system (u̇, 0, Az, ·): slopes of the linear functionals.
+    let deriv = |yy: &[f64]| {
+        let az = &ff.a * DVector::from_column_slice(&yy[2..2 + zl]);
+        let mut d = vec![0.0; dim];
+        d[0] = yy[1];
+        d[2..2 + zl].copy_from_slice(az.as_slice());
+        d
+    };
+    // State at θ of a step of size h from y0.
+    let at = |y0: &[f64], h: f64, th: f64, dissipation: bool| {
+        let (z, dd) = ff.taylor(&y0[2..2 + zl], th * h, dissipation);
+        let mut out = y0.to_vec();
+        out[0] = y0[0] + y0[1] * th * h;
+        out[2..2 + zl].copy_from_slice(z.as_slice());
+        out[dim - 1] = y0[dim - 1] + dd;
+        out
+    };
+    loop {
+        if t >= t_end {
+            return Ok((false, t));
+        }
+        st.steps += 1;
+        if st.steps % 1000 == 999 {
+            control.check()?;
+        }
+        if st.steps >= max_steps {
+            return Err(PhysicsError::TooManySteps {
+                estimated: st.steps as f64 * t_end / t.max(f64::MIN_POSITIVE),
+                limit: max_steps as f64,
+            });
+        }
+        let last = t + ff.h >= t_end;
+        let h = if last { t_end - t } else { ff.h };
+        let y0 = y.to_vec();
+        let y1 = if last {
+            at(&y0, h, 1.0, true)
+        } else {
+            let z0 = DVector::from_column_slice(&y0[2..2 + zl]);
+            let z1 = &ff.phi * &z0;
+            let dd = z0.dot(&(&ff.gram * &z0));
+            let mut out = y0.clone();
+            out[0] = y0[0] + y0[1] * h;
+            out[2..2 + zl].copy_from_slice(z1.as_slice());
+            out[dim - 1] = y0[dim - 1] + dd;
+            out
+        };
+        let (dy0, dy1) = (deriv(&y0), deriv(&y1));
+        // Re-contact: δ crossing upward; Hermite to detect, the exact series to locate.
+        let (g0, g1) = (delta(&y0), delta(&y1));
+        let (s0, s1) = (h * delta(&dy0), h * delta(&dy1));
+        let herm = |th: f64| hermite(g0, s0, g1, s1, th);
+        let mut th_end = 1.0;
+        let mut recontact = false;
+        if !find_roots(herm, g0, g1, 1, 4, true).is_empty() {
+            let exact = |th: f64| delta(&at(&y0, h, th, false));
+            if let Some(&th) = find_roots(exact, g0, g1, 1, 8, true).first() {
+                th_end = th;
+                recontact = true;
+            }
+        }
+        // Extrema of w_mid and of the curvatures within [0, th_end].
+        for k in 0..3 {
+            let (r0, r1) = (apply(rates[k], &y0), apply(rates[k], &y1));
+            let (q0, q1) = (h * apply(rates[k], &dy0), h * apply(rates[k], &dy1));
+            let herm = |th: f64| hermite(r0, q0, r1, q1, th);
+            let mut best: f64 = 0.0;
+            for th in find_roots(herm, r0, r1, 0, 4, false) {
+                if th <= th_end {
+                    best = best.max(apply(values[k], &at(&y0, h, th, false)).abs());
+                }
+            }
+            let target = match k {
+                0 => &mut res.max_midpoint_displacement,
+                1 => &mut res.max_curvature_clamp,
+                _ => &mut res.max_curvature_midpoint,
+            };
+            *target = target.max(best);
+        }
+        let y_end = if recontact {
+            at(&y0, h, th_end, true)
+        } else {
+            y1
+        };
+        let t_next = if recontact {
+            t + th_end * h
+        } else if last {
+            t_end
+        } else {
+            t + h
+        };
+        while *next_sample < samples.len() && samples[*next_sample] <= t_next {
+            let ts = samples[*next_sample];
+            let ys = if ts >= t_next {
+                y_end.clone()
+            } else {
+                at(&y0, h, ((ts - t) / h).clamp(0.0, 1.0), true)
+            };
+            record(res, ts, &ys, false);
+            *next_sample += 1;
+        }
+        for k in 0..3 {
+            let v = apply(values[k], &y_end).abs();
+            let target = match k {
+                0 => &mut res.max_midpoint_displacement,
+                1 => &mut res.max_curvature_clamp,
+                _ => &mut res.max_curvature_midpoint,
+            };
+            *target = target.max(v);
+        }
+        y.copy_from_slice(&y_end);
+        t = t_next;
+        if recontact {
+            return Ok((true, t));
+        }
+    }
 }
 
 #[cfg(test)]
