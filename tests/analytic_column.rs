@@ -833,3 +833,190 @@ fn verification_cases_through_solve_column() {
     // the default window is 50 × the rigid contact duration (1.1081705 ms)
     close("window", c.end_time, 50.0 * 1.1081705e-3, 1e-7, 0.0);
 }
+
+/// Re-contact: a slender column (D 0.15/0.12 m, l = 2.5 and 4 m) struck by a 81 kg rock
+/// swings back into it; contact counts and all maxima against reference.py (`coupled`,
+/// n_modes 3, zeta1 0.01, rho_rock 3000, R 0.075, t_window 0.03).
+#[test]
+fn multiple_contacts_match_reference() {
+    let rows = [
+        (
+            2.5,
+            5u32,
+            [
+                537860.6806225762,
+                0.0010878741785311022,
+                0.006211685033863703,
+                0.0008719500959472883,
+                1.89679686604717,
+                857.662377386053,
+                -4.350564329768802,
+                120.78864862651581,
+            ],
+        ),
+        (
+            4.0,
+            4,
+            [
+                619085.3027653979,
+                0.0012351303631822955,
+                0.012057917445353315,
+                0.0007854518651571942,
+                1.3389367568588613,
+                936.3496470248072,
+                -4.718483604461201,
+                44.131179295919836,
+            ],
+        ),
+    ];
+    for (l, contacts, want) in rows {
+        let case = ColumnCase {
+            impact: ImpactCase {
+                rock: Rock {
+                    density: 3000.0,
+                    ..Rock::default()
+                },
+                column: Column {
+                    outer_diameter: 0.15,
+                    inner_diameter: 0.12,
+                    length: l,
+                    contact_radius: 0.075,
+                    damping: Damping::Ratio(0.01),
+                    ..Column::default()
+                },
+                ..ImpactCase::default()
+            },
+            model: ColumnModel::Coupled,
+            modes: Some(3),
+            end_time: Some(0.03),
+            tolerance: 1e-10,
+            ..ColumnCase::default()
+        };
+        let r = run(&case);
+        let ColumnDetail::Coupled(d) = r.detail else {
+            panic!()
+        };
+        assert_eq!(d.contact_count, contacts, "l = {l}");
+        let got = [
+            d.max_force,
+            d.max_contact_deformation,
+            d.max_midpoint_displacement,
+            d.first_contact_duration.unwrap(),
+            d.rebound_velocity,
+            d.column_energy_after_contact,
+            d.rock_velocity_end,
+            d.column_energy_end,
+        ];
+        for (i, (g, w)) in got.iter().zip(want).enumerate() {
+            close(&format!("l={l}[{i}]"), *g, w, 1e-5, 0.0);
+        }
+    }
+}
+
+/// Johnson law with two-body E* and the Hertz corner (r_c = 0.02, exact elliptical κ), n = 3,
+/// default window, end to end through `solve_column`, against reference.py (`coupled`).
+#[test]
+fn johnson_and_hertz_coupled_match_reference() {
+    use gangue::physics::column::solve_column;
+    let rows = [
+        (
+            ContactLaw::Johnson,
+            [
+                853041.3992321247,
+                0.0011924363834180398,
+                0.0013340691487332271,
+                0.0013017234825012523,
+                -4.617894417409472,
+                124.03002863492566,
+                123.9077012301608,
+            ],
+            0.04790780535598845,
+        ),
+        (
+            ContactLaw::HertzPoint,
+            [
+                361906.2996703555,
+                0.0052064939306911825,
+                0.0005216430914639299,
+                0.003387354080647496,
+                -4.992074103099993,
+                2.672631025400526,
+                2.663767495750376,
+            ],
+            0.1603175802778307,
+        ),
+    ];
+    for (law, want, window) in rows {
+        let case = ColumnCase {
+            impact: ImpactCase {
+                contact: ContactModel {
+                    law,
+                    modulus: ModulusConvention::TwoBody,
+                    hertz_exact: true,
+                },
+                ..ImpactCase::default()
+            },
+            model: ColumnModel::Coupled,
+            modes: Some(3),
+            tolerance: 1e-10,
+            ..ColumnCase::default()
+        };
+        let r = solve_column(&case, &Control::unlimited()).unwrap();
+        let ColumnDetail::Coupled(d) = r.detail else {
+            panic!()
+        };
+        close("window", d.end_time, window, 1e-7, 0.0);
+        assert_eq!(d.contact_count, 1);
+        let got = [
+            d.max_force,
+            d.max_contact_deformation,
+            d.max_midpoint_displacement,
+            d.first_contact_duration.unwrap(),
+            d.rebound_velocity,
+            d.column_energy_after_contact,
+            d.column_energy_end,
+        ];
+        for (i, (g, w)) in got.iter().zip(want).enumerate() {
+            close(&format!("{law:?}[{i}]"), *g, w, 1e-5, 0.0);
+        }
+    }
+}
+
+/// Coupled stresses: with one mode the curvature is proportional to w_mid, so the located
+/// curvature extrema must equal w_mid_max·φ₁″(x)/(φ₁(½)l²) (x = 0: φ₁″ = 2λ₁²).
+#[test]
+fn coupled_single_mode_stress_is_consistent() {
+    use gangue::physics::beam::BeamMode;
+    let r = run(&coupled_case(1));
+    let ColumnDetail::Coupled(d) = r.detail else {
+        panic!()
+    };
+    let m = BeamMode::clamped(1);
+    let (l, es, d1) = (1.31f64, 208e9, 0.25);
+    let f = es * d1 / 2.0 / (l * l) * d.max_midpoint_displacement / m.shape(0.5);
+    let lam = m.lambda;
+    close(
+        "clamp",
+        r.max_bending_stress.clamp,
+        f * 2.0 * lam * lam,
+        1e-9,
+        0.0,
+    );
+    close(
+        "mid",
+        r.max_bending_stress.midpoint,
+        f * m.curvature(0.5).abs(),
+        1e-9,
+        0.0,
+    );
+    close(
+        "utilisation",
+        r.stress_utilisation,
+        r.max_bending_stress
+            .clamp
+            .max(r.max_bending_stress.midpoint)
+            / 345e6,
+        1e-15,
+        0.0,
+    );
+}

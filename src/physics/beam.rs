@@ -111,6 +111,12 @@ impl BeamMode {
     }
 
     /// φ(x), dimensionless.
+    ///
+    /// # Examples
+    /// ```
+    /// let m = gangue::physics::beam::BeamMode::clamped(1);
+    /// assert!((m.shape(0.5) - 1.588146262064605).abs() < 1e-14);
+    /// ```
     pub fn shape(&self, x: f64) -> f64 {
         let (a, b, c, s) = self.parts(x);
         a + b - c + self.sigma * s
@@ -515,6 +521,15 @@ impl FreeVibration {
     ///
     /// The dissipated energy is the closed-form ∫₀ᵗCẇ²dτ
     /// = C w₀²ω_n²·[−expm1(−2σt) − 2σE_SE_C − 2σ²E_S²]/(4σ), not U₀ − T − U.
+    ///
+    /// # Examples
+    /// ```
+    /// use gangue::physics::beam::FreeVibration;
+    /// let fv = FreeVibration::new(2.0, 3.0, 800.0, 0.01);
+    /// let s = fv.sample(0.3);
+    /// let total = s.kinetic + s.strain + s.dissipated;
+    /// assert!((total - fv.initial_energy()).abs() < 1e-12 * fv.initial_energy());
+    /// ```
     ///
     /// # Special cases
     /// C = 0 gives a dissipated energy of exactly 0.

@@ -252,6 +252,20 @@ fn max_deformation_and_force(impact: &ImpactResult) -> (f64, f64) {
 
 /// Solves `/v1/column`: the impact (contact module), then the decoupled or coupled column model.
 ///
+/// # Examples
+/// ```
+/// use gangue::physics::{Control, column::{solve_column, ColumnCase, ColumnDetail}};
+/// let r = solve_column(&ColumnCase::default(), &Control::unlimited()).unwrap();
+/// let ColumnDetail::Decoupled(d) = r.detail else { panic!() };
+/// assert!((d.energy_ratio - 1.4712097663375543).abs() < 1e-9); // P07
+/// ```
+///
+/// # Special cases
+/// * No damping (c = 0 or ζ₁ = 0): `decay_time_1pct` is `None` with the warning `no_damping`.
+/// * The paper's c = 1 N·s/m²: warning `paper_damping`; a decoupled energy ratio above 1:
+///   warning `energy_ratio_above_one`; a coupled first contact still open at the end of the
+///   window: warning `contact_not_ended` (first-contact quantities then at the end).
+///
 /// # Errors
 /// * `CapacityExceeded` from the impact, or when the coupled approach reaches δ_cap;
 /// * `InvalidInput` for option combinations api.md rejects (see [`solve_column_with_impact`]);
@@ -531,7 +545,15 @@ fn decoupled(
         Grid::Times(t) => t.iter().map(|&t| fv.sample(t)).collect(),
     });
     let history = samples.map(|samples: Vec<_>| {
-        let mut h = ColumnHistory::default();
+        let n = samples.len();
+        let mut h = ColumnHistory {
+            time: Vec::with_capacity(n),
+            midpoint_displacement: Vec::with_capacity(n),
+            kinetic_energy: Vec::with_capacity(n),
+            strain_energy: Vec::with_capacity(n),
+            dissipated_energy: Vec::with_capacity(n),
+            rock: None,
+        };
         for s in samples {
             let t = s.time;
             h.time.push(t);

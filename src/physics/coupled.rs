@@ -136,7 +136,8 @@ struct System {
     m: f64,
     law: ForceLaw,
     phi: Vec<f64>,
-    minv: DMatrix<f64>,
+    /// M⁻¹ row-major, n × n.
+    minv: Vec<f64>,
     k: Vec<f64>,
     c: Vec<f64>,
     n: usize,
@@ -174,16 +175,157 @@ impl OdeSystem for System {
             dis += self.c[j] * wd * wd;
             dy[2 + j] = wd;
         }
-        for i in 0..n {
-            let mut s = 0.0;
-            for j in 0..n {
-                s += self.minv[(i, j)] * f[j];
-            }
-            dy[2 + n + i] = s;
+        let f = &f[..n];
+        for (i, row) in self.minv.chunks_exact(n).enumerate() {
+            dy[2 + n + i] = row.iter().zip(f).map(|(a, b)| a * b).sum();
         }
         dy[2 + 2 * n] = dis;
         true
     }
+}
+
+/// Exact propagator of the free column (no contact): z = [w, ẇ], z′ = A z.
+///
+/// Φ = e^{Ah} and the dissipation Gramian G = ∫₀ʰ e^{Aᵀs} Q e^{As} ds (Q = diag(0, C)) come
+/// from one matrix exponential each (Van Loan's block form), so a step costs a mat-vec and a
+/// quadratic form; within a step the state is the Taylor series of e^{Aτ}z (‖Aτ‖ ≲ 0.8).
+struct FreeFlight {
+    a: DMatrix<f64>,
+    phi: DMatrix<f64>,
+    gram: DMatrix<f64>,
+    h: f64,
+    c: Vec<f64>,
+    n: usize,
+}
+
+impl FreeFlight {
+    fn new(minv: &DMatrix<f64>, k: &[f64], c: &[f64], omega_max: f64) -> Self {
+        let n = k.len();
+        let mut a = DMatrix::zeros(2 * n, 2 * n);
+        for i in 0..n {
+            a[(i, n + i)] = 1.0;
+            for j in 0..n {
+                a[(n + i, j)] = -minv[(i, j)] * k[j];
+                a[(n + i, n + j)] = -minv[(i, j)] * c[j];
+            }
+        }
+        // Eight steps per period of the highest mode (the caller uses this propagator only when
+        // the damping rate is below 2/h, so that the in-step Taylor series converge quickly).
+        let h = 2.0 * std::f64::consts::PI / omega_max / 8.0;
+        let phi = (&a * h).exp();
+        let mut big = DMatrix::zeros(4 * n, 4 * n);
+        for i in 0..2 * n {
+            for j in 0..2 * n {
+                big[(i, j)] = -a[(j, i)] * h;
+                big[(2 * n + i, 2 * n + j)] = a[(i, j)] * h;
+            }
+        }
+        for i in 0..n {
+            big[(n + i, 3 * n + i)] = c[i] * h;
+        }
+        let e = big.exp();
+        let f12 = e.view((0, 2 * n), (2 * n, 2 * n)).into_owned();
+        let f22 = e.view((2 * n, 2 * n), (2 * n, 2 * n)).into_owned();
+        let gram = f22.transpose() * f12;
+        let gram = (&gram + gram.transpose()) * 0.5;
+        Self {
+            a,
+            phi,
+            gram,
+            h,
+            c: c.to_vec(),
+            n,
+        }
+    }
+
+    /// e^{Aτ}z into `out` without allocating (`term`, `next`: scratch of length 2n); stops when
+    /// the Taylor term is below 1e-17 of the sum in both halves (w and ẇ), at most 40 terms.
+    fn propagate_into(
+        &self,
+        z: &[f64],
+        tau: f64,
+        out: &mut [f64],
+        term: &mut [f64],
+        next: &mut [f64],
+    ) {
+        let zl = 2 * self.n;
+        let a = self.a.as_slice();
+        out.copy_from_slice(z);
+        term.copy_from_slice(z);
+        for k in 1..40 {
+            next.fill(0.0);
+            for (j, &tj) in term.iter().enumerate() {
+                if tj != 0.0 {
+                    for (o, &aij) in next.iter_mut().zip(&a[j * zl..(j + 1) * zl]) {
+                        *o += aij * tj;
+                    }
+                }
+            }
+            let f = tau / k as f64;
+            let (mut tw, mut tv, mut ow, mut ov) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+            for i in 0..zl {
+                term[i] = next[i] * f;
+                out[i] += term[i];
+                if i < self.n {
+                    tw = tw.max(term[i].abs());
+                    ow = ow.max(out[i].abs());
+                } else {
+                    tv = tv.max(term[i].abs());
+                    ov = ov.max(out[i].abs());
+                }
+            }
+            if k >= 4 && tw <= 1e-17 * ow && tv <= 1e-17 * ov {
+                break;
+            }
+        }
+    }
+
+    /// e^{Aτ}z and (when `dissipation`) ∫₀^τ ẇᵀCẇ ds for 0 ≤ τ ≤ h, by 30 Taylor terms.
+    fn taylor(&self, z: &[f64], tau: f64, dissipation: bool) -> (DVector<f64>, f64) {
+        const TERMS: usize = 30;
+        let n = self.n;
+        let mut terms: Vec<DVector<f64>> = Vec::with_capacity(TERMS);
+        terms.push(DVector::from_column_slice(z));
+        for k in 1..TERMS {
+            let next = (&self.a * &terms[k - 1]) * (tau / k as f64);
+            terms.push(next);
+        }
+        let mut out = DVector::zeros(2 * n);
+        for t in terms.iter().rev() {
+            out += t;
+        }
+        let mut d = 0.0;
+        if !dissipation {
+            return (out, 0.0);
+        }
+        for (j, tj) in terms.iter().enumerate() {
+            for (k, tk) in terms.iter().enumerate() {
+                let mut s = 0.0;
+                for i in 0..n {
+                    s += self.c[i] * tj[n + i] * tk[n + i];
+                }
+                d += s / (j + k + 1) as f64;
+            }
+        }
+        (out, d * tau)
+    }
+}
+
+/// A linear functional Σ aᵢ·y_{idxᵢ} of the state, as (index, coefficient) pairs.
+type Functional = Vec<(usize, f64)>;
+/// Records one history sample (result, time, state, in contact).
+type Recorder<'a> = dyn Fn(&mut CoupledResult, f64, &[f64], bool) + 'a;
+/// Applies a functional to a state.
+type Apply<'a> = dyn Fn(&[(usize, f64)], &[f64]) -> f64 + 'a;
+
+/// Cubic Hermite interpolant on θ ∈ [0, 1] from end values and end slopes (per unit θ).
+fn hermite(g0: f64, d0: f64, g1: f64, d1: f64, th: f64) -> f64 {
+    let t2 = th * th;
+    let t3 = t2 * th;
+    (2.0 * t3 - 3.0 * t2 + 1.0) * g0
+        + (t3 - 2.0 * t2 + th) * d0
+        + (-2.0 * t3 + 3.0 * t2) * g1
+        + (t3 - t2) * d1
 }
 
 /// Runs the coupled impact (physics.md §B.7) over [0, end_time].
@@ -192,6 +334,18 @@ impl OdeSystem for System {
 /// terminal), maxima of approach (δ̇ ↓ 0 in contact), extrema of w_mid and of the curvature at
 /// the clamp and the midpoint. A terminal event ends the step there and the integration restarts
 /// with the other right-hand side, so no step straddles the switch of the contact law.
+///
+/// In contact: Dormand–Prince 5(4) with dense output at relative tolerance `tolerance`. In
+/// flight (no contact force, a linear system): the exact propagator e^{Ah} at 1/8 of the
+/// shortest period, with the dissipated energy from Van Loan's Gramian; events there are
+/// detected on cubic Hermite interpolants and located on the Taylor series of e^{Aτ}. Heavily
+/// damped columns ((M⁻¹C)ᵢᵢ·h > 2) stay with the adaptive integrator in flight too.
+///
+/// # Special cases
+/// * The Hertz law has no capacity; the log laws stop at δ_cap.
+/// * A first contact that lasts past `end_time` leaves `first_contact_duration` at `None` and
+///   reports the rebound velocity and column energy at the end.
+/// * History samples at t = 0 are the initial state (rock at the column, at speed v).
 ///
 /// # Errors
 /// * `CapacityExceeded` when the approach reaches the log law's capacity δ_cap.
@@ -216,7 +370,7 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
         m: input.rock_mass,
         law: input.law,
         phi: active.iter().map(|&i| g.midpoint[i]).collect(),
-        minv,
+        minv: (0..n * n).map(|k| minv[(k / n, k % n)]).collect(),
         k: active.iter().map(|&i| g.stiffness[(i, i)]).collect(),
         c: active.iter().map(|&i| g.damping[(i, i)]).collect(),
         n,
@@ -377,11 +531,14 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
             (&f_cm_rate, &f_cm, 2),
         ] {
             let cr = st.functional(rate);
-            let cv = st.functional(val);
             let g = |th: f64| Dopri5::eval_functional(&cr, th);
             let mut best = apply(val, y1).abs();
-            for th in find_roots(g, apply(rate, y0), apply(rate, y1), 0, sub, false) {
-                best = best.max(Dopri5::eval_functional(&cv, th).abs());
+            let roots = find_roots(g, apply(rate, y0), apply(rate, y1), 0, sub, false);
+            if !roots.is_empty() {
+                let cv = st.functional(val);
+                for th in roots {
+                    best = best.max(Dopri5::eval_functional(&cv, th).abs());
+                }
             }
             let target = match slot {
                 0 => &mut res.max_midpoint_displacement,
@@ -412,7 +569,55 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
     };
 
     let mut in_contact = true;
+    let mut switches: u64 = 0;
+    let omega_max = 2.0
+        * std::f64::consts::PI
+        * super::beam::generalized_frequencies(
+            &mass,
+            &DMatrix::from_diagonal(&DVector::from_column_slice(&sys.k)),
+        )
+        .last()
+        .copied()
+        .unwrap_or(0.0);
+    let mut free: Option<FreeFlight> = None;
+    // The exact propagator steps at 1/8 of the shortest period; its in-step Taylor series need
+    // ‖Aτ‖ ≲ 1, so a damping rate (M⁻¹C)ᵢᵢ above 2/h (heavy damping) keeps the adaptive
+    // integrator in flight as well.
+    let damping_rate = (0..n)
+        .map(|i| minv[(i, i)] * sys.c[i])
+        .fold(0.0f64, f64::max);
+    let exact_flight =
+        omega_max > 0.0 && damping_rate * (2.0 * std::f64::consts::PI / omega_max / 8.0) <= 2.0;
     while t < t_end {
+        if !in_contact && exact_flight {
+            let ff = free.get_or_insert_with(|| FreeFlight::new(&minv, &sys.k, &sys.c, omega_max));
+            let (recontact, t_new) = free_flight(
+                ff,
+                &sys,
+                &mut y,
+                t,
+                t_end,
+                &mut res,
+                &mut next_sample,
+                samples,
+                &record,
+                &apply,
+                &[&f_wmid, &f_c0, &f_cm],
+                &[&f_wmid_rate, &f_c0_rate, &f_cm_rate],
+                &mut st,
+                control,
+                input.max_steps,
+            )?;
+            t = t_new;
+            if recontact {
+                res.contact_count += 1;
+                in_contact = true;
+                sys.in_contact.set(true);
+                st.reset();
+                st.h = st.h.max(input.time_scale * 1e-6);
+            }
+            continue;
+        }
         if st.steps % 1000 == 999 {
             control.check()?;
         }
@@ -439,9 +644,24 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
             4,
             true,
         );
-        if let Some(&th) = hit.first() {
-            let (t0, h) = st.last_step();
-            let te = (t0 + th * h).max(t_save);
+        let (t0, h) = st.last_step();
+        // An event must move time forward (a grazing δ ≈ 0 at the very start of a step would
+        // otherwise switch back and forth without progress).
+        let event = hit
+            .first()
+            .map(|&th| t0 + th * h)
+            .filter(|&te| te > t_save + 1e-13 * h.max(t_save.abs() * 1e-3));
+        if let Some(te) = event {
+            switches += 1;
+            if switches % 64 == 0 {
+                control.check()?;
+            }
+            if switches > input.max_steps {
+                return Err(PhysicsError::TooManySteps {
+                    estimated: switches as f64 * t_end / t_save.max(f64::MIN_POSITIVE),
+                    limit: input.max_steps as f64,
+                });
+            }
             // Redo the integration from the start of the step to the event exactly.
             y.copy_from_slice(&ysave);
             t = t_save;
@@ -528,6 +748,170 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
     Ok(res)
 }
 
+/// Free flight of the rock beside the freely vibrating column, from (t, y) until re-contact
+/// (δ ↑ 0, returns `true`) or `t_end`, by the exact propagator; records extrema and samples.
+#[allow(clippy::too_many_arguments)]
+fn free_flight(
+    ff: &FreeFlight,
+    sys: &System,
+    y: &mut [f64],
+    mut t: f64,
+    t_end: f64,
+    res: &mut CoupledResult,
+    next_sample: &mut usize,
+    samples: &[f64],
+    record: &Recorder,
+    apply: &Apply,
+    values: &[&Functional; 3],
+    rates: &[&Functional; 3],
+    st: &mut Dopri5,
+    control: &Control,
+    max_steps: u64,
+) -> PhysicsResult<(bool, f64)> {
+    let n = ff.n;
+    let zl = 2 * n;
+    let dim = y.len();
+    let delta = |yy: &[f64]| yy[0] - (0..n).map(|j| sys.phi[j] * yy[2 + j]).sum::<f64>();
+    // y ← M x for a column-major zl × zl matrix.
+    let matvec = |m: &[f64], x: &[f64], out: &mut [f64]| {
+        out.fill(0.0);
+        for (j, &xj) in x.iter().enumerate() {
+            if xj != 0.0 {
+                for (o, &mij) in out.iter_mut().zip(&m[j * zl..(j + 1) * zl]) {
+                    *o += mij * xj;
+                }
+            }
+        }
+    };
+    // ẏ of the free system (u̇, 0, Az, ·): slopes of the linear functionals.
+    let deriv = |yy: &[f64], d: &mut [f64]| {
+        d[0] = yy[1];
+        d[1] = 0.0;
+        matvec(ff.a.as_slice(), &yy[2..2 + zl], &mut d[2..2 + zl]);
+        d[dim - 1] = 0.0;
+    };
+    // State at θ of a step of size h from y0.
+    let at = |y0: &[f64], h: f64, th: f64, dissipation: bool| {
+        let (z, dd) = ff.taylor(&y0[2..2 + zl], th * h, dissipation);
+        let mut out = y0.to_vec();
+        out[0] = y0[0] + y0[1] * th * h;
+        out[2..2 + zl].copy_from_slice(z.as_slice());
+        out[dim - 1] = y0[dim - 1] + dd;
+        out
+    };
+    let (mut y0, mut y1) = (vec![0.0; dim], vec![0.0; dim]);
+    let (mut dy0, mut dy1) = (vec![0.0; dim], vec![0.0; dim]);
+    let mut gz = vec![0.0; zl];
+    let (mut ye, mut tb1, mut tb2) = (vec![0.0; dim], vec![0.0; zl], vec![0.0; zl]);
+    deriv(y, &mut dy0);
+    loop {
+        if t >= t_end {
+            return Ok((false, t));
+        }
+        st.steps += 1;
+        if st.steps % 1000 == 999 {
+            control.check()?;
+        }
+        if st.steps >= max_steps {
+            return Err(PhysicsError::TooManySteps {
+                estimated: st.steps as f64 * t_end / t.max(f64::MIN_POSITIVE),
+                limit: max_steps as f64,
+            });
+        }
+        let last = t + ff.h >= t_end;
+        let h = if last { t_end - t } else { ff.h };
+        y0.copy_from_slice(y);
+        if last {
+            y1.copy_from_slice(&at(&y0, h, 1.0, true));
+        } else {
+            y1[0] = y0[0] + y0[1] * h;
+            y1[1] = y0[1];
+            matvec(ff.phi.as_slice(), &y0[2..2 + zl], &mut y1[2..2 + zl]);
+            matvec(ff.gram.as_slice(), &y0[2..2 + zl], &mut gz);
+            let dd: f64 = gz.iter().zip(&y0[2..2 + zl]).map(|(a, b)| a * b).sum();
+            y1[dim - 1] = y0[dim - 1] + dd;
+        }
+        deriv(&y1, &mut dy1);
+        // Re-contact: δ crossing upward; Hermite to detect, the exact series to locate.
+        let (g0, g1) = (delta(&y0), delta(&y1));
+        let (s0, s1) = (h * delta(&dy0), h * delta(&dy1));
+        let herm = |th: f64| hermite(g0, s0, g1, s1, th);
+        let mut th_end = 1.0;
+        let mut recontact = false;
+        if !find_roots(herm, g0, g1, 1, 4, true).is_empty() {
+            let exact = |th: f64| delta(&at(&y0, h, th, false));
+            if let Some(&th) = find_roots(exact, g0, g1, 1, 8, true).first() {
+                th_end = th;
+                recontact = true;
+            }
+        }
+        // Extrema of w_mid and of the curvatures within [0, th_end].
+        for k in 0..3 {
+            let (r0, r1) = (apply(rates[k], &y0), apply(rates[k], &y1));
+            let (q0, q1) = (h * apply(rates[k], &dy0), h * apply(rates[k], &dy1));
+            let herm = |th: f64| hermite(r0, q0, r1, q1, th);
+            let mut best: f64 = 0.0;
+            for th in find_roots(herm, r0, r1, 0, 4, false) {
+                if th <= th_end {
+                    ff.propagate_into(
+                        &y0[2..2 + zl],
+                        th * h,
+                        &mut ye[2..2 + zl],
+                        &mut tb1,
+                        &mut tb2,
+                    );
+                    best = best.max(apply(values[k], &ye).abs());
+                }
+            }
+            let target = match k {
+                0 => &mut res.max_midpoint_displacement,
+                1 => &mut res.max_curvature_clamp,
+                _ => &mut res.max_curvature_midpoint,
+            };
+            *target = target.max(best);
+        }
+        let y_rc;
+        let y_end: &[f64] = if recontact {
+            y_rc = at(&y0, h, th_end, true);
+            &y_rc
+        } else {
+            &y1
+        };
+        let t_next = if recontact {
+            t + th_end * h
+        } else if last {
+            t_end
+        } else {
+            t + h
+        };
+        while *next_sample < samples.len() && samples[*next_sample] <= t_next {
+            let ts = samples[*next_sample];
+            let ys = if ts >= t_next {
+                y_end.to_vec()
+            } else {
+                at(&y0, h, ((ts - t) / h).clamp(0.0, 1.0), true)
+            };
+            record(res, ts, &ys, false);
+            *next_sample += 1;
+        }
+        for k in 0..3 {
+            let v = apply(values[k], y_end).abs();
+            let target = match k {
+                0 => &mut res.max_midpoint_displacement,
+                1 => &mut res.max_curvature_clamp,
+                _ => &mut res.max_curvature_midpoint,
+            };
+            *target = target.max(v);
+        }
+        y.copy_from_slice(y_end);
+        t = t_next;
+        if recontact {
+            return Ok((true, t));
+        }
+        std::mem::swap(&mut dy0, &mut dy1);
+    }
+}
+
 #[cfg(test)]
 mod tests_support {
     pub(super) use super::*;
@@ -565,6 +949,80 @@ mod tests_support {
 #[cfg(test)]
 mod tests {
     use super::tests_support::*;
+
+    /// The free-flight propagator: Φ and the Gramian against the Taylor series at τ = h, and
+    /// against a tight Dormand–Prince integration of the same linear system over 200 steps.
+    #[test]
+    fn free_flight_propagator_matches_integration() {
+        use crate::physics::material::{Column, Damping};
+        let col = Column {
+            damping: Damping::Coefficient(2e4),
+            ..Column::default()
+        };
+        let g = Galerkin::new(&col, 5, 2e4, true).unwrap();
+        let act = [0usize, 2, 4];
+        let mass = DMatrix::from_fn(3, 3, |i, j| g.mass[(act[i], act[j])]);
+        let minv = mass.clone().cholesky().unwrap().inverse();
+        let k: Vec<f64> = act.iter().map(|&i| g.stiffness[(i, i)]).collect();
+        let c: Vec<f64> = act.iter().map(|&i| g.damping[(i, i)]).collect();
+        let fmax = crate::physics::beam::generalized_frequencies(
+            &mass,
+            &DMatrix::from_diagonal(&DVector::from_column_slice(&k)),
+        )[2];
+        let ff = FreeFlight::new(&minv, &k, &c, 2.0 * std::f64::consts::PI * fmax);
+        let z0 = [1e-3, -2e-4, 5e-5, 0.3, 1.0, -2.0];
+        let (zt, dt) = ff.taylor(&z0, ff.h, true);
+        let zp = &ff.phi * DVector::from_column_slice(&z0);
+        let d = DVector::from_column_slice(&z0).dot(&(&ff.gram * DVector::from_column_slice(&z0)));
+        for i in 0..6 {
+            assert!((zt[i] - zp[i]).abs() < 1e-13 * (zp[i].abs() + 1e-3), "{i}");
+        }
+        assert!(((dt - d) / d).abs() < 1e-12, "{dt} vs {d}");
+        let (mut out, mut t1, mut t2) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+        ff.propagate_into(&z0, 0.37 * ff.h, &mut out, &mut t1, &mut t2);
+        let (zq, _) = ff.taylor(&z0, 0.37 * ff.h, false);
+        for i in 0..6 {
+            assert!((out[i] - zq[i]).abs() < 1e-14 * (zq[i].abs() + 1e-3), "{i}");
+        }
+        // 200 exact steps against Dormand–Prince at 1e-13.
+        struct Lin<'a>(&'a DMatrix<f64>, &'a [f64]);
+        impl OdeSystem for Lin<'_> {
+            fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) -> bool {
+                let z = DVector::from_column_slice(&y[..6]);
+                let az = self.0 * &z;
+                dy[..6].copy_from_slice(az.as_slice());
+                dy[6] = (0..3).map(|i| self.1[i] * y[3 + i] * y[3 + i]).sum();
+                true
+            }
+        }
+        let mut z = DVector::from_column_slice(&z0);
+        let mut dis = 0.0;
+        for _ in 0..200 {
+            dis += z.dot(&(&ff.gram * &z));
+            z = &ff.phi * &z;
+        }
+        let t_end = 200.0 * ff.h;
+        let mut y = z0.to_vec();
+        y.push(0.0);
+        let mut atol = vec![1e-16; 3];
+        atol.extend([1e-13; 3]);
+        atol.push(1e-13);
+        let mut st = Dopri5::new(1e-13, atol, ff.h / 10.0);
+        let sys = Lin(&ff.a, &c);
+        let mut t = 0.0;
+        while t < t_end {
+            t = st.step(&sys, t, &mut y, t_end).unwrap();
+        }
+        for i in 0..6 {
+            assert!(
+                (y[i] - z[i]).abs() < 1e-9 * (z[i].abs() + 1e-4),
+                "{i}: {} vs {}",
+                y[i],
+                z[i]
+            );
+        }
+        assert!(((y[6] - dis) / dis).abs() < 1e-9, "{} vs {dis}", y[6]);
+    }
 
     /// Contact energy closed form against Gauss–Legendre quadrature of P(δ).
     #[test]
@@ -620,40 +1078,6 @@ mod tests {
             // global energy error of the integrator: within 1e3 × the local tolerance
             assert!(r.energy_residual < 1e-7, "{}", r.energy_residual);
             assert!(r.energy_residual > 0.0);
-        }
-    }
-}
-#[cfg(test)]
-mod explore {
-    use super::tests_support::*;
-    #[test]
-    #[ignore]
-    fn explore_tolerance() {
-        for n in [3usize, 10] {
-            let reference = solve_coupled(&base_input(n, 1e-13), &Control::unlimited()).unwrap();
-            for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12] {
-                let t = std::time::Instant::now();
-                let r = solve_coupled(&base_input(n, tol), &Control::unlimited()).unwrap();
-                let el = t.elapsed();
-                let e = |a: f64, b: f64| ((a - b) / b).abs();
-                let err = e(r.max_force, reference.max_force)
-                    .max(e(
-                        r.column_energy_after_contact,
-                        reference.column_energy_after_contact,
-                    ))
-                    .max(e(
-                        r.first_contact_duration.unwrap(),
-                        reference.first_contact_duration.unwrap(),
-                    ))
-                    .max(e(
-                        r.max_midpoint_displacement,
-                        reference.max_midpoint_displacement,
-                    ));
-                println!(
-                    "n={n} tol={tol:e} steps={} rej={} resid={:.2e} err={:.2e} time={:?}",
-                    r.steps, r.rejected_steps, r.energy_residual, err, el
-                );
-            }
         }
     }
 }

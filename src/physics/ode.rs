@@ -234,6 +234,12 @@ impl Dopri5 {
 
     /// Advances (t, y) by one accepted step, not past `t_end`; returns the new t.
     ///
+    /// Error norm: RMS of errᵢ/(atolᵢ + rtol·max(|y₀ᵢ|, |y₁ᵢ|)); PI step-size control.
+    /// A right-hand side that reports a state outside its domain rejects the step (h ÷ 4).
+    ///
+    /// # References
+    /// Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.4 (control), §II.6 (dense output).
+    ///
     /// # Errors
     /// `StepTooSmall` when the step size underflows (1e-14·max(|t|, |h₀|)).
     pub fn step<S: OdeSystem>(
