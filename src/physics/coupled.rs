@@ -653,7 +653,7 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
             .filter(|&te| te > t_save + 1e-13 * h.max(t_save.abs() * 1e-3));
         if let Some(te) = event {
             switches += 1;
-            if switches % 64 == 0 {
+            if switches.is_multiple_of(64) {
                 control.check()?;
             }
             if switches > input.max_steps {
