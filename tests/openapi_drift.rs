@@ -37,6 +37,49 @@ fn every_request_field_documents_its_range_or_default() {
             assert!(has_doc, "{name}.{field} has no description");
         }
     }
+    // Every scalar request field carries a description and an example.
+    for (name, schema) in schemas {
+        if !(name.ends_with("Request") || name.ends_with("Dto")) || name.contains("History") {
+            continue;
+        }
+        let request_side = doc["paths"]
+            .as_object()
+            .unwrap()
+            .values()
+            .any(|p| p.to_string().contains(&format!("schemas/{name}\"")))
+            || [
+                "RockDto",
+                "ColumnDto",
+                "ContactDto",
+                "FaceDto",
+                "FloorDto",
+                "ReleaseDto",
+                "MonteCarloDto",
+                "DistributionDto",
+                "GalerkinDto",
+                "ColumnOutputDto",
+                "LumpedMassDto",
+                "RigidBlockDto",
+                "MigrationOutputDto",
+                "ImpactOutputDto",
+                "RandomShapeDto",
+                "ContourDto",
+            ]
+            .contains(&name.as_str());
+        if !request_side {
+            continue;
+        }
+        for (field, prop) in schema["properties"].as_object().into_iter().flatten() {
+            if prop.get("oneOf").is_some() || prop.get("$ref").is_some() {
+                continue;
+            }
+            assert!(
+                prop.get("description").is_some(),
+                "{name}.{field}: no description"
+            );
+            assert!(prop.get("example").is_some(), "{name}.{field}: no example");
+        }
+    }
     let v = &schemas["ImpactRequest"]["properties"]["velocity_m_s"];
     assert_eq!(v["default"], 5.0);
     assert_eq!(v["maximum"], 1000.0);

@@ -46,10 +46,10 @@ pub struct GalerkinDto {
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     pub modes: Option<u32>,
     /// Mode shapes (`paper` and `approx` are defined for mode 1 only: decoupled).
-    #[schema(default = "exact")]
+    #[schema(default = "exact", example = "exact")]
     pub mode_shapes: ModeShapesDto,
     /// Include the rotary inertia J₀ = ρ_s I.
-    #[schema(default = true)]
+    #[schema(default = true, example = true)]
     pub rotary_inertia: bool,
 }
 
@@ -100,7 +100,7 @@ pub struct ColumnRequest {
     /// The contact model.
     pub contact: ContactDto,
     /// Decoupled (the paper's method) or coupled.
-    #[schema(default = "decoupled")]
+    #[schema(default = "decoupled", example = "decoupled")]
     pub model: ColumnModelDto,
     /// Galerkin modes.
     pub galerkin: GalerkinDto,

@@ -158,12 +158,12 @@ pub struct RandomShapeDto {
     #[schema(example = json!([0.2, 0.15, 0.1]))]
     pub semi_axes_m: [f64; 3],
     /// Number of points drawn on the ellipsoid.
-    #[schema(default = 20, minimum = 4, maximum = 1000)]
+    #[schema(default = 20, minimum = 4, maximum = 1000, example = 20)]
     #[serde(default = "default_random_vertices")]
     pub vertices: u32,
     /// Seed of the shape generator.
     #[serde(default = "default_random_seed")]
-    #[schema(default = 1)]
+    #[schema(default = 1, example = 1)]
     pub seed: u64,
 }
 
@@ -179,7 +179,7 @@ fn default_random_seed() -> u64 {
 #[serde(deny_unknown_fields, default)]
 pub struct RockDto {
     /// Shape of the block.
-    #[schema(default = "cube")]
+    #[schema(default = "cube", example = "cube")]
     pub shape: ShapeKind,
     /// Cube side L, m; also the contact length on the column.
     #[schema(default = 0.3, minimum = 0.01, maximum = 5.0, example = 0.3)]
@@ -201,6 +201,7 @@ pub struct RockDto {
     #[schema(example = json!([0.4, 0.3, 0.2]))]
     pub dimensions_m: Option<[f64; 3]>,
     /// Convex polyhedron vertices (4–1000 points), m.
+    #[schema(example = json!([[0.0, 0.0, 0.0], [0.3, 0.0, 0.0], [0.0, 0.3, 0.0], [0.0, 0.0, 0.3]]))]
     #[serde(
         skip_serializing_if = "Option::is_none",
         default,
@@ -416,7 +417,7 @@ pub struct ColumnDto {
     )]
     pub contact_radius_m: Option<f64>,
     /// Viscous damping per unit length c, N·s/m² (default 1.0, the paper's value).
-    #[schema(minimum = 0.0, maximum = 1e9, example = 1.0)]
+    #[schema(default = 1.0, minimum = 0.0, maximum = 1e9, example = 1.0)]
     #[serde(
         skip_serializing_if = "Option::is_none",
         default,
@@ -544,13 +545,13 @@ pub enum ModulusDto {
 #[serde(deny_unknown_fields, default)]
 pub struct ContactDto {
     /// Force–approach law.
-    #[schema(default = "paper")]
+    #[schema(default = "paper", example = "paper")]
     pub law: LawDto,
     /// Effective-modulus convention.
-    #[schema(default = "paper")]
+    #[schema(default = "paper", example = "paper")]
     pub effective_modulus: ModulusDto,
     /// Exact elliptical Hertz κ (`hertz_point`); false: the equivalent-radius form.
-    #[schema(default = true)]
+    #[schema(default = true, example = true)]
     pub hertz_exact: bool,
 }
 

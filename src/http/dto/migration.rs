@@ -43,8 +43,10 @@ pub enum FloorKind {
 #[serde(deny_unknown_fields)]
 pub struct ContourDto {
     /// Elevation z of the line, m.
+    #[schema(example = -10.0)]
     pub elevation_m: f64,
     /// Plan points [x, y] of the polyline, m.
+    #[schema(example = json!([[10.0, -5.0], [10.0, 5.0]]))]
     pub points_m: Vec<[f64; 2]>,
 }
 
@@ -55,11 +57,11 @@ pub struct ContourDto {
 #[serde(deny_unknown_fields, default)]
 pub struct FloorDto {
     /// Kind of floor.
-    #[schema(default = "plane")]
+    #[schema(default = "plane", example = "plane")]
     pub kind: FloorKind,
     /// Grid origin [x₀, y₀], m (default [0, 0]).
     #[serde(deserialize_with = "some")]
-    #[schema(example = json!([0.0, -5.0]))]
+    #[schema(default = json!([0.0, 0.0]), example = json!([0.0, -5.0]))]
     pub origin_m: Option<[f64; 2]>,
     /// Grid spacing d, m, in [0.01, 100].
     #[serde(deserialize_with = "some")]
@@ -67,13 +69,15 @@ pub struct FloorDto {
     pub spacing_m: Option<f64>,
     /// Grid heights: `heights_m[i][j]` is z at (x₀ + j·d, y₀ + i·d), m; at most 4096 × 4096.
     #[serde(deserialize_with = "some")]
+    #[schema(example = json!([[0.0, -1.0, -2.0], [0.0, -1.0, -2.0]]))]
     pub heights_m: Option<Vec<Vec<f64>>>,
     /// Contour polylines with elevations.
     #[serde(deserialize_with = "some")]
+    #[schema(example = json!([{"elevation_m": 0.0, "points_m": [[0.0, -5.0], [0.0, 5.0]]}, {"elevation_m": -10.0, "points_m": [[10.0, -5.0], [10.0, 5.0]]}]))]
     pub contours: Option<Vec<ContourDto>>,
     /// Largest spacing of resampled contour points, m, in [0.01, 100] (default 1).
     #[serde(deserialize_with = "some")]
-    #[schema(minimum = 0.01, maximum = 100.0, example = 1.0)]
+    #[schema(default = 1.0, minimum = 0.01, maximum = 100.0, example = 1.0)]
     pub resolution_m: Option<f64>,
     /// SHA-256 of the floor as received (set when resolved; echoed in `inputs`).
     #[serde(skip)]
@@ -177,7 +181,7 @@ pub struct FaceDto {
     #[schema(default = 0.0, minimum = 0.0, exclusive_maximum = 1.0, example = 0.0)]
     pub local_damping: f64,
     /// Normal contact law (rigid block).
-    #[schema(default = "linear")]
+    #[schema(default = "linear", example = "linear")]
     pub contact_model: ContactModelDto,
 }
 
@@ -244,7 +248,7 @@ pub enum MotionDto {
 #[serde(deny_unknown_fields, default)]
 pub struct LumpedMassDto {
     /// Ground motion.
-    #[schema(default = "slide")]
+    #[schema(default = "slide", example = "slide")]
     pub motion: MotionDto,
     /// Normal rebound speed below which the ground phase starts, m/s, in [0, 100].
     #[schema(default = 0.5, minimum = 0.0, maximum = 100.0, example = 0.5)]
@@ -300,19 +304,23 @@ pub enum DistributionKind {
 #[serde(deny_unknown_fields, default)]
 pub struct DistributionDto {
     /// Kind of distribution.
-    #[schema(default = "uniform")]
+    #[schema(default = "uniform", example = "uniform")]
     pub distribution: DistributionKind,
     /// Lower bound (uniform, truncated_normal).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[schema(example = 0.2)]
     pub min: Option<f64>,
     /// Upper bound (uniform, truncated_normal).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[schema(example = 0.4)]
     pub max: Option<f64>,
     /// Mean (normal, truncated_normal).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[schema(example = 0.3)]
     pub mean: Option<f64>,
     /// Standard deviation ≥ 0 (normal, truncated_normal).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[schema(example = 0.05)]
     pub std: Option<f64>,
 }
 
@@ -436,16 +444,16 @@ impl Default for MonteCarloDto {
 #[serde(deny_unknown_fields, default)]
 pub struct MigrationOutputDto {
     /// Sample the (nominal) trajectory.
-    #[schema(default = false)]
+    #[schema(default = false, example = false)]
     pub trajectory: bool,
     /// Trajectory sample interval, s, in [1e-6, 100].
     #[schema(default = 0.01, minimum = 1e-6, maximum = 100.0, example = 0.01)]
     pub sample_interval_s: f64,
     /// Report the events of the (nominal) run.
-    #[schema(default = true)]
+    #[schema(default = true, example = true)]
     pub events: bool,
     /// Per-run summaries as CSV (Monte Carlo).
-    #[schema(default = false)]
+    #[schema(default = false, example = false)]
     pub runs_csv: bool,
 }
 
@@ -465,7 +473,7 @@ impl Default for MigrationOutputDto {
 #[serde(deny_unknown_fields, default)]
 pub struct MigrationRequest {
     /// Method.
-    #[schema(default = "lumped_mass")]
+    #[schema(default = "lumped_mass", example = "lumped_mass")]
     pub method: MethodDto,
     /// Gravity g, m/s², in [0.1, 100].
     #[schema(default = 9.81, minimum = 0.1, maximum = 100.0, example = 9.81)]
