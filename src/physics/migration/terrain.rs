@@ -18,7 +18,7 @@ use crate::physics::error::{PhysicsError, PhysicsResult};
 /// Identifier of one planar facet of a floor (the plane floor has the single facet 0).
 pub(crate) type Facet = u32;
 
-/// A planar facet z = z_r + b_x (x − x_r) + b_y (y − y_r), heights in m.
+/// A planar facet z = z_r + b_x (x − x_r) + b_y (y − y_r), heights in m, with its unit normal.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct FacetPlane {
     xr: f64,
@@ -26,9 +26,26 @@ pub(crate) struct FacetPlane {
     zr: f64,
     bx: f64,
     by: f64,
+    n: Vector3<f64>,
 }
 
+/// Largest number of facets whose planes a floor keeps precomputed (64 bytes each); larger
+/// floors set each plane up when it is needed.
+const MAX_TABLED_FACETS: usize = 1 << 20;
+
 impl FacetPlane {
+    fn new(xr: f64, yr: f64, zr: f64, bx: f64, by: f64) -> Self {
+        let k = 1.0 / (1.0 + bx * bx + by * by).sqrt();
+        FacetPlane {
+            xr,
+            yr,
+            zr,
+            bx,
+            by,
+            n: Vector3::new(-bx * k, -by * k, k),
+        }
+    }
+
     /// Height of the facet's plane at (x, y), m.
     pub(crate) fn z(&self, x: f64, y: f64) -> f64 {
         self.zr + self.bx * (x - self.xr) + self.by * (y - self.yr)
@@ -36,8 +53,7 @@ impl FacetPlane {
 
     /// Unit normal pointing up (n_z > 0).
     pub(crate) fn normal(&self) -> Vector3<f64> {
-        let k = 1.0 / (1.0 + self.bx * self.bx + self.by * self.by).sqrt();
-        Vector3::new(-self.bx * k, -self.by * k, k)
+        self.n
     }
 
     /// Vertical height of p above the plane, m.
@@ -257,6 +273,8 @@ pub(crate) struct GridFloor {
     cells: CellGrid,
     nx: usize,
     z: Vec<f64>,
+    /// The facets' planes, precomputed unless there are more than [`MAX_TABLED_FACETS`].
+    planes: Vec<FacetPlane>,
 }
 
 /// Triangulated contour set with a bucket grid for point and line queries.
@@ -269,6 +287,8 @@ pub(crate) struct MeshFloor {
     bucket_start: Vec<u32>,
     bucket_items: Vec<u32>,
     bbox: [f64; 4],
+    /// The facets' planes, precomputed unless there are more than [`MAX_TABLED_FACETS`].
+    planes: Vec<FacetPlane>,
 }
 
 const NONE: u32 = u32::MAX;
@@ -309,19 +329,26 @@ fn plane_of(c: &[[f64; 2]; 3], z: &[f64; 3]) -> FacetPlane {
     let (bx, by) = (c[2][0] - c[0][0], c[2][1] - c[0][1]);
     let (az, bz) = (z[1] - z[0], z[2] - z[0]);
     let det = ax * by - ay * bx;
-    FacetPlane {
-        xr: c[0][0],
-        yr: c[0][1],
-        zr: z[0],
-        bx: (az * by - bz * ay) / det,
-        by: (ax * bz - bx * az) / det,
-    }
+    FacetPlane::new(
+        c[0][0],
+        c[0][1],
+        z[0],
+        (az * by - bz * ay) / det,
+        (ax * bz - bx * az) / det,
+    )
 }
 
 impl GridFloor {
+    /// Row i and column j of facet f's cell.
+    fn cell_of(&self, f: Facet) -> (usize, usize) {
+        // facet ids are u32, so the cell index and the row length fit u32 (a cheaper division)
+        let cell = f >> 1;
+        let ncx = self.cells.ncx as u32;
+        ((cell / ncx) as usize, (cell % ncx) as usize)
+    }
+
     fn corners(&self, f: Facet) -> ([[f64; 2]; 3], [f64; 3]) {
-        let cell = (f >> 1) as usize;
-        let (i, j) = (cell / (self.nx - 1), cell % (self.nx - 1));
+        let (i, j) = self.cell_of(f);
         let d = self.cells.d;
         let x = self.cells.x0 + j as f64 * d;
         let y = self.cells.y0 + i as f64 * d;
@@ -341,8 +368,14 @@ impl GridFloor {
     }
 
     fn plane(&self, f: Facet) -> FacetPlane {
-        let cell = (f >> 1) as usize;
-        let (i, j) = (cell / (self.nx - 1), cell % (self.nx - 1));
+        match self.planes.get(f as usize) {
+            Some(p) => *p,
+            None => self.plane_of(f),
+        }
+    }
+
+    fn plane_of(&self, f: Facet) -> FacetPlane {
+        let (i, j) = self.cell_of(f);
         let d = self.cells.d;
         let z00 = self.z[i * self.nx + j];
         let z10 = self.z[i * self.nx + j + 1];
@@ -353,13 +386,13 @@ impl GridFloor {
         } else {
             ((z11 - z01) / d, (z01 - z00) / d)
         };
-        FacetPlane {
-            xr: self.cells.x0 + j as f64 * d,
-            yr: self.cells.y0 + i as f64 * d,
-            zr: z00,
+        FacetPlane::new(
+            self.cells.x0 + j as f64 * d,
+            self.cells.y0 + i as f64 * d,
+            z00,
             bx,
             by,
-        }
+        )
     }
 
     fn facet(&self, ci: usize, cj: usize, half: u32) -> Facet {
@@ -367,9 +400,8 @@ impl GridFloor {
     }
 
     fn neighbor(&self, f: Facet, edge: usize) -> Option<Facet> {
-        let cell = (f >> 1) as usize;
         let ncx = self.nx - 1;
-        let (i, j) = (cell / ncx, cell % ncx);
+        let (i, j) = self.cell_of(f);
         let ncy = self.cells.ncy;
         match (f & 1, edge) {
             (0, 0) => (i > 0).then(|| self.facet(j, i - 1, 1)),
@@ -383,6 +415,16 @@ impl GridFloor {
 }
 
 impl MeshFloor {
+    fn plane(&self, f: Facet) -> FacetPlane {
+        match self.planes.get(f as usize) {
+            Some(p) => *p,
+            None => {
+                let (c, z) = self.corners(f);
+                plane_of(&c, &z)
+            }
+        }
+    }
+
     fn corners(&self, f: Facet) -> ([[f64; 2]; 3], [f64; 3]) {
         let t = self.tris[f as usize];
         let p = t.map(|k| self.xyz[k as usize]);
@@ -422,13 +464,7 @@ impl Floor {
     pub(crate) fn plane(dip: f64) -> Self {
         let (sin, cos) = dip.sin_cos();
         Floor {
-            kind: FloorKind::Plane(FacetPlane {
-                xr: 0.0,
-                yr: 0.0,
-                zr: 0.0,
-                bx: -sin / cos,
-                by: 0.0,
-            }),
+            kind: FloorKind::Plane(FacetPlane::new(0.0, 0.0, 0.0, -sin / cos, 0.0)),
             mean: MeanPlane {
                 x0: 0.0,
                 z_ref: 0.0,
@@ -476,18 +512,24 @@ impl Floor {
         }
         let z_ref = heights.iter().map(|r| r[0]).sum::<f64>() / ny as f64;
         let (sin, cos) = dip.sin_cos();
+        let mut grid = GridFloor {
+            cells: CellGrid {
+                x0: origin[0],
+                y0: origin[1],
+                d: spacing,
+                ncx: nx - 1,
+                ncy: ny - 1,
+            },
+            nx,
+            z,
+            planes: Vec::new(),
+        };
+        let n_facets = 2 * (nx - 1) * (ny - 1);
+        if n_facets <= MAX_TABLED_FACETS {
+            grid.planes = (0..n_facets as Facet).map(|f| grid.plane_of(f)).collect();
+        }
         Ok(Floor {
-            kind: FloorKind::Grid(GridFloor {
-                cells: CellGrid {
-                    x0: origin[0],
-                    y0: origin[1],
-                    d: spacing,
-                    ncx: nx - 1,
-                    ncy: ny - 1,
-                },
-                nx,
-                z,
-            }),
+            kind: FloorKind::Grid(grid),
             mean: MeanPlane {
                 x0: origin[0],
                 z_ref,
@@ -648,16 +690,26 @@ impl Floor {
             }
         }
         let (sin, cos) = dip.sin_cos();
+        let mut mesh = MeshFloor {
+            xyz,
+            tris,
+            nbr,
+            cells,
+            bucket_start: counts,
+            bucket_items: items,
+            bbox: [lo[0], hi[0], lo[1], hi[1]],
+            planes: Vec::new(),
+        };
+        if mesh.tris.len() <= MAX_TABLED_FACETS {
+            mesh.planes = (0..mesh.tris.len() as Facet)
+                .map(|f| {
+                    let (c, z) = mesh.corners(f);
+                    plane_of(&c, &z)
+                })
+                .collect();
+        }
         Ok(Floor {
-            kind: FloorKind::Mesh(MeshFloor {
-                xyz,
-                tris,
-                nbr,
-                cells,
-                bucket_start: counts,
-                bucket_items: items,
-                bbox: [lo[0], hi[0], lo[1], hi[1]],
-            }),
+            kind: FloorKind::Mesh(mesh),
             mean: MeanPlane {
                 x0: x_min,
                 z_ref: z_at_min,
@@ -672,10 +724,7 @@ impl Floor {
         match &self.kind {
             FloorKind::Plane(p) => *p,
             FloorKind::Grid(g) => g.plane(f),
-            FloorKind::Mesh(m) => {
-                let (c, z) = m.corners(f);
-                plane_of(&c, &z)
-            }
+            FloorKind::Mesh(m) => m.plane(f),
         }
     }
 
@@ -788,13 +837,12 @@ impl Floor {
                 m.cells.walk(p.x, p.y, v.x, v.y, t_max, |ci, cj, t0, t1| {
                     let mut best: Option<(f64, Facet)> = None;
                     for &f in m.bucket(ci, cj) {
-                        let (c, z) = m.corners(f);
-                        let pl = plane_of(&c, &z);
+                        let pl = m.plane(f);
                         if let Some(r) = root(&pl)
                             && r >= t0 - 1e-12 * (1.0 + t0)
                             && r <= t1 + 1e-12 * (1.0 + t1)
                             && best.is_none_or(|b| r < b.0)
-                            && inside_tri(&c, p.x + v.x * r, p.y + v.y * r, tol)
+                            && inside_tri(&m.corners(f).0, p.x + v.x * r, p.y + v.y * r, tol)
                         {
                             best = Some((r.max(0.0), f));
                         }
