@@ -173,7 +173,8 @@ impl CellGrid {
         if !(u >= 0.0 && u <= n as f64) {
             return None;
         }
-        let mut c = u.floor();
+        // u ≥ 0 here, so truncation is the floor (and avoids a libm call on baseline x86-64)
+        let mut c = (u as u64) as f64;
         if c == u && r < 0.0 {
             c -= 1.0;
         }
@@ -349,6 +350,10 @@ impl GridFloor {
 
     fn corners(&self, f: Facet) -> ([[f64; 2]; 3], [f64; 3]) {
         let (i, j) = self.cell_of(f);
+        self.corners_at(f, i, j)
+    }
+
+    fn corners_at(&self, f: Facet, i: usize, j: usize) -> ([[f64; 2]; 3], [f64; 3]) {
         let d = self.cells.d;
         let x = self.cells.x0 + j as f64 * d;
         let y = self.cells.y0 + i as f64 * d;
@@ -399,9 +404,8 @@ impl GridFloor {
         (((cj * (self.nx - 1) + ci) as u32) << 1) | half
     }
 
-    fn neighbor(&self, f: Facet, edge: usize) -> Option<Facet> {
+    fn neighbor_at(&self, f: Facet, i: usize, j: usize, edge: usize) -> Option<Facet> {
         let ncx = self.nx - 1;
-        let (i, j) = self.cell_of(f);
         let ncy = self.cells.ncy;
         match (f & 1, edge) {
             (0, 0) => (i > 0).then(|| self.facet(j, i - 1, 1)),
@@ -864,10 +868,13 @@ impl Floor {
         a: &Vector3<f64>,
         t_max: f64,
     ) -> Option<(f64, Option<Facet>, [[f64; 2]; 2])> {
-        let corners = match &self.kind {
+        let (corners, ij) = match &self.kind {
             FloorKind::Plane(_) => return None,
-            FloorKind::Grid(g) => g.corners(f).0,
-            FloorKind::Mesh(m) => m.corners(f).0,
+            FloorKind::Grid(g) => {
+                let (i, j) = g.cell_of(f);
+                (g.corners_at(f, i, j).0, (i, j))
+            }
+            FloorKind::Mesh(m) => (m.corners(f).0, (0, 0)),
         };
         let mut best: Option<(f64, usize)> = None;
         for k in 0..3 {
@@ -886,7 +893,7 @@ impl Floor {
         }
         best.map(|(t, k)| {
             let next = match &self.kind {
-                FloorKind::Grid(g) => g.neighbor(f, k),
+                FloorKind::Grid(g) => g.neighbor_at(f, ij.0, ij.1, k),
                 FloorKind::Mesh(m) => {
                     let n = m.nbr[f as usize][k];
                     (n != NONE).then_some(n)
