@@ -47,6 +47,7 @@ impl FacetPlane {
     }
 
     /// Height of the facet's plane at (x, y), m.
+    #[inline]
     pub(crate) fn z(&self, x: f64, y: f64) -> f64 {
         self.zr + self.bx * (x - self.xr) + self.by * (y - self.yr)
     }
@@ -57,11 +58,13 @@ impl FacetPlane {
     }
 
     /// Vertical height of p above the plane, m.
+    #[inline]
     pub(crate) fn height(&self, p: &Vector3<f64>) -> f64 {
         p.z - self.z(p.x, p.y)
     }
 
     /// Rate of change of the vertical height for velocity v, m/s.
+    #[inline]
     pub(crate) fn height_rate(&self, v: &Vector3<f64>) -> f64 {
         v.z - self.bx * v.x - self.by * v.y
     }
@@ -73,6 +76,7 @@ impl FacetPlane {
 }
 
 /// Descending root of h0 + b t − ½ g t² (the larger root), or None when the parabola stays below.
+#[inline]
 fn descent_root(h0: f64, b: f64, g: f64) -> Option<f64> {
     let d = b * b + 2.0 * g * h0;
     if d < 0.0 {
@@ -314,6 +318,7 @@ pub(crate) struct Floor {
     pub(crate) mean: MeanPlane,
 }
 
+#[inline]
 fn inside_tri(c: &[[f64; 2]; 3], x: f64, y: f64, tol: f64) -> bool {
     (0..3).all(|k| {
         let a = c[k];
@@ -341,6 +346,7 @@ fn plane_of(c: &[[f64; 2]; 3], z: &[f64; 3]) -> FacetPlane {
 
 impl GridFloor {
     /// Row i and column j of facet f's cell.
+    #[inline]
     fn cell_of(&self, f: Facet) -> (usize, usize) {
         // facet ids are u32, so the cell index and the row length fit u32 (a cheaper division)
         let cell = f >> 1;
@@ -348,11 +354,13 @@ impl GridFloor {
         ((cell / ncx) as usize, (cell % ncx) as usize)
     }
 
+    #[inline]
     fn corners(&self, f: Facet) -> ([[f64; 2]; 3], [f64; 3]) {
         let (i, j) = self.cell_of(f);
         self.corners_at(f, i, j)
     }
 
+    #[inline]
     fn corners_at(&self, f: Facet, i: usize, j: usize) -> ([[f64; 2]; 3], [f64; 3]) {
         let d = self.cells.d;
         let x = self.cells.x0 + j as f64 * d;
@@ -372,6 +380,7 @@ impl GridFloor {
         }
     }
 
+    #[inline]
     fn plane(&self, f: Facet) -> FacetPlane {
         match self.planes.get(f as usize) {
             Some(p) => *p,
@@ -400,10 +409,12 @@ impl GridFloor {
         )
     }
 
+    #[inline]
     fn facet(&self, ci: usize, cj: usize, half: u32) -> Facet {
         (((cj * (self.nx - 1) + ci) as u32) << 1) | half
     }
 
+    #[inline]
     fn neighbor_at(&self, f: Facet, i: usize, j: usize, edge: usize) -> Option<Facet> {
         let ncx = self.nx - 1;
         let ncy = self.cells.ncy;
@@ -419,6 +430,7 @@ impl GridFloor {
 }
 
 impl MeshFloor {
+    #[inline]
     fn plane(&self, f: Facet) -> FacetPlane {
         match self.planes.get(f as usize) {
             Some(p) => *p,
@@ -429,6 +441,7 @@ impl MeshFloor {
         }
     }
 
+    #[inline]
     fn corners(&self, f: Facet) -> ([[f64; 2]; 3], [f64; 3]) {
         let t = self.tris[f as usize];
         let p = t.map(|k| self.xyz[k as usize]);
@@ -724,6 +737,7 @@ impl Floor {
     }
 
     /// The facet's plane.
+    #[inline]
     pub(crate) fn facet_plane(&self, f: Facet) -> FacetPlane {
         match &self.kind {
             FloorKind::Plane(p) => *p,
@@ -860,6 +874,7 @@ impl Floor {
     /// First exit of the planar motion p + v t + ½ a t² from facet f through one of its edges
     /// within t ≤ t_max: the time, the facet across that edge (None: off the floor) and the
     /// edge's end points in plan.
+    #[inline]
     pub(crate) fn slide_exit(
         &self,
         f: Facet,
@@ -907,6 +922,7 @@ impl Floor {
 
 /// Smallest t ≥ 0 where f0 + f1 t + ½ f2 t² reaches 0 while increasing (leaving the half-plane
 /// f ≤ 0); t = 0 when already on or past the line and moving out.
+#[inline]
 pub(crate) fn outward_root(f0: f64, f1: f64, f2: f64) -> Option<f64> {
     if f0 >= 0.0 && (f1 > 0.0 || (f1 == 0.0 && f2 > 0.0)) {
         return Some(0.0);
