@@ -596,7 +596,8 @@ pub(crate) fn simulate(
                     }
                     let aperp = (a - fdir * ad).norm();
                     if aperp > 1e-12 * g {
-                        turn_at = MAX_TURN * s.v.norm().max(REST_SPEED) / aperp;
+                        // |v| is `speed`, or 0 after a rest above (both give REST_SPEED here)
+                        turn_at = MAX_TURN * speed.max(REST_SPEED) / aperp;
                     }
                     s.undecelerated = ad >= 0.0;
                 } else {

@@ -927,6 +927,10 @@ pub(crate) fn outward_root(f0: f64, f1: f64, f2: f64) -> Option<f64> {
     if f0 >= 0.0 && (f1 > 0.0 || (f1 == 0.0 && f2 > 0.0)) {
         return Some(0.0);
     }
+    if f1 <= 0.0 && f2 <= 0.0 {
+        // never increasing for t > 0: no outward crossing (saves the square root)
+        return None;
+    }
     if f2 == 0.0 {
         return (f1 > 0.0).then(|| (-f0 / f1).max(0.0));
     }
