@@ -324,7 +324,14 @@ fn inside_tri(c: &[[f64; 2]; 3], x: f64, y: f64, tol: f64) -> bool {
         let a = c[k];
         let b = c[(k + 1) % 3];
         let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
-        let len = (ex * ex + ey * ey).sqrt();
+        // axis-parallel edges (every edge of a grid cell but its diagonal) need no square root
+        let len = if ey == 0.0 {
+            ex.abs()
+        } else if ex == 0.0 {
+            ey.abs()
+        } else {
+            (ex * ex + ey * ey).sqrt()
+        };
         // outward normal of a ccw edge is (ey, −ex)
         (ey * (x - a[0]) - ex * (y - a[1])) <= tol * len
     })
