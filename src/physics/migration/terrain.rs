@@ -987,6 +987,30 @@ mod tests {
     }
 
     #[test]
+    fn tabled_planes_equal_planes_set_up_on_demand() {
+        let h: Vec<Vec<f64>> = (0..4)
+            .map(|i| {
+                (0..5)
+                    .map(|j| (0.3 * i as f64).sin() - 0.7 * j as f64)
+                    .collect()
+            })
+            .collect();
+        let f = Floor::grid(0.6, [1.0, -2.0], 0.5, &h).unwrap();
+        let FloorKind::Grid(g) = &f.kind else {
+            unreachable!()
+        };
+        assert_eq!(g.planes.len(), 2 * 4 * 3);
+        for id in 0..g.planes.len() as Facet {
+            let (c, z) = g.corners(id);
+            assert_eq!(g.plane(id), g.plane_of(id));
+            // the same plane as through the facet's corners, up to rounding
+            let p = plane_of(&c, &z);
+            assert!((p.bx - g.plane(id).bx).abs() < 1e-12);
+            assert!((p.by - g.plane(id).by).abs() < 1e-12);
+        }
+    }
+
+    #[test]
     fn grid_plane_matches_heights() {
         let d = 0.5;
         let h: Vec<Vec<f64>> = (0..3)
