@@ -197,8 +197,13 @@ fn crease_of(
     v: &Vector3<f64>,
     g: f64,
 ) -> Option<Crease> {
+    let c = na.cross(nb);
+    // |kink| ≤ |n_a × n_b|: (nearly) coplanar facets need no edge direction
+    if c.norm_squared() < 1e-12 {
+        return None;
+    }
     let e = (ends[1] - ends[0]).try_normalize(0.0)?;
-    let kink = na.cross(nb).dot(&e);
+    let kink = c.dot(&e);
     if kink.abs() < 1e-6 {
         return None;
     }
@@ -591,7 +596,8 @@ pub(crate) fn simulate(
                     }
                     let aperp = (a - fdir * ad).norm();
                     if aperp > 1e-12 * g {
-                        turn_at = MAX_TURN * s.v.norm().max(REST_SPEED) / aperp;
+                        // |v| is `speed`, or 0 after a rest above (both give REST_SPEED here)
+                        turn_at = MAX_TURN * speed.max(REST_SPEED) / aperp;
                     }
                     s.undecelerated = ad >= 0.0;
                 } else {

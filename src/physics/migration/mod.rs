@@ -889,20 +889,33 @@ fn ensemble(
             steps: o.steps,
         })
     };
-    let chunks: Vec<PhysicsResult<Vec<RunSummary>>> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
+    // the summaries are written in place, chunk by chunk; the first error in run order wins
+    let blank = RunSummary {
+        time: 0.0,
+        speed: 0.0,
+        kinetic_energy: 0.0,
+        impact_count: 0,
+        runout: 0.0,
+        max_bounce_height: 0.0,
+        stop_reason: StopReason::AtRest,
+        steps: 0,
+    };
+    let mut all = vec![blank; n as usize];
+    let chunks: Vec<PhysicsResult<()>> = all
+        .par_chunks_mut(CHUNK as usize)
+        .enumerate()
+        .map(|(c, out)| {
             control.check()?;
-            let range = c * CHUNK..((c + 1) * CHUNK).min(n);
-            let len = range.end - range.start;
-            let v = range.map(one).collect::<PhysicsResult<Vec<_>>>()?;
-            control.add_done(len);
-            Ok(v)
+            let start = c as u64 * CHUNK;
+            for (i, slot) in (start..).zip(out.iter_mut()) {
+                *slot = one(i)?;
+            }
+            control.add_done(out.len() as u64);
+            Ok(())
         })
         .collect();
-    let mut all = Vec::with_capacity(n as usize);
     for c in chunks {
-        all.extend(c?);
+        c?;
     }
     Ok(all)
 }
@@ -920,15 +933,15 @@ fn statistics_of(mc: &MonteCarlo, runs: &[RunSummary]) -> Statistics {
         }
     };
     let all = |f: &dyn Fn(&RunSummary) -> f64| {
-        stats::summarize(&col(f, false)).expect("an ensemble has at least one run")
+        stats::summarize_owned(col(f, false)).expect("an ensemble has at least one run")
     };
     Statistics {
         runs: runs.len() as u64,
         seed: mc.seed,
         reached_fraction: reached.len() as f64 / runs.len().max(1) as f64,
-        speed: stats::summarize(&col(&|r| r.speed, true)),
-        kinetic_energy: stats::summarize(&col(&|r| r.kinetic_energy, true)),
-        time: stats::summarize(&col(&|r| r.time, true)),
+        speed: stats::summarize_owned(col(&|r| r.speed, true)),
+        kinetic_energy: stats::summarize_owned(col(&|r| r.kinetic_energy, true)),
+        time: stats::summarize_owned(col(&|r| r.time, true)),
         impact_count: all(&|r| r.impact_count as f64),
         runout: all(&|r| r.runout),
         max_bounce_height: all(&|r| r.max_bounce_height),

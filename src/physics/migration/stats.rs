@@ -74,6 +74,13 @@ pub fn percentile_sorted(sorted: &[f64], p: f64) -> f64 {
 /// # References
 /// api.md `POST /v1/migration` (statistics).
 pub fn summarize(values: &[f64]) -> Option<Summary> {
+    summarize_owned(values.to_vec())
+}
+
+/// [`summarize`] of values the caller no longer needs: they are reordered in place by the
+/// percentile selection instead of being copied.
+pub(crate) fn summarize_owned(mut work: Vec<f64>) -> Option<Summary> {
+    let values = &work[..];
     let n = values.len();
     if n == 0 {
         return None;
@@ -88,31 +95,6 @@ pub fn summarize(values: &[f64]) -> Option<Summary> {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
             (a.min(x), b.max(x))
         });
-    // the order statistics the percentiles need, found by selection (O(n)) instead of a sort
-    let ps = [0.05, 0.50, 0.95, 0.99];
-    let mut idx: Vec<usize> = ps
-        .iter()
-        .flat_map(|p| {
-            let lo = ((n - 1) as f64 * p).floor() as usize;
-            [lo, (lo + 1).min(n - 1)]
-        })
-        .collect();
-    idx.sort_unstable();
-    idx.dedup();
-    let mut work = values.to_vec();
-    let mut start = 0;
-    for &k in &idx {
-        work[start..].select_nth_unstable_by(k - start, f64::total_cmp);
-        start = k + 1;
-    }
-    let pct = |p: f64| {
-        let h = (n - 1) as f64 * p;
-        let lo = h.floor() as usize;
-        if lo + 1 >= n {
-            return work[n - 1];
-        }
-        work[lo] + (h - lo as f64) * (work[lo + 1] - work[lo])
-    };
     let width = (max - min) / HISTOGRAM_BINS as f64;
     let edges: Vec<f64> = (0..=HISTOGRAM_BINS)
         .map(|k| {
@@ -132,6 +114,30 @@ pub fn summarize(values: &[f64]) -> Option<Summary> {
         };
         counts[k] += 1;
     }
+    // the order statistics the percentiles need, found by selection (O(n)) instead of a sort
+    let ps = [0.05, 0.50, 0.95, 0.99];
+    let mut idx: Vec<usize> = ps
+        .iter()
+        .flat_map(|p| {
+            let lo = ((n - 1) as f64 * p).floor() as usize;
+            [lo, (lo + 1).min(n - 1)]
+        })
+        .collect();
+    idx.sort_unstable();
+    idx.dedup();
+    let mut start = 0;
+    for &k in &idx {
+        work[start..].select_nth_unstable_by(k - start, f64::total_cmp);
+        start = k + 1;
+    }
+    let pct = |p: f64| {
+        let h = (n - 1) as f64 * p;
+        let lo = h.floor() as usize;
+        if lo + 1 >= n {
+            return work[n - 1];
+        }
+        work[lo] + (h - lo as f64) * (work[lo + 1] - work[lo])
+    };
     Some(Summary {
         count: n as u64,
         mean: mean.clamp(min, max),

@@ -18,7 +18,7 @@ use crate::physics::error::{PhysicsError, PhysicsResult};
 /// Identifier of one planar facet of a floor (the plane floor has the single facet 0).
 pub(crate) type Facet = u32;
 
-/// A planar facet z = z_r + b_x (x − x_r) + b_y (y − y_r), heights in m.
+/// A planar facet z = z_r + b_x (x − x_r) + b_y (y − y_r), heights in m, with its unit normal.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct FacetPlane {
     xr: f64,
@@ -26,26 +26,45 @@ pub(crate) struct FacetPlane {
     zr: f64,
     bx: f64,
     by: f64,
+    n: Vector3<f64>,
 }
 
+/// Largest number of facets whose planes a floor keeps precomputed (64 bytes each); larger
+/// floors set each plane up when it is needed.
+const MAX_TABLED_FACETS: usize = 1 << 20;
+
 impl FacetPlane {
+    fn new(xr: f64, yr: f64, zr: f64, bx: f64, by: f64) -> Self {
+        let k = 1.0 / (1.0 + bx * bx + by * by).sqrt();
+        FacetPlane {
+            xr,
+            yr,
+            zr,
+            bx,
+            by,
+            n: Vector3::new(-bx * k, -by * k, k),
+        }
+    }
+
     /// Height of the facet's plane at (x, y), m.
+    #[inline]
     pub(crate) fn z(&self, x: f64, y: f64) -> f64 {
         self.zr + self.bx * (x - self.xr) + self.by * (y - self.yr)
     }
 
     /// Unit normal pointing up (n_z > 0).
     pub(crate) fn normal(&self) -> Vector3<f64> {
-        let k = 1.0 / (1.0 + self.bx * self.bx + self.by * self.by).sqrt();
-        Vector3::new(-self.bx * k, -self.by * k, k)
+        self.n
     }
 
     /// Vertical height of p above the plane, m.
+    #[inline]
     pub(crate) fn height(&self, p: &Vector3<f64>) -> f64 {
         p.z - self.z(p.x, p.y)
     }
 
     /// Rate of change of the vertical height for velocity v, m/s.
+    #[inline]
     pub(crate) fn height_rate(&self, v: &Vector3<f64>) -> f64 {
         v.z - self.bx * v.x - self.by * v.y
     }
@@ -57,6 +76,7 @@ impl FacetPlane {
 }
 
 /// Descending root of h0 + b t − ½ g t² (the larger root), or None when the parabola stays below.
+#[inline]
 fn descent_root(h0: f64, b: f64, g: f64) -> Option<f64> {
     let d = b * b + 2.0 * g * h0;
     if d < 0.0 {
@@ -157,7 +177,8 @@ impl CellGrid {
         if !(u >= 0.0 && u <= n as f64) {
             return None;
         }
-        let mut c = u.floor();
+        // u ≥ 0 here, so truncation is the floor (and avoids a libm call on baseline x86-64)
+        let mut c = (u as u64) as f64;
         if c == u && r < 0.0 {
             c -= 1.0;
         }
@@ -257,6 +278,8 @@ pub(crate) struct GridFloor {
     cells: CellGrid,
     nx: usize,
     z: Vec<f64>,
+    /// The facets' planes, precomputed unless there are more than [`MAX_TABLED_FACETS`].
+    planes: Vec<FacetPlane>,
 }
 
 /// Triangulated contour set with a bucket grid for point and line queries.
@@ -269,6 +292,8 @@ pub(crate) struct MeshFloor {
     bucket_start: Vec<u32>,
     bucket_items: Vec<u32>,
     bbox: [f64; 4],
+    /// The facets' planes, precomputed unless there are more than [`MAX_TABLED_FACETS`].
+    planes: Vec<FacetPlane>,
 }
 
 const NONE: u32 = u32::MAX;
@@ -293,12 +318,20 @@ pub(crate) struct Floor {
     pub(crate) mean: MeanPlane,
 }
 
+#[inline]
 fn inside_tri(c: &[[f64; 2]; 3], x: f64, y: f64, tol: f64) -> bool {
     (0..3).all(|k| {
         let a = c[k];
         let b = c[(k + 1) % 3];
         let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
-        let len = (ex * ex + ey * ey).sqrt();
+        // axis-parallel edges (every edge of a grid cell but its diagonal) need no square root
+        let len = if ey == 0.0 {
+            ex.abs()
+        } else if ex == 0.0 {
+            ey.abs()
+        } else {
+            (ex * ex + ey * ey).sqrt()
+        };
         // outward normal of a ccw edge is (ey, −ex)
         (ey * (x - a[0]) - ex * (y - a[1])) <= tol * len
     })
@@ -309,19 +342,33 @@ fn plane_of(c: &[[f64; 2]; 3], z: &[f64; 3]) -> FacetPlane {
     let (bx, by) = (c[2][0] - c[0][0], c[2][1] - c[0][1]);
     let (az, bz) = (z[1] - z[0], z[2] - z[0]);
     let det = ax * by - ay * bx;
-    FacetPlane {
-        xr: c[0][0],
-        yr: c[0][1],
-        zr: z[0],
-        bx: (az * by - bz * ay) / det,
-        by: (ax * bz - bx * az) / det,
-    }
+    FacetPlane::new(
+        c[0][0],
+        c[0][1],
+        z[0],
+        (az * by - bz * ay) / det,
+        (ax * bz - bx * az) / det,
+    )
 }
 
 impl GridFloor {
+    /// Row i and column j of facet f's cell.
+    #[inline]
+    fn cell_of(&self, f: Facet) -> (usize, usize) {
+        // facet ids are u32, so the cell index and the row length fit u32 (a cheaper division)
+        let cell = f >> 1;
+        let ncx = self.cells.ncx as u32;
+        ((cell / ncx) as usize, (cell % ncx) as usize)
+    }
+
+    #[inline]
     fn corners(&self, f: Facet) -> ([[f64; 2]; 3], [f64; 3]) {
-        let cell = (f >> 1) as usize;
-        let (i, j) = (cell / (self.nx - 1), cell % (self.nx - 1));
+        let (i, j) = self.cell_of(f);
+        self.corners_at(f, i, j)
+    }
+
+    #[inline]
+    fn corners_at(&self, f: Facet, i: usize, j: usize) -> ([[f64; 2]; 3], [f64; 3]) {
         let d = self.cells.d;
         let x = self.cells.x0 + j as f64 * d;
         let y = self.cells.y0 + i as f64 * d;
@@ -340,9 +387,16 @@ impl GridFloor {
         }
     }
 
+    #[inline]
     fn plane(&self, f: Facet) -> FacetPlane {
-        let cell = (f >> 1) as usize;
-        let (i, j) = (cell / (self.nx - 1), cell % (self.nx - 1));
+        match self.planes.get(f as usize) {
+            Some(p) => *p,
+            None => self.plane_of(f),
+        }
+    }
+
+    fn plane_of(&self, f: Facet) -> FacetPlane {
+        let (i, j) = self.cell_of(f);
         let d = self.cells.d;
         let z00 = self.z[i * self.nx + j];
         let z10 = self.z[i * self.nx + j + 1];
@@ -353,23 +407,23 @@ impl GridFloor {
         } else {
             ((z11 - z01) / d, (z01 - z00) / d)
         };
-        FacetPlane {
-            xr: self.cells.x0 + j as f64 * d,
-            yr: self.cells.y0 + i as f64 * d,
-            zr: z00,
+        FacetPlane::new(
+            self.cells.x0 + j as f64 * d,
+            self.cells.y0 + i as f64 * d,
+            z00,
             bx,
             by,
-        }
+        )
     }
 
+    #[inline]
     fn facet(&self, ci: usize, cj: usize, half: u32) -> Facet {
         (((cj * (self.nx - 1) + ci) as u32) << 1) | half
     }
 
-    fn neighbor(&self, f: Facet, edge: usize) -> Option<Facet> {
-        let cell = (f >> 1) as usize;
+    #[inline]
+    fn neighbor_at(&self, f: Facet, i: usize, j: usize, edge: usize) -> Option<Facet> {
         let ncx = self.nx - 1;
-        let (i, j) = (cell / ncx, cell % ncx);
         let ncy = self.cells.ncy;
         match (f & 1, edge) {
             (0, 0) => (i > 0).then(|| self.facet(j, i - 1, 1)),
@@ -383,6 +437,18 @@ impl GridFloor {
 }
 
 impl MeshFloor {
+    #[inline]
+    fn plane(&self, f: Facet) -> FacetPlane {
+        match self.planes.get(f as usize) {
+            Some(p) => *p,
+            None => {
+                let (c, z) = self.corners(f);
+                plane_of(&c, &z)
+            }
+        }
+    }
+
+    #[inline]
     fn corners(&self, f: Facet) -> ([[f64; 2]; 3], [f64; 3]) {
         let t = self.tris[f as usize];
         let p = t.map(|k| self.xyz[k as usize]);
@@ -422,13 +488,7 @@ impl Floor {
     pub(crate) fn plane(dip: f64) -> Self {
         let (sin, cos) = dip.sin_cos();
         Floor {
-            kind: FloorKind::Plane(FacetPlane {
-                xr: 0.0,
-                yr: 0.0,
-                zr: 0.0,
-                bx: -sin / cos,
-                by: 0.0,
-            }),
+            kind: FloorKind::Plane(FacetPlane::new(0.0, 0.0, 0.0, -sin / cos, 0.0)),
             mean: MeanPlane {
                 x0: 0.0,
                 z_ref: 0.0,
@@ -476,18 +536,24 @@ impl Floor {
         }
         let z_ref = heights.iter().map(|r| r[0]).sum::<f64>() / ny as f64;
         let (sin, cos) = dip.sin_cos();
+        let mut grid = GridFloor {
+            cells: CellGrid {
+                x0: origin[0],
+                y0: origin[1],
+                d: spacing,
+                ncx: nx - 1,
+                ncy: ny - 1,
+            },
+            nx,
+            z,
+            planes: Vec::new(),
+        };
+        let n_facets = 2 * (nx - 1) * (ny - 1);
+        if n_facets <= MAX_TABLED_FACETS {
+            grid.planes = (0..n_facets as Facet).map(|f| grid.plane_of(f)).collect();
+        }
         Ok(Floor {
-            kind: FloorKind::Grid(GridFloor {
-                cells: CellGrid {
-                    x0: origin[0],
-                    y0: origin[1],
-                    d: spacing,
-                    ncx: nx - 1,
-                    ncy: ny - 1,
-                },
-                nx,
-                z,
-            }),
+            kind: FloorKind::Grid(grid),
             mean: MeanPlane {
                 x0: origin[0],
                 z_ref,
@@ -648,16 +714,26 @@ impl Floor {
             }
         }
         let (sin, cos) = dip.sin_cos();
+        let mut mesh = MeshFloor {
+            xyz,
+            tris,
+            nbr,
+            cells,
+            bucket_start: counts,
+            bucket_items: items,
+            bbox: [lo[0], hi[0], lo[1], hi[1]],
+            planes: Vec::new(),
+        };
+        if mesh.tris.len() <= MAX_TABLED_FACETS {
+            mesh.planes = (0..mesh.tris.len() as Facet)
+                .map(|f| {
+                    let (c, z) = mesh.corners(f);
+                    plane_of(&c, &z)
+                })
+                .collect();
+        }
         Ok(Floor {
-            kind: FloorKind::Mesh(MeshFloor {
-                xyz,
-                tris,
-                nbr,
-                cells,
-                bucket_start: counts,
-                bucket_items: items,
-                bbox: [lo[0], hi[0], lo[1], hi[1]],
-            }),
+            kind: FloorKind::Mesh(mesh),
             mean: MeanPlane {
                 x0: x_min,
                 z_ref: z_at_min,
@@ -668,14 +744,12 @@ impl Floor {
     }
 
     /// The facet's plane.
+    #[inline]
     pub(crate) fn facet_plane(&self, f: Facet) -> FacetPlane {
         match &self.kind {
             FloorKind::Plane(p) => *p,
             FloorKind::Grid(g) => g.plane(f),
-            FloorKind::Mesh(m) => {
-                let (c, z) = m.corners(f);
-                plane_of(&c, &z)
-            }
+            FloorKind::Mesh(m) => m.plane(f),
         }
     }
 
@@ -788,13 +862,12 @@ impl Floor {
                 m.cells.walk(p.x, p.y, v.x, v.y, t_max, |ci, cj, t0, t1| {
                     let mut best: Option<(f64, Facet)> = None;
                     for &f in m.bucket(ci, cj) {
-                        let (c, z) = m.corners(f);
-                        let pl = plane_of(&c, &z);
+                        let pl = m.plane(f);
                         if let Some(r) = root(&pl)
                             && r >= t0 - 1e-12 * (1.0 + t0)
                             && r <= t1 + 1e-12 * (1.0 + t1)
                             && best.is_none_or(|b| r < b.0)
-                            && inside_tri(&c, p.x + v.x * r, p.y + v.y * r, tol)
+                            && inside_tri(&m.corners(f).0, p.x + v.x * r, p.y + v.y * r, tol)
                         {
                             best = Some((r.max(0.0), f));
                         }
@@ -808,6 +881,7 @@ impl Floor {
     /// First exit of the planar motion p + v t + ½ a t² from facet f through one of its edges
     /// within t ≤ t_max: the time, the facet across that edge (None: off the floor) and the
     /// edge's end points in plan.
+    #[inline]
     pub(crate) fn slide_exit(
         &self,
         f: Facet,
@@ -816,10 +890,13 @@ impl Floor {
         a: &Vector3<f64>,
         t_max: f64,
     ) -> Option<(f64, Option<Facet>, [[f64; 2]; 2])> {
-        let corners = match &self.kind {
+        let (corners, ij) = match &self.kind {
             FloorKind::Plane(_) => return None,
-            FloorKind::Grid(g) => g.corners(f).0,
-            FloorKind::Mesh(m) => m.corners(f).0,
+            FloorKind::Grid(g) => {
+                let (i, j) = g.cell_of(f);
+                (g.corners_at(f, i, j).0, (i, j))
+            }
+            FloorKind::Mesh(m) => (m.corners(f).0, (0, 0)),
         };
         let mut best: Option<(f64, usize)> = None;
         for k in 0..3 {
@@ -838,7 +915,7 @@ impl Floor {
         }
         best.map(|(t, k)| {
             let next = match &self.kind {
-                FloorKind::Grid(g) => g.neighbor(f, k),
+                FloorKind::Grid(g) => g.neighbor_at(f, ij.0, ij.1, k),
                 FloorKind::Mesh(m) => {
                     let n = m.nbr[f as usize][k];
                     (n != NONE).then_some(n)
@@ -852,9 +929,14 @@ impl Floor {
 
 /// Smallest t ≥ 0 where f0 + f1 t + ½ f2 t² reaches 0 while increasing (leaving the half-plane
 /// f ≤ 0); t = 0 when already on or past the line and moving out.
+#[inline]
 pub(crate) fn outward_root(f0: f64, f1: f64, f2: f64) -> Option<f64> {
     if f0 >= 0.0 && (f1 > 0.0 || (f1 == 0.0 && f2 > 0.0)) {
         return Some(0.0);
+    }
+    if f1 <= 0.0 && f2 <= 0.0 {
+        // never increasing for t > 0: no outward crossing (saves the square root)
+        return None;
     }
     if f2 == 0.0 {
         return (f1 > 0.0).then(|| (-f0 / f1).max(0.0));
@@ -902,6 +984,30 @@ mod tests {
         assert!((outward_root(0.0, -1.0, 1.0).unwrap() - 2.0).abs() < 1e-15);
         // moving in for ever
         assert!(outward_root(-1.0, -1.0, 0.0).is_none());
+    }
+
+    #[test]
+    fn tabled_planes_equal_planes_set_up_on_demand() {
+        let h: Vec<Vec<f64>> = (0..4)
+            .map(|i| {
+                (0..5)
+                    .map(|j| (0.3 * i as f64).sin() - 0.7 * j as f64)
+                    .collect()
+            })
+            .collect();
+        let f = Floor::grid(0.6, [1.0, -2.0], 0.5, &h).unwrap();
+        let FloorKind::Grid(g) = &f.kind else {
+            unreachable!()
+        };
+        assert_eq!(g.planes.len(), 2 * 4 * 3);
+        for id in 0..g.planes.len() as Facet {
+            let (c, z) = g.corners(id);
+            assert_eq!(g.plane(id), g.plane_of(id));
+            // the same plane as through the facet's corners, up to rounding
+            let p = plane_of(&c, &z);
+            assert!((p.bx - g.plane(id).bx).abs() < 1e-12);
+            assert!((p.by - g.plane(id).by).abs() < 1e-12);
+        }
     }
 
     #[test]
