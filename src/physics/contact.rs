@@ -318,6 +318,8 @@ struct LogSolution {
     p_max: f64,
     d_max: f64,
     p_cap: f64,
+    /// e^{−u/4}.
+    exp_quarter_u: f64,
 }
 
 /// Solves ½mv² = E(Pmax) on W₋₁ for a line law with E* `e_star` (double-double).
@@ -385,8 +387,10 @@ fn solve_log(case: &ImpactCase, e_star: Dd) -> PhysicsResult<LogSolution> {
         let u = branch_u_log(-ln_g).unwrap_or(f64::INFINITY);
         (ln_g.exp(), u)
     };
+    // e^{−u/4} serves Pmax = P_cap·(e^{−u/4})² and √Pmax (one exp instead of two).
+    let exp_quarter_u = (-0.25 * u).exp();
     let p_max = if u < 1400.0 {
-        p_cap * (-0.5 * u).exp()
+        p_cap * exp_quarter_u * exp_quarter_u
     } else {
         (p_cap.ln() - 0.5 * u).exp()
     };
@@ -399,6 +403,7 @@ fn solve_log(case: &ImpactCase, e_star: Dd) -> PhysicsResult<LogSolution> {
         p_max,
         d_max,
         p_cap,
+        exp_quarter_u,
     })
 }
 
@@ -922,7 +927,7 @@ pub fn impact_maxima(case: &ImpactCase) -> PhysicsResult<ImpactDetail> {
             let s = solve_log(case, e_star)?;
             // √Pmax directly, so that a and p₀ = √(P E*/(πRL)) survive an underflowing Pmax.
             let sqrt_p = if s.u < 1400.0 {
-                s.p_cap.sqrt() * (-0.25 * s.u).exp()
+                s.p_cap.sqrt() * s.exp_quarter_u
             } else {
                 (0.5 * s.p_cap.ln() - 0.25 * s.u).exp()
             };
