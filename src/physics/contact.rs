@@ -322,8 +322,95 @@ struct LogSolution {
     exp_quarter_u: f64,
 }
 
-/// Solves ½mv² = E(Pmax) on W₋₁ for a line law with E* `e_star` (double-double).
-fn solve_log(case: &ImpactCase, e_star: Dd) -> PhysicsResult<LogSolution> {
+/// Solves ½mv² = E(Pmax) on W₋₁ for a line law.
+///
+/// Far from the branch point (G < 0.5, where Pmax has condition (1 + u)/(2u) < 0.8 in G) G is
+/// formed in plain f64; otherwise, and whenever a factor leaves [1e-290, 1e290], in
+/// double-double with 1 − G taken before rounding.
+fn solve_log(case: &ImpactCase) -> PhysicsResult<LogSolution> {
+    if let Some(s) = solve_log_far(case) {
+        return Ok(s);
+    }
+    let e_star = effective_modulus_dd(&case.rock, &case.column, case.contact.modulus);
+    solve_log_dd(case, e_star)
+}
+
+/// E* in plain f64 (within a few ulp of [`effective_modulus`]).
+fn effective_modulus_f64(rock: &Rock, column: &Column, convention: ModulusConvention) -> f64 {
+    let nu = rock.poisson_ratio;
+    let rock_term = (1.0 - nu * nu) / rock.elastic_modulus;
+    match convention {
+        ModulusConvention::Paper => rock.elastic_modulus / (1.0 - nu * nu),
+        ModulusConvention::TwoBody => {
+            let nus = column.poisson_ratio;
+            1.0 / (rock_term + (1.0 - nus * nus) / column.elastic_modulus)
+        }
+    }
+}
+
+/// The f64 path of [`solve_log`]; `None` when G ≥ 0.5 or a factor is outside [1e-290, 1e290].
+fn solve_log_far(case: &ImpactCase) -> Option<LogSolution> {
+    let l = case.rock.side_length;
+    let r = case.column.contact_radius;
+    let v = case.velocity;
+    let m = case.rock.mass();
+    let es = effective_modulus_f64(&case.rock, &case.column, case.contact.modulus);
+    let (num, den, p_cap, p_ref) = match case.contact.law {
+        ContactLaw::Paper => {
+            let p_cap = PI * es * l * l * l / r;
+            (
+                2.0 * m * r * r * v * v,
+                PI * es * l * l * l * l * l,
+                p_cap,
+                E * p_cap,
+            )
+        }
+        _ => {
+            let p_cap = 4.0 * PI * l * es * r / (E * E);
+            (
+                DD_E4.hi * m * v * v,
+                8.0 * PI * l * es * r * r,
+                p_cap,
+                4.0 * PI * l * es * r / E,
+            )
+        }
+    };
+    let in_range = |x: f64| (1e-290..=1e290).contains(&x);
+    if !(in_range(num) && in_range(den)) {
+        return None;
+    }
+    let g = num / den;
+    if !(1e-250..0.5).contains(&g) {
+        return None;
+    }
+    let u = branch_u_parts(1.0 - g, -g.ln());
+    Some(log_solution(PI * l * es, p_ref, p_cap, g, u))
+}
+
+/// Pmax, δmax from u (physics.md §A.5).
+fn log_solution(k: f64, p_ref: f64, p_cap: f64, g: f64, u: f64) -> LogSolution {
+    // e^{−u/4} serves Pmax = P_cap·(e^{−u/4})² and √Pmax (one exp instead of two).
+    let exp_quarter_u = (-0.25 * u).exp();
+    let p_max = if u < 1400.0 {
+        p_cap * exp_quarter_u * exp_quarter_u
+    } else {
+        (p_cap.ln() - 0.5 * u).exp()
+    };
+    let d_max = p_max * (2.0 + u) / (2.0 * k);
+    LogSolution {
+        k,
+        p_ref,
+        g,
+        u,
+        p_max,
+        d_max,
+        p_cap,
+        exp_quarter_u,
+    }
+}
+
+/// The double-double path of [`solve_log`] with E* `e_star`.
+fn solve_log_dd(case: &ImpactCase, e_star: Dd) -> PhysicsResult<LogSolution> {
     let l = case.rock.side_length;
     let r = case.column.contact_radius;
     let v = case.velocity;
@@ -387,24 +474,7 @@ fn solve_log(case: &ImpactCase, e_star: Dd) -> PhysicsResult<LogSolution> {
         let u = branch_u_log(-ln_g).unwrap_or(f64::INFINITY);
         (ln_g.exp(), u)
     };
-    // e^{−u/4} serves Pmax = P_cap·(e^{−u/4})² and √Pmax (one exp instead of two).
-    let exp_quarter_u = (-0.25 * u).exp();
-    let p_max = if u < 1400.0 {
-        p_cap * exp_quarter_u * exp_quarter_u
-    } else {
-        (p_cap.ln() - 0.5 * u).exp()
-    };
-    let d_max = p_max * (2.0 + u) / (2.0 * k);
-    Ok(LogSolution {
-        k,
-        p_ref,
-        g,
-        u,
-        p_max,
-        d_max,
-        p_cap,
-        exp_quarter_u,
-    })
+    Ok(log_solution(k, p_ref, p_cap, g, u))
 }
 
 /// J(u₀) = ∫₀^{π/2} sin θ · exp((u(G sin²θ) − u₀)/2) dθ, where u₀ = u(G): the log-law contact
@@ -840,9 +910,15 @@ pub fn hertz_geometry(
     }
 }
 
-/// δmax = (5mv²/(4κ))^{2/5}, m, without forming v² (v may be 1e-300).
+/// δmax = (5mv²/(4κ))^{2/5}, m: one power when 5mv²/(4κ) is a normal number, else without
+/// forming v² (v may be 1e-300).
 fn hertz_max_deformation(mass: f64, v: f64, kappa: f64) -> f64 {
-    (1.25 * mass / kappa).powf(0.4) * v.powf(0.8)
+    let x = 1.25 * mass * (v * v) / kappa;
+    if x.is_normal() && (1e-290..=1e290).contains(&(v * v)) {
+        x.powf(0.4)
+    } else {
+        (1.25 * mass / kappa).powf(0.4) * v.powf(0.8)
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -918,13 +994,11 @@ fn corner_radius(case: &ImpactCase) -> f64 {
 /// physics.md §A.5 (closed form on W₋₁ through u(G)), §A.7.
 pub fn impact_maxima(case: &ImpactCase) -> PhysicsResult<ImpactDetail> {
     check_case(case)?;
-    let e_star = effective_modulus_dd(&case.rock, &case.column, case.contact.modulus);
-    let es = e_star.f64();
     let r = case.column.contact_radius;
     let l = case.rock.side_length;
     match case.contact.law {
         ContactLaw::Paper | ContactLaw::Johnson => {
-            let s = solve_log(case, e_star)?;
+            let s = solve_log(case)?;
             // √Pmax directly, so that a and p₀ = √(P E*/(πRL)) survive an underflowing Pmax.
             let sqrt_p = if s.u < 1400.0 {
                 s.p_cap.sqrt() * s.exp_quarter_u
@@ -946,6 +1020,7 @@ pub fn impact_maxima(case: &ImpactCase) -> PhysicsResult<ImpactDetail> {
             }))
         }
         ContactLaw::HertzPoint => {
+            let es = effective_modulus(&case.rock, &case.column, case.contact.modulus);
             let mass = case.rock.mass();
             let v = case.velocity;
             let h = hertz_geometry(es, corner_radius(case), r, case.contact.hertz_exact);
@@ -956,11 +1031,11 @@ pub fn impact_maxima(case: &ImpactCase) -> PhysicsResult<ImpactDetail> {
                 max_force: h.stiffness * d * d.sqrt(),
                 stiffness: h.stiffness,
                 equivalent_radius: h.equivalent_radius,
-                max_deformation_equivalent_radius: hertz_max_deformation(
-                    mass,
-                    v,
-                    h.stiffness_equivalent_radius,
-                ),
+                max_deformation_equivalent_radius: if h.stiffness == h.stiffness_equivalent_radius {
+                    d
+                } else {
+                    hertz_max_deformation(mass, v, h.stiffness_equivalent_radius)
+                },
                 axis_ratio: h.axis_ratio,
                 semi_axes: [a, a * h.axis_ratio],
                 // 3P/(2πab) = 3κ√δ/(2π·factor·(b/a)), without forming P (it may underflow).
