@@ -5,7 +5,7 @@ use std::f64::consts::{E, FRAC_PI_2, PI};
 
 use super::elliptic::complete_elliptic_parts;
 use super::error::{PhysicsError, PhysicsResult};
-use super::lambert::{branch_u_log, branch_u_parts, u_minus_ln1p};
+use super::lambert::{branch_u_far, branch_u_log, branch_u_parts, u_minus_ln1p};
 use super::material::{Column, ContactLaw, ImpactCase, ModulusConvention, Rock, RockShape};
 use super::quadrature::{Integral, QuadOptions, integrate};
 
@@ -383,14 +383,13 @@ fn solve_log_far(case: &ImpactCase) -> Option<LogSolution> {
     if !(1e-250..0.5).contains(&g) {
         return None;
     }
-    let u = branch_u_parts(1.0 - g, -g.ln());
-    Some(log_solution(PI * l * es, p_ref, p_cap, g, u))
+    let (u, exp_quarter_u) = branch_u_far(g, -g.ln());
+    Some(log_solution(PI * l * es, p_ref, p_cap, g, u, exp_quarter_u))
 }
 
-/// Pmax, δmax from u (physics.md §A.5).
-fn log_solution(k: f64, p_ref: f64, p_cap: f64, g: f64, u: f64) -> LogSolution {
+/// Pmax, δmax from u and e^{−u/4} (physics.md §A.5).
+fn log_solution(k: f64, p_ref: f64, p_cap: f64, g: f64, u: f64, exp_quarter_u: f64) -> LogSolution {
     // e^{−u/4} serves Pmax = P_cap·(e^{−u/4})² and √Pmax (one exp instead of two).
-    let exp_quarter_u = (-0.25 * u).exp();
     let p_max = if u < 1400.0 {
         p_cap * exp_quarter_u * exp_quarter_u
     } else {
@@ -474,7 +473,7 @@ fn solve_log_dd(case: &ImpactCase, e_star: Dd) -> PhysicsResult<LogSolution> {
         let u = branch_u_log(-ln_g).unwrap_or(f64::INFINITY);
         (ln_g.exp(), u)
     };
-    Ok(log_solution(k, p_ref, p_cap, g, u))
+    Ok(log_solution(k, p_ref, p_cap, g, u, (-0.25 * u).exp()))
 }
 
 /// J(u₀) = ∫₀^{π/2} sin θ · exp((u(G sin²θ) − u₀)/2) dθ, where u₀ = u(G): the log-law contact
@@ -1101,7 +1100,8 @@ pub fn impact_maxima(case: &ImpactCase) -> PhysicsResult<ImpactDetail> {
             } else {
                 (0.5 * s.p_cap.ln() - 0.25 * s.u).exp()
             };
-            let half_width = 2.0 * sqrt_p * (r / s.k).sqrt();
+            let root_r_over_k = (r / s.k).sqrt();
+            let half_width = 2.0 * sqrt_p * root_r_over_k;
             Ok(ImpactDetail::Line(LineImpact {
                 energy_parameter: s.g,
                 lambert_w: -1.0 - s.u,
@@ -1109,7 +1109,7 @@ pub fn impact_maxima(case: &ImpactCase) -> PhysicsResult<ImpactDetail> {
                 max_deformation: s.d_max,
                 max_force: s.p_max,
                 half_width,
-                max_pressure: sqrt_p * (s.k / r).sqrt() / (PI * l),
+                max_pressure: sqrt_p / (root_r_over_k * PI * l),
                 energy_capacity: s.p_cap * s.p_cap / (4.0 * s.k),
                 deformation_capacity: s.p_ref / (E * s.k),
                 force_capacity: s.p_cap,

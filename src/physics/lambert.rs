@@ -172,6 +172,34 @@ fn initial_u(y: f64) -> f64 {
     }
 }
 
+/// u and e^{−u/4} for G < 0.5 given G and y = −ln G, without a logarithm in the iteration.
+///
+/// Halley steps as in [`branch_u_parts`], with f = −ln R, R = (1 + u)e^{−u}/G formed from
+/// e^{−u/4} (R − 1 is O(1e-5) from the starting value, so ln R is a short series), and
+/// e^{−u/4} carried along by its Taylor factor. Falls back to [`branch_u_parts`] and one exp.
+pub(crate) fn branch_u_far(g: f64, y: f64) -> (f64, f64) {
+    let mut u = initial_u(y);
+    let mut e4 = (-0.25 * u).exp();
+    for _ in 0..4 {
+        let e2 = e4 * e4;
+        let r = (1.0 + u) * (e2 * e2) / g - 1.0;
+        if r.abs() > 1e-4 {
+            break;
+        }
+        let f = -(r * (1.0 - r * (0.5 - r * (1.0 / 3.0 - 0.25 * r))));
+        let u2 = 2.0 * u * u;
+        let du = -2.0 * f * u * (1.0 + u) / (u2 - f);
+        let q = 0.25 * du;
+        e4 *= 1.0 - q * (1.0 - q * (0.5 - q / 6.0));
+        u += du;
+        if du.abs() <= 1e-6 * u {
+            return (u, e4);
+        }
+    }
+    let u = branch_u_parts(1.0 - g, y);
+    (u, (-0.25 * u).exp())
+}
+
 /// y = −ln G = u − ln(1 + u) for u ≥ 0 (the inverse of [`branch_u_log`]), without
 /// cancellation at small u.
 ///
@@ -265,5 +293,25 @@ mod tests {
         }
         assert!(worst_guess <= 3e-7, "{worst_guess:e}");
         assert!(worst_residual <= 1e-15, "{worst_residual:e}");
+    }
+
+    /// The logarithm-free iteration for G < 0.5 agrees with [`branch_u_parts`] to a few ulp of
+    /// 1 + u and carries e^{−u/4} to rounding.
+    #[test]
+    fn far_iteration_matches() {
+        let mut worst = (0.0f64, 0.0f64);
+        for i in 0..=5000 {
+            let g = 0.5 * 10f64.powf(-250.0 * (i as f64 / 5000.0).powi(2)) * (1.0 - 1e-12);
+            let y = -g.ln();
+            let (u, e4) = branch_u_far(g, y);
+            let reference = branch_u_parts(1.0 - g, y);
+            worst.0 = worst
+                .0
+                .max((u - reference).abs() / (1.0 + reference) / f64::EPSILON);
+            // exp(−u/4) of the rounded u is itself off by ~ulp(u)/4 relative.
+            let scale = (4.0 + 0.5 * u) * f64::EPSILON;
+            worst.1 = worst.1.max((e4 / (-0.25 * u).exp() - 1.0).abs() / scale);
+        }
+        assert!(worst.0 <= 8.0 && worst.1 <= 1.0, "{worst:?}");
     }
 }
