@@ -383,7 +383,9 @@ fn solve_log_far(case: &ImpactCase) -> Option<LogSolution> {
     if !(1e-250..0.5).contains(&g) {
         return None;
     }
-    let (u, exp_quarter_u) = branch_u_far(g, -g.ln());
+    // 1/G and ln(1/G) off the division that gives G itself.
+    let inv_g = den / num;
+    let (u, exp_quarter_u) = branch_u_far(inv_g, inv_g.ln());
     Some(log_solution(PI * l * es, p_ref, p_cap, g, u, exp_quarter_u))
 }
 

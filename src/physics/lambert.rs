@@ -119,20 +119,21 @@ pub fn branch_u_parts(q: f64, y: f64) -> f64 {
     u
 }
 
-/// Chebyshev coefficients of u on s = √(2y) ∈ [1, √60] (y ∈ [0.5, 30]), fitted at 10 nodes to
-/// 30-digit roots; relative error ≤ 2.5e-8.
+/// u on s = √(2y) ∈ [1, √60] (y ∈ [0.5, 30]) as a polynomial in x = (2s − 1 − √60)/(√60 − 1):
+/// a 10-node Chebyshev fit to 30-digit roots (relative error ≤ 2.5e-8), converted to powers
+/// of x for Estrin's scheme.
 #[allow(clippy::excessive_precision)] // fitted digits kept as computed
-const U_CHEB: [f64; 10] = [
-    14.799393865693112,
-    16.058388094453022,
-    2.656692754180252,
-    0.032755777758818154,
-    -0.005965978836372399,
-    0.001077553626201544,
-    -0.00018732795666485114,
-    3.0386844523744295e-05,
-    -4.36658758954378e-06,
-    4.933350656710634e-07,
+const U_POLY: [f64; 10] = [
+    12.136918094045562,
+    15.9653002614115,
+    5.357881166634381,
+    0.1111145015966909,
+    -0.039434742785393335,
+    0.014050652180935241,
+    -0.0048766481903520275,
+    0.001660597051693102,
+    -0.0005589232114616039,
+    0.00012629377681179222,
 ];
 
 /// A starting value for u(y) with relative error ≤ 3e-7, so that one Halley step reaches full
@@ -140,7 +141,7 @@ const U_CHEB: [f64; 10] = [
 ///
 /// * y ≤ 0.5: the series of the inverse of u − ln(1 + u) = s²/2 in s = √(2y), 8 terms
 ///   (1, 1/3, 1/36, −1/270, 1/4320, 1/17010, −139/5443200, 1/204120).
-/// * y ≤ 30: [`U_CHEB`].
+/// * y ≤ 30: [`U_POLY`].
 /// * Beyond: the asymptotic series of −W₋₁ in a = 1 + y, L = ln a (de Bruijn), to 1/a³.
 fn initial_u(y: f64) -> f64 {
     if y <= 0.5 {
@@ -153,17 +154,17 @@ fn initial_u(y: f64) -> f64 {
                             + s * (1.0 / 17010.0
                                 + s * (-139.0 / 5443200.0 + s * (1.0 / 204120.0))))))))
     } else if y <= 30.0 {
-        let s = (2.0 * y).sqrt();
-        let lo = 1.0;
-        let hi = 60f64.sqrt();
-        let x = (2.0 * s - (lo + hi)) / (hi - lo);
-        let (mut b1, mut b2) = (0.0, 0.0);
-        for &c in U_CHEB[1..].iter().rev() {
-            let b0 = 2.0 * x * b1 - b2 + c;
-            b2 = b1;
-            b1 = b0;
-        }
-        x * b1 - b2 + U_CHEB[0]
+        // x = (2s − (1 + √60))/(√60 − 1), by multiplications.
+        let x = (2.0 * y).sqrt() * 0.296_473_447_200_502_84 - 1.296_473_447_200_502_8;
+        let c = &U_POLY;
+        let x2 = x * x;
+        let x4 = x2 * x2;
+        let p01 = c[0] + c[1] * x;
+        let p23 = c[2] + c[3] * x;
+        let p45 = c[4] + c[5] * x;
+        let p67 = c[6] + c[7] * x;
+        let p89 = c[8] + c[9] * x;
+        (p01 + p23 * x2) + x4 * ((p45 + p67 * x2) + x4 * p89)
     } else {
         let a = 1.0 + y;
         let l = a.ln();
@@ -172,17 +173,17 @@ fn initial_u(y: f64) -> f64 {
     }
 }
 
-/// u and e^{−u/4} for G < 0.5 given G and y = −ln G, without a logarithm in the iteration.
+/// u and e^{−u/4} for G < 0.5 given 1/G and y = −ln G, without a logarithm in the iteration.
 ///
 /// Halley steps as in [`branch_u_parts`], with f = −ln R, R = (1 + u)e^{−u}/G formed from
 /// e^{−u/4} (R − 1 is O(1e-5) from the starting value, so ln R is a short series), and
 /// e^{−u/4} carried along by its Taylor factor. Falls back to [`branch_u_parts`] and one exp.
-pub(crate) fn branch_u_far(g: f64, y: f64) -> (f64, f64) {
+pub(crate) fn branch_u_far(inv_g: f64, y: f64) -> (f64, f64) {
     let mut u = initial_u(y);
     let mut e4 = (-0.25 * u).exp();
     for _ in 0..4 {
         let e2 = e4 * e4;
-        let r = (1.0 + u) * (e2 * e2) / g - 1.0;
+        let r = (1.0 + u) * (e2 * e2) * inv_g - 1.0;
         if r.abs() > 1e-4 {
             break;
         }
@@ -196,7 +197,7 @@ pub(crate) fn branch_u_far(g: f64, y: f64) -> (f64, f64) {
             return (u, e4);
         }
     }
-    let u = branch_u_parts(1.0 - g, y);
+    let u = branch_u_parts(1.0 - 1.0 / inv_g, y);
     (u, (-0.25 * u).exp())
 }
 
@@ -303,7 +304,7 @@ mod tests {
         for i in 0..=5000 {
             let g = 0.5 * 10f64.powf(-250.0 * (i as f64 / 5000.0).powi(2)) * (1.0 - 1e-12);
             let y = -g.ln();
-            let (u, e4) = branch_u_far(g, y);
+            let (u, e4) = branch_u_far(1.0 / g, y);
             let reference = branch_u_parts(1.0 - g, y);
             worst.0 = worst
                 .0
