@@ -42,7 +42,7 @@ pub fn solve(case: &ImpactCase, req: ImpactRequest) -> Result<ImpactResponse, Ap
     let n = req.output.curve_points as usize;
     let mut plan = vec![PlanStep::ran(
         "impact",
-        "closed-form maxima on the W₋₁ branch (log laws) or Hertz; duration by quadrature",
+        "closed-form maxima on the W₋₁ branch (log laws) or Hertz; duration t_c = (2mv/Pmax)·J(u₀)",
     )];
     let curve = if n > 0 {
         let law = contact::force_law(case)?;
