@@ -570,12 +570,19 @@ impl FreeVibration {
     /// physics.md §B.5.
     pub fn sample_uniform(&self, duration: f64, n: usize) -> Vec<ModalSample> {
         let mut out = Vec::with_capacity(n);
+        self.for_each_uniform(duration, n, |s| out.push(s));
+        out
+    }
+
+    /// Calls `f` with the samples of [`FreeVibration::sample_uniform`] in time order, without
+    /// collecting them (callers write straight into their own arrays).
+    pub fn for_each_uniform(&self, duration: f64, n: usize, mut f: impl FnMut(ModalSample)) {
         if n == 0 {
-            return out;
+            return;
         }
         if n == 1 {
-            out.push(self.sample(0.0));
-            return out;
+            f(self.sample(0.0));
+            return;
         }
         let dt = duration / (n - 1) as f64;
         let (kc, ks) = self.kernels(dt);
@@ -602,7 +609,7 @@ impl FreeVibration {
             } else {
                 dis_factor * (m - 2.0 * s * es * ec - 2.0 * s * s * es * es)
             };
-            out.push(ModalSample {
+            f(ModalSample {
                 time: t,
                 displacement: w,
                 velocity: wd,
@@ -613,7 +620,6 @@ impl FreeVibration {
             (ec, es) = (ec * kc - q2 * es * ks, es * kc + ec * ks);
             m += (1.0 - m) * a;
         }
-        out
     }
 
     /// Initial (absorbed) energy U₀ = ½Kw₀², J.

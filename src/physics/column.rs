@@ -1,7 +1,7 @@
 //! Column dynamics after an impact (api.md `POST /v1/column`): the paper's decoupled single-mode
 //! free vibration, or the coupled rock–contact–beam model (physics.md §B).
 
-use super::beam::{FirstMode, Galerkin, ModeIntegrals, ModeShapes, SingleMode};
+use super::beam::{FirstMode, Galerkin, ModalSample, ModeIntegrals, ModeShapes, SingleMode};
 use super::contact::{ForceLaw, ImpactDetail, ImpactResult, force_law, solve_impact};
 use super::control::Control;
 use super::coupled::{CoupledInput, solve_coupled};
@@ -540,12 +540,11 @@ fn decoupled(
         });
     }
     let f1 = fv.omega_n / (2.0 * std::f64::consts::PI);
-    let samples = sample_times(&case.output, f1, None, case.max_samples)?.map(|g| match g {
-        Grid::Uniform(d, n) => fv.sample_uniform(d, n),
-        Grid::Times(t) => t.iter().map(|&t| fv.sample(t)).collect(),
-    });
-    let history = samples.map(|samples: Vec<_>| {
-        let n = samples.len();
+    let history = sample_times(&case.output, f1, None, case.max_samples)?.map(|grid| {
+        let n = match &grid {
+            Grid::Uniform(_, n) => *n,
+            Grid::Times(t) => t.len(),
+        };
         let mut h = ColumnHistory {
             time: Vec::with_capacity(n),
             midpoint_displacement: Vec::with_capacity(n),
@@ -554,13 +553,16 @@ fn decoupled(
             dissipated_energy: Vec::with_capacity(n),
             rock: None,
         };
-        for s in samples {
-            let t = s.time;
-            h.time.push(t);
+        let mut push = |s: ModalSample| {
+            h.time.push(s.time);
             h.midpoint_displacement.push(phi * s.displacement);
             h.kinetic_energy.push(s.kinetic);
             h.strain_energy.push(s.strain);
             h.dissipated_energy.push(s.dissipated);
+        };
+        match grid {
+            Grid::Uniform(d, n) => fv.for_each_uniform(d, n, push),
+            Grid::Times(t) => t.iter().for_each(|&t| push(fv.sample(t))),
         }
         h
     });
