@@ -16,7 +16,7 @@
 
 use nalgebra::Vector3;
 
-use super::terrain::{Facet, FlightEnd, Floor};
+use super::terrain::{Facet, FacetPlane, FlightEnd, Floor};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
 
@@ -340,6 +340,50 @@ pub(crate) fn simulate(
             },
         );
     };
+    // Move onto facet `fb` at a facet change. Where the new facet falls away faster than the free
+    // parabola (the velocity points out of it: a convex edge) the rock takes off, a rolling one
+    // keeping its spin about `spin_normal` (the new facet's normal when `None`); otherwise the
+    // velocity is projected onto the facet and the lost normal energy booked as transition.
+    // Returns the new facet's plane when the rock stays on the ground, `None` on take-off.
+    let change_facet = |s: &mut St,
+                        fb: Facet,
+                        spin_normal: Option<Vector3<f64>>,
+                        rec: &mut Option<&mut Recording>|
+     -> Option<FacetPlane> {
+        let plb = floor.facet_plane(fb);
+        let nb = plb.normal();
+        let z = plb.z(s.p.x, s.p.y);
+        set_height(s, z, g, ke_factor);
+        let vn = s.v.dot(&nb);
+        let sp = s.v.norm();
+        if vn > 1e-9 * sp + 1e-12 {
+            s.ground = None;
+            if roll {
+                s.spin = (
+                    0.2 * sp * sp,
+                    spin_normal.unwrap_or(nb).cross(&s.v) / su.radius,
+                );
+            }
+            push_event(
+                rec,
+                EventRec {
+                    t: s.t,
+                    kind: EventKind::TakeOff,
+                    p: s.p,
+                    speed_before: sp,
+                    speed_after: sp,
+                    lost: 0.0,
+                },
+            );
+            None
+        } else {
+            let vp = s.v - nb * vn;
+            s.e_trans += 0.5 * ke_factor * (sp * sp - vp.norm_squared());
+            s.v = vp;
+            s.ground = Some(fb);
+            Some(plb)
+        }
+    };
     if let Some(f) = su.on_floor {
         enter_ground(&mut s, f, &mut rec);
     }
@@ -515,34 +559,7 @@ pub(crate) fn simulate(
                     match floor.locate(s.p.x, s.p.y, d3.x, d3.y) {
                         None => break (moving, StopReason::LeftFloor),
                         Some(fb) => {
-                            let plb = floor.facet_plane(fb);
-                            let nb = plb.normal();
-                            let z = plb.z(s.p.x, s.p.y);
-                            set_height(&mut s, z, g, ke_factor);
-                            let vn = s.v.dot(&nb);
-                            let sp = s.v.norm();
-                            if vn > 1e-9 * sp + 1e-12 {
-                                s.ground = None;
-                                if roll {
-                                    s.spin = (0.2 * sp * sp, nb.cross(&s.v) / su.radius);
-                                }
-                                push_event(
-                                    &mut rec,
-                                    EventRec {
-                                        t: s.t,
-                                        kind: EventKind::TakeOff,
-                                        p: s.p,
-                                        speed_before: sp,
-                                        speed_after: sp,
-                                        lost: 0.0,
-                                    },
-                                );
-                            } else {
-                                let vp = s.v - nb * vn;
-                                s.e_trans += 0.5 * ke_factor * (sp * sp - vp.norm_squared());
-                                s.v = vp;
-                                s.ground = Some(fb);
-                            }
+                            change_facet(&mut s, fb, None, &mut rec);
                         }
                     }
                     continue;
@@ -637,34 +654,8 @@ pub(crate) fn simulate(
                     let Some(fb) = next else {
                         break (moving, StopReason::LeftFloor);
                     };
-                    let plb = floor.facet_plane(fb);
-                    let nb = plb.normal();
-                    let z = plb.z(s.p.x, s.p.y);
-                    set_height(&mut s, z, g, ke_factor);
-                    let vn = s.v.dot(&nb);
-                    let sp = s.v.norm();
-                    if vn > 1e-9 * sp + 1e-12 {
-                        // convex edge: the new facet falls away faster than the free parabola
-                        s.ground = None;
-                        if roll {
-                            s.spin = (0.2 * sp * sp, n.cross(&s.v) / su.radius);
-                        }
-                        push_event(
-                            &mut rec,
-                            EventRec {
-                                t: s.t,
-                                kind: EventKind::TakeOff,
-                                p: s.p,
-                                speed_before: sp,
-                                speed_after: sp,
-                                lost: 0.0,
-                            },
-                        );
-                    } else {
-                        let vp = s.v - nb * vn;
-                        s.e_trans += 0.5 * ke_factor * (sp * sp - vp.norm_squared());
-                        s.v = vp;
-                        s.ground = Some(fb);
+                    if let Some(plb) = change_facet(&mut s, fb, Some(n), &mut rec) {
+                        let nb = plb.normal();
                         let ends = edge.map(|q| Vector3::new(q[0], q[1], plb.z(q[0], q[1])));
                         let d = ends[1] - ends[0];
                         let out_a = Vector3::new(d.y, -d.x, 0.0);
