@@ -559,7 +559,10 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
                     1.0
                 }
             };
-            let heights = f.heights_m.clone().unwrap_or_default();
+            // The echo needs only the hash: hash the floor as received, then move its heights
+            // into the case rather than copying up to 16 M values.
+            f.sha256 = Some(f.digest());
+            let heights = f.heights_m.take().unwrap_or_default();
             let rows = heights.len();
             let cols = heights.first().map_or(0, Vec::len);
             if !(2..=4096).contains(&rows) || !(2..=4096).contains(&cols) {
@@ -585,7 +588,6 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
                     "heights must lie in [−1e6, 1e6] m",
                 );
             }
-            f.sha256 = Some(f.digest());
             FloorSpec::Grid {
                 origin,
                 spacing,
@@ -598,7 +600,8 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
             stray(ck, "heights_m", f.heights_m.is_some(), "contour");
             let resolution = *f.resolution_m.get_or_insert(1.0);
             ck.closed(&p("resolution_m"), resolution, 0.01, 100.0, "m");
-            let lines = f.contours.clone().unwrap_or_default();
+            f.sha256 = Some(f.digest());
+            let lines = f.contours.take().unwrap_or_default();
             if lines.is_empty() {
                 ck.push(
                     p("contours"),
@@ -642,7 +645,6 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
                     "at most 4 000 000 points in all",
                 );
             }
-            f.sha256 = Some(f.digest());
             FloorSpec::Contours {
                 contours: lines
                     .into_iter()
