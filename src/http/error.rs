@@ -212,6 +212,19 @@ impl ApiError {
         Self::new("internal", "an internal error occurred; it has been logged")
     }
 
+    /// Fills the value of the `/velocity_m_s` entry of a `capacity_exceeded` problem with the speed
+    /// that was sent, m/s (the physics error does not carry it); other problems are unchanged.
+    pub fn with_capacity_velocity(mut self, velocity_m_s: f64) -> Self {
+        if self.problem.code == "capacity_exceeded" {
+            for e in &mut self.errors {
+                if e.field == CAPACITY_FIELD {
+                    e.value = num(velocity_m_s);
+                }
+            }
+        }
+        self
+    }
+
     /// Adds an extension member to the problem object.
     pub fn with_extension(mut self, key: &str, value: Value) -> Self {
         self.extensions.insert(key.to_string(), value);
@@ -251,9 +264,8 @@ impl ApiError {
         body.insert("title".into(), json!(self.problem.title));
         body.insert("status".into(), json!(self.problem.status));
         body.insert("detail".into(), json!(self.detail));
-        if !self.errors.is_empty() {
-            body.insert("errors".into(), json!(self.errors));
-        }
+        // api.md: every problem carries `errors`, empty when no field is at fault.
+        body.insert("errors".into(), json!(self.errors));
         for (k, v) in &self.extensions {
             body.insert(k.clone(), v.clone());
         }
@@ -281,6 +293,9 @@ impl IntoResponse for ApiError {
     }
 }
 
+/// The field a `capacity_exceeded` problem names: the impact speed of the request.
+pub const CAPACITY_FIELD: &str = "/velocity_m_s";
+
 /// A finite f64 as JSON, else null.
 pub fn num(v: f64) -> Value {
     serde_json::Number::from_f64(v).map_or(Value::Null, Value::Number)
@@ -298,9 +313,22 @@ impl From<PhysicsError> for ApiError {
                 energy_parameter,
                 max_velocity_m_s,
                 message,
-            } => ApiError::new("capacity_exceeded", message)
-                .with_extension("max_velocity_m_s", num(max_velocity_m_s))
-                .with_extension("energy_parameter", num(energy_parameter)),
+            } => {
+                let mut e = ApiError::from_field_errors(
+                    "capacity_exceeded",
+                    vec![FieldError {
+                        field: CAPACITY_FIELD.into(),
+                        value: Value::Null,
+                        message: format!(
+                            "must be at most {max_velocity_m_s:.6e} m/s for this law with the \
+                             other inputs unchanged"
+                        ),
+                    }],
+                );
+                e.detail = message;
+                e.with_extension("max_velocity_m_s", num(max_velocity_m_s))
+                    .with_extension("energy_parameter", num(energy_parameter))
+            }
             PhysicsError::TooManySteps { estimated, limit } => ApiError::new(
                 "too_many_steps",
                 format!("the run needs about {estimated:.3e} time steps; the limit is {limit:.3e}"),

@@ -58,10 +58,151 @@ pub async fn read_body<S: Send + Sync>(req: Request, state: &S) -> Result<Bytes,
     })
 }
 
-/// Parses bytes as JSON, mapping failures to 400 `malformed_json` with line and column.
+/// Parses bytes as JSON, mapping failures to 400 `malformed_json` with line and column. An object
+/// with the same key twice is 422 `invalid_input` naming the repeated key's JSON Pointer (JSON
+/// parsers disagree on which one wins, so the request is ambiguous).
 pub fn parse_json(bytes: &[u8]) -> Result<Value, ApiError> {
-    serde_json::from_slice(bytes)
-        .map_err(|e| ApiError::new("malformed_json", format!("the body is not valid JSON: {e}")))
+    let dup = std::cell::RefCell::new(None);
+    let mut de = serde_json::Deserializer::from_slice(bytes);
+    let parsed = de::DeserializeSeed::deserialize(
+        NoDuplicates {
+            path: &Path::Root,
+            dup: &dup,
+        },
+        &mut de,
+    )
+    .and_then(|v| de.end().map(|()| v));
+    match parsed {
+        Ok(v) => Ok(v),
+        Err(e) => match dup.into_inner() {
+            Some((field, value)) => Err(ApiError::from_field_errors(
+                "invalid_input",
+                vec![FieldError {
+                    message: "this key appears more than once in its object; send it once".into(),
+                    field,
+                    value,
+                }],
+            )),
+            None => Err(ApiError::new(
+                "malformed_json",
+                format!("the body is not valid JSON: {e}"),
+            )),
+        },
+    }
+}
+
+/// Where a value sits in the document, rendered as a JSON Pointer only when a duplicate is found
+/// (so that parsing a large floor allocates no path strings).
+enum Path<'a> {
+    Root,
+    Key(&'a Path<'a>, &'a str),
+    Index(&'a Path<'a>, usize),
+}
+
+impl Path<'_> {
+    fn pointer(&self) -> String {
+        match self {
+            Path::Root => String::new(),
+            Path::Key(parent, k) => format!("{}/{}", parent.pointer(), escape(k)),
+            Path::Index(parent, i) => format!("{}/{i}", parent.pointer()),
+        }
+    }
+}
+
+/// Builds a [`Value`] like serde_json's own, but stops at the first repeated key of an object,
+/// recording its pointer and the repeated value in `dup`.
+struct NoDuplicates<'a> {
+    path: &'a Path<'a>,
+    dup: &'a std::cell::RefCell<Option<(String, Value)>>,
+}
+
+impl<'de> de::DeserializeSeed<'de> for NoDuplicates<'_> {
+    type Value = Value;
+
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for NoDuplicates<'_> {
+    type Value = Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("any JSON value")
+    }
+
+    fn visit_bool<E>(self, v: bool) -> Result<Value, E> {
+        Ok(Value::Bool(v))
+    }
+
+    fn visit_i64<E>(self, v: i64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_u64<E>(self, v: u64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_f64<E>(self, v: f64) -> Result<Value, E> {
+        Ok(serde_json::Number::from_f64(v).map_or(Value::Null, Value::Number))
+    }
+
+    fn visit_str<E>(self, v: &str) -> Result<Value, E> {
+        Ok(Value::String(v.to_owned()))
+    }
+
+    fn visit_string<E>(self, v: String) -> Result<Value, E> {
+        Ok(Value::String(v))
+    }
+
+    fn visit_unit<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+
+    fn visit_none<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+
+    fn visit_some<D: de::Deserializer<'de>>(self, d: D) -> Result<Value, D::Error> {
+        d.deserialize_any(self)
+    }
+
+    fn visit_seq<A: de::SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let mut out = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(4096));
+        loop {
+            let path = Path::Index(self.path, out.len());
+            let seed = NoDuplicates {
+                path: &path,
+                dup: self.dup,
+            };
+            match seq.next_element_seed(seed)? {
+                Some(v) => out.push(v),
+                None => break,
+            }
+        }
+        Ok(Value::Array(out))
+    }
+
+    fn visit_map<A: de::MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
+        let mut out = serde_json::Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            let path = Path::Key(self.path, &key);
+            let seed = NoDuplicates {
+                path: &path,
+                dup: self.dup,
+            };
+            let value = map.next_value_seed(seed)?;
+            if out.contains_key(&key) {
+                let pointer = path.pointer();
+                *self.dup.borrow_mut() = Some((pointer.clone(), value));
+                return Err(de::Error::custom(format_args!(
+                    "duplicate key at {pointer}"
+                )));
+            }
+            out.insert(key, value);
+        }
+        Ok(Value::Object(out))
+    }
 }
 
 /// Deserializes a parsed JSON value strictly: every object in the schema must be a JSON object,
@@ -336,6 +477,34 @@ mod tests {
         assert_eq!(e.code(), "invalid_type");
         let e = err(json!({"list": [1, "x"]}));
         assert_eq!(e.errors()[0].field, "/list/1");
+    }
+
+    #[test]
+    fn duplicate_keys_are_refused_naming_the_key() {
+        let e = parse_json(br#"{"a": 1, "a": 2}"#).unwrap_err();
+        assert_eq!(e.code(), "invalid_input");
+        assert_eq!(e.errors()[0].field, "/a");
+        assert_eq!(e.errors()[0].value, json!(2));
+        let e = parse_json(br#"{"x": [{"k": 1}, {"k/~": 1, "k/~": {"z": 3}}]}"#).unwrap_err();
+        assert_eq!(e.errors()[0].field, "/x/1/k~1~0");
+        assert_eq!(e.errors()[0].value, json!({"z": 3}));
+        // Same key in sibling objects is fine; the value equals serde_json's parse.
+        let text = br#"{"a": {"k": 1}, "b": {"k": [1.5, -2, 1e300, null, true, "s"]}}"#;
+        let v = parse_json(text).unwrap();
+        assert_eq!(v, serde_json::from_slice::<Value>(text).unwrap());
+    }
+
+    #[test]
+    fn malformed_json_stays_400() {
+        for text in [&b"{"[..], b"{\"a\": 1} x", b"", b"{\"a\": NaN}", b"[1,]"] {
+            let e = parse_json(text).unwrap_err();
+            assert_eq!(
+                e.code(),
+                "malformed_json",
+                "{}",
+                String::from_utf8_lossy(text)
+            );
+        }
     }
 
     #[test]

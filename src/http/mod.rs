@@ -49,6 +49,7 @@ pub fn app(config: Config) -> Router {
         .merge(api)
         .fallback(error::not_found)
         .method_not_allowed_fallback(method_not_allowed)
+        .layer(axum::middleware::from_fn(problems_everywhere))
         .layer(DefaultBodyLimit::max(body_limit))
         .layer(
             ServiceBuilder::new()
@@ -76,4 +77,75 @@ pub fn app(config: Config) -> Router {
 
 async fn method_not_allowed() -> error::ApiError {
     error::ApiError::new("method_not_allowed", "this path does not take this method")
+}
+
+/// Makes every 4xx/5xx an `application/problem+json` answer, whatever produced it (the
+/// documentation routes' empty 404, axum's `text/plain` rejections such as a path that is not
+/// valid UTF-8). Problems the service made itself pass unchanged.
+async fn problems_everywhere(req: Request<Body>, next: axum::middleware::Next) -> Response<Body> {
+    use axum::http::header;
+    use axum::response::IntoResponse;
+    let path_is_utf8 = percent_decoded_is_utf8(req.uri().path());
+    let res = next.run(req).await;
+    let status = res.status();
+    if !(status.is_client_error() || status.is_server_error()) {
+        return res;
+    }
+    let is_problem = res
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|ct| ct.starts_with(error::PROBLEM_JSON));
+    if is_problem {
+        return res;
+    }
+    let problem = match status.as_u16() {
+        // No resource has a path that is not UTF-8 once percent-decoded.
+        400 if !path_is_utf8 => error::ApiError::new(
+            "not_found",
+            "the path is not valid UTF-8 once percent-decoded; no resource has such a path",
+        ),
+        400 => error::ApiError::new("malformed_json", "the request could not be read"),
+        404 => error::ApiError::new("not_found", "no resource at this path"),
+        405 => error::ApiError::new("method_not_allowed", "this path does not take this method"),
+        413 => error::ApiError::new(
+            "payload_too_large",
+            "the request body is larger than the limit (see /v1/presets)",
+        ),
+        415 => error::ApiError::new(
+            "unsupported_media_type",
+            "send the body as Content-Type: application/json",
+        ),
+        503 => error::ApiError::overloaded(1),
+        504 => error::ApiError::new("timeout", "the request passed the time limit"),
+        s if s < 500 => error::ApiError::new("malformed_json", "the request could not be read"),
+        _ => error::ApiError::internal(format!("unexpected {status} without a problem body")),
+    };
+    let allow = res.headers().get(header::ALLOW).cloned();
+    let mut out = problem.into_response();
+    if let Some(allow) = allow {
+        out.headers_mut().insert(header::ALLOW, allow);
+    }
+    out
+}
+
+/// True when the percent-decoded bytes of `path` are UTF-8.
+fn percent_decoded_is_utf8(path: &str) -> bool {
+    let b = path.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%'
+            && i + 2 < b.len()
+            && let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2]))
+        {
+            out.push((h * 16 + l) as u8);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    std::str::from_utf8(&out).is_ok()
 }

@@ -20,7 +20,8 @@ pub struct Problem {
     pub status: u16,
     /// What went wrong in this request.
     pub detail: String,
-    /// Offending fields: JSON Pointer, value, message naming the valid range.
+    /// Offending fields: JSON Pointer, value, message naming the valid range; always present,
+    /// `[]` when no field is at fault (`capacity_exceeded` names `/velocity_m_s`).
     #[schema(value_type = Vec<FieldErrorDoc>)]
     pub errors: Vec<FieldError>,
     /// `capacity_exceeded` only: the largest impact speed the law can take, m/s.
@@ -82,9 +83,181 @@ const NULL_DEFAULTS: &[&str] = &[
     "time_step_s",
 ];
 
-/// The served document: utoipa's, with derived defaults (which have no constant value) tidied.
+/// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot
+/// express from the Rust type: (schema, property, minItems, maxItems, item minimum, item maximum).
+/// For `vertices_m` the item is a point, an array of three coordinates each in the bounds.
+const ARRAY_BOUNDS: &[(&str, &str, u64, u64, f64, f64)] = &[
+    ("RockDto", "dimensions_m", 3, 3, 0.01, 5.0),
+    ("RandomShapeDto", "semi_axes_m", 3, 3, 0.005, 2.5),
+    ("RockDto", "vertices_m", 4, 1000, -10.0, 10.0),
+];
+
+/// Adds the documented array lengths and item bounds of [`ARRAY_BOUNDS`].
+fn add_array_bounds(doc: &mut serde_json::Value) {
+    use serde_json::json;
+    for &(schema, prop, min_items, max_items, lo, hi) in ARRAY_BOUNDS {
+        let Some(p) = doc
+            .pointer_mut(&format!("/components/schemas/{schema}/properties/{prop}"))
+            .and_then(|p| p.as_object_mut())
+        else {
+            continue;
+        };
+        p.insert("minItems".into(), json!(min_items));
+        p.insert("maxItems".into(), json!(max_items));
+        let Some(mut item) = p.get_mut("items") else {
+            continue;
+        };
+        if prop == "vertices_m" {
+            let point = item.as_object_mut().expect("a point is an array schema");
+            point.insert("minItems".into(), json!(3));
+            point.insert("maxItems".into(), json!(3));
+            item = point.get_mut("items").expect("a point has item schema");
+        }
+        if let Some(item) = item.as_object_mut() {
+            item.insert("minimum".into(), json!(lo));
+            item.insert("maximum".into(), json!(hi));
+        }
+    }
+}
+
+/// How a POST answers when the client accepts NDJSON, appended to each POST's description.
+pub const NDJSON_POLICY: &str = "With `Accept: application/x-ndjson` (q > 0 and at least the \
+    q-value of application/json) the answer is 200 `application/x-ndjson`: `{\"progress\": \
+    {\"done\", \"total\"}}` lines while the solver reports a known amount of work (runs or steps; \
+    none otherwise, never a repeated line), then exactly one `{\"result\": …}` or \
+    `{\"problem\": …}` line. A request refused before the computation starts (unreadable body, \
+    wrong media type, invalid fields, all slots busy) is answered as plain \
+    `application/problem+json` with its own status (400, 413, 415, 422, 503), not as a stream; \
+    failures after the stream has started (capacity exceeded, too many steps, time limit) are its \
+    problem line.";
+
+/// The explicit error answers of every POST (problem+json), besides the 4XX/5XX ranges.
+const POST_PROBLEMS: &[(&str, &str)] = &[
+    ("400", "`malformed_json`: the body is not JSON"),
+    (
+        "413",
+        "`payload_too_large`: the body is over the limit (see /v1/presets)",
+    ),
+    (
+        "415",
+        "`unsupported_media_type`: the content type is not application/json",
+    ),
+    (
+        "422",
+        "`invalid_type`, `unknown_field`, `invalid_input` (each naming the field's JSON Pointer, \
+         the value and the valid range), `capacity_exceeded` (naming `/velocity_m_s`, with \
+         `max_velocity_m_s`) or `too_many_steps`",
+    ),
+    (
+        "500",
+        "`internal`: always a bug; details logged, not returned",
+    ),
+    (
+        "503",
+        "`overloaded`: all computation slots are busy; retry after `Retry-After` seconds",
+    ),
+    (
+        "504",
+        "`timeout`: the computation passed the time limit and was stopped",
+    ),
+];
+
+/// Documents on every POST the NDJSON answer, the explicit problem statuses and `Retry-After`.
+fn add_post_responses(doc: &mut serde_json::Value) {
+    use serde_json::json;
+    if let Some(schemas) = doc
+        .pointer_mut("/components/schemas")
+        .and_then(|s| s.as_object_mut())
+    {
+        schemas.insert(
+            "NdjsonLine".into(),
+            json!({
+                "description": "One line of an `application/x-ndjson` answer: progress, then \
+                                exactly one result or problem line.",
+                "oneOf": [
+                    {
+                        "type": "object",
+                        "required": ["progress"],
+                        "properties": {"progress": {
+                            "type": "object",
+                            "required": ["done", "total"],
+                            "properties": {
+                                "done": {"type": "integer", "minimum": 0,
+                                         "description": "Work units done (runs or steps)."},
+                                "total": {"type": "integer", "minimum": 1,
+                                          "description": "Work units in all."}
+                            }
+                        }}
+                    },
+                    {
+                        "type": "object",
+                        "required": ["result"],
+                        "properties": {"result": {
+                            "type": "object",
+                            "description": "The endpoint's 200 JSON result."
+                        }}
+                    },
+                    {
+                        "type": "object",
+                        "required": ["problem"],
+                        "properties": {"problem": {"$ref": "#/components/schemas/Problem"}}
+                    }
+                ]
+            }),
+        );
+    }
+    let Some(paths) = doc.get_mut("paths").and_then(|p| p.as_object_mut()) else {
+        return;
+    };
+    for item in paths.values_mut() {
+        let Some(post) = item.get_mut("post").and_then(|p| p.as_object_mut()) else {
+            continue;
+        };
+        let description = post
+            .get("description")
+            .and_then(|d| d.as_str())
+            .map_or(String::new(), |d| format!("{d}\n\n"));
+        post.insert(
+            "description".into(),
+            json!(format!("{description}{NDJSON_POLICY}")),
+        );
+        let Some(responses) = post.get_mut("responses").and_then(|r| r.as_object_mut()) else {
+            continue;
+        };
+        if let Some(content) = responses
+            .get_mut("200")
+            .and_then(|r| r.get_mut("content"))
+            .and_then(|c| c.as_object_mut())
+        {
+            content.insert(
+                crate::http::runner::NDJSON.into(),
+                json!({"schema": {"$ref": "#/components/schemas/NdjsonLine"}}),
+            );
+        }
+        for &(status, description) in POST_PROBLEMS {
+            let mut r = json!({
+                "description": description,
+                "content": {super::error::PROBLEM_JSON: {
+                    "schema": {"$ref": "#/components/schemas/Problem"}
+                }}
+            });
+            if status == "503" {
+                r["headers"] = json!({"Retry-After": {
+                    "description": "Seconds to wait before retrying.",
+                    "schema": {"type": "integer", "minimum": 1}
+                }});
+            }
+            responses.insert(status.into(), r);
+        }
+    }
+}
+
+/// The served document: utoipa's, with derived defaults (which have no constant value) tidied,
+/// array bounds and the POST answers (NDJSON, explicit problem statuses) added.
 pub fn openapi_value() -> serde_json::Value {
     let mut doc = serde_json::to_value(ApiDoc::openapi()).expect("the OpenAPI document serializes");
+    add_array_bounds(&mut doc);
+    add_post_responses(&mut doc);
     if let Some(schemas) = doc
         .pointer_mut("/components/schemas")
         .and_then(|s| s.as_object_mut())

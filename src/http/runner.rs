@@ -132,13 +132,57 @@ where
     finish(state, run).await
 }
 
-/// True when the client asked for streamed progress (`Accept: application/x-ndjson`).
+/// True when the client asked for streamed progress: `Accept` names `application/x-ndjson`
+/// (media types compared case-insensitively) with a q-value above 0 and at least as high as the
+/// q-value that applies to `application/json` (its own, `application/*` or `*/*`, the most
+/// specific one counting). `application/x-ndjson;q=0` refuses NDJSON; no `Accept` means JSON.
 pub fn wants_progress(headers: &HeaderMap) -> bool {
-    headers
-        .get_all(header::ACCEPT)
-        .iter()
-        .filter_map(|v| v.to_str().ok())
-        .any(|v| v.split(',').any(|t| t.trim().starts_with(NDJSON)))
+    // (specificity, q) of the most specific range matching each type: 2 exact, 1 type/*, 0 */*.
+    let mut ndjson: Option<(u8, f64)> = None;
+    let mut json: Option<(u8, f64)> = None;
+    let keep = |slot: &mut Option<(u8, f64)>, spec: u8, q: f64| {
+        if slot.is_none_or(|(s, _)| spec > s) {
+            *slot = Some((spec, q));
+        }
+    };
+    for value in headers.get_all(header::ACCEPT).iter() {
+        let Ok(value) = value.to_str() else { continue };
+        for range in value.split(',') {
+            let mut parts = range.split(';');
+            let media = parts.next().unwrap_or("").trim().to_ascii_lowercase();
+            let mut q = 1.0;
+            for param in parts {
+                let mut kv = param.splitn(2, '=');
+                let key = kv.next().unwrap_or("").trim();
+                if key.eq_ignore_ascii_case("q") {
+                    // RFC 9110 §12.4.2: a weight in [0, 1]; an unreadable one counts as 0.
+                    q = kv
+                        .next()
+                        .and_then(|v| v.trim().parse::<f64>().ok())
+                        .filter(|v| (0.0..=1.0).contains(v))
+                        .unwrap_or(0.0);
+                }
+            }
+            match media.as_str() {
+                "application/x-ndjson" => keep(&mut ndjson, 2, q),
+                "application/json" => keep(&mut json, 2, q),
+                "application/*" => {
+                    keep(&mut ndjson, 1, q);
+                    keep(&mut json, 1, q);
+                }
+                "*/*" => {
+                    keep(&mut ndjson, 0, q);
+                    keep(&mut json, 0, q);
+                }
+                _ => {}
+            }
+        }
+    }
+    // Only an explicit request streams: wildcards alone keep the plain JSON answer.
+    match ndjson {
+        Some((2, qn)) if qn > 0.0 => qn >= json.map_or(0.0, |(_, qj)| qj),
+        _ => false,
+    }
 }
 
 /// Serializes a result to JSON bytes, refusing non-finite numbers (a bug, never sent as null).
@@ -187,13 +231,17 @@ where
         let mut fut = Box::pin(finish(&state, run));
         let mut tick = tokio::time::interval(Duration::from_millis(250));
         tick.tick().await;
+        // A progress line is sent only when the solver announced a total and the count moved:
+        // `{"done":0,"total":0}` or a repeated line says nothing.
+        let mut last: Option<(u64, u64)> = None;
         let result = loop {
             tokio::select! {
                 r = &mut fut => break r,
                 _ = tick.tick() => {
                     let (done, total) = control.progress();
-                    let line = format!("{{\"progress\":{{\"done\":{done},\"total\":{total}}}}}\n");
-                    yield Ok::<_, std::convert::Infallible>(bytes::Bytes::from(line));
+                    if let Some(line) = progress_line(done, total, &mut last) {
+                        yield Ok::<_, std::convert::Infallible>(bytes::Bytes::from(line));
+                    }
                 }
             }
         };
@@ -221,6 +269,19 @@ where
         Body::from_stream(stream),
     )
         .into_response()
+}
+
+/// The NDJSON progress line for (done, total), or `None` when it would say nothing new: no total
+/// announced (total 0) or the same counts as the last line sent (`last`, updated when sent).
+fn progress_line(done: u64, total: u64, last: &mut Option<(u64, u64)>) -> Option<String> {
+    if total == 0 || *last == Some((done, total)) {
+        return None;
+    }
+    *last = Some((done, total));
+    Some(format!(
+        "{{\"progress\":{{\"done\":{},\"total\":{total}}}}}\n",
+        done.min(total)
+    ))
 }
 
 #[cfg(test)]
@@ -302,6 +363,60 @@ mod tests {
         assert_eq!(e.code(), "overloaded");
         assert_eq!(e.status(), StatusCode::SERVICE_UNAVAILABLE);
         busy.abort();
+    }
+
+    fn accept(values: &[&'static str]) -> HeaderMap {
+        let mut h = HeaderMap::new();
+        for v in values {
+            h.append(header::ACCEPT, HeaderValue::from_static(v));
+        }
+        h
+    }
+
+    #[test]
+    fn accept_negotiation_honours_q_values_and_case() {
+        let yes = [
+            &["application/x-ndjson"][..],
+            &["Application/X-NDJSON"],
+            &["application/json;q=0.5, application/x-ndjson"],
+            &["application/x-ndjson;q=0.9, */*;q=0.1"],
+            &["text/html", "application/x-ndjson; Q=0.3"],
+            &["application/x-ndjson, application/json"],
+        ];
+        for h in yes {
+            assert!(wants_progress(&accept(h)), "{h:?} asks for NDJSON");
+        }
+        let no = [
+            &[][..],
+            &["application/json"],
+            &["*/*"],
+            &["application/*"],
+            &["application/x-ndjson;q=0"],
+            &["application/x-ndjson;q=0.000"],
+            &["application/x-ndjson;q=0.2, application/json"],
+            &["application/x-ndjson;q=0.5, */*;q=0.9"],
+            &["application/x-ndjsonfoo"],
+            &["application/x-ndjson;q=banana"],
+        ];
+        for h in no {
+            assert!(!wants_progress(&accept(h)), "{h:?} does not ask for NDJSON");
+        }
+    }
+
+    #[test]
+    fn progress_lines_only_when_they_say_something() {
+        let mut last = None;
+        assert_eq!(progress_line(0, 0, &mut last), None, "no total announced");
+        assert_eq!(progress_line(5, 0, &mut last), None);
+        assert_eq!(
+            progress_line(0, 10, &mut last).as_deref(),
+            Some("{\"progress\":{\"done\":0,\"total\":10}}\n")
+        );
+        assert_eq!(progress_line(0, 10, &mut last), None, "repeated");
+        assert_eq!(
+            progress_line(3, 10, &mut last).as_deref(),
+            Some("{\"progress\":{\"done\":3,\"total\":10}}\n")
+        );
     }
 
     #[tokio::test]

@@ -154,7 +154,7 @@ pub enum ShapeKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RandomShapeDto {
-    /// Semi-axes of the ellipsoid, m.
+    /// Semi-axes of the ellipsoid [a, b, c], m, each in [0.005, 2.5].
     #[schema(example = json!([0.2, 0.15, 0.1]))]
     pub semi_axes_m: [f64; 3],
     /// Number of points drawn on the ellipsoid.
@@ -200,7 +200,7 @@ pub struct RockDto {
     )]
     #[schema(example = json!([0.4, 0.3, 0.2]))]
     pub dimensions_m: Option<[f64; 3]>,
-    /// Convex polyhedron vertices (4–1000 points), m.
+    /// Convex polyhedron vertices (4–1000 points [x, y, z], each coordinate in [-10, 10]), m.
     #[schema(example = json!([[0.0, 0.0, 0.0], [0.3, 0.0, 0.0], [0.0, 0.3, 0.0], [0.0, 0.0, 0.3]]))]
     #[serde(
         skip_serializing_if = "Option::is_none",
@@ -224,7 +224,8 @@ pub struct RockDto {
     /// Poisson ratio ν, in [0, 0.5).
     #[schema(default = 0.28, minimum = 0.0, exclusive_maximum = 0.5, example = 0.28)]
     pub poisson_ratio: f64,
-    /// Rounded-corner radius r_c of `hertz_point`, m, in (0, L/2] (default min(0.02, L/2)).
+    /// Rounded-corner radius r_c of `hertz_point`, m, in (0, 2.5]; where used (`hertz_point`, not a
+    /// sphere) also at most L/2 = side_length_m/2 (default min(0.02, L/2)).
     #[schema(exclusive_minimum = 0.0, maximum = 2.5, example = 0.02)]
     #[serde(
         skip_serializing_if = "Option::is_none",
@@ -273,20 +274,62 @@ impl RockDto {
         );
         ck.closed_open(&p("poisson_ratio"), self.poisson_ratio, 0.0, 0.5, "");
         let l = self.side_length_m;
+        // Every field that is sent is checked against its own range, whether the shape uses it
+        // or not; rules relating two fields (r_c ≤ L/2) apply only where the field is used.
+        if let Some(r) = self.radius_m {
+            ck.closed(&p("radius_m"), r, 0.005, 2.5, "m");
+        }
+        if let Some(d) = self.dimensions_m {
+            for (i, v) in d.iter().enumerate() {
+                ck.closed(&p(&format!("dimensions_m/{i}")), *v, 0.01, 5.0, "m");
+            }
+        }
+        if let Some(v) = &self.vertices_m {
+            if !(4..=1000).contains(&v.len()) {
+                ck.push(
+                    p("vertices_m"),
+                    json!(v),
+                    format!("must hold 4 to 1000 points; {} were sent", v.len()),
+                );
+            }
+            if let Some((i, j, c)) = v.iter().enumerate().find_map(|(i, pt)| {
+                pt.iter()
+                    .enumerate()
+                    .find(|(_, c)| !c.is_finite() || c.abs() > 10.0)
+                    .map(|(j, c)| (i, j, *c))
+            }) {
+                ck.closed(&p(&format!("vertices_m/{i}/{j}")), c, -10.0, 10.0, "m");
+            }
+        }
+        if let Some(r) = &self.random {
+            for (i, v) in r.semi_axes_m.iter().enumerate() {
+                ck.closed(&p(&format!("random/semi_axes_m/{i}")), *v, 0.005, 2.5, "m");
+            }
+            ck.count(
+                &p("random/vertices"),
+                u64::from(r.vertices),
+                4,
+                1000,
+                "points",
+            );
+        }
+        if let Some(rc) = self.corner_radius_m {
+            ck.range(
+                &p("corner_radius_m"),
+                rc,
+                Bound::Open(0.0),
+                Bound::Closed(2.5),
+                "m",
+            );
+        }
         let shape = match self.shape {
             ShapeKind::Cube => RockShape::Cube,
             ShapeKind::Sphere => {
                 let r = *self.radius_m.get_or_insert(l / 2.0);
-                ck.closed(&p("radius_m"), r, 0.005, 2.5, "m");
                 RockShape::Sphere { radius: r }
             }
             ShapeKind::Cuboid => match self.dimensions_m {
-                Some(d) => {
-                    for (i, v) in d.iter().enumerate() {
-                        ck.closed(&p(&format!("dimensions_m/{i}")), *v, 0.01, 5.0, "m");
-                    }
-                    RockShape::Cuboid { dimensions: d }
-                }
+                Some(d) => RockShape::Cuboid { dimensions: d },
                 None => {
                     ck.push(
                         p("dimensions_m"),
@@ -297,26 +340,9 @@ impl RockDto {
                 }
             },
             ShapeKind::Polyhedron => match &self.vertices_m {
-                Some(v) if (4..=1000).contains(&v.len()) => {
-                    if v.iter().flatten().any(|c| !c.is_finite() || c.abs() > 10.0) {
-                        ck.push(
-                            p("vertices_m"),
-                            Value::Null,
-                            "coordinates must be finite, within ±10 m",
-                        );
-                    }
-                    RockShape::Polyhedron {
-                        vertices: v.clone(),
-                    }
-                }
-                Some(v) => {
-                    ck.push(
-                        p("vertices_m"),
-                        json!(v.len()),
-                        "must hold 4 to 1000 points",
-                    );
-                    RockShape::Cube
-                }
+                Some(v) => RockShape::Polyhedron {
+                    vertices: v.clone(),
+                },
                 None => {
                     ck.push(
                         p("vertices_m"),
@@ -327,23 +353,11 @@ impl RockDto {
                 }
             },
             ShapeKind::RandomPolyhedron => match &self.random {
-                Some(r) => {
-                    for (i, v) in r.semi_axes_m.iter().enumerate() {
-                        ck.closed(&p(&format!("random/semi_axes_m/{i}")), *v, 0.005, 2.5, "m");
-                    }
-                    ck.count(
-                        &p("random/vertices"),
-                        u64::from(r.vertices),
-                        4,
-                        1000,
-                        "points",
-                    );
-                    RockShape::RandomPolyhedron {
-                        semi_axes: r.semi_axes_m,
-                        vertices: r.vertices as usize,
-                        seed: r.seed,
-                    }
-                }
+                Some(r) => RockShape::RandomPolyhedron {
+                    semi_axes: r.semi_axes_m,
+                    vertices: r.vertices as usize,
+                    seed: r.seed,
+                },
                 None => {
                     ck.push(
                         p("random"),

@@ -33,7 +33,11 @@ pub async fn impact(
         Ok(c) => c,
         Err(e) => return e.into_response(),
     };
-    respond(&state, &headers, move |_control| solve(&case, req)).await
+    let velocity = req.velocity_m_s;
+    respond(&state, &headers, move |_control| {
+        solve(&case, req).map_err(|e| e.with_capacity_velocity(velocity))
+    })
+    .await
 }
 
 /// Solves a resolved impact request (also used by batch and scene).
