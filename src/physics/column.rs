@@ -258,6 +258,9 @@ pub const MIN_KINETIC_ENERGY: f64 = 1e-280;
 /// and far above the range where step sizes underflow.
 pub const MIN_END_TIME: f64 = 1e-9;
 
+/// Longest default coupled window (50 × the rigid contact duration), s: the largest end_time_s.
+pub const MAX_DEFAULT_END_TIME: f64 = 1e3;
+
 /// Solves `/v1/column`: the impact (contact module), then the decoupled or coupled column model.
 ///
 /// # Examples
@@ -674,7 +677,19 @@ fn coupled(
             ));
         }
         Some(t) => t,
-        None => 50.0 * tc,
+        None if 50.0 * tc <= MAX_DEFAULT_END_TIME => 50.0 * tc,
+        None => {
+            return Err(PhysicsError::invalid(
+                "/end_time_s",
+                50.0 * tc,
+                format!(
+                    "the default window, 50 × the rigid contact duration = {:e} s, exceeds \
+                     {MAX_DEFAULT_END_TIME:e} s (the contact law barely resists this impact): \
+                     give end_time_s in [1e-9, 1e3] s",
+                    50.0 * tc
+                ),
+            ));
+        }
     };
     let mut times =
         sample_times(&case.output, freqs[0], Some(end_time), case.max_samples)?.map(Grid::times);

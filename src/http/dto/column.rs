@@ -310,13 +310,16 @@ pub struct StressDto {
 /// Integrator report of the coupled model.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, ToSchema)]
 pub struct IntegratorDto {
-    /// Accepted steps.
+    /// Accepted steps (of the last pass).
     pub steps: u64,
-    /// Rejected steps.
+    /// Rejected steps (of the last pass).
     pub rejected_steps: u64,
-    /// Relative tolerance.
+    /// Relative tolerance (of the last pass).
     pub tolerance: f64,
-    /// Energy-balance error at the end, relative to the rock's kinetic energy.
+    /// Estimated relative error at the end: the larger of the rock's energy balance relative to
+    /// its kinetic energy and the column's balance (energy + dissipated = work of the contact
+    /// force) relative to the transferred energy. Above 1e-5 the integrator refines, and
+    /// warns (`integrator_error_above_target`) if it still is.
     pub estimated_error: f64,
 }
 
