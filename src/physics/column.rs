@@ -250,6 +250,17 @@ fn max_deformation_and_force(impact: &ImpactResult) -> (f64, f64) {
     }
 }
 
+/// Smallest rock kinetic energy the column models accept, J: below it the energies, their
+/// tolerances (1e-9 of it and less) and squares leave the normal range of double precision.
+pub const MIN_KINETIC_ENERGY: f64 = 1e-280;
+
+/// Shortest coupled window, s: 1 ns, far below any contact duration the models resolve (µs–s)
+/// and far above the range where step sizes underflow.
+pub const MIN_END_TIME: f64 = 1e-9;
+
+/// Longest default coupled window (50 × the rigid contact duration), s: the largest end_time_s.
+pub const MAX_DEFAULT_END_TIME: f64 = 1e3;
+
 /// Solves `/v1/column`: the impact (contact module), then the decoupled or coupled column model.
 ///
 /// # Examples
@@ -427,6 +438,18 @@ fn solve_inner(
     let col = &case.impact.column;
     let single = SingleMode::new(col, case.mode_shapes, case.rotary_inertia)?;
     let ke = impact.kinetic_energy;
+    let (dmax, _) = max_deformation_and_force(impact);
+    if !(ke >= MIN_KINETIC_ENERGY && dmax >= f64::MIN_POSITIVE) {
+        return Err(PhysicsError::invalid(
+            "/velocity_m_s",
+            case.impact.velocity,
+            format!(
+                "the impact energy ½mv² = {ke:e} J (maximum approach {dmax:e} m) is below what \
+                 double precision resolves in the column energies ({MIN_KINETIC_ENERGY:e} J): \
+                 give a larger velocity"
+            ),
+        ));
+    }
     let mut warnings = Vec::new();
     if let Damping::Coefficient(c) = col.damping
         && c == 1.0
@@ -455,17 +478,41 @@ fn common(
     history: Option<ColumnHistory>,
     detail: ColumnDetail,
     mut warnings: Vec<Warning>,
-) -> ColumnResult {
+) -> PhysicsResult<ColumnResult> {
+    let utilisation = stress.clamp.max(stress.midpoint) / yield_stress;
+    if !utilisation.is_finite() {
+        return Err(PhysicsError::invalid(
+            "/column/yield_stress_pa",
+            yield_stress,
+            format!(
+                "the stress utilisation (largest bending stress {:e} Pa / yield stress) overflows \
+                 double precision: the yield stress is too small to compare with",
+                stress.clamp.max(stress.midpoint)
+            ),
+        ));
+    }
     let fv = single.free_vibration(1.0);
     let decay = fv.decay_time(0.01);
     if decay.is_none() {
-        warnings.push(Warning {
-            code: "no_damping",
-            message: "without damping the vibration never decays: decay_time_1pct_s is null".into(),
+        warnings.push(if fv.damping > 0.0 {
+            Warning {
+                code: "decay_time_unrepresentable",
+                message: format!(
+                    "the damping (decay rate {:e} 1/s) is so light that the decay time exceeds \
+                     the range of double precision: decay_time_1pct_s is null",
+                    fv.decay_rate()
+                ),
+            }
+        } else {
+            Warning {
+                code: "no_damping",
+                message: "without damping the vibration never decays: decay_time_1pct_s is null"
+                    .into(),
+            }
         });
     }
     let first: &FirstMode = &single.first;
-    ColumnResult {
+    Ok(ColumnResult {
         natural_frequencies_hz: frequencies,
         damping_ratios,
         damping_coefficient: single.damping_coefficient,
@@ -481,11 +528,11 @@ fn common(
         midpoint_mass: single.midpoint_mass,
         kinetic_energy: ke,
         max_bending_stress: stress,
-        stress_utilisation: stress.clamp.max(stress.midpoint) / yield_stress,
+        stress_utilisation: utilisation,
         history,
         detail,
         warnings,
-    }
+    })
 }
 
 fn decoupled(
@@ -573,7 +620,7 @@ fn decoupled(
         (w0 * mode.curvature(0.0) / (l * l)).abs(),
         (w0 * mode.curvature(0.5) / (l * l)).abs(),
     );
-    Ok(common(
+    common(
         single,
         ke,
         stress,
@@ -589,7 +636,7 @@ fn decoupled(
             energy_ratio: ratio,
         }),
         warnings,
-    ))
+    )
 }
 
 fn coupled(
@@ -622,15 +669,27 @@ fn coupled(
     let ratios = galerkin.damping_ratios();
     let tc = impact.contact_duration;
     let end_time = match case.end_time {
-        Some(t) if !(t > 0.0 && t.is_finite()) => {
+        Some(t) if !(t >= MIN_END_TIME && t.is_finite()) => {
             return Err(PhysicsError::invalid(
                 "/end_time_s",
                 t,
-                "end_time_s must lie in (0, 1e3] s",
+                "end_time_s must lie in [1e-9, 1e3] s",
             ));
         }
         Some(t) => t,
-        None => 50.0 * tc,
+        None if 50.0 * tc <= MAX_DEFAULT_END_TIME => 50.0 * tc,
+        None => {
+            return Err(PhysicsError::invalid(
+                "/end_time_s",
+                50.0 * tc,
+                format!(
+                    "the default window, 50 × the rigid contact duration = {:e} s, exceeds \
+                     {MAX_DEFAULT_END_TIME:e} s (the contact law barely resists this impact): \
+                     give end_time_s in [1e-9, 1e3] s",
+                    50.0 * tc
+                ),
+            ));
+        }
     };
     let mut times =
         sample_times(&case.output, freqs[0], Some(end_time), case.max_samples)?.map(Grid::times);
@@ -658,6 +717,20 @@ fn coupled(
         max_steps: case.max_steps,
     };
     let r = solve_coupled(&input, control)?;
+    if r.estimated_error > super::coupled::ACCURACY_TARGET {
+        warnings.push(Warning {
+            code: "integrator_error_above_target",
+            message: format!(
+                "the integrator's estimated error {:.1e} (energy balances of the rock and of the \
+                 column, after {} passes down to tolerance {:.0e}) exceeds the target {:.0e}: \
+                 treat the energies as approximate",
+                r.estimated_error,
+                r.passes,
+                r.tolerance,
+                super::coupled::ACCURACY_TARGET
+            ),
+        });
+    }
     if r.first_contact_duration.is_none() {
         warnings.push(Warning {
             code: "contact_not_ended",
@@ -695,7 +768,7 @@ fn coupled(
         r.max_curvature_clamp,
         r.max_curvature_midpoint,
     );
-    Ok(common(
+    common(
         single,
         ke,
         stress,
@@ -719,8 +792,8 @@ fn coupled(
             steps: r.steps,
             rejected_steps: r.rejected_steps,
             tolerance: r.tolerance,
-            estimated_error: r.energy_residual,
+            estimated_error: r.estimated_error,
         }),
         warnings,
-    ))
+    )
 }

@@ -108,8 +108,9 @@ pub struct ColumnRequest {
     #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1.0, example = 0.0018)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub initial_midpoint_displacement_m: Option<f64>,
-    /// End of the coupled window, s, in (0, 1e3] (coupled only; default 50 × the rigid contact duration).
-    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1000.0, example = 0.05)]
+    /// End of the coupled window, s, in [1e-9, 1e3] (coupled only; default 50 × the rigid contact
+    /// duration; shorter windows resolve nothing of a contact).
+    #[schema(default = json!(null), minimum = 1e-9, maximum = 1000.0, example = 0.05)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub end_time_s: Option<f64>,
     /// History output (null: no history).
@@ -173,7 +174,13 @@ impl ColumnRequest {
                 );
             }
             if let Some(t) = self.end_time_s {
-                ck.open_closed("/end_time_s", t, 0.0, config.max_end_time_s, "s");
+                ck.closed(
+                    "/end_time_s",
+                    t,
+                    crate::physics::column::MIN_END_TIME,
+                    config.max_end_time_s,
+                    "s",
+                );
             }
         } else {
             if modes != 1 {
@@ -303,13 +310,16 @@ pub struct StressDto {
 /// Integrator report of the coupled model.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, ToSchema)]
 pub struct IntegratorDto {
-    /// Accepted steps.
+    /// Accepted steps (of the last pass).
     pub steps: u64,
-    /// Rejected steps.
+    /// Rejected steps (of the last pass).
     pub rejected_steps: u64,
-    /// Relative tolerance.
+    /// Relative tolerance (of the last pass).
     pub tolerance: f64,
-    /// Energy-balance error at the end, relative to the rock's kinetic energy.
+    /// Estimated relative error at the end: the larger of the rock's energy balance relative to
+    /// its kinetic energy and the column's balance (energy + dissipated = work of the contact
+    /// force) relative to the transferred energy. Above 1e-5 the integrator refines, and
+    /// warns (`integrator_error_above_target`) if it still is.
     pub estimated_error: f64,
 }
 
