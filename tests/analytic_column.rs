@@ -399,9 +399,10 @@ fn closed_forms_match_direct_integration() {
     }
 }
 
-/// Decay time to 1 % of an under-damped mode from the plain envelope time ln(100)/σ: the
-/// envelope e^{−σt}·min(1/√(1−ζ²), 1 + σt) (exact amplitude, bounded by the critically damped
-/// solution so that it is continuous through ζ = 1), evaluated independently by bisection.
+/// Decay time to 1 % of an under-damped mode from the plain envelope time ln(100)/σ: that time
+/// for ζ ≤ 1/√2; above, blended by a smoothstep in ζ into the root of the response bound
+/// e^{−σt}·min(1/√(1−ζ²), 1 + σt) = 0.01 (exact amplitude, bounded by the critically damped
+/// solution so that it is continuous through ζ = 1), the root found independently by bisection.
 fn envelope_decay_time(zeta: f64, omega_n: f64, plain: f64) -> f64 {
     let sigma = zeta * omega_n;
     let amp = plain + (1.0 / (1.0 - zeta * zeta).sqrt()).ln() / sigma;
@@ -414,7 +415,10 @@ fn envelope_decay_time(zeta: f64, omega_n: f64, plain: f64) -> f64 {
             hi = mid;
         }
     }
-    amp.min(0.5 * (lo + hi) / sigma)
+    let bound = amp.min(0.5 * (lo + hi) / sigma);
+    let a = 0.5f64.sqrt();
+    let x = ((zeta - a) / (1.0 - a)).clamp(0.0, 1.0);
+    plain + x * x * (3.0 - 2.0 * x) * (bound - plain)
 }
 
 /// Decay times: ζ < 1 the envelope; ζ ≥ 1 the root of w = 0.01·w₀; c = 0 gives None.

@@ -367,3 +367,36 @@ fn coarse_integrator_refines_or_warns_never_reports_silently() {
     // Both paths are exercised: tolerance 1e-3 with one mode stays above the target.
     assert!(any_warned && any_refined);
 }
+
+/// Light damping keeps physics.md §B.5's envelope time ln(100)/σ exactly (the recommended
+/// ζ₁ = 0.02 included); the blend towards the response bound starts only above ζ = 1/√2 and is
+/// continuous there.
+#[tokio::test]
+async fn light_damping_decay_time_is_the_envelope_time() {
+    let app = common::app();
+    let decay = |z: f64| {
+        let app = app.clone();
+        async move {
+            let req = json!({"column":{"damping_ratio": z}});
+            let b = common::post(&app, "/v1/column", &req).await.json();
+            let omega =
+                b["natural_frequencies_hz"][0].as_f64().unwrap() * 2.0 * std::f64::consts::PI;
+            let zeta = b["damping_ratios"][0].as_f64().unwrap();
+            (
+                b["decay_time_1pct_s"].as_f64().unwrap(),
+                100f64.ln() / (zeta * omega),
+            )
+        }
+    };
+    for z in [1e-6, 0.02, 0.3, 0.7] {
+        let (t, plain) = decay(z).await;
+        assert!(
+            common::rel(t, plain) < 1e-13,
+            "ζ = {z}: {t} against {plain}"
+        );
+    }
+    let a = std::f64::consts::FRAC_1_SQRT_2;
+    let (below, _) = decay(a - 1e-9).await;
+    let (above, _) = decay(a + 1e-9).await;
+    assert!(common::rel(below, above) < 1e-7, "{below} against {above}");
+}

@@ -640,12 +640,12 @@ impl FreeVibration {
     /// (no damping) or when the time is not representable (damping so light that it overflows).
     ///
     /// # Special cases
-    /// * ζ < 1: the root of the envelope e^{−σt}·min(1/√(1−ζ²), 1 + σt) = x. The first factor is
-    ///   the exact amplitude of w₀e^{−σt}(cos ω_d t + (σ/ω_d) sin ω_d t); the second bounds it by
-    ///   |sin ω_d t|/ω_d ≤ t and equals the critically damped solution as ζ → 1, so the decay time
-    ///   is continuous through ζ = 1 (the plain ln(1/x)/σ is 30 % short there). For light damping
-    ///   it is ln(1/x)/σ + ln(1/√(1−ζ²))/σ: relative change ζ²/(2 ln(1/x)), 4e-13 for the
-    ///   paper's ζ₁ = 1.9e-6 and 4.3e-5 for ζ₁ = 0.02. After this time |w| ≤ x·w₀ for good.
+    /// * ζ ≤ 1/√2: the envelope time ln(1/x)/σ of physics.md §B.5.
+    /// * 1/√2 < ζ < 1: that time blended (C¹ smoothstep in ζ) into the root of the response bound
+    ///   e^{−σt}·min(1/√(1−ζ²), 1 + σt) = x. The first factor is the exact amplitude of
+    ///   w₀e^{−σt}(cos ω_d t + (σ/ω_d) sin ω_d t); the second bounds it by |sin ω_d t|/ω_d ≤ t and
+    ///   equals the critically damped solution at ζ = 1, so the decay time is continuous through
+    ///   critical damping (the plain envelope time is 30 % short there).
     /// * ζ ≥ 1: the root of w(t) = x·w₀ (w decreases monotonically), by bisection to 1e-15.
     ///
     /// # References
@@ -675,7 +675,10 @@ impl FreeVibration {
                 s = next;
             }
             let t_crit = s / self.sigma;
-            let t = t_amp.min(t_crit);
+            let t_bound = t_amp.min(t_crit);
+            let t_plain = target / self.sigma;
+            let w = near_critical_weight(self.zeta);
+            let t = t_plain + w * (t_bound - t_plain);
             return t.is_finite().then_some(t);
         }
         // w(t)/w₀ − x, monotone decreasing from 1 − x > 0.
@@ -1024,4 +1027,12 @@ mod tests {
         assert!(rel(ze.free_vibration(1.0).zeta, 0.02) < 1e-14);
         assert!((ze.free_vibration(1.0).decay_time(0.01).unwrap() - 0.0410).abs() < 1e-4);
     }
+}
+
+/// Weight of the response bound in the decay time: 0 for ζ ≤ 1/√2, rising as a C¹ smoothstep to 1
+/// at ζ = 1 (see [`FreeVibration::decay_time`]).
+fn near_critical_weight(zeta: f64) -> f64 {
+    let lo = std::f64::consts::FRAC_1_SQRT_2;
+    let x = ((zeta - lo) / (1.0 - lo)).clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
 }
