@@ -23,30 +23,7 @@ use serde_json::{Map, Value, json};
 
 /// Failures owned by other files (physics, column and migration DTOs): (endpoint, pointer, value
 /// label). Each is reported with its request. The lead empties this list after the fixes merge.
-const KNOWN_ELSEWHERE: &[(&str, &str, &str)] = &[
-    // Issue 7, "500 from non-finite intermediate values" (column physics): a tiny impact speed
-    // gives a NaN energy ratio, a tiny yield stress an infinite utilisation, a tiny damping
-    // ratio a non-finite decay time. Fixed in the column solver, not here.
-    ("/v1/column", "/velocity_m_s", "min"),
-    ("/v1/column", "/velocity_m_s", "min+"),
-    ("/v1/column", "/velocity_m_s", "tiny-5e-324"),
-    ("/v1/column", "/velocity_m_s", "tiny-1e-300"),
-    ("/v1/column", "/column/yield_stress_pa", "min"),
-    ("/v1/column", "/column/yield_stress_pa", "min+"),
-    ("/v1/column", "/column/yield_stress_pa", "tiny-5e-324"),
-    ("/v1/column", "/column/yield_stress_pa", "tiny-1e-300"),
-    ("/v1/column", "/column/damping_ratio", "min+"),
-    ("/v1/column", "/column/damping_ratio", "tiny-5e-324"),
-    // Issue 7 (coupled model): a tiny end time gives a NaN error estimate (500).
-    ("/v1/column", "/end_time_s", "min"),
-    ("/v1/column", "/end_time_s", "min+"),
-    ("/v1/column", "/end_time_s", "tiny-5e-324"),
-    // The coupled model cannot reach the documented end_time_s maximum (1000 s): 422
-    // too_many_steps (about 3.3e7 steps against the 2e6 limit) that names no field. The column
-    // request owner documents the usable bound or names /end_time_s in the refusal.
-    ("/v1/column", "/end_time_s", "max"),
-    ("/v1/column", "/end_time_s", "max-"),
-];
+const KNOWN_ELSEWHERE: &[(&str, &str, &str)] = &[];
 
 /// Documented cross-field rules: an in-range value of the first field may be refused naming the
 /// second, whose default it contradicts (api.md: D₂ < D₁; the column at least the contact length

@@ -225,6 +225,19 @@ impl ApiError {
         self
     }
 
+    /// Names the field whose value drives the step count of a `too_many_steps` problem (e.g. the
+    /// coupled window `/end_time_s`), with the value used; other problems are unchanged.
+    pub fn with_step_field(mut self, field: &str, value: f64) -> Self {
+        if self.problem.code == "too_many_steps" && self.errors.is_empty() {
+            self.errors.push(FieldError {
+                field: field.into(),
+                value: num(value),
+                message: format!("{}; shorten this window", self.detail),
+            });
+        }
+        self
+    }
+
     /// Adds an extension member to the problem object.
     pub fn with_extension(mut self, key: &str, value: Value) -> Self {
         self.extensions.insert(key.to_string(), value);

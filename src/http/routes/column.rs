@@ -5,6 +5,7 @@ use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 
 use crate::http::dto::column::{ColumnRequest, ColumnResponse};
+use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
 use crate::physics::column::solve_column;
@@ -31,7 +32,13 @@ pub async fn column(
         Err(e) => return e.into_response(),
     };
     respond(&state, &headers, move |control| {
-        let r = solve_column(&case, control)?;
+        let r = solve_column(&case, control).map_err(|e| {
+            let e = ApiError::from(e).with_capacity_velocity(case.impact.velocity);
+            match req.end_time_s {
+                Some(t) => e.with_step_field("/end_time_s", t),
+                None => e,
+            }
+        })?;
         Ok(ColumnResponse::new(r, req))
     })
     .await
