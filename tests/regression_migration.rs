@@ -146,3 +146,18 @@ async fn subnormal_face_length_without_friction_gives_a_finite_answer_not_500() 
         assert!(b["errors"][0]["field"] == "/face/length_m", "{b}");
     }
 }
+
+#[tokio::test]
+async fn one_run_ensemble_warns_that_its_std_is_null() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/migration",
+        &json!({"monte_carlo": {"runs": 1, "seed": 7}}),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    let w = b["warnings"].as_array().unwrap();
+    assert!(w.iter().any(|w| w["code"] == "single_run"), "{b}");
+}

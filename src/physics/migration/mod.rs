@@ -699,6 +699,14 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
         Some(mc) => {
             let runs = ensemble(case, &pr, mc, control)?;
             let st = statistics_of(mc, &runs);
+            if runs.len() < 2 {
+                warnings.push(Warning {
+                    code: "single_run",
+                    message: "an ensemble of one run has no sample standard deviation: every \
+                              std is null; ask for runs ≥ 2"
+                        .into(),
+                });
+            }
             if st.speed.is_none() {
                 warnings.push(Warning {
                     code: "no_run_reached_lower_end",
