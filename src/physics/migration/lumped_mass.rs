@@ -16,7 +16,7 @@
 
 use nalgebra::Vector3;
 
-use super::terrain::{Facet, FacetPlane, FlightEnd, Floor};
+use super::terrain::{Facet, FacetPlane, FlightEnd, Floor, inside_tri};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
 
@@ -130,6 +130,9 @@ pub(crate) struct Setup<'a> {
     pub(crate) p0: Vector3<f64>,
     pub(crate) v0: Vector3<f64>,
     pub(crate) on_floor: Option<Facet>,
+    /// The floor point under the release, m, and its `along_dip`, m (exact for the plane): the
+    /// distance to the lower end is measured from floor points like it, never from p₀.
+    pub(crate) base: (Vector3<f64>, f64),
 }
 
 /// Outcome of a run; energies per kg.
@@ -169,6 +172,9 @@ struct St {
     spin: (f64, Vector3<f64>),
     undecelerated: bool,
     crease: Option<Crease>,
+    /// A floor point (m) and its `along_dip` (m): the last point where the rock was on the floor.
+    r: Vector3<f64>,
+    s_r: f64,
 }
 
 /// A concave edge (V-shaped crease) that holds the rock: it slides along the edge line.
@@ -262,16 +268,174 @@ fn reach_time(s: f64, b: f64, c: f64) -> f64 {
     if c == 0.0 {
         return if b > 0.0 { s / b } else { f64::INFINITY };
     }
-    let disc = b * b + 2.0 * c * s;
-    if disc < 0.0 {
-        return f64::INFINITY;
-    }
-    let sq = disc.sqrt();
+    let sq = if c > 0.0 {
+        // √(b² + 2cs) without underflow of 2cs (s may be subnormal)
+        b.hypot((2.0 * c).sqrt() * s.sqrt())
+    } else {
+        let disc = b * b + 2.0 * c * s;
+        if disc < 0.0 {
+            return f64::INFINITY;
+        }
+        disc.sqrt()
+    };
     if b + sq > 0.0 {
         // root with the well-conditioned form; it is the smallest positive one
         2.0 * s / (b + sq)
     } else {
         f64::INFINITY
+    }
+}
+
+/// Number of consecutive flights shorter than [`trap_length`] after which the rock is taken to
+/// be caught at a concave node or crease (a Zeno series of ever smaller hops at one point).
+const TRAP_HOPS: u32 = 3;
+
+/// Number of consecutive pieces of any kind that keep the rock within 1000 × [`trap_length`]
+/// (1e-6 of the facet size) of one point after which it is taken to be caught (a Zeno series
+/// of ever shorter slides or swings about a node).
+const TRAP_STILL: u32 = 64;
+
+/// Number of times a rock may be caught at one point and sent on before it is taken to be at
+/// rest there (every way out has led back to it, with ever less energy).
+const TRAP_RETURNS: u32 = 4;
+
+/// Length, m, below which a flight is a hop in place: 1e-9 of the floor's facet size.
+fn trap_length(floor: &Floor) -> f64 {
+    1e-9 * floor.cell_size()
+}
+
+/// Invariant: the rock is never below its floor. A point more than a rounding-level tolerance
+/// (1e-9 of its coordinates' magnitude) under the floor is a solver defect, reported as a
+/// numerical failure rather than as an answer.
+pub(crate) fn check_above_floor(floor: &Floor, p: &Vector3<f64>, t: f64) -> PhysicsResult<()> {
+    if let Some(z) = floor.height_at(p.x, p.y) {
+        let tol = 1e-9 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()).max(z.abs()));
+        if p.z < z - tol || p.z.is_nan() {
+            return Err(PhysicsError::Numerical(format!(
+                "lumped mass: the rock is {:.3e} m below the floor at t = {t} s, \
+                 ({}, {}, {}): invariant violated",
+                z - p.z,
+                p.x,
+                p.y,
+                p.z
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// How a rock caught at a point (a node, an edge or a facet) goes on.
+#[derive(Debug, Clone, Copy)]
+enum TrapExit {
+    /// No facet or crease around the point lets gravity overcome friction: at rest.
+    Rest(Option<Facet>),
+    /// Slides (rolls) onto this facet along the unit direction of gravity's in-plane part.
+    Facet(Facet, Vector3<f64>),
+    /// Slides (rolls) along this crease (a concave edge both faces slope down to).
+    Crease(Facet, Crease),
+}
+
+/// Decides how a rock caught at p (on the floor) leaves: onto the facet or along the crease
+/// with the largest driving acceleration (gravity's part along the motion less friction), or
+/// at rest when none is positive. A point mass in a V-shaped crease moves along the crease line.
+fn resolve_trap(floor: &Floor, p: &Vector3<f64>, g: f64, mu: f64, roll: bool) -> TrapExit {
+    let gv = Vector3::new(0.0, 0.0, -g);
+    let tol = 1e-7 * floor.cell_size();
+    let mut facets: Vec<Facet> = Vec::new();
+    for k in 0..24 {
+        let a = std::f64::consts::TAU * k as f64 / 24.0;
+        if let Some(f) = floor.locate(p.x, p.y, a.cos(), a.sin())
+            && !facets.contains(&f)
+        {
+            facets.push(f);
+        }
+    }
+    let mut best: Option<(f64, TrapExit)> = None;
+    let mut consider = |drive: f64, ex: TrapExit| {
+        if drive > 1e-12 * g && best.is_none_or(|b| drive > b.0) {
+            best = Some((drive, ex));
+        }
+    };
+    for &f in &facets {
+        let pl = floor.facet_plane(f);
+        let n = pl.normal();
+        let gt = gv + n * (g * n.z);
+        let gtn = gt.norm();
+        let corners = floor.facet_corners(f);
+        if gtn > 1e-12 * g {
+            let into = match &corners {
+                None => true,
+                Some((c, _)) => {
+                    let size = (0..3)
+                        .map(|k| {
+                            let (a, b) = (c[k], c[(k + 1) % 3]);
+                            (b[0] - a[0]).hypot(b[1] - a[1])
+                        })
+                        .fold(f64::INFINITY, f64::min);
+                    let h = gt.x.hypot(gt.y);
+                    h > 0.0 && {
+                        let eps = 1e-6 * size;
+                        inside_tri(c, p.x + eps * gt.x / h, p.y + eps * gt.y / h, 0.0)
+                    }
+                }
+            };
+            let drive = if roll {
+                gtn * (5.0 / 7.0)
+            } else {
+                gtn - mu * g * n.z
+            };
+            if into {
+                consider(drive, TrapExit::Facet(f, gt / gtn));
+            }
+        }
+        let Some((c, z)) = corners else { continue };
+        for k in 0..3 {
+            let (a, b) = (c[k], c[(k + 1) % 3]);
+            let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+            let len = ex.hypot(ey);
+            if len == 0.0 {
+                continue;
+            }
+            let off = (ex * (p.y - a[1]) - ey * (p.x - a[0])) / len;
+            let u = ((p.x - a[0]) * ex + (p.y - a[1]) * ey) / len;
+            if off.abs() > tol || u < -tol || u > len + tol {
+                continue;
+            }
+            // horizontal normal of the edge pointing out of f
+            let third = c[(k + 2) % 3];
+            let mut out = Vector3::new(ey, -ex, 0.0);
+            if out.x * (third[0] - a[0]) + out.y * (third[1] - a[1]) > 0.0 {
+                out = -out;
+            }
+            let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+            let Some(fb) = floor.locate(mid[0], mid[1], out.x, out.y) else {
+                continue;
+            };
+            if fb == f {
+                continue;
+            }
+            let nb = floor.facet_plane(fb).normal();
+            let p3 = Vector3::new(p.x, p.y, pl.z(p.x, p.y));
+            for (q, qz) in [(a, z[k]), (b, z[(k + 1) % 3])] {
+                if (q[0] - p.x).hypot(q[1] - p.y) <= tol {
+                    continue;
+                }
+                let q3 = Vector3::new(q[0], q[1], qz);
+                if let Some(cr) = crease_of([p3, q3], &n, &nb, &out, &Vector3::zeros(), g) {
+                    let ge = gv.dot(&cr.e);
+                    let drive = if roll {
+                        ge * (5.0 / 7.0)
+                    } else {
+                        ge - mu * cr.n_tot
+                    };
+                    consider(drive, TrapExit::Crease(f, cr));
+                }
+            }
+        }
+    }
+    match best {
+        Some((_, ex)) => ex,
+        None => TrapExit::Rest(facets.first().copied()),
     }
 }
 
@@ -304,6 +468,8 @@ pub(crate) fn simulate(
         spin: (0.0, Vector3::zeros()),
         undecelerated: false,
         crease: None,
+        r: su.base.0,
+        s_r: su.base.1,
     };
     let push_event = |rec: &mut Option<&mut Recording>, ev: EventRec| {
         if let Some(r) = rec.as_deref_mut() {
@@ -389,6 +555,13 @@ pub(crate) fn simulate(
     }
     let mut steps: u64 = 0;
     let mut zero_steps = 0u32;
+    let trap_len = trap_length(floor);
+    let mut trap = 0u32;
+    let mut still = 0u32;
+    let mut anchor = s.p;
+    let mut still_at = s.p;
+    let mut caught = 0u32;
+    let mut p_last = s.p;
     let (phase, reason) = loop {
         steps += 1;
         if steps.is_multiple_of(4096)
@@ -402,8 +575,85 @@ pub(crate) fn simulate(
                 limit: su.max_steps as f64,
             });
         }
+        // invariant: never below the floor, at every event and piece end
+        check_above_floor(floor, &s.p, s.t)?;
+        if s.ground.is_some() && floor.height_at(s.p.x, s.p.y).is_none() {
+            return Err(PhysicsError::Numerical(format!(
+                "lumped mass: the rock is on the ground off the floor at t = {} s: invariant \
+                 violated",
+                s.t
+            )));
+        }
+        let moved = (s.p - p_last).norm();
+        if moved > trap_len {
+            trap = 0;
+        }
+        if (s.p - still_at).norm() > 1e3 * trap_len {
+            still = 0;
+            still_at = s.p;
+        } else {
+            still += 1;
+        }
+        p_last = s.p;
+        if trap >= TRAP_HOPS || still >= TRAP_STILL {
+            still = 0;
+            // caught at a node or crease: hops or slides in place shrink geometrically and never end
+            trap = 0;
+            let kf = if s.ground.is_some() { ke_factor } else { 1.0 };
+            let before = 0.5 * kf * s.v.norm_squared() + s.spin.0;
+            s.spin = (0.0, Vector3::zeros());
+            // caught again and again at the same point: every way out leads back to it
+            if (s.p - anchor).norm() <= 1e-7 * floor.cell_size() {
+                caught += 1;
+            } else {
+                anchor = s.p;
+                caught = 1;
+            }
+            let exit = if caught > TRAP_RETURNS {
+                let f = s.ground.or_else(|| floor.locate(s.p.x, s.p.y, 0.0, 0.0));
+                TrapExit::Rest(f)
+            } else {
+                resolve_trap(floor, &s.p, g, mu, roll)
+            };
+            let (f, dir) = match exit {
+                TrapExit::Rest(f) => {
+                    s.e_trans += before;
+                    s.v = Vector3::zeros();
+                    s.crease = None;
+                    if s.ground.is_none() {
+                        s.ground = f;
+                    }
+                    break (Phase::Stopped, StopReason::AtRest);
+                }
+                TrapExit::Facet(f, dir) => {
+                    s.crease = None;
+                    (f, dir)
+                }
+                TrapExit::Crease(f, c) => {
+                    s.p = c.ends[0];
+                    s.crease = Some(c);
+                    (f, c.e)
+                }
+            };
+            let vd = s.v.dot(&dir).max(0.0);
+            s.v = dir * vd;
+            s.e_trans += before - 0.5 * kf * vd * vd;
+            let z = floor.facet_plane(f).z(s.p.x, s.p.y);
+            set_height(&mut s, z, g, kf);
+            if s.ground.is_none() {
+                enter_ground(&mut s, f, &mut rec);
+            } else {
+                s.ground = Some(f);
+            }
+            continue;
+        }
+        if s.ground.is_some() {
+            // measure along the dip from the last floor point (local terms)
+            s.s_r += (s.p - s.r).dot(&dip);
+            s.r = s.p;
+        }
         let t_left = su.end_time.map_or(f64::INFINITY, |te| te - s.t);
-        let s_left = su.length - mean.along(&s.p);
+        let s_left = su.length - (s.s_r + (s.p - s.r).dot(&dip));
         let moving = match s.ground {
             None => Phase::Flight,
             Some(_) if roll => Phase::Roll,
@@ -420,11 +670,34 @@ pub(crate) fn simulate(
             None => {
                 let t_s = reach_time(s_left, s.v.dot(&dip), gv.dot(&dip));
                 let t_lim = t_s.min(t_left);
-                let end = floor.flight(&s.p, &s.v, g, t_lim);
+                // t_s is formed from the whole flight; whether a strike comes before the lower
+                // end is decided by its point, measured from the last floor point (local terms)
+                let t_q = if t_s < t_left {
+                    (t_s * (1.0 + 1e-9)).min(t_left)
+                } else {
+                    t_lim
+                };
+                let mut past_end = None;
+                let end = match floor.flight(&s.p, &s.v, g, t_q) {
+                    FlightEnd::Hit { t, facet } => {
+                        let q = s.p + s.v * t + gv * (0.5 * t * t);
+                        let zq = floor.facet_plane(facet).z(q.x, q.y);
+                        let dq = Vector3::new(q.x - s.r.x, q.y - s.r.y, zq - s.r.z);
+                        if s.s_r + dq.dot(&dip) < su.length {
+                            FlightEnd::Hit { t, facet }
+                        } else {
+                            past_end = Some(t);
+                            FlightEnd::Clear
+                        }
+                    }
+                    FlightEnd::Leaves { t } if t > t_lim => FlightEnd::Clear,
+                    e => e,
+                };
                 let dt = match end {
                     FlightEnd::Hit { t, .. } | FlightEnd::Leaves { t } => t,
-                    FlightEnd::Clear => t_lim,
+                    FlightEnd::Clear => past_end.map_or(t_lim, |t| t.min(t_lim)),
                 };
+                let p_start = s.p;
                 if let Some(r) = rec.as_deref_mut() {
                     r.segments.push(Segment {
                         t0: s.t,
@@ -445,7 +718,7 @@ pub(crate) fn simulate(
                 match end {
                     FlightEnd::Leaves { .. } => break (Phase::Flight, StopReason::LeftFloor),
                     FlightEnd::Clear => {
-                        if t_s <= t_left {
+                        if t_s <= t_left || past_end.is_some() {
                             break (Phase::Flight, StopReason::LowerEnd);
                         }
                         break (Phase::Flight, StopReason::EndTime);
@@ -455,6 +728,13 @@ pub(crate) fn simulate(
                         let n = pl.normal();
                         let z = pl.z(s.p.x, s.p.y);
                         set_height(&mut s, z, g, 1.0);
+                        if (s.p - p_start).norm() <= trap_len {
+                            trap += 1;
+                        } else {
+                            trap = 0;
+                        }
+                        s.s_r += (s.p - s.r).dot(&dip);
+                        s.r = s.p;
                         let vn = s.v.dot(&n);
                         let vt = s.v - n * vn;
                         let (en, et) = draw();
@@ -523,8 +803,9 @@ pub(crate) fn simulate(
                     stop_at = ve.abs() / ae.abs();
                 }
                 t_max = t_max.min(stop_at);
-                let u0 = (s.p - c.ends[0]).dot(&c.e);
                 let len = (c.ends[1] - c.ends[0]).dot(&c.e);
+                // on the edge: a rounding error past an end would never cross it again
+                let u0 = (s.p - c.ends[0]).dot(&c.e).clamp(0.0, len);
                 let t_end_edge = super::terrain::outward_root(u0 - len, ve, ae)
                     .into_iter()
                     .chain(super::terrain::outward_root(-u0, -ve, -ae))

@@ -448,6 +448,8 @@ struct Prepared {
     v0: Vector3<f64>,
     on_floor: Option<u32>,
     release_along: f64,
+    /// Floor point under the release, m.
+    base: Vector3<f64>,
     z_end: f64,
     e0: f64,
 }
@@ -549,7 +551,12 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
     let z_end = mean.z_at(face.length);
     let e0 = 0.5 * rel.speed * rel.speed + g * (p0.z - z_end);
     Ok(Prepared {
-        release_along: mean.along(&Vector3::new(x, y, z_floor)),
+        // on the plane the release's along_dip is exact; a floor's is measured
+        release_along: match face.floor {
+            FloorSpec::Plane => rel.along_dip,
+            _ => mean.along(&Vector3::new(x, y, z_floor)),
+        },
+        base: Vector3::new(x, y, z_floor),
         on_floor: (rel.drop_height == 0.0).then_some(facet),
         floor,
         mass: case.rock.mass(),
@@ -581,6 +588,7 @@ fn setup<'a>(case: &MigrationCase, pr: &'a Prepared) -> Setup<'a> {
         p0: pr.p0,
         v0: pr.v0,
         on_floor: pr.on_floor,
+        base: (pr.base, pr.release_along),
     }
 }
 
@@ -691,6 +699,14 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
         Some(mc) => {
             let runs = ensemble(case, &pr, mc, control)?;
             let st = statistics_of(mc, &runs);
+            if runs.len() < 2 {
+                warnings.push(Warning {
+                    code: "single_run",
+                    message: "an ensemble of one run has no sample standard deviation: every \
+                              std is null; ask for runs ≥ 2"
+                        .into(),
+                });
+            }
             if st.speed.is_none() {
                 warnings.push(Warning {
                     code: "no_run_reached_lower_end",
@@ -838,6 +854,10 @@ fn sample_trajectory(
         tr.time.push(t);
         tr.position.push(v3(&p));
         tr.along_dip.push(mean.along(&p));
+        if !on_floor {
+            // invariant: every flight sample lies above the floor
+            lumped_mass::check_above_floor(&pr.floor, &p, t)?;
+        }
         tr.height.push(if on_floor {
             0.0
         } else {

@@ -319,7 +319,7 @@ pub(crate) struct Floor {
 }
 
 #[inline]
-fn inside_tri(c: &[[f64; 2]; 3], x: f64, y: f64, tol: f64) -> bool {
+pub(crate) fn inside_tri(c: &[[f64; 2]; 3], x: f64, y: f64, tol: f64) -> bool {
     (0..3).all(|k| {
         let a = c[k];
         let b = c[(k + 1) % 3];
@@ -767,6 +767,31 @@ impl Floor {
             }
             FloorKind::Mesh(m) => m.bbox,
         }
+    }
+
+    /// Plan corners [x, y] (m, counter-clockwise) and heights z (m) of facet f; None for the
+    /// plane, which has no corners.
+    pub(crate) fn facet_corners(&self, f: Facet) -> Option<([[f64; 2]; 3], [f64; 3])> {
+        match &self.kind {
+            FloorKind::Plane(_) => None,
+            FloorKind::Grid(g) => Some(g.corners(f)),
+            FloorKind::Mesh(m) => Some(m.corners(f)),
+        }
+    }
+
+    /// Length scale of the floor's facets (grid spacing or bucket cell), m; 1 for the plane.
+    pub(crate) fn cell_size(&self) -> f64 {
+        match &self.kind {
+            FloorKind::Plane(_) => 1.0,
+            FloorKind::Grid(g) => g.cells.d,
+            FloorKind::Mesh(m) => m.cells.d,
+        }
+    }
+
+    /// Height of the floor under (x, y), m, or None off the floor.
+    pub(crate) fn height_at(&self, x: f64, y: f64) -> Option<f64> {
+        self.locate(x, y, 0.0, 0.0)
+            .map(|f| self.facet_plane(f).z(x, y))
     }
 
     /// The facet under (x, y), preferring the one the direction (dx, dy) moves into.

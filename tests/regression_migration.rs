@@ -1,0 +1,163 @@
+//! Regressions of `POST /v1/migration` found against independent references (issue 7).
+//!
+//! Physical expectations: a point mass on a triangulated floor never goes below it; caught in a
+//! pit (every neighbouring node higher) it comes to rest; a rock released from any height just
+//! above the lower end strikes the floor once before it arrives, with the closed-form speed of
+//! physics.md §C.1; a vanishing face length gives a finite (limit) answer.
+
+mod common;
+
+use common::{post, rel};
+use serde_json::{Value, json};
+
+fn load(name: &str) -> Value {
+    let p = common::shared_dir().join("repro").join(name);
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+/// Height of a grid floor (cells split along the (j, i)–(j+1, i+1) diagonal), m.
+fn grid_height(floor: &Value, x: f64, y: f64) -> Option<f64> {
+    let d = floor["spacing_m"].as_f64().unwrap();
+    let o = [
+        floor["origin_m"][0].as_f64().unwrap(),
+        floor["origin_m"][1].as_f64().unwrap(),
+    ];
+    let h: Vec<Vec<f64>> = serde_json::from_value(floor["heights_m"].clone()).unwrap();
+    let (u, w) = ((x - o[0]) / d, (y - o[1]) / d);
+    let (nx, ny) = (h[0].len(), h.len());
+    if !(u >= 0.0 && w >= 0.0 && u <= (nx - 1) as f64 && w <= (ny - 1) as f64) {
+        return None;
+    }
+    let j = (u.floor() as usize).min(nx - 2);
+    let i = (w.floor() as usize).min(ny - 2);
+    let (fx, fy) = (u - j as f64, w - i as f64);
+    let (z00, z10, z01, z11) = (h[i][j], h[i][j + 1], h[i + 1][j], h[i + 1][j + 1]);
+    Some(if fx >= fy {
+        z00 + fx * (z10 - z00) + fy * (z11 - z10)
+    } else {
+        z00 + fy * (z01 - z00) + fx * (z11 - z01)
+    })
+}
+
+#[tokio::test]
+async fn rock_in_a_grid_pit_comes_to_rest_instead_of_falling_through_and_arriving() {
+    let app = common::app();
+    let mut req = load("grid_tunnel.json");
+    req["output"] = json!({"trajectory": true, "sample_interval_s": 0.001});
+    let r = post(&app, "/v1/migration", &req).await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    let floor = &req["face"]["floor"];
+    let below = |p: &Value| -> f64 {
+        let p: Vec<f64> = serde_json::from_value(p.clone()).unwrap();
+        grid_height(floor, p[0], p[1]).map_or(0.0, |z| z - p[2])
+    };
+    // the node (2.2, 0.2) is a pit: all six neighbours are higher
+    assert_eq!(b["arrival"]["phase"], "stopped", "{}", b["arrival"]);
+    assert_eq!(b["arrival"]["stop_reason"], "at_rest");
+    let pos = &b["arrival"]["position_m"];
+    assert!((pos[0].as_f64().unwrap() - 2.2).abs() < 1e-9);
+    assert!((pos[1].as_f64().unwrap() - 0.2).abs() < 1e-9);
+    assert!(below(pos).abs() < 1e-9);
+    for e in b["events"].as_array().unwrap() {
+        assert!(below(&e["position_m"]) < 1e-9, "event below the floor: {e}");
+    }
+    let tr = &b["trajectory"]["position_m"];
+    let n = tr.as_array().unwrap().len();
+    assert!(n > 1000);
+    for p in tr.as_array().unwrap() {
+        assert!(below(p) < 1e-9, "sample below the floor: {p}");
+    }
+    let e = &b["energy"];
+    assert!(e["residual_j"].as_f64().unwrap().abs() < 1e-9 * e["total_start_j"].as_f64().unwrap());
+}
+
+/// Closed form (physics.md §C.1–C.2) of a vertical drop h onto the 45° plane at s0 < S, one
+/// impact (e_n = 0.3, e_t = 0.8), then flight (or, below the stop speed 0.5 m/s, the slide)
+/// to the lower end: the arrival speed.
+fn one_impact_arrival(h: f64, s0: f64, s: f64) -> f64 {
+    let g = 9.81;
+    let (c, sn) = (45f64.to_radians().cos(), 45f64.to_radians().sin());
+    let v0 = (2.0 * g * h).sqrt();
+    let (vx, vy) = (0.8 * v0 * sn, 0.3 * v0 * c);
+    let d = s - s0;
+    if vy < 0.5 {
+        // below the stop speed: the slide (μ = 0.2) from vx
+        let a = g * (sn - 0.2 * c);
+        return (vx * vx + 2.0 * a * d).sqrt();
+    }
+    let a = g * sn;
+    let tau = 2.0 * d / (vx + (vx * vx + 2.0 * a * d).sqrt());
+    let (ux, uy) = (vx + a * tau, vy - g * c * tau);
+    ux.hypot(uy)
+}
+
+#[tokio::test]
+async fn release_a_hair_above_the_lower_end_strikes_once_before_arriving() {
+    let app = common::app();
+    let s = 120.0f64;
+    let mut along = vec![119.99999999999999, s - 1e-12, s - 1e-9, s - 1e-6, s - 1e-3];
+    // 1 to 8 ulps below the end
+    let mut a = s;
+    for _ in 0..8 {
+        a = f64::from_bits(a.to_bits() - 1);
+        along.push(a);
+    }
+    for h in [1000.0, 3.27, 0.01] {
+        for &s0 in &along {
+            let r = post(
+                &app,
+                "/v1/migration",
+                &json!({"release": {"drop_height_m": h, "along_dip_m": s0}}),
+            )
+            .await;
+            assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+            let b = r.json();
+            assert_eq!(b["impact_count"], 1, "h {h}, s0 {s0}: {}", b["arrival"]);
+            let v = b["arrival"]["speed_m_s"].as_f64().unwrap();
+            let exact = one_impact_arrival(h, s0, s);
+            assert!(rel(v, exact) < 1e-9, "h {h}, s0 {s0}: {v} vs {exact}");
+        }
+    }
+    // the issue's figure: 84.6 m/s after one impact from 1000 m
+    assert!((one_impact_arrival(1000.0, 119.99999999999999, s) - 84.63).abs() < 0.01);
+}
+
+#[tokio::test]
+async fn subnormal_face_length_without_friction_gives_a_finite_answer_not_500() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/migration",
+        &json!({"face": {"dip_deg": 5, "friction_coefficient": 0, "length_m": 5e-324,
+                "restitution_tangential": 0}, "gravity_m_s2": 0.1}),
+    )
+    .await;
+    let b = r.json();
+    assert!(r.status == 200 || r.status == 422, "{} {b}", r.status);
+    if r.status == 200 {
+        assert!(b["arrival"]["time_s"].as_f64().unwrap().is_finite(), "{b}");
+        assert!(
+            b["arrival"]["speed_m_s"].as_f64().unwrap().is_finite(),
+            "{b}"
+        );
+        assert_eq!(b["arrival"]["stop_reason"], "lower_end");
+    } else {
+        assert!(b["errors"][0]["field"] == "/face/length_m", "{b}");
+    }
+}
+
+#[tokio::test]
+async fn one_run_ensemble_warns_that_its_std_is_null() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/migration",
+        &json!({"monte_carlo": {"runs": 1, "seed": 7}}),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    let w = b["warnings"].as_array().unwrap();
+    assert!(w.iter().any(|w| w["code"] == "single_run"), "{b}");
+}
