@@ -8,7 +8,6 @@ use serde_json::Value;
 
 /// Cases whose endpoint or method is not implemented yet, with the reason.
 const PENDING: &[(&str, &str)] = &[
-    ("P12_table1", "POST /v1/spalling"),
     ("P13_sensitivity_paper", "POST /v1/study"),
     (
         "P15_dem_cube_slide_1s",

@@ -5,5 +5,6 @@ pub mod column;
 pub mod common;
 pub mod impact;
 pub mod migration;
+pub mod spalling;
 
 pub use common::{Meta, PlanStep, Warning};

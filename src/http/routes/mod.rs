@@ -5,3 +5,4 @@ pub mod column;
 pub mod impact;
 pub mod meta;
 pub mod migration;
+pub mod spalling;
