@@ -35,7 +35,7 @@ pub fn ratio(low: f64, high: f64) -> Option<f64> {
 /// p − h/2, p + h/2 with h = 1e-4·|p|. `None` when p is 0 (no relative step).
 pub fn richardson_points(p: f64) -> Option<[f64; 4]> {
     let h = FD_REL_STEP * p.abs();
-    (h > 0.0 && h.is_finite()).then(|| [p - h, p + h, p - 0.5 * h, p + 0.5 * h])
+    (h > 0.0 && h.is_finite()).then_some([p - h, p + h, p - 0.5 * h, p + 0.5 * h])
 }
 
 /// Elasticity d ln y/d ln p at `p` from y at the [`richardson_points`]: D(h) and D(h/2) are
