@@ -244,3 +244,72 @@ async fn event_log_equals_its_counts() {
     );
     assert_eq!(p["errors"][0]["field"], "/low_resistance_n");
 }
+
+mod properties {
+    //! Property: for any consistent counts over the documented range (0 to 1e12, fractional
+    //! allowed), every percentage lies in [0, 100], the zone shares of each event sum to 100 %,
+    //! each Wilson interval lies in [0, 100] and contains its proportion, and the total's P₁ is
+    //! |ΣA∩B|/|ΣB|. Run longer with PROPTEST_CASES=100000.
+
+    use gangue::physics::spalling::{ZoneCounts, check_counts, spalling_statistics};
+    use proptest::prelude::*;
+
+    fn zone() -> impl Strategy<Value = ZoneCounts> {
+        (
+            0.0f64..1.0,
+            0.0f64..1.0,
+            0.0f64..1.0,
+            0.0f64..=1.0,
+            0.0f64..=1.0,
+            -12.0f64..12.0,
+        )
+            .prop_map(|(a, b, c, fab, fac, scale)| {
+                let s = 10f64.powf(scale);
+                let (a, b, c) = (a * s, b * s, c * s);
+                ZoneCounts {
+                    spalling: a,
+                    high: b,
+                    low: c,
+                    spalling_and_high: fab * a.min(b),
+                    spalling_and_low: fac * a.min(c),
+                }
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(512))]
+        #[test]
+        fn percentages_and_intervals_stay_in_range(zones in proptest::collection::vec(zone(), 1..12)) {
+            prop_assert!(check_counts(&zones).is_empty());
+            let r = spalling_statistics(&zones);
+            let mut share_sum = 0.0;
+            for z in r.zones.iter().chain([&r.total]) {
+                for p in [z.spalling_share, z.high_share, z.low_share, z.spalling_given_high,
+                          z.spalling_given_low, z.high_given_spalling, z.low_given_spalling]
+                    .into_iter()
+                    .flatten()
+                {
+                    prop_assert!((0.0..=100.0 + 1e-9).contains(&p), "{p}");
+                }
+                for (ci, p) in [(z.spalling_given_high_ci95, z.spalling_given_high),
+                                (z.spalling_given_low_ci95, z.spalling_given_low)] {
+                    prop_assert_eq!(ci.is_some(), p.is_some());
+                    if let (Some([lo, hi]), Some(p)) = (ci, p) {
+                        prop_assert!(0.0 <= lo && lo <= p + 1e-9 && p <= hi + 1e-9 && hi <= 100.0);
+                    }
+                }
+            }
+            for z in &r.zones {
+                share_sum += z.spalling_share.unwrap_or(0.0);
+            }
+            if r.total.counts.spalling > 0.0 {
+                prop_assert!((share_sum - 100.0).abs() <= 1e-9, "{share_sum}");
+            }
+            if let Some(p1) = r.total.spalling_given_high {
+                let ab: f64 = zones.iter().map(|z| z.spalling_and_high).sum();
+                let b: f64 = zones.iter().map(|z| z.high).sum();
+                prop_assert!((p1 - 100.0 * ab / b).abs() <= 1e-9 * p1.max(1.0));
+            }
+        }
+    }
+}

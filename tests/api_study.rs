@@ -279,3 +279,101 @@ async fn progress_stream_ends_with_the_result() {
     let last: Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
     assert!(last["result"]["sensitivity"].is_object(), "{last}");
 }
+
+mod properties {
+    //! Property: the analytic elasticities of §D.2 equal a central difference with one
+    //! Richardson step of the impact maxima themselves, over the whole documented domain of v,
+    //! L, ρ, E (log-uniform), both E* conventions and all three laws. Cases past the capacity
+    //! are skipped; so are cases within u < 1e-2 of the branch point, where the elasticities
+    //! grow like 1/u and the difference quotient loses the digits (physics.md §A.5).
+    //! Run longer with PROPTEST_CASES=100000.
+
+    use gangue::physics::contact::{ImpactDetail, impact_maxima};
+    use gangue::physics::material::{ContactLaw, ImpactCase, ModulusConvention};
+    use gangue::physics::study::{
+        ImpactParameter, impact_elasticities, richardson_elasticity, richardson_points,
+    };
+    use proptest::prelude::*;
+
+    fn maxima(case: &ImpactCase) -> Option<(f64, f64)> {
+        match impact_maxima(case).ok()? {
+            ImpactDetail::Line(l) => Some((l.max_deformation, l.max_force)),
+            ImpactDetail::Hertz(h) => Some((h.max_deformation, h.max_force)),
+        }
+    }
+
+    fn set(case: &mut ImpactCase, p: ImpactParameter, x: f64) {
+        match p {
+            ImpactParameter::Velocity => case.velocity = x,
+            ImpactParameter::SideLength => case.rock.side_length = x,
+            ImpactParameter::Density => case.rock.density = x,
+            ImpactParameter::RockModulus => case.rock.elastic_modulus = x,
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig {
+            cases: 512,
+            max_global_rejects: 200_000,
+            ..ProptestConfig::default()
+        })]
+        #[test]
+        fn analytic_elasticities_match_richardson(
+            lv in (0.01f64).ln()..(1000f64).ln(),
+            ll in (0.01f64).ln()..(5f64).ln(),
+            lr in (100f64).ln()..(20000f64).ln(),
+            le in (1e7f64).ln()..(1e12f64).ln(),
+            law in 0usize..3,
+            two_body in any::<bool>(),
+            which in 0usize..4,
+        ) {
+            let mut case = ImpactCase::default();
+            case.velocity = lv.exp();
+            case.rock.side_length = ll.exp();
+            case.rock.density = lr.exp();
+            case.rock.elastic_modulus = le.exp();
+            case.rock.corner_radius = 0.02f64.min(case.rock.side_length / 2.0);
+            case.contact.law = [ContactLaw::Paper, ContactLaw::Johnson, ContactLaw::HertzPoint][law];
+            if two_body {
+                case.contact.modulus = ModulusConvention::TwoBody;
+            }
+            let p = [ImpactParameter::Velocity, ImpactParameter::SideLength,
+                     ImpactParameter::Density, ImpactParameter::RockModulus][which];
+            if let Ok(ImpactDetail::Line(l)) = impact_maxima(&case) {
+                prop_assume!(l.u > 1e-2);
+            }
+            let Ok(Some(e)) = impact_elasticities(&case, p) else {
+                prop_assume!(false);
+                unreachable!()
+            };
+            let p0 = match p {
+                ImpactParameter::Velocity => case.velocity,
+                ImpactParameter::SideLength => case.rock.side_length,
+                ImpactParameter::Density => case.rock.density,
+                ImpactParameter::RockModulus => case.rock.elastic_modulus,
+            };
+            let (d0, f0) = maxima(&case).unwrap();
+            let x = richardson_points(p0).unwrap();
+            let mut ys = Vec::new();
+            for xi in x {
+                let mut c = case.clone();
+                set(&mut c, p, xi);
+                let Some(m) = maxima(&c) else {
+                    prop_assume!(false);
+                    unreachable!()
+                };
+                ys.push(m);
+            }
+            let yd = [ys[0].0, ys[1].0, ys[2].0, ys[3].0];
+            let yf = [ys[0].1, ys[1].1, ys[2].1, ys[3].1];
+            let nd = richardson_elasticity(p0, d0, x, yd).unwrap();
+            let nf = richardson_elasticity(p0, f0, x, yf).unwrap();
+            // The difference quotient's rounding error grows like (1 + u)/u; 1e-6 holds for u > 1e-2.
+            prop_assert!((nd - e.max_deformation).abs() <= 1e-6 * e.max_deformation.abs().max(1.0),
+                "δ: analytic {} numeric {nd} ({case:?}, {p:?})", e.max_deformation);
+            prop_assert!((nf - e.max_force).abs() <= 1e-6 * e.max_force.abs().max(1.0),
+                "P: analytic {} numeric {nf} ({case:?}, {p:?})", e.max_force);
+            prop_assert!((e.absorbed_energy - 2.0 * e.max_deformation).abs() <= 1e-15 * e.absorbed_energy.abs().max(1.0));
+        }
+    }
+}
