@@ -56,9 +56,21 @@ pub struct BatchItemDto {
     /// Which endpoint's request this is.
     pub kind: BatchKind,
     /// The request body of that endpoint (default `{}`: its defaults).
-    #[schema(value_type = Object, example = json!({"velocity_m_s": 6.0}))]
+    #[schema(schema_with = request_schema)]
     #[serde(default)]
     pub request: Value,
+}
+
+/// Schema of an item's `request`: any JSON object (the item's endpoint checks it).
+#[allow(deprecated)] // `example` is what the rest of the document uses
+fn request_schema() -> utoipa::openapi::schema::Object {
+    utoipa::openapi::schema::ObjectBuilder::new()
+        .schema_type(utoipa::openapi::schema::Type::Object)
+        .description(Some(
+            "The request body of that endpoint (default `{}`: its defaults).",
+        ))
+        .example(Some(json!({"velocity_m_s": 6.0})))
+        .build()
 }
 
 /// A batch as JSON (or send `application/x-ndjson`: one item object per line).
@@ -66,6 +78,7 @@ pub struct BatchItemDto {
 #[serde(deny_unknown_fields)]
 pub struct BatchRequest {
     /// The items, at most the configured limit (default 1000).
+    #[schema(example = json!([{"kind": "impact", "request": {"velocity_m_s": 6.0}}, {"kind": "spalling", "request": {}}]))]
     pub items: Vec<BatchItemDto>,
 }
 

@@ -75,11 +75,14 @@ pub struct ZoneSupportsDto {
 #[serde(deny_unknown_fields, default)]
 pub struct SpallingRequest {
     /// Counts per zone, 1–1000 zones (default: Table 1, unless `events` is given).
+    #[schema(example = json!([{"name": "lower", "spalling": 118, "high_resistance": 8, "low_resistance": 22, "spalling_and_high": 5, "spalling_and_low": 4.5}]))]
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     pub zones: Option<Vec<ZoneCountsDto>>,
     /// Event log (instead of `zones`).
+    #[schema(example = json!([{"support": 12, "spalling": true, "resistance_n": 6.2e6}]))]
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     pub events: Option<Vec<SpallingEventDto>>,
+    #[schema(example = json!([{"name": "lower", "first": 1, "last": 21}, {"name": "middle", "first": 22, "last": 42}, {"name": "upper", "first": 43, "last": 62}]))]
     /// Zones of the event log as support ranges (default: the paper's lower 1–21, middle 22–42, upper 43–62).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     pub zone_supports: Option<Vec<ZoneSupportsDto>>,
