@@ -289,7 +289,9 @@ mod properties {
     //! Run longer with PROPTEST_CASES=100000.
 
     use gangue::physics::contact::{ImpactDetail, impact_maxima};
-    use gangue::physics::material::{ContactLaw, ImpactCase, ModulusConvention};
+    use gangue::physics::material::{
+        ContactLaw, ContactModel, ImpactCase, ModulusConvention, Rock,
+    };
     use gangue::physics::study::{
         ImpactParameter, impact_elasticities, richardson_elasticity, richardson_points,
     };
@@ -327,16 +329,22 @@ mod properties {
             two_body in any::<bool>(),
             which in 0usize..4,
         ) {
-            let mut case = ImpactCase::default();
-            case.velocity = lv.exp();
-            case.rock.side_length = ll.exp();
-            case.rock.density = lr.exp();
-            case.rock.elastic_modulus = le.exp();
-            case.rock.corner_radius = 0.02f64.min(case.rock.side_length / 2.0);
-            case.contact.law = [ContactLaw::Paper, ContactLaw::Johnson, ContactLaw::HertzPoint][law];
-            if two_body {
-                case.contact.modulus = ModulusConvention::TwoBody;
-            }
+            let case = ImpactCase {
+                velocity: lv.exp(),
+                rock: Rock {
+                    side_length: ll.exp(),
+                    density: lr.exp(),
+                    elastic_modulus: le.exp(),
+                    corner_radius: 0.02f64.min(ll.exp() / 2.0),
+                    ..Rock::default()
+                },
+                contact: ContactModel {
+                    law: [ContactLaw::Paper, ContactLaw::Johnson, ContactLaw::HertzPoint][law],
+                    modulus: if two_body { ModulusConvention::TwoBody } else { ModulusConvention::Paper },
+                    ..ContactModel::default()
+                },
+                ..ImpactCase::default()
+            };
             let p = [ImpactParameter::Velocity, ImpactParameter::SideLength,
                      ImpactParameter::Density, ImpactParameter::RockModulus][which];
             if let Ok(ImpactDetail::Line(l)) = impact_maxima(&case) {

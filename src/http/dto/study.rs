@@ -177,7 +177,7 @@ pub struct StudyGridDto {
     pub x_values: Vec<f64>,
     /// Values of y.
     pub y_values: Vec<f64>,
-    /// `<output>`: [[…], …], row i at y_values[i].
+    /// `<output>`: `[[…], …]`, row `i` at `y_values[i]`.
     #[serde(flatten)]
     #[schema(value_type = Object)]
     pub outputs: OrderedMap<Vec<Vec<f64>>>,
@@ -193,7 +193,7 @@ pub struct EnergyProportionDto {
     /// `<parameter>`: energy ratio at each x.
     #[schema(value_type = Object)]
     pub curves: OrderedMap<Vec<f64>>,
-    /// orderings[i]: parameters by energy ratio at x[i], highest first, ties joined by `=`.
+    /// `orderings[i]`: parameters by energy ratio at `x[i]`, highest first, ties joined by `=`.
     pub orderings: Vec<Vec<String>>,
 }
 
@@ -215,7 +215,7 @@ pub struct PaperComparisonDto {
 /// Result of a study.
 #[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
 pub struct StudyResponse {
-    /// `<parameter>`: {"values": […], "<output>": […]}.
+    /// `<parameter>`: `{"values": […], "<output>": […]}`.
     #[schema(value_type = Object)]
     pub curves: OrderedMap<OrderedMap<Vec<f64>>>,
     /// Pair grids (with `grid: pairs`).
