@@ -4,8 +4,10 @@ import { getJson } from './js/api.js';
 import { initColumn } from './js/column.js';
 import { initImpact } from './js/impact.js';
 import { initMigration } from './js/migration.js';
+import { initSpalling } from './js/spalling.js';
+import { initStudy } from './js/study.js';
 
-const TABS = ['impact', 'column', 'migration'];
+const TABS = ['impact', 'column', 'migration', 'study', 'spalling'];
 
 function showTab(name) {
   const active = TABS.includes(name) ? name : TABS[0];
@@ -50,6 +52,8 @@ async function showVersion() {
 initImpact();
 initColumn();
 initMigration();
+initStudy();
+initSpalling();
 initTabs();
 showVersion();
 document.body.dataset.ready = 'true';

@@ -43,6 +43,9 @@ pub fn app(config: Config) -> Router {
         .route("/v1/impact", post(routes::impact::impact))
         .route("/v1/column", post(routes::column::column))
         .route("/v1/migration", post(routes::migration::migration))
+        .route("/v1/spalling", post(routes::spalling::spalling))
+        .route("/v1/study", post(routes::study::study))
+        .route("/v1/batch", post(routes::batch::batch))
         .with_state(state);
     Router::new()
         .merge(SwaggerUi::new("/docs").external_url_unchecked("/openapi.json", openapi::openapi_value()))

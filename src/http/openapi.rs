@@ -57,12 +57,18 @@ pub struct FieldErrorDoc {
         routes::impact::impact,
         routes::column::column,
         routes::migration::migration,
+        routes::spalling::spalling,
+        routes::study::study,
+        routes::batch::batch,
     ),
     components(schemas(Problem, FieldErrorDoc, dto::common::Warning, dto::common::PlanStep)),
     tags(
         (name = "impact", description = "Contact of the rock on the column"),
         (name = "column", description = "Column vibration and energy after an impact"),
         (name = "migration", description = "Rockfall migration down the face"),
+        (name = "spalling", description = "Coal-wall spalling statistics by face zone (Table 1)"),
+        (name = "study", description = "Parameter sweeps, sensitivity measures and orderings, energy proportions"),
+        (name = "batch", description = "Many requests in one call, answered as NDJSON"),
         (name = "service", description = "Health, presets, problem types"),
     )
 )]

@@ -15,6 +15,9 @@ pub mod material;
 pub mod migration;
 pub mod ode;
 pub mod quadrature;
+pub mod spalling;
+pub mod stats_interval;
+pub mod study;
 
 pub use control::Control;
 pub use error::{PhysicsError, PhysicsResult};

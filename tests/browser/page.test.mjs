@@ -267,6 +267,48 @@ async function migrationSection(page) {
   await screenshot(page, 'migration-ensemble.png');
 }
 
+async function studySection(page) {
+  const status = await endpointStatus('/v1/study');
+  if (status === 404) {
+    skip('study', 'the server answers 404 for POST /v1/study');
+    return;
+  }
+
+  await check('study: the paper ranges run; Figure 21 is drawn and Pmax L > v > ρ > E is reproduced', async () => {
+    await page.goto(`${BASE}/#study`, { waitUntil: 'load' });
+    await page.waitForSelector('body[data-ready="true"]', { timeout: WAIT_MS });
+    const min = await page.locator('#study-parameters-1-min').inputValue();
+    assert(Number(min) === 0.2, `L min prefilled with the paper's 0.2, got ${min}`);
+    await page.locator('#study-form button[type="submit"]').click();
+    await page.locator('#study-fig21 canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
+    const text = await page.locator('#study-paper').textContent();
+    assert(text.includes('Figures 12–20 Pmax ordering (elasticity)'), 'paper comparison table shown');
+    assert(text.includes('L > v > ρ > E'), 'Pmax ordering shown');
+    assert((await page.locator('#study-results a.csv').count()) > 5, 'CSV links for the tables');
+  });
+
+  await screenshot(page, 'study.png');
+}
+
+async function spallingSection(page) {
+  const status = await endpointStatus('/v1/spalling');
+  if (status === 404) {
+    skip('spalling', 'the server answers 404 for POST /v1/spalling');
+    return;
+  }
+
+  await check('spalling: Table 1 gives P₁ = 62.5 % (lower) and P₂ = 61.76 % (middle)', async () => {
+    await page.goto(`${BASE}/#spalling`, { waitUntil: 'load' });
+    await page.waitForSelector('body[data-ready="true"]', { timeout: WAIT_MS });
+    await page.locator('#spalling-form button[type="submit"]').click();
+    assertClose(await shown(page, 'zones/0/spalling_given_high_pct'), 62.5, 1e-4, 'P1 lower (%)');
+    assertClose(await shown(page, 'zones/1/spalling_given_low_pct'), 61.765, 1e-4, 'P2 middle (%)');
+    await page.locator('#spalling-plot canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
+  });
+
+  await screenshot(page, 'spalling.png');
+}
+
 // ---- main ------------------------------------------------------------------
 
 async function main() {
@@ -290,6 +332,8 @@ async function main() {
     await impactSection(page);
     await columnSection(page);
     await migrationSection(page);
+    await studySection(page);
+    await spallingSection(page);
 
     await check('no JavaScript errors on the page', async () => {
       // 404 and 422 answers are logged by Chromium as failed resources; they are expected here.

@@ -1,9 +1,12 @@
 //! Request and response types of the API (serde + utoipa schemas), their range checks, and the
 //! conversions into the plain physics structs.
 
+pub mod batch;
 pub mod column;
 pub mod common;
 pub mod impact;
 pub mod migration;
+pub mod spalling;
+pub mod study;
 
 pub use common::{Meta, PlanStep, Warning};

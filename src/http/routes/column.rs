@@ -8,7 +8,8 @@ use crate::http::dto::column::{ColumnRequest, ColumnResponse};
 use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
-use crate::physics::column::solve_column;
+use crate::physics::Control;
+use crate::physics::column::{ColumnCase, solve_column};
 
 /// Column vibration after an impact: midpoint history, energies, absorbed energy, stress.
 #[utoipa::path(
@@ -31,15 +32,21 @@ pub async fn column(
         Ok(c) => c,
         Err(e) => return e.into_response(),
     };
-    respond(&state, &headers, move |control| {
-        let r = solve_column(&case, control).map_err(|e| {
-            let e = ApiError::from(e).with_capacity_velocity(case.impact.velocity);
-            match req.end_time_s {
-                Some(t) => e.with_step_field("/end_time_s", t),
-                None => e,
-            }
-        })?;
-        Ok(ColumnResponse::new(r, req))
-    })
-    .await
+    respond(&state, &headers, move |control| solve(&case, req, control)).await
+}
+
+/// Solves a resolved column request (also used by batch and study).
+pub fn solve(
+    case: &ColumnCase,
+    req: ColumnRequest,
+    control: &Control,
+) -> Result<ColumnResponse, ApiError> {
+    let r = solve_column(case, control).map_err(|e| {
+        let e = ApiError::from(e).with_capacity_velocity(case.impact.velocity);
+        match req.end_time_s {
+            Some(t) => e.with_step_field("/end_time_s", t),
+            None => e,
+        }
+    })?;
+    Ok(ColumnResponse::new(r, req))
 }

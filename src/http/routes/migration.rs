@@ -5,9 +5,11 @@ use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 
 use crate::http::dto::migration::{MigrationRequest, MigrationResponse};
+use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
-use crate::physics::migration;
+use crate::physics::Control;
+use crate::physics::migration::{self, MigrationCase};
 
 /// Rockfall migration down the face: one trajectory, or a seeded Monte Carlo ensemble.
 #[utoipa::path(
@@ -30,9 +32,15 @@ pub async fn migration(
         Ok(c) => c,
         Err(e) => return e.into_response(),
     };
-    respond(&state, &headers, move |control| {
-        let r = migration::run(&case, control)?;
-        Ok(MigrationResponse::new(r, req))
-    })
-    .await
+    respond(&state, &headers, move |control| solve(&case, req, control)).await
+}
+
+/// Solves a resolved migration request (also used by batch).
+pub fn solve(
+    case: &MigrationCase,
+    req: MigrationRequest,
+    control: &Control,
+) -> Result<MigrationResponse, ApiError> {
+    let r = migration::run(case, control)?;
+    Ok(MigrationResponse::new(r, req))
 }

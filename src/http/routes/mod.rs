@@ -1,7 +1,10 @@
 //! One file per endpoint family; handlers are thin: validate → solve on the blocking pool →
 //! serialize.
 
+pub mod batch;
 pub mod column;
 pub mod impact;
 pub mod meta;
 pub mod migration;
+pub mod spalling;
+pub mod study;

@@ -1,0 +1,115 @@
+// Spalling tab: POST /v1/spalling. Table 1 (paper) is editable; the answer
+// shows the zone shares, P1 = P(A|B), P2 = P(A|C) with Wilson 95 % intervals,
+// and a bar chart by zone. Percentages whose denominator is 0 arrive as null.
+
+import { postJson } from './api.js';
+import { fmt, h, showWarnings } from './format.js';
+import { linePlot, plotMessage } from './plot.js';
+import { hideStatus, showBusy, showProblem } from './status.js';
+
+const TABLE1 = [
+  { name: 'lower', spalling: 118, high_resistance: 8, low_resistance: 22, spalling_and_high: 5, spalling_and_low: 4.5 },
+  { name: 'middle', spalling: 375, high_resistance: 65, low_resistance: 17, spalling_and_high: 32, spalling_and_low: 10.5 },
+  { name: 'upper', spalling: 150, high_resistance: 14, low_resistance: 8, spalling_and_high: 9, spalling_and_low: 2 },
+];
+const COUNTS = [
+  ['spalling', 'A (spalling)'],
+  ['high_resistance', 'B (high resistance)'],
+  ['low_resistance', 'C (low resistance)'],
+  ['spalling_and_high', 'A∩B'],
+  ['spalling_and_low', 'A∩C'],
+];
+const DERIVED = [
+  ['spalling_share_pct', 'share of A, %'],
+  ['high_share_pct', 'share of B, %'],
+  ['low_share_pct', 'share of C, %'],
+  ['spalling_given_high_pct', 'P₁ = P(A|B), %'],
+  ['spalling_given_high_ci95_pct', 'P₁ 95 % interval (Wilson), %'],
+  ['spalling_given_low_pct', 'P₂ = P(A|C), %'],
+  ['spalling_given_low_ci95_pct', 'P₂ 95 % interval (Wilson), %'],
+  ['high_given_spalling_pct', 'P(B|A), %'],
+  ['low_given_spalling_pct', 'P(C|A), %'],
+];
+
+function countsTable(el, zones) {
+  const head = h('tr', {}, h('th', {}, 'event'), ...zones.map((z, i) => h('th', {},
+    h('input', { type: 'text', value: z.name, 'data-zone': i, 'data-field': 'name', 'aria-label': `zone ${i} name`, size: 8 }))));
+  const rows = COUNTS.map(([key, label]) => h('tr', {}, h('th', { scope: 'row' }, label),
+    ...zones.map((z, i) => h('td', {}, h('input', {
+      type: 'number', step: 'any', min: 0, value: z[key], 'data-zone': i, 'data-field': key,
+      'aria-label': `${label}, zone ${z.name}`, id: `spalling-zones-${i}-${key}`,
+    })))));
+  el.replaceChildren(h('thead', {}, head), h('tbody', {}, ...rows));
+}
+
+function readZones(el) {
+  const zones = [];
+  for (const input of el.querySelectorAll('input[data-zone]')) {
+    const i = Number(input.dataset.zone);
+    zones[i] ??= {};
+    zones[i][input.dataset.field] = input.dataset.field === 'name' ? input.value : Number(input.value);
+  }
+  return zones;
+}
+
+function cell(v) {
+  if (Array.isArray(v)) return `${fmt(v[0], 4)} – ${fmt(v[1], 4)}`;
+  return fmt(v, 4);
+}
+
+function resultTable(el, data) {
+  const all = [...data.zones, data.total];
+  const head = h('tr', {}, h('th', {}, ''), ...all.map((z) => h('th', {}, z.name)));
+  const rows = DERIVED.map(([key, label]) => h('tr', {}, h('th', { scope: 'row' }, label),
+    ...all.map((z, i) => h('td', { 'data-out': `${i < data.zones.length ? `zones/${i}` : 'total'}/${key}` }, cell(z[key])))));
+  el.replaceChildren(h('thead', {}, head), h('tbody', {}, ...rows));
+}
+
+function barChart(el, data) {
+  const zones = data.zones;
+  if (!zones.length) return plotMessage(el, 'No zones.');
+  const xs = zones.map((_, i) => i + 1);
+  linePlot(el, {
+    x: { label: `zone (${zones.map((z, i) => `${i + 1} ${z.name}`).join(', ')})`, values: xs, range: [0.5, zones.length + 0.5] },
+    y: { label: '%', range: [0, 100] },
+    series: [
+      { label: 'P₁ = P(A|B)', values: zones.map((z) => z.spalling_given_high_pct), bars: true },
+      { label: 'P₂ = P(A|C)', values: zones.map((z) => z.spalling_given_low_pct), bars: true },
+      { label: 'share of A', values: zones.map((z) => z.spalling_share_pct), points: 'only' },
+    ],
+  });
+}
+
+export function initSpalling() {
+  const form = document.getElementById('spalling-form');
+  const input = document.getElementById('spalling-input');
+  const status = document.getElementById('spalling-status');
+  const warnings = document.getElementById('spalling-warnings');
+  const output = document.getElementById('spalling-table');
+  const plot = document.getElementById('spalling-plot');
+  if (!form) return;
+  countsTable(input, TABLE1);
+  form.addEventListener('reset', (event) => {
+    event.preventDefault();
+    countsTable(input, TABLE1);
+  });
+  form.addEventListener('submit', async (event) => {
+    event.preventDefault();
+    showBusy(status, 'Computing the zone statistics…');
+    const r = await postJson('v1/spalling', { zones: readZones(input) });
+    if (!r.ok) {
+      showProblem(status, r.problem, { endpoint: 'POST /v1/spalling', label: 'Spalling' });
+      for (const e of r.problem.errors ?? []) {
+        const field = document.getElementById(`spalling${e.field.replaceAll('/', '-')}`);
+        if (field) field.setAttribute('aria-invalid', 'true');
+      }
+      return;
+    }
+    for (const el of input.querySelectorAll('[aria-invalid]')) el.removeAttribute('aria-invalid');
+    hideStatus(status);
+    showWarnings(warnings, r.data.warnings);
+    resultTable(output, r.data);
+    document.getElementById('spalling-empty').hidden = true;
+    barChart(plot, r.data);
+  });
+}
