@@ -346,3 +346,79 @@ fn monte_carlo_over_friction_and_damping_is_bit_identical_across_threads() {
     assert!(sp.max < (2.0 * G * (0.5 + 5.0 * th.sin())).sqrt());
     assert!(sp.std.unwrap() > 0.0);
 }
+
+mod common;
+
+#[tokio::test]
+async fn rigid_block_over_http_reports_its_block_and_refuses_bad_input() {
+    use serde_json::json;
+    let app = common::app();
+    // the tetrahedron (0,0,0), (1,0,0), (0,1,0), (0,0,1) m: V = 1/6 m³
+    let r = common::post(
+        &app,
+        "/v1/migration",
+        &json!({"method": "rigid_block", "face": {"length_m": 2},
+                "rock": {"shape": "polyhedron", "density_kg_m3": 600,
+                         "vertices_m": [[0,0,0],[0.3,0,0],[0,0.3,0],[0,0,0.3]]},
+                "release": {"drop_height_m": 0.2}, "output": {"trajectory": true}}),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    assert_eq!(b["method"], "rigid_block");
+    let m = 600.0 * 0.027 / 6.0;
+    assert!(common::rel(b["rigid_block"]["mass_kg"].as_f64().unwrap(), m) < 1e-12);
+    assert!(common::rel(b["mass_kg"].as_f64().unwrap(), m) < 1e-12);
+    assert!(b["energy"]["stored_j"].is_number());
+    assert!(
+        b["trajectory"]["orientation_wxyz"]
+            .as_array()
+            .unwrap()
+            .len()
+            > 1
+    );
+    let imp = &b["events"].as_array().unwrap()[0];
+    assert_eq!(imp["kind"], "impact");
+    assert!(imp["peak_contact_force_n"].as_f64().unwrap() > 0.0);
+    common::assert_rejections(
+        &app,
+        "/v1/migration",
+        vec![
+            (
+                json!({"method": "rigid_block", "rigid_block": {"time_step_s": 1e-3}}),
+                "/rigid_block/time_step_s",
+                "invalid_input",
+            ),
+            (
+                json!({"method": "rigid_block", "face": {"normal_stiffness_n_m": 1e3}}),
+                "/face/normal_stiffness_n_m",
+                "invalid_input",
+            ),
+            (
+                json!({"method": "rigid_block", "monte_carlo": {"restitution_normal": {"min": 0.1, "max": 0.2}}}),
+                "/monte_carlo/restitution_normal",
+                "invalid_input",
+            ),
+            (
+                json!({"monte_carlo": {"critical_damping_ratio": {"min": 0.1, "max": 0.2}}}),
+                "/monte_carlo/critical_damping_ratio",
+                "invalid_input",
+            ),
+            (
+                json!({"method": "rigid_block", "rock": {"shape": "polyhedron", "vertices_m": [[0,0,0],[1,0,0],[0,1,0],[1,1,0]]}}),
+                "/rock/vertices_m",
+                "invalid_input",
+            ),
+        ],
+    )
+    .await;
+    // a stiff contact down a long face: the estimate is over the limit
+    let r = common::post(
+        &app,
+        "/v1/migration",
+        &json!({"method": "rigid_block", "face": {"length_m": 10000, "normal_stiffness_n_m": 1e12}}),
+    )
+    .await;
+    let p = common::assert_problem(&r, 422, "too_many_steps");
+    assert!(p["estimated_steps"].as_f64().unwrap() > 2e7, "{p}");
+}

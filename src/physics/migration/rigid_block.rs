@@ -683,7 +683,7 @@ impl<'a> Model<'a> {
             let w1 = w + (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0);
             // the orientation with the Simpson mean of the body rate (4th order for slow change)
             let wm = (w + w1) * 0.5 + (k1 - k4) * (h / 12.0);
-            q = q * UnitQuaternion::from_scaled_axis(wm * h);
+            q *= UnitQuaternion::from_scaled_axis(wm * h);
             w = w1;
         }
         (q, w)
@@ -1186,10 +1186,10 @@ impl<'a> Model<'a> {
         if events && reason == StopReason::AtRest {
             evs.push(self.event(st.t, EventKind::Stop, &st.c, st.v.norm(), 0.0, 0.0, None));
         }
-        if let Some(r) = rec.as_mut() {
-            if r.tr.time.last().is_none_or(|&t| t < st.t) {
-                self.sample(r, &st, damping + friction, stored)?;
-            }
+        if let Some(r) = rec.as_mut()
+            && r.tr.time.last().is_none_or(|&t| t < st.t)
+        {
+            self.sample(r, &st, damping + friction, stored)?;
         }
         Ok(RunOut {
             st,
@@ -1340,6 +1340,9 @@ struct Episode {
     last_t: f64,
 }
 
+/// Depth inside the block and nearest face of a point, or None outside.
+type InsideFn<'a> = dyn Fn(&Vector3<f64>) -> Option<(f64, usize)> + 'a;
+
 /// Edge–edge contact of block edge (qa, qb) with floor crease (pa, pb): the common
 /// perpendicular when both closest points are interior, the floor point inside the block and
 /// the block point under the crease; `up` is a direction out of the floor.
@@ -1349,7 +1352,7 @@ fn edge_contact(
     pa: &Vector3<f64>,
     pb: &Vector3<f64>,
     up: &Vector3<f64>,
-    inside: &dyn Fn(&Vector3<f64>) -> Option<(f64, usize)>,
+    inside: &InsideFn<'_>,
 ) -> Option<Geo> {
     let d1 = qb - qa;
     let d2 = pb - pa;

@@ -422,12 +422,12 @@ pub(crate) fn convex_hull(p: &[Vector3<f64>]) -> Option<Vec<[usize; 3]>> {
     let used = [i0, i1, i2, i3];
     let mut horizon: Vec<(usize, usize)> = Vec::new();
     let mut visible = Vec::new();
-    for k in 0..n {
+    for (k, pk) in p.iter().enumerate() {
         if used.contains(&k) {
             continue;
         }
         visible.clear();
-        visible.extend(tris.iter().map(|t| t.n.dot(&p[k]) - t.d > eps));
+        visible.extend(tris.iter().map(|t| t.n.dot(pk) - t.d > eps));
         if !visible.iter().any(|&b| b) {
             continue;
         }
@@ -481,8 +481,8 @@ mod tests {
             m * (0.04 + 0.36) / 12.0,
             m * (0.04 + 0.16) / 12.0,
         ];
-        for i in 0..3 {
-            assert!((s.inertia[i] - exp[i]).abs() < 1e-12 * m);
+        for (i, e) in exp.iter().enumerate() {
+            assert!((s.inertia[i] - e).abs() < 1e-12 * m);
         }
         // regular tetrahedron of edge a: V = a³/(6√2), I = m a²/20 about any axis
         let a = 1.0_f64;
