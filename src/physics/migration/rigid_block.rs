@@ -270,7 +270,11 @@ impl<'a> Model<'a> {
         // stiffness for the time step and the static overlap
         let w_face = m * g * dip.cos() / nc;
         let (k_step, static_overlap) = match hertz {
-            None => (o.normal_stiffness, w_face / o.normal_stiffness),
+            // a shear spring stiffer than the normal one sets the step (PFC takes the larger)
+            None => (
+                o.normal_stiffness.max(o.shear_stiffness),
+                w_face / o.normal_stiffness,
+            ),
             Some(h) => {
                 let ug = (m * g / h.k).powf(2.0 / 3.0);
                 (h.kt * ug.sqrt(), (w_face / h.k).powf(2.0 / 3.0))
@@ -775,17 +779,29 @@ impl<'a> Model<'a> {
             q: self.q0,
             w: Vector3::zeros(),
         };
-        let mut springs: Vec<(u64, Vector3<f64>)> = Vec::new();
-        let mut new_springs: Vec<(u64, Vector3<f64>)> = Vec::new();
+        // (contact key, shear force, shear stiffness at the last step)
+        let mut springs: Vec<(u64, Vector3<f64>, f64)> = Vec::new();
+        let mut new_springs: Vec<(u64, Vector3<f64>, f64)> = Vec::new();
         let mut geos: Vec<Geo> = Vec::new();
         let mut tris: Vec<FloorTriangle> = Vec::new();
         let (mut damping, mut friction) = (0.0, 0.0);
         let mut stored;
-        // springs at release
+        // springs at release: the contacts of a block released on the floor exist already
+        // (with unloaded shear springs), and its acceleration is that of its elastic forces
+        let gravity = Vector3::new(0.0, 0.0, -self.g);
+        let mut acc_prev = gravity;
         {
             let r = self.rot(&st.q);
             self.contacts(&st.c, &r, &mut tris, &mut geos);
             stored = geos.iter().map(|g| self.normal_energy(g.u)).sum::<f64>();
+            for gk in &geos {
+                let f_el = match self.hertz {
+                    None => self.kn * gk.u,
+                    Some(hz) => hz.k * gk.u * gk.u.sqrt(),
+                };
+                acc_prev += gk.n * (f_el / m);
+                springs.push((gk.key, Vector3::zeros(), self.ks));
+            }
         }
         let (k0, r0, p0) = self.energy(&st);
         let e_start = k0 + r0 + p0 + stored;
@@ -801,8 +817,6 @@ impl<'a> Model<'a> {
         let mut max_bounce: f64 = 0.0;
         let mut steps = 0u64;
         let mut max_overlap = 0.0f64;
-        let gravity = Vector3::new(0.0, 0.0, -self.g);
-        let mut acc_prev = gravity;
         let mut wacc_prev = Vector3::zeros();
         // contact episode bookkeeping
         let mut had_contact = self.on_floor_at_start;
@@ -944,6 +958,8 @@ impl<'a> Model<'a> {
             let mut f = Vector3::new(0.0, 0.0, -m * self.g);
             let mut mom = Vector3::zeros();
             let mut fn_total = 0.0;
+            let (mut f_damp, mut m_damp) = (Vector3::zeros(), Vector3::zeros());
+            let (mut f_slip, mut m_slip, mut es_slip) = (Vector3::zeros(), Vector3::zeros(), 0.0);
             new_springs.clear();
             stored = 0.0;
             slip_max = 0.0;
@@ -969,15 +985,19 @@ impl<'a> Model<'a> {
                 let old = springs.iter().find(|s| s.0 == gk.key).map(|s| s.1);
                 // A contact that has just closed touched U/|vₙ| ago, not half a step ago as the
                 // step's impulse assumes: correct the dashpot impulse by c(U − |vₙ|Δt/2) (else
-                // the restitution errs by O(Δt) with the random phase of the touch).
-                let onset = if old.is_none() && vn_t < 0.0 {
+                // the restitution errs by O(Δt) with the random phase of the touch). Only for a
+                // fresh touch (U within the step's approach), never for a contact that appears
+                // deep (a new floor feature under a block already in contact).
+                let onset = if old.is_none() && vn_t < 0.0 && gk.u <= -1.5 * vn_t * h {
                     cn * (gk.u / h + 0.5 * vn_t)
                 } else {
                     0.0
                 };
                 let fnm = (f_el - cn * vn_t + onset).max(0.0);
                 // dashpot work (and the clipped spring's share)
-                damping += -(fnm - f_el) * vn_t * h;
+                let fd = gk.n * (fnm - f_el);
+                f_damp += fd;
+                m_damp += rr.cross(&fd);
                 fn_total += fnm;
                 // shear spring: rotate the old one into the tangent plane
                 let mut fs = match old {
@@ -1007,24 +1027,20 @@ impl<'a> Model<'a> {
                     0.0
                 };
                 if slipping {
-                    friction += -fs.dot(&vt) * h - (es_new - es_old);
+                    f_slip += fs;
+                    m_slip += rr.cross(&fs);
+                    es_slip += es_new - es_old;
                 }
                 stored += self.normal_energy(gk.u) + es_new;
-                new_springs.push((gk.key, fs));
+                new_springs.push((gk.key, fs, ks));
                 let fc = gk.n * fnm + fs;
                 f += fc;
                 mom += rr.cross(&fc);
             }
             // springs of contacts that opened release their shear energy
-            for (k, fs) in &springs {
-                if !new_springs.iter().any(|s| s.0 == *k) {
-                    let ks = match self.hertz {
-                        None => self.ks,
-                        Some(_) => 0.0,
-                    };
-                    if ks > 0.0 {
-                        friction += fs.norm_squared() / (2.0 * ks);
-                    }
+            for (k, fs, ks) in &springs {
+                if *ks > 0.0 && !new_springs.iter().any(|s| s.0 == *k) {
+                    friction += fs.norm_squared() / (2.0 * ks);
                 }
             }
             std::mem::swap(&mut springs, &mut new_springs);
@@ -1034,17 +1050,18 @@ impl<'a> Model<'a> {
                     let d = self.alpha * f[i].abs() * st.v[i].signum();
                     if st.v[i] != 0.0 {
                         f[i] -= d;
-                        damping += d * st.v[i] * h;
+                        f_damp[i] -= d;
                     }
                     let dm = self.alpha * mom[i].abs() * w_world[i].signum();
                     if w_world[i] != 0.0 {
                         mom[i] -= dm;
-                        damping += dm * w_world[i] * h;
+                        m_damp[i] -= dm;
                     }
                 }
             }
             // Newton–Euler
             let speed_before = st.v.norm();
+            let v_old = st.v;
             acc_prev = f / m;
             st.v += f * (h / m);
             let mb = r.transpose() * mom;
@@ -1059,6 +1076,13 @@ impl<'a> Model<'a> {
             }
             wacc_prev = r * ((w1 - w0) / h);
             st.w = w1;
+            // Dissipation is booked with the step's mean velocities, the ones whose product
+            // with a force gives the leapfrog's kinetic-energy change, so the account closes
+            // to the scheme's O(Δt²) once the springs have relaxed.
+            let v_bar = (v_old + st.v) * 0.5;
+            let w_bar = r * ((w0 + w1) * 0.5);
+            damping -= (v_bar.dot(&f_damp) + w_bar.dot(&m_damp)) * h;
+            friction -= (v_bar.dot(&f_slip) + w_bar.dot(&m_slip)) * h + es_slip;
             st.c += st.v * h;
             st.q = UnitQuaternion::new_normalize(
                 (st.q * UnitQuaternion::from_scaled_axis(st.w * h)).into_inner(),
