@@ -422,3 +422,52 @@ async fn rigid_block_over_http_reports_its_block_and_refuses_bad_input() {
     let p = common::assert_problem(&r, 422, "too_many_steps");
     assert!(p["estimated_steps"].as_f64().unwrap() > 2e7, "{p}");
 }
+
+/// The 45° plane as a grid (spacing d, across |y| ≤ 1 m) with node heights raised by `bump(i, j)`.
+fn bumpy_grid(d: f64, nx: usize, bump: impl Fn(usize, usize) -> f64) -> FloorSpec {
+    let t = 45f64.to_radians().tan();
+    let ny = (2.0 / d).round() as usize + 1;
+    FloorSpec::Grid {
+        origin: [0.0, -1.0],
+        spacing: d,
+        heights: (0..ny)
+            .map(|i| (0..nx).map(|j| -(j as f64) * d * t + bump(i, j)).collect())
+            .collect(),
+    }
+}
+
+#[test]
+fn a_floor_spike_and_a_ridge_lift_the_block_instead_of_piercing_it() {
+    // A 2 cm spike (one raised node: face–vertex contacts) and a 2 cm ridge across the slope
+    // (a row of raised nodes: edge–edge contacts on its convex creases) under the sliding
+    // cube's path. The block must ride over them: no contact deeper than a few millimetres
+    // (a 1 cm-deep pierce would mean the floor feature passed through the block's face), and
+    // the energy account closes.
+    let d = 0.1;
+    let nx = 80;
+    let (ji, ii) = (25usize, 10usize); // x = 2.5 m, y = 0
+    for (name, floor) in [
+        (
+            "spike",
+            bumpy_grid(d, nx, |i, j| if i == ii && j == ji { 0.02 } else { 0.0 }),
+        ),
+        (
+            "ridge",
+            bumpy_grid(d, nx, |_, j| if j == ji { 0.02 } else { 0.0 }),
+        ),
+    ] {
+        let mut c = block();
+        c.face.length = 8.0;
+        c.release.along_dip = 1.0;
+        c.end_time = Some(1.2);
+        c.face.floor = floor;
+        let r = solve(&c);
+        let rb = r.rigid_block.unwrap();
+        assert!(rb.max_overlap < 3e-3, "{name}: overlap {}", rb.max_overlap);
+        // it passed the feature (x = 2.5 m is along ≈ 3.54 m)
+        assert!(r.arrival.along_dip > 3.8, "{name}: {:?}", r.arrival);
+        let e = &r.energy;
+        assert!(e.residual.abs() < 2e-2 * 67.5 * G * 3.0, "{name}: {e:?}");
+        assert!(e.damping >= 0.0 && e.friction > 0.0, "{name}: {e:?}");
+    }
+}

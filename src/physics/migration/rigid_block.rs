@@ -647,7 +647,9 @@ impl<'a> Model<'a> {
                 }
                 for (ei, e) in sh.edges.iter().enumerate() {
                     let (qa, qb) = (world[e[0]], world[e[1]]);
-                    if let Some(geo) = edge_contact(&qa, &qb, &pa, &pb, &(n1 + n2), &inside_depth) {
+                    let [fa, fb] = sh.edge_faces[ei];
+                    let cones = [n1, n2, faces_w[fa].0, faces_w[fb].0];
+                    if let Some(geo) = edge_contact(&qa, &qb, &pa, &pb, &cones, &inside_depth) {
                         let h = (u64::from(key.0).wrapping_mul(0x9E37_79B9_7F4A_7C15)
                             ^ u64::from(key.1))
                             & ((1 << 40) - 1);
@@ -1369,15 +1371,18 @@ type InsideFn<'a> = dyn Fn(&Vector3<f64>) -> Option<(f64, usize)> + 'a;
 
 /// Edge–edge contact of block edge (qa, qb) with floor crease (pa, pb): the common
 /// perpendicular when both closest points are interior, the floor point inside the block and
-/// the block point under the crease; `up` is a direction out of the floor.
+/// the normal inside both edges' normal cones (`cones`: the crease's two facet normals, then
+/// the block edge's two face normals).
 fn edge_contact(
     qa: &Vector3<f64>,
     qb: &Vector3<f64>,
     pa: &Vector3<f64>,
     pb: &Vector3<f64>,
-    up: &Vector3<f64>,
+    cones: &[Vector3<f64>; 4],
     inside: &InsideFn<'_>,
 ) -> Option<Geo> {
+    let [n1, n2, b1, b2] = *cones;
+    let up = n1 + n2;
     let d1 = qb - qa;
     let d2 = pb - pa;
     let mut n = d1.cross(&d2);
@@ -1386,8 +1391,17 @@ fn edge_contact(
         return None;
     }
     n /= nn;
-    if n.dot(up) < 0.0 {
+    if n.dot(&up) < 0.0 {
         n = -n;
+    }
+    // A genuine edge–edge contact pushes along a normal in both edges' normal cones: between
+    // the crease's two facet normals, and (reversed) between the block edge's two face normals.
+    let between = |a: &Vector3<f64>, b: &Vector3<f64>, x: &Vector3<f64>| {
+        let s = a.cross(b);
+        a.cross(x).dot(&s) >= 0.0 && x.cross(b).dot(&s) >= 0.0
+    };
+    if !between(&n1, &n2, &n) || !between(&b1, &b2, &(-n)) {
+        return None;
     }
     // closest points
     let r = qa - pa;

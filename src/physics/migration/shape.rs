@@ -47,6 +47,8 @@ pub struct BlockShape {
     pub faces: Vec<BlockFace>,
     /// Edges of the hull between different faces, as vertex index pairs.
     pub edges: Vec<[usize; 2]>,
+    /// The two faces that meet at each edge (indices into `faces`).
+    pub edge_faces: Vec<[usize; 2]>,
     /// Radius of a sphere, m (None: a polyhedron).
     pub sphere_radius: Option<f64>,
     /// Volume, m³.
@@ -118,6 +120,7 @@ impl BlockShape {
             vertices: Vec::new(),
             faces: Vec::new(),
             edges: Vec::new(),
+            edge_faces: Vec::new(),
             sphere_radius: Some(radius),
             volume,
             mass,
@@ -234,6 +237,7 @@ impl BlockShape {
         }
         // edges between different faces
         let mut edges: Vec<[usize; 2]> = Vec::new();
+        let mut edge_faces: Vec<[usize; 2]> = Vec::new();
         let mut seen = std::collections::HashMap::new();
         for (ti, t) in tris.iter().enumerate() {
             for k in 0..3 {
@@ -243,6 +247,7 @@ impl BlockShape {
                     Some(&other) => {
                         if tri_face[other] != tri_face[ti] {
                             edges.push([key.0, key.1]);
+                            edge_faces.push([tri_face[other], tri_face[ti]]);
                         }
                     }
                     None => {
@@ -274,6 +279,7 @@ impl BlockShape {
             vertices: verts,
             faces,
             edges,
+            edge_faces,
             sphere_radius: None,
             volume: vol,
             mass: density * vol,
