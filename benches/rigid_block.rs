@@ -43,7 +43,33 @@ fn steps_of(c: &MigrationCase) -> u64 {
         .steps
 }
 
+/// Error against the analytic slide (physics.md §C.1) at several safety factors, printed before
+/// the timings: v(1 s) and the speed at the lower end of the 120 m face, from rest on the floor.
+fn accuracy_table() {
+    let th = 45f64.to_radians();
+    let a = 9.81 * (th.sin() - 0.2 * th.cos());
+    let v_end = (2.0 * a * 120.0).sqrt();
+    println!("safety | dt (s) | steps 1 s | rel. error v(1 s) | steps 120 m | rel. error v_S");
+    for safety in [0.4, 0.2, 0.1, 0.05] {
+        let mut c = block(120.0, 0.0);
+        c.rigid_block.time_step_safety = safety;
+        let full = run(&c, &Control::unlimited()).unwrap();
+        c.end_time = Some(1.0);
+        let one = run(&c, &Control::unlimited()).unwrap();
+        let rb1 = one.rigid_block.unwrap();
+        println!(
+            "{safety} | {:.3e} | {} | {:.2e} | {} | {:.2e}",
+            rb1.time_step,
+            rb1.steps,
+            (one.arrival.along_dip_velocity - a).abs() / a,
+            full.rigid_block.unwrap().steps,
+            (full.arrival.along_dip_velocity - v_end).abs() / v_end
+        );
+    }
+}
+
 fn bench(c: &mut Criterion) {
+    accuracy_table();
     let ctl = Control::unlimited();
     let pools: Vec<_> = [1usize, 2]
         .iter()
