@@ -6,8 +6,8 @@
 use gangue::physics::Control;
 use gangue::physics::material::RockShape;
 use gangue::physics::migration::{
-    Distribution, EventKind, FloorSpec, Method, MigrationCase, MigrationResult, MonteCarlo, Phase,
-    StopReason, bounce_restitution, run,
+    ContourLine, Distribution, EventKind, FloorSpec, Method, MigrationCase, MigrationResult,
+    MonteCarlo, Phase, StopReason, bounce_restitution, run,
 };
 use serde_json::Value;
 
@@ -276,7 +276,7 @@ fn plane_grid(spacing: f64, nx: usize, ny: usize) -> FloorSpec {
 }
 
 #[test]
-fn flat_grid_floor_gives_the_planes_answer() {
+fn flat_grid_and_contour_floors_give_the_planes_answer() {
     let mut c = block();
     c.end_time = Some(1.0);
     c.face.length = 20.0;
@@ -293,6 +293,25 @@ fn flat_grid_floor_gives_the_planes_answer() {
     );
     assert!(rel(g.arrival.along_dip, p.arrival.along_dip) < 1e-6);
     assert!(g.arrival.angular_speed < 1e-4);
+    // contour lines of the plane, Delaunay-triangulated: a flat mesh as well
+    let t = 45f64.to_radians().tan();
+    c.face.floor = FloorSpec::Contours {
+        contours: (0..=16)
+            .map(|k| ContourLine {
+                elevation: -(k as f64) * t,
+                points: vec![[k as f64, -2.0], [k as f64, 2.0]],
+            })
+            .collect(),
+        resolution: 0.5,
+    };
+    let m = solve(&c);
+    assert!(
+        rel(m.arrival.along_dip_velocity, p.arrival.along_dip_velocity) < 1e-6,
+        "{:?} vs {:?}",
+        m.arrival,
+        p.arrival
+    );
+    assert!(rel(m.arrival.along_dip, p.arrival.along_dip) < 1e-6);
     // dropped from 1 m with bounces
     c.end_time = Some(2.0);
     c.release.drop_height = 1.0;
