@@ -214,7 +214,6 @@ async fn bad_input_names_the_field() {
             "/face/friction_coefficient",
             "invalid_input",
         ),
-        (json!({"method": "rigid_block"}), "/method", "invalid_input"),
         (
             json!({"monte_carlo": {"runs": 0}}),
             "/monte_carlo/runs",

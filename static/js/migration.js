@@ -1,5 +1,6 @@
-// Migration tab: POST /v1/migration with the lumped-mass method: one
-// trajectory, or a seeded Monte Carlo ensemble streamed with progress.
+// Migration tab: POST /v1/migration with the lumped-mass method or the
+// rigid block (DEM): one trajectory, or a seeded Monte Carlo ensemble streamed
+// with progress.
 
 import { postJson } from './api.js';
 import { buildForm, clearErrors, markLocalErrors, readForm } from './form.js';
@@ -25,6 +26,14 @@ const MIGRATION_GROUPS = [
     legend: 'Rock',
     pointer: '/rock',
     fields: [
+      {
+        pointer: '/method', label: 'Method', kind: 'select', value: 'lumped_mass',
+        options: [['lumped_mass', 'lumped mass (energy tracking)'], ['rigid_block', 'rigid block (DEM)']],
+      },
+      {
+        pointer: '/rock/shape', label: 'Shape', kind: 'select', value: 'cube',
+        options: [['cube', 'cube'], ['sphere', 'sphere (r = L/2)']],
+      },
       { pointer: '/rock/side_length_m', label: 'Cube side <i>L</i>', unit: 'mm', exp: -3, value: 300 },
       { pointer: '/rock/density_kg_m3', label: 'Density <i>ρ</i>', unit: 'kg/m³', value: 2500 },
       {
@@ -85,6 +94,7 @@ const ROWS = [
   { key: 'arrival.kinetic_energy_j', label: 'Kinetic energy', symbol: 'KE', unit: 'kJ', scale: 1e-3, sig: 5 },
   { key: 'arrival.along_dip_velocity_m_s', label: 'Down-dip velocity', symbol: '<i>v</i><sub>s</sub>', unit: 'm/s', sig: 5 },
   { key: 'arrival.normal_velocity_m_s', label: 'Normal velocity', symbol: '<i>v</i><sub>n</sub>', unit: 'm/s', sig: 5 },
+  { key: 'arrival.angular_speed_rad_s', label: 'Rotation speed', symbol: '<i>ω</i>', unit: 'rad/s', sig: 5 },
   { key: 'arrival.phase', label: 'Motion at the end', symbol: '' },
   { key: 'arrival.stop_reason', label: 'Stop reason', symbol: '' },
   { key: 'arrival.along_dip_m', label: 'Final position along the dip', symbol: '<i>s</i>', unit: 'm', sig: 5 },
@@ -95,6 +105,7 @@ const ROWS = [
   { key: 'energy.impacts_j', label: 'Lost in impacts', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
   { key: 'energy.friction_j', label: 'Lost to friction', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
   { key: 'energy.transition_j', label: 'Lost at the flight–ground transition', symbol: '', unit: 'J', sig: 4 },
+  { key: 'energy.damping_j', label: 'Lost to contact damping (rigid block)', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
   { key: 'energy.residual_j', label: 'Energy residual', symbol: '', unit: 'J', sig: 3 },
 ];
 
@@ -156,8 +167,14 @@ export function initMigration() {
       showInfo(status, 'Some inputs are not numbers; nothing was sent.');
       return;
     }
-    request.method = 'lumped_mass';
+    request.method ??= 'lumped_mass';
+    const rigid = request.method === 'rigid_block';
     const mc = request.monte_carlo;
+    if (mc && rigid) {
+      // the rigid block has no restitution: its ensemble varies friction only here
+      delete mc.restitution_normal;
+      delete mc.restitution_tangential;
+    }
     if (mc) {
       for (const key of ['restitution_normal', 'restitution_tangential']) {
         if (mc[key]) mc[key] = { distribution: 'uniform', ...mc[key] };

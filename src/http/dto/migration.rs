@@ -9,9 +9,9 @@ use super::common::{Checker, Meta, PlanStep, RockDto, Warning, some};
 use crate::config::Config;
 use crate::http::error::{ApiError, num};
 use crate::physics::migration::{
-    self, ContourLine, Distribution, EventKind, Face, FloorSpec, LumpedMassOptions, Method,
-    MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase, Release, StopReason,
-    Summary,
+    self, ContactModel, ContourLine, Distribution, EventKind, Face, FloorSpec, LumpedMassOptions,
+    Method, MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase, Release,
+    RigidBlockOptions, StopReason, Summary,
 };
 
 /// Migration method.
@@ -425,6 +425,11 @@ pub struct MonteCarloDto {
     #[schema(default = json!(null))]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction_coefficient: Option<DistributionDto>,
+    /// β of the contact dashpot, drawn once per run after μ, in [0, 1) (rigid block only; null:
+    /// the face's β for every run).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critical_damping_ratio: Option<DistributionDto>,
 }
 
 impl Default for MonteCarloDto {
@@ -435,6 +440,7 @@ impl Default for MonteCarloDto {
             restitution_normal: DistributionDto::uniform(0.2, 0.4),
             restitution_tangential: DistributionDto::uniform(0.7, 0.9),
             friction_coefficient: None,
+            critical_damping_ratio: None,
         }
     }
 }
@@ -663,13 +669,7 @@ impl MigrationRequest {
     /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
     pub fn resolve(&mut self, config: &Config) -> Result<MigrationCase, ApiError> {
         let mut ck = Checker::new();
-        if self.method == MethodDto::RigidBlock {
-            ck.push(
-                "/method",
-                json!("rigid_block"),
-                "the rigid-block method is not available in this version; use lumped_mass",
-            );
-        }
+        let rigid = self.method == MethodDto::RigidBlock;
         ck.closed("/gravity_m_s2", self.gravity_m_s2, 0.1, 100.0, "m/s²");
         let f = &mut self.face;
         ck.closed("/face/dip_deg", f.dip_deg, 5.0, 80.0, "°");
@@ -719,10 +719,12 @@ impl MigrationRequest {
         ck.closed_open("/face/local_damping", f.local_damping, 0.0, 1.0, "");
         let floor = resolve_floor(&mut f.floor, &mut ck);
         let rock = self.rock.resolve("/rock", false, &mut ck);
-        if matches!(
-            self.rock.shape,
-            super::common::ShapeKind::Polyhedron | super::common::ShapeKind::RandomPolyhedron
-        ) {
+        if !rigid
+            && matches!(
+                self.rock.shape,
+                super::common::ShapeKind::Polyhedron | super::common::ShapeKind::RandomPolyhedron
+            )
+        {
             ck.push(
                 "/rock/shape",
                 json!(self.rock.shape),
@@ -790,6 +792,40 @@ impl MigrationRequest {
                     .map(|d| d.resolve("/monte_carlo/friction_coefficient", 0.0, 2.0, &mut ck)),
             }
         });
+        let damping_distribution = self.monte_carlo.as_ref().and_then(|mc| {
+            let d = mc.critical_damping_ratio.as_ref()?;
+            if !rigid {
+                ck.push(
+                    "/monte_carlo/critical_damping_ratio",
+                    Value::Null,
+                    "the critical damping ratio belongs to the rigid-block method",
+                );
+            }
+            Some(d.resolve("/monte_carlo/critical_damping_ratio", 0.0, 0.999, &mut ck))
+        });
+        if rigid && let Some(mc) = &self.monte_carlo {
+            let def = MonteCarloDto::default();
+            for (name, d, d0) in [
+                (
+                    "restitution_normal",
+                    &mc.restitution_normal,
+                    &def.restitution_normal,
+                ),
+                (
+                    "restitution_tangential",
+                    &mc.restitution_tangential,
+                    &def.restitution_tangential,
+                ),
+            ] {
+                if d != d0 {
+                    ck.push(
+                        format!("/monte_carlo/{name}"),
+                        Value::Null,
+                        "the rigid block has no restitution: its ensemble varies friction_coefficient and critical_damping_ratio",
+                    );
+                }
+            }
+        }
         if o.runs_csv && monte_carlo.is_none() {
             ck.push(
                 "/output/runs_csv",
@@ -798,8 +834,28 @@ impl MigrationRequest {
             );
         }
         ck.finish()?;
+        let f = &self.face;
+        let rigid_block = RigidBlockOptions {
+            time_step: self.rigid_block.time_step_s,
+            time_step_safety: self.rigid_block.time_step_safety,
+            normal_stiffness: f.normal_stiffness_n_m,
+            shear_stiffness: f.shear_stiffness_n_m,
+            critical_damping_ratio: f.critical_damping_ratio,
+            local_damping: f.local_damping,
+            contact_model: match f.contact_model {
+                ContactModelDto::Linear => ContactModel::Linear,
+                ContactModelDto::Hertz => ContactModel::Hertz,
+            },
+            critical_damping_ratio_distribution: damping_distribution,
+            max_steps: config.max_rigid_steps,
+        };
         Ok(MigrationCase {
-            method: Method::LumpedMass,
+            method: if rigid {
+                Method::RigidBlock
+            } else {
+                Method::LumpedMass
+            },
+            rigid_block,
             gravity: self.gravity_m_s2,
             face: Face {
                 dip_deg: self.face.dip_deg,
@@ -879,6 +935,8 @@ pub struct EnergyDto {
     pub transition_j: f64,
     /// Lost to contact and local damping (rigid block), J.
     pub damping_j: f64,
+    /// Elastic energy still in the contact springs at the end (rigid block; else 0), J.
+    pub stored_j: f64,
     /// KE + PE + losses − total at start (rounding only), J.
     pub residual_j: f64,
 }
@@ -900,6 +958,9 @@ pub struct EventDto {
     pub speed_after_m_s: f64,
     /// Energy lost in the event, J.
     pub energy_lost_j: f64,
+    /// Largest total normal contact force during the contact, N (rigid-block impacts).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_contact_force_n: Option<f64>,
 }
 
 /// Sampled trajectory: equal-length arrays.
@@ -919,6 +980,9 @@ pub struct TrajectoryDto {
     pub speed_m_s: Vec<f64>,
     /// Angular velocities, rad/s.
     pub angular_velocity_rad_s: Vec<[f64; 3]>,
+    /// Orientation quaternions [w, x, y, z], body to world (rigid block).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientation_wxyz: Option<Vec<[f64; 4]>>,
     /// Kinetic energies (translation + rotation), J.
     pub kinetic_energy_j: Vec<f64>,
     /// Rotational energies, J.
@@ -1003,6 +1067,21 @@ pub struct StatisticsDto {
     pub max_bounce_height_m: SummaryDto,
 }
 
+/// What the rigid-block method reports besides the common outputs.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct RigidBlockOutDto {
+    /// Time step used, s.
+    pub time_step_s: f64,
+    /// Critical time step Δt_crit, s.
+    pub critical_time_step_s: f64,
+    /// Time steps of the nominal run (closed-form free flights count as none).
+    pub steps: u64,
+    /// Block mass, kg.
+    pub mass_kg: f64,
+    /// Principal moments of inertia, ascending, kg·m².
+    pub principal_inertia_kg_m2: [f64; 3],
+}
+
 /// Result of a migration.
 #[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
 pub struct MigrationResponse {
@@ -1034,6 +1113,9 @@ pub struct MigrationResponse {
     /// Per-run summaries as CSV (when `output.runs_csv`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub runs_csv: Option<String>,
+    /// Time step, steps and mass properties (rigid block).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rigid_block: Option<RigidBlockOutDto>,
     /// Named warnings.
     pub warnings: Vec<Warning>,
     /// Stages run or skipped.
@@ -1063,6 +1145,24 @@ fn event_name(k: EventKind) -> &'static str {
     }
 }
 
+fn rigid_plan(mc: bool, trajectory: bool) -> Vec<PlanStep> {
+    vec![
+        PlanStep::ran(
+            "migration",
+            if mc {
+                "rigid-block DEM, seeded Monte Carlo ensemble (contact steps, closed-form free flights)"
+            } else {
+                "rigid-block DEM, one deterministic run (contact steps, closed-form free flights)"
+            },
+        ),
+        if trajectory {
+            PlanStep::ran("trajectory", "sampled during the run")
+        } else {
+            PlanStep::skipped("trajectory", "output.trajectory is false")
+        },
+    ]
+}
+
 fn stop_name(s: StopReason) -> &'static str {
     migration::stop_reason_name(s)
 }
@@ -1086,6 +1186,12 @@ impl MigrationResponse {
                 PlanStep::skipped("trajectory", "output.trajectory is false")
             },
         ];
+        let rigid = r.rigid_block.is_some();
+        let plan = if rigid {
+            rigid_plan(mc, r.trajectory.is_some())
+        } else {
+            plan
+        };
         let mut meta = Meta::new(plan);
         meta.warnings = r
             .warnings
@@ -1094,7 +1200,11 @@ impl MigrationResponse {
             .collect();
         let a = &r.arrival;
         Self {
-            method: MethodDto::LumpedMass,
+            method: if rigid {
+                MethodDto::RigidBlock
+            } else {
+                MethodDto::LumpedMass
+            },
             mass_kg: r.mass,
             arrival: ArrivalDto {
                 phase: phase_name(a.phase).into(),
@@ -1120,6 +1230,7 @@ impl MigrationResponse {
                 friction_j: r.energy.friction,
                 transition_j: r.energy.transition,
                 damping_j: r.energy.damping,
+                stored_j: r.energy.stored,
                 residual_j: r.energy.residual,
             },
             events: r.events.map(|ev| {
@@ -1132,6 +1243,7 @@ impl MigrationResponse {
                         speed_before_m_s: e.speed_before,
                         speed_after_m_s: e.speed_after,
                         energy_lost_j: e.energy_lost,
+                        peak_contact_force_n: e.peak_contact_force,
                     })
                     .collect()
             }),
@@ -1143,6 +1255,7 @@ impl MigrationResponse {
                 velocity_m_s: t.velocity,
                 speed_m_s: t.speed,
                 angular_velocity_rad_s: t.angular_velocity,
+                orientation_wxyz: (!t.orientation.is_empty()).then_some(t.orientation),
                 kinetic_energy_j: t.kinetic_energy,
                 rotational_energy_j: t.rotational_energy,
                 potential_energy_j: t.potential_energy,
@@ -1160,6 +1273,13 @@ impl MigrationResponse {
                 max_bounce_height_m: (&s.max_bounce_height).into(),
             }),
             runs_csv: r.runs_csv,
+            rigid_block: r.rigid_block.map(|b| RigidBlockOutDto {
+                time_step_s: b.time_step,
+                critical_time_step_s: b.critical_time_step,
+                steps: b.steps,
+                mass_kg: b.mass,
+                principal_inertia_kg_m2: b.principal_inertia,
+            }),
             warnings: meta.warnings,
             plan: meta.plan,
             inputs,

@@ -11,6 +11,8 @@
 
 mod lumped_mass;
 pub mod monte_carlo;
+mod rigid_block;
+pub mod shape;
 pub mod stats;
 mod terrain;
 
@@ -19,6 +21,10 @@ use rayon::prelude::*;
 
 pub use lumped_mass::{EventKind, MAX_TURN, MIN_REBOUND, Motion, Phase, StopReason};
 pub use monte_carlo::Distribution;
+pub use rigid_block::{
+    ContactModel, FLOOR_MODULUS_PA, FLOOR_POISSON, REST_SPEED_M_S, REST_TIME_S, RigidBlockOptions,
+    RigidBlockReport, bounce_restitution,
+};
 pub use stats::{Histogram, Summary};
 pub use terrain::ContourLine;
 
@@ -203,6 +209,8 @@ pub struct MigrationCase {
     pub release: Release,
     /// Lumped-mass options.
     pub lumped_mass: LumpedMassOptions,
+    /// Rigid-block options (contact law, time step, β distribution).
+    pub rigid_block: RigidBlockOptions,
     /// Stop at this time instead of the lower end, s (default none).
     pub end_time: Option<f64>,
     /// Monte Carlo ensemble (default none).
@@ -222,6 +230,7 @@ impl Default for MigrationCase {
             rock: Rock::default(),
             release: Release::default(),
             lumped_mass: LumpedMassOptions::default(),
+            rigid_block: RigidBlockOptions::default(),
             end_time: None,
             monte_carlo: None,
             output: OutputOptions::default(),
@@ -272,6 +281,8 @@ pub struct EnergyBudget {
     pub transition: f64,
     /// Damping (rigid block only; 0 here), J.
     pub damping: f64,
+    /// Elastic energy still in the contact springs (rigid block only; 0 here), J.
+    pub stored: f64,
     /// KE + PE + losses − total_start at the end, J (rounding only).
     pub residual: f64,
 }
@@ -293,6 +304,8 @@ pub struct Event {
     pub speed_after: f64,
     /// Energy lost at the event, J.
     pub energy_lost: f64,
+    /// Largest total normal contact force during the contact, N (rigid block impacts).
+    pub peak_contact_force: Option<f64>,
 }
 
 /// Trajectory sampled from the closed forms (api.md `trajectory`), equal-length arrays.
@@ -312,6 +325,8 @@ pub struct Trajectory {
     pub speed: Vec<f64>,
     /// Angular velocities, rad/s (zero for the sliding point mass).
     pub angular_velocity: Vec<[f64; 3]>,
+    /// Orientation quaternions [w, x, y, z] body → world (rigid block; empty otherwise).
+    pub orientation: Vec<[f64; 4]>,
     /// Kinetic energy, translation + rotation, J.
     pub kinetic_energy: Vec<f64>,
     /// Rotational energy, J.
@@ -406,6 +421,8 @@ pub struct MigrationResult {
     pub runs_csv: Option<String>,
     /// Warnings.
     pub warnings: Vec<Warning>,
+    /// Time step, steps and mass properties (rigid block only).
+    pub rigid_block: Option<RigidBlockReport>,
 }
 
 /// The api.md name of a stop reason.
@@ -621,11 +638,7 @@ fn v3(v: &Vector3<f64>) -> [f64; 3] {
 /// ```
 pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationResult> {
     if case.method == Method::RigidBlock {
-        return Err(PhysicsError::invalid(
-            "/method",
-            0.0,
-            "the rigid_block method is not available yet; use lumped_mass",
-        ));
+        return rigid_block::run(case, control);
     }
     let face = &case.face;
     let dip = face.dip_deg.to_radians();
@@ -692,6 +705,7 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
                 speed_before: e.speed_before,
                 speed_after: e.speed_after,
                 energy_lost: e.lost * m,
+                peak_contact_force: None,
             })
             .collect()
     });
@@ -737,6 +751,7 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
             friction: fric,
             transition: trans,
             damping: 0.0,
+            stored: 0.0,
             residual,
         },
         events,
@@ -745,6 +760,7 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
         runs,
         statistics,
         warnings,
+        rigid_block: None,
     })
 }
 

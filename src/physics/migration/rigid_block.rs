@@ -1,0 +1,1587 @@
+//! Rigid polyhedral block, DEM in the PFC3D style (physics.md §C.3).
+//!
+//! The block ([`BlockShape`]) moves under gravity and the contact forces of the floor:
+//!
+//! * **Contacts.** Plane: every vertex below the plane (a sphere: its lowest point). Grid and
+//!   contour floors: every block vertex below the facet under it (vertex–face, that facet's
+//!   normal); every floor vertex inside the block that pokes up from its neighbours towards the
+//!   nearest block face (face–vertex, that face's normal); every convex floor crease crossed by a
+//!   block edge (edge–edge, along the common perpendicular). A flat patch of floor therefore
+//!   gives vertex–face contacts only, so a flat grid gives the plane's answer.
+//! * **Force law** per contact: PFC linear, Fₙ = max(0, kₙU − cₙvₙ) with cₙ = 2β√(m kₙ), or
+//!   Hertz, Fₙ = max(0, (4/3)E*√r U^{3/2} − cₙvₙ) with cₙ = 2β√(m k_t), k_t = 2E*√(rU); an
+//!   incremental shear spring Fₛ ← Fₛ − kₛ vₜ Δt, rotated into the current tangent plane
+//!   (magnitude kept) and capped at μ times the elastic normal force. A spring belongs to its
+//!   (block feature, floor feature) pair — a block vertex keeps its spring from facet to facet —
+//!   and is dropped when the contact opens. Optional PFC local damping α on the unbalanced force
+//!   and moment, component by component.
+//! * **Integration**: leapfrog (velocities at half steps): v ← v + (F/m)Δt, x ← x + vΔt; the
+//!   body-frame angular velocity from Euler's equations with the gyroscopic term by the implicit
+//!   midpoint rule (three fixed-point sweeps), q ← q ⊗ exp(ω_b Δt/2), renormalised.
+//! * **Free flight** is skipped in closed form: while the sphere of radius r_max about the centre
+//!   cannot reach the floor (on a height field with slopes ≤ s: the centre is more than
+//!   r_max (1 + s) above it), the centre follows its parabola exactly and the torque-free rotation
+//!   is exact for an isotropic block, else integrated by RK4 with turns of at most 0.02 rad per
+//!   sub-step (local error below 1e-10 rad).
+//! * **Energy**: dashpot and local-damping work → damping; shear-spring work while the Coulomb
+//!   cap holds, and the shear energy a spring still holds when its contact opens → friction; the
+//!   elastic energy of the closed springs → stored. KE + PE + stored + damping + friction +
+//!   residual = the energy at release (with the springs' energy at release).
+//!
+//! References: physics.md §C.1 (restitution of the spring–dashpot), §C.3; api.md
+//! `POST /v1/migration`.
+
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use rayon::prelude::*;
+
+use super::lumped_mass::{EventKind, Phase, StopReason};
+use super::monte_carlo::{self, Distribution};
+use super::shape::BlockShape;
+use super::terrain::{Floor, FloorKind, FloorTriangle, MeanPlane};
+use super::{
+    Arrival, EnergyBudget, Event, MigrationCase, MigrationResult, MonteCarlo, RunSummary,
+    Trajectory, Warning,
+};
+use crate::physics::control::Control;
+use crate::physics::error::{PhysicsError, PhysicsResult};
+
+/// Young's modulus of the floor for the Hertz law, Pa (physics.md §C.3).
+pub const FLOOR_MODULUS_PA: f64 = 4.38e9;
+/// Poisson ratio of the floor for the Hertz law.
+pub const FLOOR_POISSON: f64 = 0.3;
+/// Speed below which the block counts as still (|v| and |ω| r_max), m/s.
+pub const REST_SPEED_M_S: f64 = 1e-3;
+/// Time the block must stay still to be at rest, s.
+pub const REST_TIME_S: f64 = 0.1;
+
+/// Normal contact law of the rigid block.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ContactModel {
+    /// PFC linear spring–dashpot.
+    #[default]
+    Linear,
+    /// Hertz from the moduli of rock and floor.
+    Hertz,
+}
+
+/// Options of the rigid-block method (api.md `face` contact fields and `rigid_block`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidBlockOptions {
+    /// Given time step, s (None: safety × Δt_crit).
+    pub time_step: Option<f64>,
+    /// Safety factor on the critical time step (default 0.2).
+    pub time_step_safety: f64,
+    /// Normal contact stiffness kₙ, N/m (default 1e8; linear law).
+    pub normal_stiffness: f64,
+    /// Shear contact stiffness kₛ, N/m (default 1e8; linear law).
+    pub shear_stiffness: f64,
+    /// Critical damping ratio β of the contact dashpot (default 0.35).
+    pub critical_damping_ratio: f64,
+    /// PFC local damping α (default 0).
+    pub local_damping: f64,
+    /// Normal contact law (default linear).
+    pub contact_model: ContactModel,
+    /// Monte Carlo distribution of β, drawn once per run after μ (default: β for every run).
+    pub critical_damping_ratio_distribution: Option<Distribution>,
+    /// Largest number of time steps of one run (default 2e7).
+    pub max_steps: f64,
+}
+
+impl Default for RigidBlockOptions {
+    fn default() -> Self {
+        Self {
+            time_step: None,
+            time_step_safety: 0.2,
+            normal_stiffness: 1e8,
+            shear_stiffness: 1e8,
+            critical_damping_ratio: 0.35,
+            local_damping: 0.0,
+            contact_model: ContactModel::Linear,
+            critical_damping_ratio_distribution: None,
+            max_steps: 2e7,
+        }
+    }
+}
+
+/// What the rigid-block method reports besides the common outputs (api.md `rigid_block`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidBlockReport {
+    /// Time step used, s.
+    pub time_step: f64,
+    /// Critical time step Δt_crit, s.
+    pub critical_time_step: f64,
+    /// Time steps of the nominal run (free flights skipped in closed form count as none).
+    pub steps: u64,
+    /// Block mass, kg.
+    pub mass: f64,
+    /// Principal moments of inertia, ascending, kg·m².
+    pub principal_inertia: [f64; 3],
+    /// Static overlap of the resting block, m.
+    pub static_overlap: f64,
+    /// Largest overlap of any contact during the nominal run, m.
+    pub max_overlap: f64,
+}
+
+/// Restitution and contact time of one linear spring–dashpot impact (physics.md §C.1): a mass
+/// m (kg) striking at speed v (m/s) a spring k (N/m) with critical damping ratio β < 1.
+///
+/// Returns (e, contact time s). With `clip` the force is max(0, kx + cẋ) (no tension) and the
+/// contact ends when that force returns to zero; else it ends when the overlap does. Closed
+/// form: x(t) = (v/ω_d) e^{−βωt} sin ω_d t.
+pub fn bounce_restitution(m: f64, k: f64, beta: f64, clip: bool) -> (f64, f64) {
+    let w = (k / m).sqrt();
+    let s = (1.0 - beta * beta).sqrt();
+    let wd = w * s;
+    let t_end = if clip {
+        // k x + c ẋ = 0 ⇔ sin(ω_d t)(1 − 2β²) + 2βs cos(ω_d t) = 0
+        let phase = (-2.0 * beta * s).atan2(1.0 - 2.0 * beta * beta);
+        // ω_d t = π + phase (the first zero after the start), phase ∈ (−π, 0]
+        (std::f64::consts::PI + phase) / wd
+    } else {
+        std::f64::consts::PI / wd
+    };
+    // ẋ(t)/v = e^{−βωt}(cos ω_d t − (β/s) sin ω_d t)
+    let (sn, cs) = (wd * t_end).sin_cos();
+    let vr = (-beta * w * t_end).exp() * (cs - beta / s * sn);
+    (-vr, t_end)
+}
+
+/// One contact point of the current configuration.
+#[derive(Debug, Clone, Copy)]
+struct Geo {
+    key: u64,
+    p: Vector3<f64>,
+    n: Vector3<f64>,
+    u: f64,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Hertz {
+    /// (4/3) E* √r, N/m^{3/2}.
+    k: f64,
+    /// 2 E* √r, N/m^{3/2}.
+    kt: f64,
+    /// kₛ / k_t.
+    shear_ratio: f64,
+}
+
+/// Everything a run needs that does not change between Monte Carlo runs.
+struct Model<'a> {
+    floor: &'a Floor,
+    shape: BlockShape,
+    mean: MeanPlane,
+    g: f64,
+    m: f64,
+    inertia: Vector3<f64>,
+    kn: f64,
+    ks: f64,
+    hertz: Option<Hertz>,
+    alpha: f64,
+    dt: f64,
+    dt_crit: f64,
+    length: f64,
+    end_time: Option<f64>,
+    c0: Vector3<f64>,
+    v0: Vector3<f64>,
+    q0: UnitQuaternion<f64>,
+    z_end: f64,
+    rest_offset: f64,
+    /// Vertical drop below the centre that keeps the block clear of the floor (r_max(1 + s)).
+    clear_drop: f64,
+    /// Shortest time between contacts that counts as a new impact, s.
+    gap: f64,
+    /// Contact time of a resting face, s (ground phase after 5 of them).
+    t_contact: f64,
+    max_steps: f64,
+    isotropic: bool,
+    static_overlap: f64,
+    on_floor_at_start: bool,
+}
+
+/// State of the block: centre, velocity (half step), orientation, body angular velocity.
+#[derive(Debug, Clone, Copy)]
+struct State {
+    t: f64,
+    c: Vector3<f64>,
+    v: Vector3<f64>,
+    q: UnitQuaternion<f64>,
+    w: Vector3<f64>,
+}
+
+/// Per-run outcome.
+#[derive(Debug, Clone)]
+struct RunOut {
+    st: State,
+    reason: StopReason,
+    phase: Phase,
+    impacts: u64,
+    slide_start: Option<f64>,
+    stop_along: Option<f64>,
+    max_bounce: f64,
+    damping: f64,
+    friction: f64,
+    stored: f64,
+    e_start: f64,
+    steps: u64,
+    max_overlap: f64,
+    events: Vec<Event>,
+    trajectory: Option<Trajectory>,
+}
+
+struct Recorder {
+    interval: f64,
+    next: f64,
+    max: usize,
+    tr: Trajectory,
+}
+
+fn v3(v: &Vector3<f64>) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+
+impl<'a> Model<'a> {
+    /// Builds the model of a case on its floor; `pr` gives the release point.
+    fn new(case: &MigrationCase, pr: &'a super::Prepared) -> PhysicsResult<Self> {
+        let o = &case.rigid_block;
+        let shape = BlockShape::of_rock(&case.rock)?;
+        let floor = &pr.floor;
+        let g = pr.g;
+        let m = shape.mass;
+        let dip = case.face.dip_deg.to_radians();
+        let nc = shape.resting_contacts() as f64;
+        let hertz = match o.contact_model {
+            ContactModel::Linear => None,
+            ContactModel::Hertz => {
+                let r = match shape.sphere_radius {
+                    Some(r) => r,
+                    None => case.rock.corner_radius,
+                };
+                let nu = case.rock.poisson_ratio;
+                let estar = 1.0
+                    / ((1.0 - nu * nu) / case.rock.elastic_modulus
+                        + (1.0 - FLOOR_POISSON * FLOOR_POISSON) / FLOOR_MODULUS_PA);
+                Some(Hertz {
+                    k: 4.0 / 3.0 * estar * r.sqrt(),
+                    kt: 2.0 * estar * r.sqrt(),
+                    shear_ratio: 2.0 * (1.0 - nu) / (2.0 - nu),
+                })
+            }
+        };
+        // stiffness for the time step and the static overlap
+        let w_face = m * g * dip.cos() / nc;
+        let (k_step, static_overlap) = match hertz {
+            // a shear spring stiffer than the normal one sets the step (PFC takes the larger)
+            None => (
+                o.normal_stiffness.max(o.shear_stiffness),
+                w_face / o.normal_stiffness,
+            ),
+            Some(h) => {
+                let ug = (m * g / h.k).powf(2.0 / 3.0);
+                (h.kt * ug.sqrt(), (w_face / h.k).powf(2.0 / 3.0))
+            }
+        };
+        let (field, what) = match hertz {
+            None => ("/face/normal_stiffness_n_m", o.normal_stiffness),
+            Some(_) => ("/rock/elastic_modulus_pa", case.rock.elastic_modulus),
+        };
+        if static_overlap > 0.01 * shape.smallest_dimension {
+            return Err(PhysicsError::invalid(
+                field,
+                what,
+                format!(
+                    "too soft: the resting block would sink {static_overlap:.3e} m, more than 1 % \
+                     of its smallest dimension {:.3e} m",
+                    shape.smallest_dimension
+                ),
+            ));
+        }
+        let i_min = shape.inertia.min();
+        let dt_crit = (m / (nc * k_step))
+            .sqrt()
+            .min((i_min / (k_step * shape.resting_r2())).sqrt());
+        let mut dt = match o.time_step {
+            Some(dt) => {
+                if dt > dt_crit {
+                    return Err(PhysicsError::invalid(
+                        "/rigid_block/time_step_s",
+                        dt,
+                        format!("above the critical time step {dt_crit:.6e} s"),
+                    ));
+                }
+                dt
+            }
+            None => o.time_step_safety * dt_crit,
+        };
+        if let Some(te) = case.end_time {
+            dt = te / (te / dt).ceil();
+        }
+        // release: resting face-down on the facet under the release point, then lifted
+        let rel = &case.release;
+        let floor_pt = pr.p0 - Vector3::z() * rel.drop_height;
+        let facet = floor
+            .locate(floor_pt.x, floor_pt.y, 1.0, 0.0)
+            .or_else(|| floor.locate(floor_pt.x, floor_pt.y, 0.0, 0.0))
+            .ok_or_else(|| {
+                PhysicsError::invalid("/release/along_dip_m", rel.along_dip, "off the floor")
+            })?;
+        let pl = floor.facet_plane(facet);
+        let nf = pl.normal();
+        let rest_normal = shape.rest_normal();
+        let q_face = UnitQuaternion::rotation_between(&rest_normal, &(-Vector3::z()))
+            .unwrap_or_else(|| {
+                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+            });
+        let q_tilt = UnitQuaternion::rotation_between(&Vector3::z(), &nf)
+            .unwrap_or_else(UnitQuaternion::identity);
+        let q0 = q_tilt * q_face;
+        let rest_offset = shape.rest_height() - static_overlap;
+        let c0 = floor_pt + nf * rest_offset + Vector3::z() * rel.drop_height;
+        let mean = floor.mean;
+        let z_end = mean.z_at(case.face.length) + rest_offset * mean.normal().z;
+        // steepest floor slope
+        let slope = match &floor.kind {
+            FloorKind::Plane(p) => {
+                let n = p.normal();
+                (n.x * n.x + n.y * n.y).sqrt() / n.z
+            }
+            _ => {
+                let mut tris = Vec::new();
+                floor.triangles_in(floor.extent(), &mut tris);
+                tris.iter()
+                    .map(|t| {
+                        let n = (t.corners[1] - t.corners[0]).cross(&(t.corners[2] - t.corners[0]));
+                        (n.x * n.x + n.y * n.y).sqrt() / n.z.abs().max(1e-300)
+                    })
+                    .fold(0.0, f64::max)
+            }
+        };
+        let inertia = shape.inertia;
+        let iso = (inertia.max() - inertia.min()) <= 1e-12 * inertia.max();
+        let t_contact = std::f64::consts::PI * (m / (nc * k_step)).sqrt();
+        Ok(Model {
+            floor,
+            mean,
+            g,
+            m,
+            inertia,
+            kn: o.normal_stiffness,
+            ks: o.shear_stiffness,
+            hertz,
+            alpha: o.local_damping,
+            dt,
+            dt_crit,
+            length: case.face.length,
+            end_time: case.end_time,
+            c0,
+            v0: pr.v0,
+            q0,
+            z_end,
+            rest_offset,
+            clear_drop: shape.r_max * (1.0 + slope),
+            gap: (5.0 * dt).max(1e-3),
+            t_contact,
+            max_steps: o.max_steps,
+            isotropic: iso,
+            static_overlap,
+            on_floor_at_start: rel.drop_height == 0.0,
+            shape,
+        })
+    }
+
+    /// The nominal report of the model.
+    fn report(&self, steps: u64, max_overlap: f64) -> RigidBlockReport {
+        RigidBlockReport {
+            time_step: self.dt,
+            critical_time_step: self.dt_crit,
+            steps,
+            mass: self.m,
+            principal_inertia: self.shape.principal_moments(),
+            static_overlap: self.static_overlap,
+            max_overlap,
+        }
+    }
+
+    /// Estimated steps: the fall and the slide down the rest of the face at μ (or end_time).
+    fn estimated_steps(&self, case: &MigrationCase, mu: f64) -> f64 {
+        let dip = case.face.dip_deg.to_radians();
+        let g = self.g;
+        let h = case.release.drop_height;
+        let s = (self.length - case.release.along_dip).max(0.0);
+        let v0 = case.release.speed;
+        let a = g * (dip.sin() - mu * dip.cos());
+        let t_slide = if a > 1e-9 * g {
+            ((v0 * v0 + 2.0 * a * s).sqrt() - v0) / a
+        } else {
+            // decelerating: it stops within v0/|a| (or at once), then rests REST_TIME_S
+            (v0 / a.abs().max(1e-9 * g)).min(s / v0.max(1e-300)) + REST_TIME_S
+        };
+        // free flight is skipped: only the last r_max of the fall is stepped
+        let t_fall = if h > 0.0 {
+            let v = (2.0 * g * h).sqrt();
+            (2.0 * self.clear_drop / v).min((2.0 * h / g).sqrt())
+        } else {
+            0.0
+        };
+        let t = t_fall + t_slide;
+        let t = match self.end_time {
+            Some(te) => te.min(t),
+            None => t,
+        };
+        t / self.dt
+    }
+
+    fn rot(&self, q: &UnitQuaternion<f64>) -> Matrix3<f64> {
+        *q.to_rotation_matrix().matrix()
+    }
+
+    /// Contacts of the block at (c, R), appended to `out`.
+    fn contacts(
+        &self,
+        c: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        tris: &mut Vec<FloorTriangle>,
+        out: &mut Vec<Geo>,
+    ) {
+        out.clear();
+        let sh = &self.shape;
+        match &self.floor.kind {
+            FloorKind::Plane(pl) => {
+                let n = pl.normal();
+                let nz = n.z;
+                if let Some(rad) = sh.sphere_radius {
+                    let d = pl.height(c) * nz - rad;
+                    if d < 0.0 {
+                        out.push(Geo {
+                            key: 0,
+                            p: c - n * rad,
+                            n,
+                            u: -d,
+                        });
+                    }
+                    return;
+                }
+                // cheap reject: the centre farther than r_max
+                if pl.height(c) * nz > sh.r_max {
+                    return;
+                }
+                for (i, b) in sh.vertices.iter().enumerate() {
+                    let p = c + r * b;
+                    let d = pl.height(&p) * nz;
+                    if d < 0.0 {
+                        out.push(Geo {
+                            key: i as u64,
+                            p,
+                            n,
+                            u: -d,
+                        });
+                    }
+                }
+            }
+            _ => self.contacts_mesh(c, r, tris, out),
+        }
+    }
+
+    fn contacts_mesh(
+        &self,
+        c: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        tris: &mut Vec<FloorTriangle>,
+        out: &mut Vec<Geo>,
+    ) {
+        let sh = &self.shape;
+        let fl = self.floor;
+        // clear of the floor under the centre by more than r_max (1 + s): no contact
+        if let Some(f) = fl.locate(c.x, c.y, 0.0, 0.0)
+            && fl.facet_plane(f).height(c) > self.clear_drop
+        {
+            return;
+        }
+        if let Some(rad) = sh.sphere_radius {
+            if let Some(f) = fl.locate(c.x, c.y, 0.0, 0.0) {
+                let pl = fl.facet_plane(f);
+                let n = pl.normal();
+                let d = pl.height(c) * n.z - rad;
+                if d < 0.0 {
+                    out.push(Geo {
+                        key: 0,
+                        p: c - n * rad,
+                        n,
+                        u: -d,
+                    });
+                }
+            }
+            return;
+        }
+        let world: Vec<Vector3<f64>> = sh.vertices.iter().map(|b| c + r * b).collect();
+        // vertex–face
+        for (i, p) in world.iter().enumerate() {
+            if let Some(f) = fl.locate(p.x, p.y, 0.0, 0.0) {
+                let pl = fl.facet_plane(f);
+                let n = pl.normal();
+                let d = pl.height(p) * n.z;
+                if d < 0.0 {
+                    out.push(Geo {
+                        key: i as u64,
+                        p: *p,
+                        n,
+                        u: -d,
+                    });
+                }
+            }
+        }
+        // floor features inside the block's plan box (padded)
+        let (mut x0, mut x1, mut y0, mut y1) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
+        let mut z_min = f64::INFINITY;
+        for p in &world {
+            x0 = x0.min(p.x);
+            x1 = x1.max(p.x);
+            y0 = y0.min(p.y);
+            y1 = y1.max(p.y);
+            z_min = z_min.min(p.z);
+        }
+        tris.clear();
+        let pad = 1e-9 * (1.0 + sh.r_max);
+        fl.triangles_in([x0 - pad, x1 + pad, y0 - pad, y1 + pad], tris);
+        if tris.is_empty() {
+            return;
+        }
+        let faces_w: Vec<(Vector3<f64>, f64)> = sh
+            .faces
+            .iter()
+            .map(|f| {
+                let n = r * f.normal;
+                (n, f.offset + n.dot(c))
+            })
+            .collect();
+        let inside_depth = |x: &Vector3<f64>| -> Option<(f64, usize)> {
+            let mut best = (f64::INFINITY, 0usize);
+            for (k, (n, off)) in faces_w.iter().enumerate() {
+                let d = off - n.dot(x);
+                if d <= 0.0 {
+                    return None;
+                }
+                if d < best.0 {
+                    best = (d, k);
+                }
+            }
+            Some(best)
+        };
+        // face–vertex: floor vertices inside the block that poke towards the nearest face
+        let mut done: Vec<u32> = Vec::new();
+        for t in tris.iter() {
+            for k in 0..3 {
+                let id = t.ids[k];
+                let x = t.corners[k];
+                if x.z < z_min || done.contains(&id) {
+                    continue;
+                }
+                done.push(id);
+                let Some((depth, face)) = inside_depth(&x) else {
+                    continue;
+                };
+                let nf = faces_w[face].0;
+                // a peak towards the face: every neighbour lower along the face normal
+                let mut peak = true;
+                let mut any = false;
+                for t2 in tris.iter() {
+                    for k2 in 0..3 {
+                        if t2.ids[k2] == id {
+                            for y in [t2.corners[(k2 + 1) % 3], t2.corners[(k2 + 2) % 3]] {
+                                any = true;
+                                let e = x - y;
+                                if (-nf).dot(&e) <= 1e-6 * e.norm() {
+                                    peak = false;
+                                }
+                            }
+                        }
+                    }
+                }
+                if peak && any {
+                    out.push(Geo {
+                        key: (1 << 62) | u64::from(id),
+                        p: x,
+                        n: -nf,
+                        u: depth,
+                    });
+                }
+            }
+        }
+        // edge–edge: convex floor creases crossed by block edges
+        let mut seen: Vec<(u32, u32)> = Vec::new();
+        for (ti, t) in tris.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t.ids[k], t.ids[(k + 1) % 3]);
+                let key = (a.min(b), a.max(b));
+                if seen.contains(&key) {
+                    continue;
+                }
+                // the other triangle of this edge
+                let Some(t2) = tris
+                    .iter()
+                    .enumerate()
+                    .find(|(j, u)| *j != ti && u.ids.contains(&a) && u.ids.contains(&b))
+                    .map(|(_, u)| u)
+                else {
+                    continue;
+                };
+                seen.push(key);
+                let (pa, pb) = (t.corners[k], t.corners[(k + 1) % 3]);
+                let n1 = (t.corners[1] - t.corners[0])
+                    .cross(&(t.corners[2] - t.corners[0]))
+                    .normalize();
+                let n2 = (t2.corners[1] - t2.corners[0])
+                    .cross(&(t2.corners[2] - t2.corners[0]))
+                    .normalize();
+                // convex crease: the far vertex of t2 lies below t's plane
+                let far = (0..3)
+                    .find(|&j| t2.ids[j] != a && t2.ids[j] != b)
+                    .map(|j| t2.corners[j]);
+                let Some(far) = far else { continue };
+                if n1.dot(&(far - pa)) >= -1e-9 * (far - pa).norm() || n1.dot(&n2) > 1.0 - 1e-12 {
+                    continue;
+                }
+                for (ei, e) in sh.edges.iter().enumerate() {
+                    let (qa, qb) = (world[e[0]], world[e[1]]);
+                    let [fa, fb] = sh.edge_faces[ei];
+                    let cones = [n1, n2, faces_w[fa].0, faces_w[fb].0];
+                    if let Some(geo) = edge_contact(&qa, &qb, &pa, &pb, &cones, &inside_depth) {
+                        let h = (u64::from(key.0).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                            ^ u64::from(key.1))
+                            & ((1 << 40) - 1);
+                        out.push(Geo {
+                            key: (2 << 62) | ((ei as u64) << 40) | h,
+                            ..geo
+                        });
+                    }
+                }
+            }
+        }
+    }
+
+    /// Torque-free rotation over τ: exact for an isotropic block, else RK4 sub-steps.
+    fn free_rotation(
+        &self,
+        q: UnitQuaternion<f64>,
+        w: Vector3<f64>,
+        tau: f64,
+    ) -> (UnitQuaternion<f64>, Vector3<f64>) {
+        if self.isotropic {
+            return (q * UnitQuaternion::from_scaled_axis(w * tau), w);
+        }
+        let i = self.inertia;
+        let wdot = |w: &Vector3<f64>| -> Vector3<f64> {
+            let l = w.component_mul(&i);
+            (-w.cross(&l)).component_div(&i)
+        };
+        let n = ((w.norm() * tau / 0.02).ceil() as usize).max(1);
+        let h = tau / n as f64;
+        let (mut q, mut w) = (q, w);
+        for _ in 0..n {
+            let k1 = wdot(&w);
+            let k2 = wdot(&(w + k1 * (0.5 * h)));
+            let k3 = wdot(&(w + k2 * (0.5 * h)));
+            let k4 = wdot(&(w + k3 * h));
+            let w1 = w + (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0);
+            // the orientation with the Simpson mean of the body rate (4th order for slow change)
+            let wm = (w + w1) * 0.5 + (k1 - k4) * (h / 12.0);
+            q *= UnitQuaternion::from_scaled_axis(wm * h);
+            w = w1;
+        }
+        (q, w)
+    }
+
+    /// Time until the block could first touch the floor in free flight from (c, v), or None
+    /// when it may already be within reach.
+    fn clear_time(
+        &self,
+        c: &Vector3<f64>,
+        v: &Vector3<f64>,
+        margin: f64,
+        t_max: f64,
+    ) -> Option<f64> {
+        let g = self.g;
+        match &self.floor.kind {
+            FloorKind::Plane(pl) => {
+                let n = pl.normal();
+                let h0 = pl.height(c) * n.z - self.shape.r_max - margin;
+                if h0 <= 0.0 {
+                    return None;
+                }
+                let b = n.dot(v);
+                let a = g * n.z;
+                // h0 + b t − ½ a t² = 0, the positive root
+                let d = (b * b + 2.0 * a * h0).sqrt();
+                let t = if b >= 0.0 {
+                    (b + d) / a
+                } else {
+                    2.0 * h0 / (d - b)
+                };
+                Some(t.min(t_max))
+            }
+            _ => {
+                let f = self.floor.locate(c.x, c.y, v.x, v.y)?;
+                let drop = self.clear_drop + margin;
+                if self.floor.facet_plane(f).height(c) <= drop {
+                    return None;
+                }
+                let p = c - Vector3::z() * drop;
+                match self.floor.flight(&p, v, g, t_max) {
+                    super::terrain::FlightEnd::Hit { t, .. } => Some(t),
+                    super::terrain::FlightEnd::Leaves { t } => Some(t.min(t_max)),
+                    super::terrain::FlightEnd::Clear => Some(t_max),
+                }
+            }
+        }
+    }
+
+    fn height_of_centre(&self, c: &Vector3<f64>) -> f64 {
+        let h = match self.floor.locate(c.x, c.y, 0.0, 0.0) {
+            Some(f) => {
+                let pl = self.floor.facet_plane(f);
+                pl.height(c) * pl.normal().z
+            }
+            None => {
+                self.mean.normal().dot(c)
+                    - self
+                        .mean
+                        .normal()
+                        .dot(&Vector3::new(self.mean.x0, 0.0, self.mean.z_ref))
+            }
+        };
+        h - self.rest_offset
+    }
+
+    fn energy(&self, st: &State) -> (f64, f64, f64) {
+        let ke_t = 0.5 * self.m * st.v.norm_squared();
+        let ke_r = 0.5 * st.w.dot(&st.w.component_mul(&self.inertia));
+        let pe = self.m * self.g * (st.c.z - self.z_end);
+        (ke_t, ke_r, pe)
+    }
+
+    /// Runs one trajectory with friction μ and damping ratio β.
+    fn simulate(
+        &self,
+        mu: f64,
+        beta: f64,
+        record: Option<(f64, usize)>,
+        events: bool,
+        control: Option<&Control>,
+    ) -> PhysicsResult<RunOut> {
+        let m = self.m;
+        let dt = self.dt;
+        let mut st = State {
+            t: 0.0,
+            c: self.c0,
+            v: self.v0,
+            q: self.q0,
+            w: Vector3::zeros(),
+        };
+        // (contact key, shear force, shear stiffness at the last step)
+        let mut springs: Vec<(u64, Vector3<f64>, f64)> = Vec::new();
+        let mut new_springs: Vec<(u64, Vector3<f64>, f64)> = Vec::new();
+        let mut geos: Vec<Geo> = Vec::new();
+        let mut tris: Vec<FloorTriangle> = Vec::new();
+        let (mut damping, mut friction) = (0.0, 0.0);
+        let mut stored;
+        // springs at release: the contacts of a block released on the floor exist already
+        // (with unloaded shear springs), and its acceleration is that of its elastic forces
+        let gravity = Vector3::new(0.0, 0.0, -self.g);
+        let mut acc_prev = gravity;
+        {
+            let r = self.rot(&st.q);
+            self.contacts(&st.c, &r, &mut tris, &mut geos);
+            stored = geos.iter().map(|g| self.normal_energy(g.u)).sum::<f64>();
+            for gk in &geos {
+                let f_el = match self.hertz {
+                    None => self.kn * gk.u,
+                    Some(hz) => hz.k * gk.u * gk.u.sqrt(),
+                };
+                acc_prev += gk.n * (f_el / m);
+                springs.push((gk.key, Vector3::zeros(), self.ks));
+            }
+        }
+        let (k0, r0, p0) = self.energy(&st);
+        let e_start = k0 + r0 + p0 + stored;
+        let mut rec = record.map(|(interval, max)| Recorder {
+            interval,
+            next: 0.0,
+            max,
+            tr: Trajectory::default(),
+        });
+        let mut evs: Vec<Event> = Vec::new();
+        let mut impacts = 0u64;
+        let mut slide_start: Option<f64> = None;
+        let mut max_bounce: f64 = 0.0;
+        let mut steps = 0u64;
+        let mut max_overlap = 0.0f64;
+        let mut wacc_prev = Vector3::zeros();
+        // contact episode bookkeeping
+        let mut had_contact = self.on_floor_at_start;
+        let mut last_contact_t = if self.on_floor_at_start {
+            0.0
+        } else {
+            f64::NEG_INFINITY
+        };
+        let mut episode: Option<Episode> = if self.on_floor_at_start {
+            Some(Episode {
+                t0: 0.0,
+                speed_before: st.v.norm(),
+                diss_before: 0.0,
+                peak: 0.0,
+                p: st.c,
+                ground: true,
+                impact: false,
+                last_speed: st.v.norm(),
+                last_p: st.c,
+                last_diss: 0.0,
+                last_t: 0.0,
+            })
+        } else {
+            None
+        };
+        if self.on_floor_at_start {
+            slide_start = Some(self.mean.along(&st.c));
+        }
+        let mut first_impact_done = false;
+        let mut still_since: Option<f64> = None;
+        let mut slip_max = 0.0f64;
+        let end_t = self.end_time.unwrap_or(f64::INFINITY);
+        let reason;
+        let along_start = self.mean.along(&st.c);
+        let _ = along_start;
+        let mut prev_along = self.mean.along(&st.c);
+        loop {
+            // sample the trajectory
+            if let Some(r) = rec.as_mut()
+                && st.t >= r.next
+            {
+                let diss = damping + friction;
+                self.sample(r, &st, diss, stored)?;
+                while r.next <= st.t {
+                    r.next += r.interval;
+                }
+            }
+            if st.t >= end_t * (1.0 - 1e-12) {
+                reason = StopReason::EndTime;
+                break;
+            }
+            // leave the floor's extent
+            if !matches!(self.floor.kind, FloorKind::Plane(_))
+                && self.floor.locate(st.c.x, st.c.y, 0.0, 0.0).is_none()
+            {
+                reason = StopReason::LeftFloor;
+                break;
+            }
+            // an episode whose contact ended more than the gap ago is over
+            if springs.is_empty()
+                && st.t - last_contact_t > self.gap
+                && let Some(ep) = episode.take()
+            {
+                self.close_episode(ep, true, &mut evs, events);
+            }
+            // free flight in closed form
+            if springs.is_empty() && st.t - last_contact_t > self.gap.max(dt) {
+                let margin =
+                    2.0 * (st.v.norm() + st.w.norm() * self.shape.r_max + self.g * dt) * dt
+                        + 1e-9 * self.shape.r_max;
+                if let Some(tau) = self.clear_time(&st.c, &st.v, margin, end_t - st.t)
+                    && tau > 2.0 * dt
+                {
+                    let t_target = st.t + tau;
+                    // lower end inside the flight?
+                    let cross = self.along_cross(&st, tau);
+                    let t_stop = cross.map(|tc| st.t + tc);
+                    let t_final = t_stop.unwrap_or(t_target);
+                    // apex for the bounce height (centre above its resting height)
+                    if first_impact_done {
+                        let nrm = self.mean.normal();
+                        let (b, a) = (nrm.dot(&st.v), -self.g * nrm.z);
+                        let ta = if a < 0.0 {
+                            (-b / a).clamp(0.0, t_final - st.t)
+                        } else {
+                            0.0
+                        };
+                        let ca = st.c + st.v * ta + Vector3::new(0.0, 0.0, -0.5 * self.g * ta * ta);
+                        max_bounce = max_bounce.max(self.height_of_centre(&ca));
+                    }
+                    // samples inside the flight
+                    while let Some(r) = rec.as_mut()
+                        && r.next < t_final
+                    {
+                        let s = self.fly(&st, r.next - st.t);
+                        self.sample(r, &s, damping + friction, stored)?;
+                        r.next += r.interval;
+                    }
+                    st = self.fly(&st, t_final - st.t);
+                    acc_prev = gravity;
+                    wacc_prev = Vector3::zeros();
+                    if t_stop.is_some() {
+                        reason = StopReason::LowerEnd;
+                        break;
+                    }
+                    if let Some(te) = self.end_time
+                        && t_target >= te * (1.0 - 1e-12)
+                    {
+                        st.t = te;
+                        continue;
+                    }
+                    prev_along = self.mean.along(&st.c);
+                    continue;
+                }
+            }
+            if steps as f64 >= self.max_steps {
+                return Err(PhysicsError::TooManySteps {
+                    estimated: steps as f64,
+                    limit: self.max_steps,
+                });
+            }
+            if steps & 0xFFF == 0
+                && let Some(c) = control
+            {
+                c.check()?;
+            }
+            // the last step may be shortened to end exactly at end_time
+            let h = if end_t - st.t < dt * (1.0 + 1e-9) {
+                end_t - st.t
+            } else {
+                dt
+            };
+            // contact forces at x(t) with the half-step velocities
+            let r = self.rot(&st.q);
+            self.contacts(&st.c, &r, &mut tris, &mut geos);
+            let w_world = r * st.w;
+            let v_t = st.v + acc_prev * (0.5 * h);
+            let w_t = w_world + wacc_prev * (0.5 * h);
+            let mut f = Vector3::new(0.0, 0.0, -m * self.g);
+            let mut mom = Vector3::zeros();
+            let mut fn_total = 0.0;
+            let (mut f_damp, mut m_damp) = (Vector3::zeros(), Vector3::zeros());
+            let (mut f_slip, mut m_slip, mut es_slip) = (Vector3::zeros(), Vector3::zeros(), 0.0);
+            new_springs.clear();
+            stored = 0.0;
+            slip_max = 0.0;
+            for gk in &geos {
+                max_overlap = max_overlap.max(gk.u);
+                let rr = gk.p - st.c;
+                let vrel = st.v + w_world.cross(&rr);
+                let vn = gk.n.dot(&vrel);
+                let vt = vrel - gk.n * vn;
+                slip_max = slip_max.max(vt.norm());
+                let (f_el, kt, ks) = match self.hertz {
+                    None => (self.kn * gk.u, self.kn, self.ks),
+                    Some(hz) => {
+                        let kt = hz.kt * gk.u.sqrt();
+                        (hz.k * gk.u * gk.u.sqrt(), kt, kt * hz.shear_ratio)
+                    }
+                };
+                let cn = 2.0 * beta * (m * kt).sqrt();
+                // the dashpot takes the velocity at x(t), predicted from the half step with
+                // the last acceleration (second order; the lagged half-step velocity alone
+                // would err by O(β ω Δt) in the restitution)
+                let vn_t = gk.n.dot(&(v_t + w_t.cross(&rr)));
+                let old = springs.iter().find(|s| s.0 == gk.key).map(|s| s.1);
+                // A contact that has just closed touched U/|vₙ| ago, not half a step ago as the
+                // step's impulse assumes: correct the dashpot impulse by c(U − |vₙ|Δt/2) (else
+                // the restitution errs by O(Δt) with the random phase of the touch). Only for a
+                // fresh touch (U within the step's approach), never for a contact that appears
+                // deep (a new floor feature under a block already in contact).
+                let onset = if old.is_none() && vn_t < 0.0 && gk.u <= -1.5 * vn_t * h {
+                    cn * (gk.u / h + 0.5 * vn_t)
+                } else {
+                    0.0
+                };
+                let fnm = (f_el - cn * vn_t + onset).max(0.0);
+                // dashpot work (and the clipped spring's share)
+                let fd = gk.n * (fnm - f_el);
+                f_damp += fd;
+                m_damp += rr.cross(&fd);
+                fn_total += fnm;
+                // shear spring: rotate the old one into the tangent plane
+                let mut fs = match old {
+                    Some(o) => {
+                        let mag = o.norm();
+                        let pr = o - gk.n * gk.n.dot(&o);
+                        let pn = pr.norm();
+                        if pn > 0.0 { pr * (mag / pn) } else { pr }
+                    }
+                    None => Vector3::zeros(),
+                };
+                let es_old = if ks > 0.0 {
+                    fs.norm_squared() / (2.0 * ks)
+                } else {
+                    0.0
+                };
+                fs -= vt * (ks * h);
+                let cap = mu * f_el;
+                let fs_n = fs.norm();
+                let slipping = fs_n > cap;
+                if slipping {
+                    fs *= if fs_n > 0.0 { cap / fs_n } else { 0.0 };
+                }
+                let es_new = if ks > 0.0 {
+                    fs.norm_squared() / (2.0 * ks)
+                } else {
+                    0.0
+                };
+                if slipping {
+                    f_slip += fs;
+                    m_slip += rr.cross(&fs);
+                    es_slip += es_new - es_old;
+                }
+                stored += self.normal_energy(gk.u) + es_new;
+                new_springs.push((gk.key, fs, ks));
+                let fc = gk.n * fnm + fs;
+                f += fc;
+                mom += rr.cross(&fc);
+            }
+            // springs of contacts that opened release their shear energy
+            for (k, fs, ks) in &springs {
+                if *ks > 0.0 && !new_springs.iter().any(|s| s.0 == *k) {
+                    friction += fs.norm_squared() / (2.0 * ks);
+                }
+            }
+            std::mem::swap(&mut springs, &mut new_springs);
+            // local damping
+            if self.alpha > 0.0 {
+                for i in 0..3 {
+                    let d = self.alpha * f[i].abs() * st.v[i].signum();
+                    if st.v[i] != 0.0 {
+                        f[i] -= d;
+                        f_damp[i] -= d;
+                    }
+                    let dm = self.alpha * mom[i].abs() * w_world[i].signum();
+                    if w_world[i] != 0.0 {
+                        mom[i] -= dm;
+                        m_damp[i] -= dm;
+                    }
+                }
+            }
+            // Newton–Euler
+            let speed_before = st.v.norm();
+            let v_old = st.v;
+            acc_prev = f / m;
+            st.v += f * (h / m);
+            let mb = r.transpose() * mom;
+            let i = self.inertia;
+            let w0 = st.w;
+            let mut w1 = w0 + (mb - w0.cross(&w0.component_mul(&i))).component_div(&i) * h;
+            if !self.isotropic {
+                for _ in 0..3 {
+                    let wm = (w0 + w1) * 0.5;
+                    w1 = w0 + (mb - wm.cross(&wm.component_mul(&i))).component_div(&i) * h;
+                }
+            }
+            wacc_prev = r * ((w1 - w0) / h);
+            st.w = w1;
+            // Dissipation is booked with the step's mean velocities, the ones whose product
+            // with a force gives the leapfrog's kinetic-energy change, so the account closes
+            // to the scheme's O(Δt²) once the springs have relaxed.
+            let v_bar = (v_old + st.v) * 0.5;
+            let w_bar = r * ((w0 + w1) * 0.5);
+            damping -= (v_bar.dot(&f_damp) + w_bar.dot(&m_damp)) * h;
+            friction -= (v_bar.dot(&f_slip) + w_bar.dot(&m_slip)) * h + es_slip;
+            st.c += st.v * h;
+            st.q = UnitQuaternion::new_normalize(
+                (st.q * UnitQuaternion::from_scaled_axis(st.w * h)).into_inner(),
+            );
+            st.t += h;
+            steps += 1;
+            if !st.c.iter().chain(st.v.iter()).all(|x| x.is_finite()) {
+                return Err(PhysicsError::Numerical(format!(
+                    "the block's state became non-finite at t = {:.6} s",
+                    st.t
+                )));
+            }
+            // episodes and events
+            let in_contact = !geos.is_empty();
+            if in_contact {
+                if !had_contact || st.t - last_contact_t > self.gap {
+                    // a new impact (the previous episode, if any, is closed below)
+                    if let Some(ep) = episode.take() {
+                        self.close_episode(ep, true, &mut evs, events);
+                    }
+                    impacts += 1;
+                    first_impact_done = true;
+                    episode = Some(Episode {
+                        t0: st.t - h,
+                        speed_before,
+                        diss_before: damping + friction,
+                        peak: 0.0,
+                        p: st.c,
+                        ground: false,
+                        impact: true,
+                        last_speed: st.v.norm(),
+                        last_p: st.c,
+                        last_diss: damping + friction,
+                        last_t: st.t,
+                    });
+                }
+                had_contact = true;
+                last_contact_t = st.t;
+                if let Some(ep) = episode.as_mut() {
+                    ep.peak = ep.peak.max(fn_total);
+                    ep.last_speed = st.v.norm();
+                    ep.last_p = st.c;
+                    ep.last_diss = damping + friction;
+                    ep.last_t = st.t;
+                    if !ep.ground && st.t - ep.t0 > 5.0 * self.t_contact {
+                        ep.ground = true;
+                        if slide_start.is_none() {
+                            slide_start = Some(self.mean.along(&st.c));
+                            if events {
+                                // the impact that became the ground phase
+                                evs.push(self.event(
+                                    ep.t0,
+                                    EventKind::Impact,
+                                    &ep.p,
+                                    ep.speed_before,
+                                    st.v.norm(),
+                                    damping + friction - ep.diss_before,
+                                    Some(ep.peak),
+                                ));
+                                ep.impact = false;
+                                evs.push(self.event(
+                                    st.t,
+                                    EventKind::SlideStart,
+                                    &st.c,
+                                    st.v.norm(),
+                                    st.v.norm(),
+                                    0.0,
+                                    None,
+                                ));
+                            }
+                        }
+                    }
+                }
+            } else if let Some(ep) = episode.as_ref()
+                && st.t - last_contact_t > self.gap
+            {
+                let ep = *ep;
+                episode = None;
+                self.close_episode(ep, true, &mut evs, events);
+            }
+            if !in_contact && first_impact_done {
+                max_bounce = max_bounce.max(self.height_of_centre(&st.c));
+            }
+            // lower end
+            let along = self.mean.along(&st.c);
+            if along >= self.length {
+                let frac = if along > prev_along {
+                    (along - self.length) / (along - prev_along)
+                } else {
+                    0.0
+                };
+                st.t -= frac * dt;
+                st.c -= st.v * (frac * dt);
+                reason = StopReason::LowerEnd;
+                break;
+            }
+            prev_along = along;
+            // at rest
+            let still = st.v.norm() < REST_SPEED_M_S
+                && st.w.norm() * self.shape.r_max < REST_SPEED_M_S
+                && in_contact;
+            if still {
+                let since = *still_since.get_or_insert(st.t);
+                if st.t - since >= REST_TIME_S {
+                    reason = StopReason::AtRest;
+                    break;
+                }
+            } else {
+                still_since = None;
+            }
+        }
+        if let Some(ep) = episode.take()
+            && ep.impact
+        {
+            self.close_episode(ep, false, &mut evs, events);
+        }
+        let in_contact = !springs.is_empty();
+        let phase = match reason {
+            StopReason::AtRest => Phase::Stopped,
+            _ if !in_contact => Phase::Flight,
+            _ if slip_max < 1e-3 * st.v.norm() => Phase::Roll,
+            _ => Phase::Slide,
+        };
+        let stop_along = (reason == StopReason::AtRest).then(|| self.mean.along(&st.c));
+        if events && reason == StopReason::AtRest {
+            evs.push(self.event(st.t, EventKind::Stop, &st.c, st.v.norm(), 0.0, 0.0, None));
+        }
+        if let Some(r) = rec.as_mut()
+            && r.tr.time.last().is_none_or(|&t| t < st.t)
+        {
+            self.sample(r, &st, damping + friction, stored)?;
+        }
+        Ok(RunOut {
+            st,
+            reason,
+            phase,
+            impacts,
+            slide_start,
+            stop_along,
+            max_bounce,
+            damping,
+            friction,
+            stored,
+            e_start,
+            steps,
+            max_overlap,
+            events: evs,
+            trajectory: rec.map(|r| r.tr),
+        })
+    }
+
+    fn normal_energy(&self, u: f64) -> f64 {
+        match self.hertz {
+            None => 0.5 * self.kn * u * u,
+            Some(h) => 0.4 * h.k * u * u * u.sqrt(),
+        }
+    }
+
+    /// Free flight over τ: the parabola and the torque-free rotation.
+    fn fly(&self, st: &State, tau: f64) -> State {
+        let (q, w) = self.free_rotation(st.q, st.w, tau);
+        let gv = Vector3::new(0.0, 0.0, -self.g);
+        State {
+            t: st.t + tau,
+            c: st.c + st.v * tau + gv * (0.5 * tau * tau),
+            v: st.v + gv * tau,
+            q,
+            w,
+        }
+    }
+
+    /// First time in (0, τ] at which the centre's along-dip position reaches the face length.
+    fn along_cross(&self, st: &State, tau: f64) -> Option<f64> {
+        let d = self.mean.dip_dir();
+        let s0 = self.mean.along(&st.c) - self.length;
+        let b = d.dot(&st.v);
+        let a = -self.g * d.z; // d²s/dt² = g sin θ
+        super::terrain::outward_root(s0, b, a).filter(|&t| t <= tau)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn event(
+        &self,
+        t: f64,
+        kind: EventKind,
+        p: &Vector3<f64>,
+        before: f64,
+        after: f64,
+        lost: f64,
+        peak: Option<f64>,
+    ) -> Event {
+        Event {
+            time: t,
+            kind,
+            position: v3(p),
+            along_dip: self.mean.along(p),
+            speed_before: before,
+            speed_after: after,
+            energy_lost: lost,
+            peak_contact_force: peak,
+        }
+    }
+
+    /// Reports an episode's impact (speed after = at its last contact) and, when a ground
+    /// phase ends by separation, the take-off.
+    fn close_episode(&self, ep: Episode, separated: bool, evs: &mut Vec<Event>, events: bool) {
+        if !events {
+            return;
+        }
+        if ep.impact {
+            evs.push(self.event(
+                ep.t0,
+                EventKind::Impact,
+                &ep.p,
+                ep.speed_before,
+                ep.last_speed,
+                ep.last_diss - ep.diss_before,
+                Some(ep.peak),
+            ));
+        }
+        if ep.ground && separated {
+            evs.push(self.event(
+                ep.last_t,
+                EventKind::TakeOff,
+                &ep.last_p,
+                ep.last_speed,
+                ep.last_speed,
+                0.0,
+                None,
+            ));
+        }
+    }
+
+    fn sample(&self, r: &mut Recorder, st: &State, diss: f64, _stored: f64) -> PhysicsResult<()> {
+        if r.tr.time.len() >= r.max {
+            return Err(PhysicsError::invalid(
+                "/output/sample_interval_s",
+                r.interval,
+                format!("the trajectory would need more than {} samples", r.max),
+            ));
+        }
+        let (kt, kr, pe) = self.energy(st);
+        let w = st.q * st.w;
+        let tr = &mut r.tr;
+        tr.time.push(st.t);
+        tr.position.push(v3(&st.c));
+        tr.along_dip.push(self.mean.along(&st.c));
+        tr.height.push(self.height_of_centre(&st.c).max(0.0));
+        tr.velocity.push(v3(&st.v));
+        tr.speed.push(st.v.norm());
+        tr.angular_velocity.push(v3(&w));
+        tr.orientation.push([st.q.w, st.q.i, st.q.j, st.q.k]);
+        tr.kinetic_energy.push(kt + kr);
+        tr.rotational_energy.push(kr);
+        tr.potential_energy.push(pe);
+        tr.dissipated_energy.push(diss);
+        Ok(())
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Episode {
+    t0: f64,
+    speed_before: f64,
+    diss_before: f64,
+    peak: f64,
+    p: Vector3<f64>,
+    /// The contact lasted long enough to be the ground phase.
+    ground: bool,
+    /// The episode began with an impact that is still to be reported.
+    impact: bool,
+    /// Speed at the last step in contact, m/s.
+    last_speed: f64,
+    /// Centre at the last step in contact.
+    last_p: Vector3<f64>,
+    /// Energy dissipated by the last step in contact, J.
+    last_diss: f64,
+    /// Time of the last step in contact, s.
+    last_t: f64,
+}
+
+/// Depth inside the block and nearest face of a point, or None outside.
+type InsideFn<'a> = dyn Fn(&Vector3<f64>) -> Option<(f64, usize)> + 'a;
+
+/// Edge–edge contact of block edge (qa, qb) with floor crease (pa, pb): the common
+/// perpendicular when both closest points are interior, the floor point inside the block and
+/// the normal inside both edges' normal cones (`cones`: the crease's two facet normals, then
+/// the block edge's two face normals).
+fn edge_contact(
+    qa: &Vector3<f64>,
+    qb: &Vector3<f64>,
+    pa: &Vector3<f64>,
+    pb: &Vector3<f64>,
+    cones: &[Vector3<f64>; 4],
+    inside: &InsideFn<'_>,
+) -> Option<Geo> {
+    let [n1, n2, b1, b2] = *cones;
+    let up = n1 + n2;
+    let d1 = qb - qa;
+    let d2 = pb - pa;
+    let mut n = d1.cross(&d2);
+    let nn = n.norm();
+    if nn <= 1e-9 * d1.norm() * d2.norm() {
+        return None;
+    }
+    n /= nn;
+    if n.dot(&up) < 0.0 {
+        n = -n;
+    }
+    // A genuine edge–edge contact pushes along a normal in both edges' normal cones: between
+    // the crease's two facet normals, and (reversed) between the block edge's two face normals.
+    let between = |a: &Vector3<f64>, b: &Vector3<f64>, x: &Vector3<f64>| {
+        let s = a.cross(b);
+        a.cross(x).dot(&s) >= 0.0 && x.cross(b).dot(&s) >= 0.0
+    };
+    if !between(&n1, &n2, &n) || !between(&b1, &b2, &(-n)) {
+        return None;
+    }
+    // closest points
+    let r = qa - pa;
+    let (a, e, f) = (d1.dot(&d1), d2.dot(&d2), d2.dot(&r));
+    let (b, c) = (d1.dot(&d2), d1.dot(&r));
+    let den = a * e - b * b;
+    if den <= 0.0 {
+        return None;
+    }
+    let s = (b * f - c * e) / den;
+    let t = (a * f - b * c) / den;
+    if !(s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0) {
+        return None;
+    }
+    let p_block = qa + d1 * s;
+    let p_floor = pa + d2 * t;
+    let depth = (p_floor - p_block).dot(&n);
+    if depth <= 0.0 {
+        return None;
+    }
+    inside(&p_floor)?;
+    Some(Geo {
+        key: 0,
+        p: p_block,
+        n,
+        u: depth,
+    })
+}
+
+/// Runs a rigid-block case: the nominal run and, when asked, the Monte Carlo ensemble.
+pub(crate) fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationResult> {
+    let pr = super::prepare(case)?;
+    let model = Model::new(case, &pr)?;
+    let o = &case.rigid_block;
+    let mu = case.face.friction_coefficient;
+    let est = model.estimated_steps(case, mu);
+    if est > o.max_steps {
+        return Err(PhysicsError::TooManySteps {
+            estimated: est,
+            limit: o.max_steps,
+        });
+    }
+    let out = model.simulate(
+        mu,
+        o.critical_damping_ratio,
+        case.output
+            .trajectory
+            .then_some((case.output.sample_interval, case.output.max_samples)),
+        case.output.events,
+        Some(control),
+    )?;
+    let m = model.m;
+    let st = &out.st;
+    let (kt, kr, pe) = model.energy(st);
+    let mean = model.mean;
+    let w = st.q * st.w;
+    let arrival = Arrival {
+        phase: out.phase,
+        stop_reason: out.reason,
+        time: st.t,
+        speed: st.v.norm(),
+        along_dip_velocity: st.v.dot(&mean.dip_dir()),
+        normal_velocity: st.v.dot(&mean.normal()),
+        along_dip: mean.along(&st.c),
+        normal_offset: model.height_of_centre(&st.c),
+        position: v3(&st.c),
+        angular_speed: w.norm(),
+        kinetic_energy: kt + kr,
+        rotational_energy: kr,
+    };
+    let residual = kt + kr + pe + out.stored + out.damping + out.friction - out.e_start;
+    let mut warnings = Vec::new();
+    let (statistics, runs) = match &case.monte_carlo {
+        Some(mc) => {
+            let runs = ensemble(case, &model, mc, control)?;
+            let st = super::statistics_of(mc, &runs);
+            if st.speed.is_none() {
+                warnings.push(Warning {
+                    code: "no_run_reached_lower_end",
+                    message: "no run reached the lower end: speed, kinetic energy and time \
+                              statistics are null"
+                        .into(),
+                });
+            }
+            (Some(st), case.output.runs_csv.then_some(runs))
+        }
+        None => {
+            control.set_total(1);
+            control.add_done(1);
+            (None, None)
+        }
+    };
+    let _ = m;
+    Ok(MigrationResult {
+        method: case.method,
+        mass: model.m,
+        arrival,
+        impact_count: out.impacts,
+        slide_start_along_dip: out.slide_start,
+        stop_along_dip: out.stop_along,
+        max_bounce_height: out.max_bounce,
+        energy: EnergyBudget {
+            total_start: out.e_start,
+            impacts: 0.0,
+            friction: out.friction,
+            transition: 0.0,
+            damping: out.damping,
+            stored: out.stored,
+            residual,
+        },
+        events: case.output.events.then_some(out.events),
+        trajectory: out.trajectory,
+        runs_csv: runs.as_deref().map(super::runs_csv),
+        runs,
+        statistics,
+        warnings,
+        rigid_block: Some(model.report(out.steps, out.max_overlap)),
+    })
+}
+
+fn ensemble(
+    case: &MigrationCase,
+    model: &Model<'_>,
+    mc: &MonteCarlo,
+    control: &Control,
+) -> PhysicsResult<Vec<RunSummary>> {
+    const CHUNK: usize = 16;
+    let n = mc.runs;
+    control.set_total(n);
+    let o = &case.rigid_block;
+    let release_along = model.mean.along(&model.c0);
+    let one = |i: u64| -> PhysicsResult<RunSummary> {
+        let mut rng = monte_carlo::run_stream(mc.seed, i);
+        let mu = match &mc.friction_coefficient {
+            Some(d) => monte_carlo::sample(d, &mut rng).max(0.0),
+            None => case.face.friction_coefficient,
+        };
+        let beta = match &o.critical_damping_ratio_distribution {
+            Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, 0.999),
+            None => o.critical_damping_ratio,
+        };
+        let r = model.simulate(mu, beta, None, false, Some(control))?;
+        let (kt, kr, _) = model.energy(&r.st);
+        Ok(RunSummary {
+            time: r.st.t,
+            speed: r.st.v.norm(),
+            kinetic_energy: kt + kr,
+            impact_count: r.impacts,
+            runout: model.mean.along(&r.st.c) - release_along,
+            max_bounce_height: r.max_bounce,
+            stop_reason: r.reason,
+            steps: r.steps,
+        })
+    };
+    let blank = RunSummary {
+        time: 0.0,
+        speed: 0.0,
+        kinetic_energy: 0.0,
+        impact_count: 0,
+        runout: 0.0,
+        max_bounce_height: 0.0,
+        stop_reason: StopReason::AtRest,
+        steps: 0,
+    };
+    let mut all = vec![blank; n as usize];
+    let chunks: Vec<PhysicsResult<()>> = all
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .map(|(c, out)| {
+            control.check()?;
+            let start = (c * CHUNK) as u64;
+            for (i, slot) in (start..).zip(out.iter_mut()) {
+                *slot = one(i)?;
+            }
+            control.add_done(out.len() as u64);
+            Ok(())
+        })
+        .collect();
+    for c in chunks {
+        c?;
+    }
+    Ok(all)
+}

@@ -1,0 +1,492 @@
+//! Rigid-block DEM against physics.md §C.1 and §C.3: the DEM checks table (cube sliding, sphere
+//! rolling, sphere slipping with spin-up) within 2e-3 of the analytic answers, the spring–dashpot
+//! restitution of P16 (closed form and one DEM impact), the paper's full scene staying below the
+//! frictionless bound, a flat grid floor giving the plane's answer, and the energy account.
+
+use gangue::physics::Control;
+use gangue::physics::material::RockShape;
+use gangue::physics::migration::{
+    ContourLine, Distribution, EventKind, FloorSpec, Method, MigrationCase, MigrationResult,
+    MonteCarlo, Phase, StopReason, bounce_restitution, run,
+};
+use serde_json::Value;
+
+const G: f64 = 9.81;
+
+fn cases() -> Value {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/verification/cases.json");
+    serde_json::from_str(&std::fs::read_to_string(path).expect("cases.json")).unwrap()
+}
+
+fn case_by_id(id: &str) -> Value {
+    cases()["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["id"] == id)
+        .cloned()
+        .unwrap_or_else(|| panic!("no case {id}"))
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    ((a - b) / b).abs()
+}
+
+/// The rigid block on the default 45°, 120 m plane, released at rest on the floor.
+fn block() -> MigrationCase {
+    let mut c = MigrationCase {
+        method: Method::RigidBlock,
+        ..MigrationCase::default()
+    };
+    c.release.drop_height = 0.0;
+    c.output.events = true;
+    c
+}
+
+fn solve(c: &MigrationCase) -> MigrationResult {
+    run(c, &Control::unlimited()).unwrap()
+}
+
+fn slide_accel(mu: f64) -> f64 {
+    let t = 45f64.to_radians();
+    G * (t.sin() - mu * t.cos())
+}
+
+#[test]
+fn cube_slides_one_second_at_the_coulomb_acceleration() {
+    // physics.md §C.3 table: v(1 s) = 5.549374, s = a/2
+    let mut c = block();
+    c.end_time = Some(1.0);
+    let r = solve(&c);
+    let a = slide_accel(0.2);
+    assert!((a - 5.549374).abs() < 1e-6);
+    assert_eq!(r.arrival.stop_reason, StopReason::EndTime);
+    assert_eq!(r.arrival.phase, Phase::Slide);
+    assert!((r.arrival.time - 1.0).abs() < 1e-12);
+    let v = r.arrival.along_dip_velocity;
+    assert!(rel(v, a) < 2e-3, "v = {v}");
+    assert!(
+        rel(r.arrival.along_dip, 0.5 * a) < 2e-3,
+        "{}",
+        r.arrival.along_dip
+    );
+    // no rotation, no impact while sliding face-down
+    assert_eq!(r.impact_count, 0);
+    assert!(
+        r.arrival.angular_speed < 1e-6,
+        "{}",
+        r.arrival.angular_speed
+    );
+    let rb = r.rigid_block.unwrap();
+    assert!(rel(rb.mass, 67.5) < 1e-12);
+    for i in rb.principal_inertia {
+        assert!(rel(i, 67.5 * 0.09 / 6.0) < 1e-12);
+    }
+    // Δt_crit = √(I/(3 kₙ L²)) for the cube; Δt = 1/⌈1/(0.2 Δt_crit)⌉
+    let dtc = (1.0125f64 / (3.0 * 1e8 * 0.09)).sqrt();
+    assert!(rel(rb.critical_time_step, dtc) < 1e-12);
+    assert!(rel(rb.time_step, 1.0 / (1.0 / (0.2 * dtc)).ceil()) < 1e-12);
+}
+
+#[test]
+fn cube_slides_the_full_face_at_the_analytic_speed_and_time() {
+    // physics.md §C.1: from rest v_S = 36.494517 m/s, t = 6.576330 s
+    let r = solve(&block());
+    assert_eq!(r.arrival.stop_reason, StopReason::LowerEnd);
+    assert!(
+        rel(r.arrival.along_dip_velocity, 36.494517) < 2e-3,
+        "{:?}",
+        r.arrival
+    );
+    assert!(rel(r.arrival.time, 6.576330) < 2e-3, "{:?}", r.arrival);
+    assert!((r.arrival.along_dip - 120.0).abs() < 1e-6);
+    // friction work μ m g cos θ S and the account
+    let wf = 0.2 * 67.5 * G * 45f64.to_radians().cos() * 120.0;
+    assert!(
+        rel(r.energy.friction, wf) < 2e-3,
+        "{} vs {wf}",
+        r.energy.friction
+    );
+    assert!(
+        r.energy.residual.abs() < 1e-4 * r.energy.total_start,
+        "{:?}",
+        r.energy
+    );
+}
+
+fn sphere(mu: f64) -> MigrationCase {
+    let mut c = block();
+    c.rock.shape = RockShape::Sphere { radius: 0.15 };
+    c.face.friction_coefficient = mu;
+    c.end_time = Some(1.0);
+    c
+}
+
+#[test]
+fn sphere_rolls_at_five_sevenths_g_sin_theta() {
+    // μ = 0.35 ≥ (2/7) tan θ: a = (5/7) g sin θ, v(1 s) = 4.954798
+    let r = solve(&sphere(0.35));
+    let a = 5.0 / 7.0 * G * 45f64.to_radians().sin();
+    assert!((a - 4.954798).abs() < 1e-6);
+    assert!(
+        rel(r.arrival.along_dip_velocity, a) < 2e-3,
+        "{:?}",
+        r.arrival
+    );
+    assert!(
+        rel(r.arrival.angular_speed, a / 0.15) < 2e-3,
+        "{:?}",
+        r.arrival
+    );
+    assert_eq!(r.arrival.phase, Phase::Roll);
+}
+
+#[test]
+fn sphere_slips_and_spins_up_with_low_friction() {
+    // μ = 0.2 < (2/7) tan θ: v = g(sin θ − μ cos θ) t, ω = 5 μ g cos θ t/(2 r)
+    let r = solve(&sphere(0.2));
+    let w = 5.0 * 0.2 * G * 45f64.to_radians().cos() / (2.0 * 0.15);
+    assert!((w - 23.1224).abs() < 1e-3);
+    assert!(
+        rel(r.arrival.along_dip_velocity, slide_accel(0.2)) < 2e-3,
+        "{:?}",
+        r.arrival
+    );
+    assert!(rel(r.arrival.angular_speed, w) < 2e-3, "{:?}", r.arrival);
+    assert_eq!(r.arrival.phase, Phase::Slide);
+}
+
+#[test]
+fn p16_spring_dashpot_restitution_closed_form() {
+    let c = case_by_id("P16_bounce_restitution");
+    let inp = &c["input"];
+    let e = &c["expected"];
+    let (m, k, beta) = (
+        inp["mass"].as_f64().unwrap(),
+        inp["kn"].as_f64().unwrap(),
+        inp["beta"].as_f64().unwrap(),
+    );
+    let (e0, t0) = bounce_restitution(m, k, beta, false);
+    let (e1, _) = bounce_restitution(m, k, beta, true);
+    assert!(rel(e0, e["e_noclip"].as_f64().unwrap()) < 1e-9, "{e0}");
+    assert!(rel(e0, e["e_formula"].as_f64().unwrap()) < 1e-9);
+    assert!(
+        rel(t0, e["t_contact_formula"].as_f64().unwrap()) < 1e-9,
+        "{t0}"
+    );
+    assert!(rel(t0, e["t_contact_noclip"].as_f64().unwrap()) < 1e-7);
+    assert!(rel(e1, e["e_clip"].as_f64().unwrap()) < 1e-7, "{e1}");
+    // e = exp(−πβ/√(1−β²))
+    let ef = (-std::f64::consts::PI * beta / (1.0 - beta * beta).sqrt()).exp();
+    assert!(rel(e0, ef) < 1e-12);
+}
+
+#[test]
+fn p16_one_dem_impact_has_the_clipped_restitution() {
+    // A frictionless sphere (one contact, contact mass = its mass) under weak gravity strikes
+    // the 45° plane: its normal rebound is e_clip times its normal approach speed.
+    let mut c = sphere(0.0);
+    let g = 0.1;
+    c.gravity = g;
+    c.release.drop_height = 100.0;
+    c.rock.shape = RockShape::Sphere { radius: 0.1 };
+    c.rock.density = 67.5 / (4.0 / 3.0 * std::f64::consts::PI * 1e-3);
+    let t_fall = (2.0 * 100.0 / g).sqrt();
+    c.end_time = Some(t_fall + 0.02);
+    let th = 45f64.to_radians();
+    let vn0 = (2.0 * g * 100.0).sqrt() * th.cos();
+    let (e, tc) = bounce_restitution(67.5, 1e8, 0.35, true);
+    // second order in Δt: 5e-3 at the default safety 0.2, 4e-4 at 0.05
+    for (safety, tol) in [(0.2, 6e-3), (0.05, 1e-3)] {
+        c.rigid_block.time_step_safety = safety;
+        let r = solve(&c);
+        let ev = r.events.as_ref().unwrap();
+        let imp = ev.iter().find(|e| e.kind == EventKind::Impact).unwrap();
+        assert!(rel(imp.speed_before, (2.0 * g * 100.0).sqrt()) < 1e-4);
+        // back out the gravity acting since separation
+        let t_sep = imp.time + tc;
+        let vn = r.arrival.normal_velocity + g * th.cos() * (r.arrival.time - t_sep);
+        assert_eq!(r.impact_count, 1);
+        assert!(
+            rel(vn, e * vn0) < tol,
+            "safety {safety}: {vn} vs {}",
+            e * vn0
+        );
+    }
+    let r = solve(&c);
+    let imp = r.events.as_ref().unwrap()[0].clone();
+    // peak force of the clipped law: between k x_max·e^… bounds; at least m v ω e^{-…}
+    let peak = imp.peak_contact_force.unwrap();
+    assert!(peak > 0.5 * vn0 * (67.5f64 * 1e8).sqrt() && peak < 1.5 * vn0 * (67.5f64 * 1e8).sqrt());
+}
+
+#[test]
+fn paper_scene_arrives_below_the_frictionless_bound() {
+    // 0.3 m cube dropped 3.27 m on the 45°, 120 m face: √(2g(h + S sin θ)) = 41.6 m/s bounds
+    // the speed; once it slides it follows the Coulomb slide to the lower end.
+    let mut c = block();
+    c.release.drop_height = 3.27;
+    c.output.trajectory = true;
+    c.output.sample_interval = 0.05;
+    let r = solve(&c);
+    let th = 45f64.to_radians();
+    let bound = (2.0 * G * (3.27 + 120.0 * th.sin())).sqrt();
+    assert!((bound - 41.6).abs() < 0.05);
+    assert_eq!(r.arrival.stop_reason, StopReason::LowerEnd);
+    assert!(r.arrival.speed < bound, "{:?}", r.arrival);
+    assert!(r.impact_count >= 1);
+    let x_s = r.slide_start_along_dip.expect("it slides");
+    // the slide from x_s at the speed it had there
+    let tr = r.trajectory.as_ref().unwrap();
+    let k = tr.along_dip.iter().position(|&s| s >= x_s + 5.0).unwrap();
+    let (s_k, v_k) = (tr.along_dip[k], tr.velocity[k]);
+    let vk = v_k[0] * th.cos() - v_k[2] * th.sin();
+    let v_slide = (vk * vk + 2.0 * slide_accel(0.2) * (120.0 - s_k)).sqrt();
+    assert!(
+        rel(r.arrival.along_dip_velocity, v_slide) < 2e-3,
+        "{} vs {v_slide}",
+        r.arrival.along_dip_velocity
+    );
+    // energy: nothing created, account closed
+    let e = &r.energy;
+    assert!(e.damping > 0.0 && e.friction > 0.0 && e.stored >= 0.0);
+    assert!(e.residual.abs() < 1e-3 * e.total_start, "{e:?}");
+    assert!(tr.orientation.len() == tr.time.len());
+    eprintln!(
+        "paper scene: v = {:.6} m/s, t = {:.6} s, impacts {}, slide from {:.4} m, steps {}",
+        r.arrival.speed,
+        r.arrival.time,
+        r.impact_count,
+        x_s,
+        r.rigid_block.unwrap().steps
+    );
+}
+
+fn plane_grid(spacing: f64, nx: usize, ny: usize) -> FloorSpec {
+    let t = 45f64.to_radians().tan();
+    let y0 = -(ny as f64 - 1.0) * spacing / 2.0;
+    FloorSpec::Grid {
+        origin: [0.0, y0],
+        spacing,
+        heights: (0..ny)
+            .map(|_| (0..nx).map(|j| -(j as f64) * spacing * t).collect())
+            .collect(),
+    }
+}
+
+#[test]
+fn flat_grid_and_contour_floors_give_the_planes_answer() {
+    let mut c = block();
+    c.end_time = Some(1.0);
+    c.face.length = 20.0;
+    c.release.along_dip = 1.0;
+    let p = solve(&c);
+    // 0.25 m cells: the cube's vertices cross facets and keep their springs
+    c.face.floor = plane_grid(0.25, 60, 9);
+    let g = solve(&c);
+    assert!(
+        rel(g.arrival.along_dip_velocity, p.arrival.along_dip_velocity) < 1e-6,
+        "{:?} vs {:?}",
+        g.arrival,
+        p.arrival
+    );
+    assert!(rel(g.arrival.along_dip, p.arrival.along_dip) < 1e-6);
+    assert!(g.arrival.angular_speed < 1e-4);
+    // contour lines of the plane, Delaunay-triangulated: a flat mesh as well
+    let t = 45f64.to_radians().tan();
+    c.face.floor = FloorSpec::Contours {
+        contours: (0..=16)
+            .map(|k| ContourLine {
+                elevation: -(k as f64) * t,
+                points: vec![[k as f64, -2.0], [k as f64, 2.0]],
+            })
+            .collect(),
+        resolution: 0.5,
+    };
+    let m = solve(&c);
+    assert!(
+        rel(m.arrival.along_dip_velocity, p.arrival.along_dip_velocity) < 1e-6,
+        "{:?} vs {:?}",
+        m.arrival,
+        p.arrival
+    );
+    assert!(rel(m.arrival.along_dip, p.arrival.along_dip) < 1e-6);
+    // dropped from 1 m with bounces
+    c.end_time = Some(2.0);
+    c.release.drop_height = 1.0;
+    c.face.floor = FloorSpec::Plane;
+    let p = solve(&c);
+    c.face.floor = plane_grid(0.5, 40, 9);
+    let g = solve(&c);
+    assert_eq!(g.impact_count, p.impact_count);
+    assert!(
+        rel(g.arrival.speed, p.arrival.speed) < 1e-4,
+        "{:?} vs {:?}",
+        g.arrival,
+        p.arrival
+    );
+}
+
+#[test]
+fn monte_carlo_over_friction_and_damping_is_bit_identical_across_threads() {
+    let mut c = block();
+    c.face.length = 5.0;
+    c.release.drop_height = 0.5;
+    c.output.events = false;
+    c.monte_carlo = Some(MonteCarlo {
+        runs: 24,
+        seed: 9,
+        friction_coefficient: Some(Distribution::Uniform {
+            min: 0.15,
+            max: 0.3,
+        }),
+        ..MonteCarlo::default()
+    });
+    c.rigid_block.critical_damping_ratio_distribution =
+        Some(Distribution::Uniform { min: 0.2, max: 0.5 });
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let a = one.install(|| solve(&c));
+    let b = two.install(|| solve(&c));
+    assert_eq!(a.statistics, b.statistics);
+    let s = a.statistics.unwrap();
+    assert_eq!(s.runs, 24);
+    assert!(s.reached_fraction > 0.0);
+    // a slower ensemble than the frictionless bound, faster than the slowest slide
+    let sp = s.speed.unwrap();
+    let th = 45f64.to_radians();
+    assert!(sp.max < (2.0 * G * (0.5 + 5.0 * th.sin())).sqrt());
+    assert!(sp.std.unwrap() > 0.0);
+}
+
+mod common;
+
+#[tokio::test]
+async fn rigid_block_over_http_reports_its_block_and_refuses_bad_input() {
+    use serde_json::json;
+    let app = common::app();
+    // the tetrahedron (0,0,0), (1,0,0), (0,1,0), (0,0,1) m: V = 1/6 m³
+    let r = common::post(
+        &app,
+        "/v1/migration",
+        &json!({"method": "rigid_block", "face": {"length_m": 2},
+                "rock": {"shape": "polyhedron", "density_kg_m3": 600,
+                         "vertices_m": [[0,0,0],[0.3,0,0],[0,0.3,0],[0,0,0.3]]},
+                "release": {"drop_height_m": 0.2}, "output": {"trajectory": true}}),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    assert_eq!(b["method"], "rigid_block");
+    let m = 600.0 * 0.027 / 6.0;
+    assert!(common::rel(b["rigid_block"]["mass_kg"].as_f64().unwrap(), m) < 1e-12);
+    assert!(common::rel(b["mass_kg"].as_f64().unwrap(), m) < 1e-12);
+    assert!(b["energy"]["stored_j"].is_number());
+    assert!(
+        b["trajectory"]["orientation_wxyz"]
+            .as_array()
+            .unwrap()
+            .len()
+            > 1
+    );
+    let imp = &b["events"].as_array().unwrap()[0];
+    assert_eq!(imp["kind"], "impact");
+    assert!(imp["peak_contact_force_n"].as_f64().unwrap() > 0.0);
+    common::assert_rejections(
+        &app,
+        "/v1/migration",
+        vec![
+            (
+                json!({"method": "rigid_block", "rigid_block": {"time_step_s": 1e-3}}),
+                "/rigid_block/time_step_s",
+                "invalid_input",
+            ),
+            (
+                json!({"method": "rigid_block", "face": {"normal_stiffness_n_m": 1e3}}),
+                "/face/normal_stiffness_n_m",
+                "invalid_input",
+            ),
+            (
+                json!({"method": "rigid_block", "monte_carlo": {"restitution_normal": {"min": 0.1, "max": 0.2}}}),
+                "/monte_carlo/restitution_normal",
+                "invalid_input",
+            ),
+            (
+                json!({"monte_carlo": {"critical_damping_ratio": {"min": 0.1, "max": 0.2}}}),
+                "/monte_carlo/critical_damping_ratio",
+                "invalid_input",
+            ),
+            (
+                json!({"method": "rigid_block", "rock": {"shape": "polyhedron", "vertices_m": [[0,0,0],[1,0,0],[0,1,0],[1,1,0]]}}),
+                "/rock/vertices_m",
+                "invalid_input",
+            ),
+        ],
+    )
+    .await;
+    // a stiff contact down a long face: the estimate is over the limit
+    let r = common::post(
+        &app,
+        "/v1/migration",
+        &json!({"method": "rigid_block", "face": {"length_m": 10000, "normal_stiffness_n_m": 1e12}}),
+    )
+    .await;
+    let p = common::assert_problem(&r, 422, "too_many_steps");
+    assert!(p["estimated_steps"].as_f64().unwrap() > 2e7, "{p}");
+}
+
+/// The 45° plane as a grid (spacing d, across |y| ≤ 1 m) with node heights raised by `bump(i, j)`.
+fn bumpy_grid(d: f64, nx: usize, bump: impl Fn(usize, usize) -> f64) -> FloorSpec {
+    let t = 45f64.to_radians().tan();
+    let ny = (2.0 / d).round() as usize + 1;
+    FloorSpec::Grid {
+        origin: [0.0, -1.0],
+        spacing: d,
+        heights: (0..ny)
+            .map(|i| (0..nx).map(|j| -(j as f64) * d * t + bump(i, j)).collect())
+            .collect(),
+    }
+}
+
+#[test]
+fn a_floor_spike_and_a_ridge_lift_the_block_instead_of_piercing_it() {
+    // A 2 cm spike (one raised node: face–vertex contacts) and a 2 cm ridge across the slope
+    // (a row of raised nodes: edge–edge contacts on its convex creases) under the sliding
+    // cube's path. The block must ride over them: no contact deeper than a few millimetres
+    // (a 1 cm-deep pierce would mean the floor feature passed through the block's face), and
+    // the energy account closes.
+    let d = 0.1;
+    let nx = 80;
+    let (ji, ii) = (25usize, 10usize); // x = 2.5 m, y = 0
+    for (name, floor) in [
+        (
+            "spike",
+            bumpy_grid(d, nx, |i, j| if i == ii && j == ji { 0.02 } else { 0.0 }),
+        ),
+        (
+            "ridge",
+            bumpy_grid(d, nx, |_, j| if j == ji { 0.02 } else { 0.0 }),
+        ),
+    ] {
+        let mut c = block();
+        c.face.length = 8.0;
+        c.release.along_dip = 1.0;
+        c.end_time = Some(1.2);
+        c.face.floor = floor;
+        let r = solve(&c);
+        let rb = r.rigid_block.unwrap();
+        assert!(rb.max_overlap < 3e-3, "{name}: overlap {}", rb.max_overlap);
+        // it passed the feature (x = 2.5 m is along ≈ 3.54 m)
+        assert!(r.arrival.along_dip > 3.8, "{name}: {:?}", r.arrival);
+        let e = &r.energy;
+        assert!(e.residual.abs() < 2e-2 * 67.5 * G * 3.0, "{name}: {e:?}");
+        assert!(e.damping >= 0.0 && e.friction > 0.0, "{name}: {e:?}");
+    }
+}
