@@ -1,6 +1,7 @@
 //! Server settings and limits: one struct, documented defaults, settable by flags or environment.
 
 use std::net::SocketAddr;
+use std::time::Duration;
 
 use clap::Parser;
 
@@ -20,9 +21,31 @@ pub struct Config {
     #[arg(long, env = "GANGUE_SOLVER_THREADS")]
     pub solver_threads: Option<usize>,
 
-    /// Computations allowed at once; more get 503 with Retry-After (default 2 × cores, at least 4).
+    /// Computations (solver slots) at once; more queue for a slot (default 2 × cores, at least 4).
     #[arg(long, env = "GANGUE_MAX_CONCURRENT")]
     pub max_concurrent: Option<usize>,
+
+    /// Longest expected queue wait for a solver slot, ms (default 100); past it 503 + Retry-After.
+    /// Expected wait = mean recent solve time × (queued + 1) / slots; a queued request waits at
+    /// most twice this.
+    #[arg(long, env = "GANGUE_MAX_QUEUE_WAIT_MS", default_value_t = 100.0)]
+    pub max_queue_wait_ms: f64,
+
+    /// Time to receive a request's head, s (default 10); also the idle keep-alive timeout (from
+    /// the end of one answer to the head of the next). Past it the connection is closed.
+    #[arg(long, env = "GANGUE_HEADER_TIMEOUT_S", default_value_t = 10.0)]
+    pub header_timeout_s: f64,
+
+    /// Time to receive a request's whole body once its head is in, s (default 30); past it 408.
+    #[arg(long, env = "GANGUE_BODY_TIMEOUT_S", default_value_t = 30.0)]
+    pub body_timeout_s: f64,
+
+    /// Request body bytes held at once across all requests (default 4 × the body limit); a body
+    /// is admitted against it by its declared length (the body limit when not declared) before it
+    /// is read and released when the answer is done; a body that cannot be admitted within twice
+    /// the longest queue wait gets 503 + Retry-After.
+    #[arg(long, env = "GANGUE_BODY_BUDGET_BYTES")]
+    pub body_budget_bytes: Option<usize>,
 
     /// Largest request body, bytes (default 16 MiB).
     #[arg(long, env = "GANGUE_MAX_BODY_BYTES", default_value_t = 16 * 1024 * 1024)]
@@ -84,6 +107,28 @@ impl Config {
             .max(1)
     }
 
+    /// Longest expected queue wait admitted (`max_queue_wait_ms`).
+    pub fn max_queue_wait(&self) -> Duration {
+        Duration::from_secs_f64(self.max_queue_wait_ms / 1e3)
+    }
+
+    /// Time to receive a request head, also the idle keep-alive timeout.
+    pub fn header_timeout(&self) -> Duration {
+        Duration::from_secs_f64(self.header_timeout_s)
+    }
+
+    /// Time to receive a request body.
+    pub fn body_timeout(&self) -> Duration {
+        Duration::from_secs_f64(self.body_timeout_s)
+    }
+
+    /// Request body bytes held at once: the setting, or 4 × the body limit (at least the limit).
+    pub fn body_budget_bytes(&self) -> usize {
+        self.body_budget_bytes
+            .unwrap_or(self.max_body_bytes.saturating_mul(4))
+            .max(self.max_body_bytes)
+    }
+
     /// Checks the settings for values that cannot work; the message names the flag.
     pub fn validate(&self) -> Result<(), String> {
         if !(self.compute_timeout_s.is_finite() && self.compute_timeout_s > 0.0) {
@@ -97,6 +142,15 @@ impl Config {
         }
         if !(self.max_rigid_steps.is_finite() && self.max_rigid_steps >= 1.0) {
             return Err("--max-rigid-steps must be at least 1".into());
+        }
+        for (flag, v, max) in [
+            ("--max-queue-wait-ms", self.max_queue_wait_ms, 3.6e6),
+            ("--header-timeout-s", self.header_timeout_s, 3600.0),
+            ("--body-timeout-s", self.body_timeout_s, 3600.0),
+        ] {
+            if !(v.is_finite() && v > 0.0 && v <= max) {
+                return Err(format!("{flag} must be in (0, {max}], got {v}"));
+            }
         }
         if self.max_body_bytes < 1024 {
             return Err("--max-body-bytes must be at least 1024".into());
@@ -124,6 +178,10 @@ mod tests {
         assert_eq!(c.max_study_points, 101);
         assert_eq!(c.max_batch_items, 1000);
         assert_eq!(c.max_rigid_steps, 2e7);
+        assert_eq!(c.max_queue_wait(), Duration::from_millis(100));
+        assert_eq!(c.header_timeout(), Duration::from_secs(10));
+        assert_eq!(c.body_timeout(), Duration::from_secs(30));
+        assert_eq!(c.body_budget_bytes(), 64 * 1024 * 1024);
         assert!(c.validate().is_ok());
     }
 
@@ -138,5 +196,13 @@ mod tests {
         ]);
         assert_eq!(c.bind.port(), 9000);
         assert!(c.validate().unwrap_err().contains("--compute-timeout-s"));
+        for flag in [
+            "--max-queue-wait-ms",
+            "--header-timeout-s",
+            "--body-timeout-s",
+        ] {
+            let c = Config::parse_from(["gangue", flag, "0"]);
+            assert!(c.validate().unwrap_err().contains(flag), "{flag}");
+        }
     }
 }

@@ -27,11 +27,7 @@ async fn main() -> std::process::ExitCode {
     };
     let addr = listener.local_addr().map_or(config.bind, |a| a);
     tracing::info!(%addr, "gangue listening: page at http://{addr}/, API docs at http://{addr}/docs");
-    let app = gangue::http::app(config);
-    if let Err(e) = axum::serve(listener, app)
-        .with_graceful_shutdown(shutdown())
-        .await
-    {
+    if let Err(e) = gangue::http::server::serve(listener, config, shutdown()).await {
         eprintln!("gangue: server error: {e}");
         return std::process::ExitCode::from(1);
     }

@@ -282,6 +282,10 @@ async fn every_problem_the_service_produces_matches_the_openapi_problem_schema()
     .into();
     assert_matches_problem_schema(&doc, &too_many.to_problem());
     seen.insert(too_many.code().to_string());
+    // A body that does not arrive in time (needs a socket; tests/api_limits.rs sends one).
+    let slow = gangue::http::error::ApiError::new("request_timeout", "the body did not arrive");
+    assert_matches_problem_schema(&doc, &slow.to_problem());
+    seen.insert(slow.code().to_string());
     let internal = gangue::http::error::ApiError::internal("test");
     assert_matches_problem_schema(&doc, &internal.to_problem());
     seen.insert(internal.code().to_string());

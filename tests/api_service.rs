@@ -17,6 +17,10 @@ async fn health_presets_and_problem_pages() {
     assert_eq!(p["face"]["dip_deg"], 45.0);
     assert_eq!(p["limits"]["max_monte_carlo_runs"], 1_000_000);
     assert_eq!(p["limits"]["max_body_bytes"], 16 * 1024 * 1024);
+    assert_eq!(p["limits"]["max_queue_wait_ms"], 100.0);
+    assert_eq!(p["limits"]["header_timeout_s"], 10.0);
+    assert_eq!(p["limits"]["body_timeout_s"], 30.0);
+    assert_eq!(p["limits"]["body_budget_bytes"], 64 * 1024 * 1024);
     assert_eq!(p["study"]["parameters"].as_array().unwrap().len(), 4);
     for code in [
         "capacity_exceeded",
@@ -62,9 +66,10 @@ fn big_ensemble() -> serde_json::Value {
 }
 
 #[tokio::test]
-async fn saturated_slots_answer_503_with_retry_after() {
+async fn a_request_that_cannot_get_a_slot_in_time_answers_503_with_retry_after() {
     let app = gangue::app(gangue::config::Config {
         max_concurrent: Some(1),
+        max_queue_wait_ms: 5.0,
         ..Default::default()
     });
     let busy_app = app.clone();

@@ -101,6 +101,13 @@ pub const PROBLEM_TYPES: &[ProblemType] = &[
         explanation: "The path exists but not with this HTTP method.",
     },
     ProblemType {
+        code: "request_timeout",
+        status: 408,
+        title: "Request timeout",
+        explanation: "The request body did not arrive within the body timeout (see `limits` in \
+                      GET /v1/presets). Send the whole body promptly once the headers are sent.",
+    },
+    ProblemType {
         code: "overloaded",
         status: 503,
         title: "Overloaded",

@@ -1,11 +1,18 @@
 //! `AppJson<T>`: the JSON body extractor. Malformed JSON, wrong types, unknown fields, a body that
 //! is too large and a wrong media type all become problem+json, each naming the field.
 
-use axum::body::Bytes;
-use axum::extract::{FromRequest, Request};
+use std::sync::Arc;
+use std::time::Duration;
+
+use axum::body::{Body, Bytes};
+use axum::extract::{FromRequest, Request, State};
 use axum::http::{StatusCode, header};
+use axum::middleware::Next;
+use axum::response::{IntoResponse, Response};
+use http_body_util::BodyExt;
 use serde::de::{self, DeserializeOwned, IntoDeserializer, Unexpected, Visitor};
 use serde_json::Value;
+use tokio::sync::Semaphore;
 
 use super::error::{ApiError, FieldError};
 
@@ -56,6 +63,128 @@ pub async fn read_body<S: Send + Sync>(req: Request, state: &S) -> Result<Bytes,
             ApiError::new("malformed_json", format!("could not read the body: {rej}"))
         }
     })
+}
+
+/// Guards request bodies before any handler sees them: a declared `Content-Length` over the body
+/// limit is refused with 413 at once (before reading, so `Expect: 100-continue` gets 413, not
+/// 100); the body is admitted against a byte budget shared by all requests (its declared length,
+/// or the body limit when not declared; 503 when that budget is not free within `admit_wait`),
+/// then read whole within the body timeout (408 past it,
+/// 413 past the limit) and handed on in memory. The budget is held until the answer is made.
+#[derive(Debug)]
+pub struct BodyGuard {
+    /// Largest body, bytes.
+    limit: usize,
+    /// Time to read a body once its head is in.
+    timeout: Duration,
+    /// Longest wait for the budget.
+    admit_wait: Duration,
+    /// Budget of body bytes held at once, in KiB units.
+    budget: Arc<Semaphore>,
+    /// The budget's size, KiB.
+    budget_kib: u32,
+}
+
+impl BodyGuard {
+    /// A guard with a body limit (bytes), a read timeout, a budget (bytes) and the longest wait
+    /// for the budget.
+    pub fn new(limit: usize, timeout: Duration, budget_bytes: usize, admit_wait: Duration) -> Self {
+        let budget_kib = u32::try_from(budget_bytes.div_ceil(1024))
+            .unwrap_or(Semaphore::MAX_PERMITS as u32)
+            .min(Semaphore::MAX_PERMITS as u32)
+            .max(1);
+        Self {
+            limit,
+            timeout,
+            admit_wait,
+            budget: Arc::new(Semaphore::new(budget_kib as usize)),
+            budget_kib,
+        }
+    }
+
+    /// Budget bytes not held by a body now.
+    pub fn available_bytes(&self) -> usize {
+        self.budget.available_permits() * 1024
+    }
+
+    /// KiB charged for a body of `bytes` (at least 1, at most the whole budget).
+    fn charge_kib(&self, bytes: usize) -> u32 {
+        u32::try_from(bytes.div_ceil(1024))
+            .unwrap_or(u32::MAX)
+            .clamp(1, self.budget_kib)
+    }
+}
+
+fn too_large() -> ApiError {
+    ApiError::new(
+        "payload_too_large",
+        "the request body is larger than the limit (see /v1/presets)",
+    )
+}
+
+/// The middleware of [`BodyGuard`].
+pub async fn guard_body(State(g): State<Arc<BodyGuard>>, req: Request, next: Next) -> Response {
+    use axum::body::HttpBody as _;
+    let hint = req.body().size_hint();
+    if hint.exact() == Some(0) {
+        return next.run(req).await;
+    }
+    let declared = req
+        .headers()
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .or(hint.exact());
+    if declared.is_some_and(|n| n > g.limit as u64) {
+        return too_large().into_response();
+    }
+    let expected = declared.map_or(g.limit, |n| n as usize);
+    let permit = match tokio::time::timeout(
+        g.admit_wait,
+        g.budget.clone().acquire_many_owned(g.charge_kib(expected)),
+    )
+    .await
+    {
+        Ok(Ok(p)) => p,
+        _ => return ApiError::overloaded(1).into_response(),
+    };
+    let (parts, body) = req.into_parts();
+    let bytes = match tokio::time::timeout(g.timeout, read_limited(body, g.limit, expected)).await {
+        Ok(Ok(b)) => b,
+        Ok(Err(e)) => return e.into_response(),
+        Err(_) => {
+            return ApiError::new(
+                "request_timeout",
+                format!(
+                    "the body did not arrive within {} s",
+                    g.timeout.as_secs_f64()
+                ),
+            )
+            .into_response();
+        }
+    };
+    let res = next
+        .run(Request::from_parts(parts, Body::from(bytes)))
+        .await;
+    drop(permit);
+    res
+}
+
+/// Reads a body into one buffer of `expected` capacity, refusing more than `limit` bytes.
+async fn read_limited(mut body: Body, limit: usize, expected: usize) -> Result<Bytes, ApiError> {
+    let mut buf = Vec::with_capacity(expected.min(limit));
+    while let Some(frame) = body.frame().await {
+        let frame = frame.map_err(|e| {
+            ApiError::new("malformed_json", format!("could not read the body: {e}"))
+        })?;
+        if let Ok(data) = frame.into_data() {
+            if buf.len() + data.len() > limit {
+                return Err(too_large());
+            }
+            buf.extend_from_slice(&data);
+        }
+    }
+    Ok(Bytes::from(buf))
 }
 
 /// Parses bytes as JSON, mapping failures to 400 `malformed_json` with line and column. An object

@@ -7,6 +7,7 @@ pub mod json;
 pub mod openapi;
 pub mod routes;
 pub mod runner;
+pub mod server;
 
 use std::time::Duration;
 
@@ -31,6 +32,7 @@ use crate::config::Config;
 pub fn app(config: Config) -> Router {
     let state = AppState::new(config);
     let body_limit = state.config.max_body_bytes;
+    let state_config = state.config.clone();
     // The whole request (reading the body, queueing, solving, writing) gets the computation
     // limit plus a margin; solvers stop themselves at the computation limit.
     let request_limit = state.time_limit() + Duration::from_secs(30);
@@ -52,6 +54,15 @@ pub fn app(config: Config) -> Router {
         .merge(api)
         .fallback(error::not_found)
         .method_not_allowed_fallback(method_not_allowed)
+        .layer(axum::middleware::from_fn_with_state(
+            std::sync::Arc::new(json::BodyGuard::new(
+                body_limit,
+                state_config.body_timeout(),
+                state_config.body_budget_bytes(),
+                2 * state_config.max_queue_wait(),
+            )),
+            json::guard_body,
+        ))
         .layer(axum::middleware::from_fn(problems_everywhere))
         .layer(DefaultBodyLimit::max(body_limit))
         .layer(

@@ -1,8 +1,16 @@
-//! Runs solvers off the async workers: a concurrency permit (saturated → 503), `spawn_blocking`
-//! inside the ensemble thread pool, and a [`Control`] whose deadline and cancel flag the solver
-//! polls. Dropping the request (client gone) or passing the time limit stops the work.
+//! Runs solvers off the async workers: a solver slot (admission below), `spawn_blocking` inside
+//! the ensemble thread pool, and a [`Control`] whose deadline and cancel flag the solver polls.
+//! Dropping the request (client gone) or passing the time limit stops the work.
+//!
+//! Admission: a request that finds every slot busy queues for one instead of being refused. It is
+//! refused (503 `overloaded` with `Retry-After`) only when the expected wait passes the bound
+//! (`--max-queue-wait-ms`): expected wait = mean recent solve time × (requests queued ahead + 1)
+//! / slots, the mean being an exponential moving average (weight 1/8) of the time each finished
+//! computation held its slot. A queued request waits at most twice the bound (the estimate can be
+//! wrong when solve times vary), then gets the same 503.
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use axum::body::Body;
@@ -24,8 +32,93 @@ pub const NDJSON: &str = "application/x-ndjson";
 pub struct AppState {
     /// Settings and limits.
     pub config: Arc<Config>,
-    permits: Arc<Semaphore>,
+    admission: Arc<Admission>,
     pool: Arc<rayon::ThreadPool>,
+}
+
+/// Solver slots with a queue whose expected wait is bounded (see the module documentation).
+#[derive(Debug)]
+pub struct Admission {
+    slots: usize,
+    permits: Arc<Semaphore>,
+    /// Requests waiting for a slot.
+    queued: AtomicUsize,
+    /// Moving average of the time a computation holds its slot, ns.
+    mean_solve_ns: AtomicU64,
+    /// Largest expected wait admitted to the queue.
+    bound: Duration,
+}
+
+/// Weight of the newest solve time in the moving average (1/8).
+const MEAN_WEIGHT_SHIFT: u32 = 3;
+
+impl Admission {
+    /// `slots` solver slots; queue while the expected wait is at most `bound`.
+    pub fn new(slots: usize, bound: Duration) -> Self {
+        Self {
+            slots: slots.max(1),
+            permits: Arc::new(Semaphore::new(slots.max(1))),
+            queued: AtomicUsize::new(0),
+            // Until something has been measured, assume a short (1 ms) computation.
+            mean_solve_ns: AtomicU64::new(1_000_000),
+            bound,
+        }
+    }
+
+    /// Expected wait of a request that would queue behind `ahead` others.
+    pub fn expected_wait(&self, ahead: usize) -> Duration {
+        let mean = self.mean_solve_ns.load(Ordering::Relaxed) as f64;
+        Duration::from_nanos((mean * (ahead + 1) as f64 / self.slots as f64) as u64)
+    }
+
+    /// Requests waiting for a slot now.
+    pub fn queued(&self) -> usize {
+        self.queued.load(Ordering::Relaxed)
+    }
+
+    /// Folds one measured slot holding time into the moving average.
+    pub fn record(&self, held: Duration) {
+        let new = u64::try_from(held.as_nanos()).unwrap_or(u64::MAX);
+        let _ = self
+            .mean_solve_ns
+            .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |old| {
+                let (o, n) = (old as i128, new as i128);
+                Some((o + ((n - o) >> MEAN_WEIGHT_SHIFT)).max(0) as u64)
+            });
+    }
+
+    /// A slot at once, or after a wait the estimate admits; 503 `overloaded` otherwise.
+    pub async fn acquire(&self) -> Result<OwnedSemaphorePermit, ApiError> {
+        if let Ok(p) = self.permits.clone().try_acquire_owned() {
+            return Ok(p);
+        }
+        let ahead = self.queued.fetch_add(1, Ordering::SeqCst);
+        let _leave = LeaveQueue(&self.queued);
+        let expected = self.expected_wait(ahead);
+        if expected > self.bound {
+            return Err(ApiError::overloaded(retry_after_s(expected)));
+        }
+        match tokio::time::timeout(2 * self.bound, self.permits.clone().acquire_owned()).await {
+            Ok(Ok(p)) => Ok(p),
+            _ => Err(ApiError::overloaded(retry_after_s(
+                self.expected_wait(self.queued()),
+            ))),
+        }
+    }
+}
+
+/// Whole seconds to suggest in `Retry-After` for an expected wait (at least 1).
+fn retry_after_s(expected: Duration) -> u64 {
+    expected.as_secs_f64().ceil().clamp(1.0, 3600.0) as u64
+}
+
+/// Leaves the admission queue when dropped (admitted, refused or the client gone).
+struct LeaveQueue<'a>(&'a AtomicUsize);
+
+impl Drop for LeaveQueue<'_> {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::SeqCst);
+    }
 }
 
 impl std::fmt::Debug for AppState {
@@ -45,7 +138,10 @@ impl AppState {
             .build()
             .expect("the solver thread pool can be built");
         Self {
-            permits: Arc::new(Semaphore::new(config.max_concurrent())),
+            admission: Arc::new(Admission::new(
+                config.max_concurrent(),
+                config.max_queue_wait(),
+            )),
             pool: Arc::new(pool),
             config: Arc::new(config),
         }
@@ -56,11 +152,9 @@ impl AppState {
         Duration::from_secs_f64(self.config.compute_timeout_s)
     }
 
-    fn acquire(&self) -> Result<OwnedSemaphorePermit, ApiError> {
-        self.permits
-            .clone()
-            .try_acquire_owned()
-            .map_err(|_| ApiError::overloaded(1))
+    /// The solver slots and their queue.
+    pub fn admission(&self) -> &Admission {
+        &self.admission
     }
 }
 
@@ -87,18 +181,23 @@ struct Running<T> {
     handle: tokio::task::JoinHandle<Result<T, ApiError>>,
 }
 
-fn start<T, F>(state: &AppState, solve: F) -> Result<Running<T>, ApiError>
+async fn start<T, F>(state: &AppState, solve: F) -> Result<Running<T>, ApiError>
 where
     T: Send + 'static,
     F: FnOnce(&Control) -> Result<T, ApiError> + Send + 'static,
 {
-    let permit = state.acquire()?;
+    let permit = state.admission.acquire().await?;
+    // The time limit counts from admission: time queued is bounded separately.
     let control = Control::with_deadline(Some(Instant::now() + state.time_limit()));
     let c = control.clone();
     let pool = state.pool.clone();
+    let admission = state.admission.clone();
     let handle = tokio::task::spawn_blocking(move || {
         let _permit = permit;
-        pool.install(|| solve(&c))
+        let t0 = Instant::now();
+        let out = pool.install(|| solve(&c));
+        admission.record(t0.elapsed());
+        out
     });
     Ok(Running { control, handle })
 }
@@ -128,7 +227,7 @@ where
     T: Send + 'static,
     F: FnOnce(&Control) -> Result<T, ApiError> + Send + 'static,
 {
-    let run = start(state, solve)?;
+    let run = start(state, solve).await?;
     finish(state, run).await
 }
 
@@ -220,7 +319,7 @@ where
             Err(e) => e.into_response(),
         };
     }
-    let run = match start(state, solve_bytes) {
+    let run = match start(state, solve_bytes).await {
         Ok(r) => r,
         Err(e) => return e.into_response(),
     };
@@ -351,7 +450,7 @@ mod tests {
     }
 
     #[tokio::test]
-    async fn saturated_slots_answer_overloaded() {
+    async fn saturated_slots_answer_overloaded_after_the_longest_wait() {
         let s = state(60.0, 1);
         let polls = Arc::new(AtomicU64::new(0));
         let stopped = Arc::new(AtomicBool::new(false));
@@ -363,6 +462,88 @@ mod tests {
         assert_eq!(e.code(), "overloaded");
         assert_eq!(e.status(), StatusCode::SERVICE_UNAVAILABLE);
         busy.abort();
+    }
+
+    /// A solver that holds its slot until `release` is set (or it is cancelled).
+    fn held(release: Arc<AtomicBool>) -> impl FnOnce(&Control) -> Result<u8, ApiError> {
+        move |c: &Control| {
+            while !release.load(Ordering::SeqCst) {
+                c.check().map_err(ApiError::from)?;
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            Ok(7)
+        }
+    }
+
+    #[tokio::test]
+    async fn a_short_request_waits_for_a_busy_slot_instead_of_being_shed() {
+        let s = state(60.0, 1);
+        let release = Arc::new(AtomicBool::new(false));
+        let s1 = s.clone();
+        let r1 = release.clone();
+        let busy = tokio::spawn(async move { run_solver(&s1, held(r1)).await });
+        while s.admission().permits.available_permits() > 0 {
+            tokio::task::yield_now().await;
+        }
+        let s2 = s.clone();
+        let short =
+            tokio::spawn(
+                async move { run_solver(&s2, |_c: &Control| Ok::<_, ApiError>(1u8)).await },
+            );
+        while s.admission().queued() == 0 {
+            tokio::task::yield_now().await;
+        }
+        // Queued behind the busy slot, not refused; it runs once the slot is free.
+        release.store(true, Ordering::SeqCst);
+        assert_eq!(short.await.unwrap().unwrap(), 1);
+        assert_eq!(busy.await.unwrap().unwrap(), 7);
+        assert_eq!(s.admission().queued(), 0, "the queue is left on admission");
+    }
+
+    #[tokio::test]
+    async fn shed_only_when_the_expected_wait_passes_the_bound() {
+        let a = Admission::new(2, Duration::from_millis(100));
+        // A mean solve time of 80 ms: one queued request expects 40 ms, three expect 120 ms.
+        for _ in 0..200 {
+            a.record(Duration::from_millis(80));
+        }
+        let near = a.expected_wait(0).as_secs_f64();
+        assert!((near - 0.040).abs() < 1e-3, "{near}");
+        assert!(a.expected_wait(2) > Duration::from_millis(100));
+        let _p1 = a.acquire().await.unwrap();
+        let _p2 = a.acquire().await.unwrap();
+        // Two more wait in the queue (expected 40 and 80 ms) ...
+        let (q1, q2) = (a.acquire(), a.acquire());
+        let mut q1 = Box::pin(q1);
+        let mut q2 = Box::pin(q2);
+        assert!(futures_util::poll!(&mut q1).is_pending());
+        assert!(futures_util::poll!(&mut q2).is_pending());
+        assert_eq!(a.queued(), 2);
+        // ... the next one would expect 120 ms: refused at once with a Retry-After.
+        let e = a.acquire().await.unwrap_err();
+        assert_eq!(e.code(), "overloaded");
+        assert_eq!(e.status(), StatusCode::SERVICE_UNAVAILABLE);
+        drop(q1);
+        assert_eq!(a.queued(), 1, "a dropped waiter leaves the queue");
+        drop(q2);
+        assert_eq!(a.queued(), 0);
+    }
+
+    #[test]
+    fn the_mean_solve_time_follows_recent_solves() {
+        let a = Admission::new(1, Duration::from_millis(100));
+        for _ in 0..100 {
+            a.record(Duration::from_millis(10));
+        }
+        let m = a.expected_wait(0).as_secs_f64();
+        assert!((m - 0.010).abs() < 1e-4, "{m}");
+        for _ in 0..100 {
+            a.record(Duration::from_micros(300));
+        }
+        let m = a.expected_wait(0).as_secs_f64();
+        assert!((m - 0.0003).abs() < 1e-5, "{m}");
+        assert_eq!(retry_after_s(Duration::from_millis(1)), 1);
+        assert_eq!(retry_after_s(Duration::from_millis(2500)), 3);
     }
 
     fn accept(values: &[&'static str]) -> HeaderMap {
