@@ -181,14 +181,18 @@ struct Running<T> {
     handle: tokio::task::JoinHandle<Result<T, ApiError>>,
 }
 
-async fn start<T, F>(state: &AppState, solve: F) -> Result<Running<T>, ApiError>
+async fn start<T, F>(
+    state: &AppState,
+    limit: Option<Duration>,
+    solve: F,
+) -> Result<Running<T>, ApiError>
 where
     T: Send + 'static,
     F: FnOnce(&Control) -> Result<T, ApiError> + Send + 'static,
 {
     let permit = state.admission.acquire().await?;
     // The time limit counts from admission: time queued is bounded separately.
-    let control = Control::with_deadline(Some(Instant::now() + state.time_limit()));
+    let control = Control::with_deadline(limit.map(|l| Instant::now() + l));
     let c = control.clone();
     let pool = state.pool.clone();
     let admission = state.admission.clone();
@@ -202,11 +206,12 @@ where
     Ok(Running { control, handle })
 }
 
-async fn finish<T>(state: &AppState, run: Running<T>) -> Result<T, ApiError> {
+async fn finish<T>(limit: Option<Duration>, run: Running<T>) -> Result<T, ApiError> {
     let guard = CancelOnDrop(Some(run.control.clone()));
     // The solver polls its deadline; the outer timeout is a backstop for one that does not.
     let grace = Duration::from_secs(2);
-    let out = match tokio::time::timeout(state.time_limit() + grace, run.handle).await {
+    let backstop = limit.map_or(Duration::MAX, |l| l.saturating_add(grace));
+    let out = match tokio::time::timeout(backstop, run.handle).await {
         Ok(Ok(result)) => result,
         Ok(Err(join)) => Err(ApiError::internal(format!("solver task failed: {join}"))),
         Err(_) => {
@@ -227,8 +232,21 @@ where
     T: Send + 'static,
     F: FnOnce(&Control) -> Result<T, ApiError> + Send + 'static,
 {
-    let run = start(state, solve).await?;
-    finish(state, run).await
+    let limit = Some(state.time_limit());
+    let run = start(state, limit, solve).await?;
+    finish(limit, run).await
+}
+
+/// Runs `solve` like [`run_solver`] but without an overall deadline: for a batch, whose items
+/// each carry the compute time limit of their own (api.md), so the whole is bounded by the item
+/// limit × the time limit. A dropped request still cancels it.
+pub async fn run_solver_without_deadline<T, F>(state: &AppState, solve: F) -> Result<T, ApiError>
+where
+    T: Send + 'static,
+    F: FnOnce(&Control) -> Result<T, ApiError> + Send + 'static,
+{
+    let run = start(state, None, solve).await?;
+    finish(None, run).await
 }
 
 /// True when the client asked for streamed progress: `Accept` names `application/x-ndjson`
@@ -319,15 +337,15 @@ where
             Err(e) => e.into_response(),
         };
     }
-    let run = match start(state, solve_bytes).await {
+    let limit = Some(state.time_limit());
+    let run = match start(state, limit, solve_bytes).await {
         Ok(r) => r,
         Err(e) => return e.into_response(),
     };
-    let state = state.clone();
     let control = run.control.clone();
     let stream = async_stream::stream! {
         let guard = CancelOnDrop(Some(control.clone()));
-        let mut fut = Box::pin(finish(&state, run));
+        let mut fut = Box::pin(finish(limit, run));
         let mut tick = tokio::time::interval(Duration::from_millis(250));
         tick.tick().await;
         // A progress line is sent only when the solver announced a total and the count moved:

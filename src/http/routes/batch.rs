@@ -26,7 +26,7 @@ use crate::http::dto::study::StudyRequest;
 use crate::http::error::ApiError;
 use crate::http::json::{from_value, is_json, parse_json, read_body};
 use crate::http::routes::{column, impact, migration, spalling, study};
-use crate::http::runner::{AppState, NDJSON, run_solver, to_json_bytes};
+use crate::http::runner::{AppState, NDJSON, run_solver_without_deadline, to_json_bytes};
 use crate::physics::Control;
 
 /// Many requests of the kinds above in one call, answered as NDJSON.
@@ -179,7 +179,7 @@ async fn stream(state: AppState, items: Vec<Result<Value, ApiError>>) -> Respons
         Ok(())
     };
     let st = state.clone();
-    let mut fut = Box::pin(async move { run_solver(&st, work).await });
+    let mut fut = Box::pin(async move { run_solver_without_deadline(&st, work).await });
     // Poll once: a batch that finds every slot busy is a plain 503, not a stream of them.
     let first = tokio::select! {
         biased;
