@@ -560,8 +560,11 @@ impl FreeVibration {
 
     /// Samples at t_k = k·duration/(n − 1), k = 0…n−1 (the last exactly at `duration`), the same
     /// quantities as [`FreeVibration::sample`] but by the addition theorems
-    /// E_C(t+Δ) = E_C·K_C − q²E_S·K_S, E_S(t+Δ) = E_S·K_C + E_C·K_S with (K_C, K_S) the kernels
-    /// at Δ, re-synchronised with the direct formulas every 32 samples (drift ≲ 32 ulps).
+    /// E_C(t_b+τ) = E_C(t_b)·K_C(τ) − q²E_S(t_b)·K_S(τ), E_S(t_b+τ) = E_S(t_b)·K_C(τ) + E_C(t_b)·K_S(τ):
+    /// the direct formulas at the start t_b of every block of 64 samples and a table of the
+    /// kernels (K_C, K_S) at τ = jΔ, j < 64, computed once. Every sample is one addition-theorem
+    /// step from two directly computed values (no drift along the history; error a few ulps), and
+    /// the samples of a block are independent of each other (no dependency chain).
     ///
     /// # Special cases
     /// n = 0 gives no samples; n = 1 gives t = 0 only.
@@ -577,6 +580,7 @@ impl FreeVibration {
     /// Calls `f` with the samples of [`FreeVibration::sample_uniform`] in time order, without
     /// collecting them (callers write straight into their own arrays).
     pub fn for_each_uniform(&self, duration: f64, n: usize, mut f: impl FnMut(ModalSample)) {
+        const BLOCK: usize = 64;
         if n == 0 {
             return;
         }
@@ -585,40 +589,61 @@ impl FreeVibration {
             return;
         }
         let dt = duration / (n - 1) as f64;
-        let (kc, ks) = self.kernels(dt);
         let q2 = self.omega_n * self.omega_n * (1.0 - self.zeta) * (1.0 + self.zeta);
         let s = self.sigma;
-        let a = -(-2.0 * s * dt).exp_m1();
         let wn2 = self.omega_n * self.omega_n;
         let dis_factor = if self.damping == 0.0 || s == 0.0 {
             0.0
         } else {
             self.damping * self.w0 * self.w0 * wn2 / (4.0 * s)
         };
-        let (mut ec, mut es, mut m) = (1.0, 0.0, 0.0);
-        for k in 0..n {
-            let t = if k + 1 == n { duration } else { k as f64 * dt };
-            if k % 32 == 0 || k + 1 == n {
-                (ec, es) = self.kernels(t);
-                m = -(-2.0 * s * t).exp_m1();
+        let (half_m, half_k) = (0.5 * self.mass, 0.5 * self.stiffness);
+        // Kernels and 1 − e^{−2στ} at τ = jΔ, j < BLOCK (only as many as there are samples).
+        let len = BLOCK.min(n);
+        let mut kc = [0.0; BLOCK];
+        let mut ks = [0.0; BLOCK];
+        let mut ka = [0.0; BLOCK];
+        for j in 0..len {
+            let tau = j as f64 * dt;
+            (kc[j], ks[j]) = self.kernels(tau);
+            ka[j] = -(-2.0 * s * tau).exp_m1();
+        }
+        let mut b = 0;
+        while b < n {
+            let tb = b as f64 * dt;
+            let (ecb, esb) = self.kernels(tb);
+            let mb = -(-2.0 * s * tb).exp_m1();
+            let end = (b + BLOCK).min(n);
+            for k in b..end {
+                let j = k - b;
+                let (t, ec, es, m) = if k + 1 == n {
+                    let (ec, es) = self.kernels(duration);
+                    (duration, ec, es, -(-2.0 * s * duration).exp_m1())
+                } else {
+                    (
+                        k as f64 * dt,
+                        ecb * kc[j] - q2 * esb * ks[j],
+                        esb * kc[j] + ecb * ks[j],
+                        mb + (1.0 - mb) * ka[j],
+                    )
+                };
+                let w = self.w0 * (ec + s * es);
+                let wd = -self.w0 * wn2 * es;
+                let dissipated = if dis_factor == 0.0 {
+                    0.0
+                } else {
+                    dis_factor * (m - 2.0 * s * es * ec - 2.0 * s * s * es * es)
+                };
+                f(ModalSample {
+                    time: t,
+                    displacement: w,
+                    velocity: wd,
+                    kinetic: half_m * wd * wd,
+                    strain: half_k * w * w,
+                    dissipated,
+                });
             }
-            let w = self.w0 * (ec + s * es);
-            let wd = -self.w0 * wn2 * es;
-            let dissipated = if dis_factor == 0.0 {
-                0.0
-            } else {
-                dis_factor * (m - 2.0 * s * es * ec - 2.0 * s * s * es * es)
-            };
-            f(ModalSample {
-                time: t,
-                displacement: w,
-                velocity: wd,
-                kinetic: 0.5 * self.mass * wd * wd,
-                strain: 0.5 * self.stiffness * w * w,
-                dissipated,
-            });
-            (ec, es) = (ec * kc - q2 * es * ks, es * kc + ec * ks);
-            m += (1.0 - m) * a;
+            b = end;
         }
     }
 
@@ -832,6 +857,14 @@ pub fn generalized_frequencies(mass: &DMatrix<f64>, stiffness: &DMatrix<f64>) ->
         .collect()
 }
 
+/// Weight of the response bound in the decay time: 0 for ζ ≤ 1/√2, rising as a C¹ smoothstep to 1
+/// at ζ = 1 (see [`FreeVibration::decay_time`]).
+fn near_critical_weight(zeta: f64) -> f64 {
+    let lo = std::f64::consts::FRAC_1_SQRT_2;
+    let x = ((zeta - lo) / (1.0 - lo)).clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1027,12 +1060,4 @@ mod tests {
         assert!(rel(ze.free_vibration(1.0).zeta, 0.02) < 1e-14);
         assert!((ze.free_vibration(1.0).decay_time(0.01).unwrap() - 0.0410).abs() < 1e-4);
     }
-}
-
-/// Weight of the response bound in the decay time: 0 for ζ ≤ 1/√2, rising as a C¹ smoothstep to 1
-/// at ζ = 1 (see [`FreeVibration::decay_time`]).
-fn near_critical_weight(zeta: f64) -> f64 {
-    let lo = std::f64::consts::FRAC_1_SQRT_2;
-    let x = ((zeta - lo) / (1.0 - lo)).clamp(0.0, 1.0);
-    x * x * (3.0 - 2.0 * x)
 }
