@@ -161,3 +161,61 @@ async fn one_run_ensemble_warns_that_its_std_is_null() {
     let w = b["warnings"].as_array().unwrap();
     assert!(w.iter().any(|w| w["code"] == "single_run"), "{b}");
 }
+
+/// Contours `[[x, ±10000]]` every 10 m resampled at 1 cm would be 3.2e7 points (7 GB, 60 s):
+/// the floor's memory is estimated before it is built and the request refused at once, naming
+/// resolution_m, the estimate and the limit.
+#[tokio::test]
+async fn contours_resampled_to_millions_of_points_are_refused_before_they_are_built() {
+    let app = common::app();
+    let req = load("contour_memory.json");
+    let t = std::time::Instant::now();
+    let r = post(&app, "/v1/migration", &req).await;
+    let b = r.json();
+    assert_eq!(r.status, 422, "{b}");
+    assert!(t.elapsed().as_secs_f64() < 5.0, "{:?}", t.elapsed());
+    let e = &b["errors"][0];
+    assert_eq!(e["field"], "/face/floor/resolution_m", "{b}");
+    assert_eq!(e["value"], 0.01, "{b}");
+    let m = e["message"].as_str().unwrap();
+    // 16 lines of 2e6 cm-steps: 3.2e7 points; the limit in MB (512 MiB)
+    assert!(m.contains("3.200e7 points"), "{m}");
+    assert!(m.contains("537 MB"), "{m}");
+    assert!(m.contains("GANGUE_MAX_FLOOR_BYTES"), "{m}");
+    // the limit is published
+    let p = common::get(&app, "/v1/presets").await.json();
+    assert_eq!(p["limits"]["max_floor_bytes"], 512 * 1024 * 1024);
+}
+
+/// A contour floor whose estimate lies just under the configured limit is built and run; one
+/// point more of resampling (a finer resolution) is refused.
+#[tokio::test]
+async fn contour_floor_just_under_the_memory_limit_runs() {
+    use gangue::physics::migration::{CONTOUR_BYTES_PER_POINT, ContourLine, contour_points};
+    let lines: Vec<ContourLine> = (0..4)
+        .map(|k| ContourLine {
+            elevation: -10.0 * k as f64,
+            points: vec![[10.0 * k as f64, -50.0], [10.0 * k as f64, 50.0]],
+        })
+        .collect();
+    let n = contour_points(&lines, 0.5);
+    // 4 lines of 200 half-metre steps: 201 points each
+    assert_eq!(n, 804.0);
+    let limit = (n * CONTOUR_BYTES_PER_POINT) as u64;
+    let cfg = gangue::config::Config {
+        max_floor_bytes: limit,
+        ..gangue::config::Config::default()
+    };
+    let app = gangue::app(cfg);
+    let req = |res: f64| {
+        json!({"face": {"length_m": 20, "floor": {"kind": "contours", "resolution_m": res,
+            "contours": lines.iter().map(|c| json!({"elevation_m": c.elevation, "points_m": c.points})).collect::<Vec<_>>()}},
+            "release": {"along_dip_m": 1}})
+    };
+    let r = post(&app, "/v1/migration", &req(0.5)).await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let r = post(&app, "/v1/migration", &req(0.49)).await;
+    let b = r.json();
+    assert_eq!(r.status, 422, "{b}");
+    assert_eq!(b["errors"][0]["field"], "/face/floor/resolution_m", "{b}");
+}

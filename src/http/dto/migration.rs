@@ -517,7 +517,30 @@ impl Default for MigrationRequest {
     }
 }
 
-fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
+/// Refuses a floor whose estimated memory exceeds the configured limit, naming `field`.
+fn check_floor_memory(
+    ck: &mut Checker,
+    field: String,
+    value: Value,
+    what: &str,
+    bytes: f64,
+    limit: u64,
+) {
+    if bytes > limit as f64 {
+        ck.push(
+            field,
+            value,
+            format!(
+                "{what} would need about {:.0} MB, more than the limit of {:.0} MB \
+                 (--max-floor-bytes, GANGUE_MAX_FLOOR_BYTES; see /v1/presets limits)",
+                bytes / 1e6,
+                limit as f64 / 1e6
+            ),
+        );
+    }
+}
+
+fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> FloorSpec {
     let base = "/face/floor";
     let p = |x: &str| format!("{base}/{x}");
     let stray = |ck: &mut Checker, name: &str, present: bool, kind: &str| {
@@ -587,6 +610,15 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
                     num(heights[i][j]),
                     "heights must lie in [−1e6, 1e6] m",
                 );
+            } else {
+                check_floor_memory(
+                    ck,
+                    p("heights_m"),
+                    json!([rows, cols]),
+                    &format!("a grid of {rows} × {cols} heights"),
+                    migration::grid_bytes(rows, cols),
+                    max_floor_bytes,
+                );
             }
             FloorSpec::Grid {
                 origin,
@@ -645,14 +677,30 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
                     "at most 4 000 000 points in all",
                 );
             }
+            let contours: Vec<ContourLine> = lines
+                .into_iter()
+                .map(|c| ContourLine {
+                    elevation: c.elevation_m,
+                    points: c.points_m,
+                })
+                .collect();
+            if total <= 4_000_000 && (0.01..=100.0).contains(&resolution) {
+                // estimated before resampling: the work and memory grow with length / resolution
+                let points = migration::contour_points(&contours, resolution);
+                check_floor_memory(
+                    ck,
+                    p("resolution_m"),
+                    num(resolution),
+                    &format!(
+                        "the contours resampled every {resolution} m have about {points:.3e} \
+                         points and"
+                    ),
+                    points * migration::CONTOUR_BYTES_PER_POINT,
+                    max_floor_bytes,
+                );
+            }
             FloorSpec::Contours {
-                contours: lines
-                    .into_iter()
-                    .map(|c| ContourLine {
-                        elevation: c.elevation_m,
-                        points: c.points_m,
-                    })
-                    .collect(),
+                contours,
                 resolution,
             }
         }
@@ -717,7 +765,7 @@ impl MigrationRequest {
             "",
         );
         ck.closed_open("/face/local_damping", f.local_damping, 0.0, 1.0, "");
-        let floor = resolve_floor(&mut f.floor, &mut ck);
+        let floor = resolve_floor(&mut f.floor, &mut ck, config.max_floor_bytes);
         let rock = self.rock.resolve("/rock", false, &mut ck);
         if matches!(
             self.rock.shape,

@@ -242,6 +242,13 @@ fn crease_of(
     })
 }
 
+/// Unit vector normal to the crease direction e in the vertical plane through e, pointing up:
+/// the normal about which a sphere rolling along the crease turns.
+fn crease_up(e: &Vector3<f64>) -> Vector3<f64> {
+    let z = Vector3::z();
+    (z - e * e.z).try_normalize(0.0).unwrap_or(z)
+}
+
 /// Moves the rock to height `z` (a rounding-level correction onto a facet or edge) and keeps
 /// KE + PE unchanged by rescaling the speed; what the kinetic energy cannot cover is booked as a
 /// (signed) transition term, so the balance stays exact.
@@ -779,6 +786,13 @@ pub(crate) fn simulate(
             Some(_) if s.crease.is_some() => {
                 let c = s.crease.expect("checked");
                 let ve = s.v.dot(&c.e);
+                // the motion is along the crease line: a velocity part across it (left by a
+                // correction at a vertex) is removed as a booked transition, never dropped
+                let across = s.v.norm_squared() - ve * ve;
+                if across > 0.0 {
+                    s.e_trans += 0.5 * ke_factor * across;
+                    s.v = c.e * ve;
+                }
                 let ge = gv.dot(&c.e);
                 let (ae, dir) = if roll {
                     (ge * (5.0 / 7.0), 0.0)
@@ -823,7 +837,8 @@ pub(crate) fn simulate(
                         a: c.e * ae,
                         fric: c.e * (dir * mu * c.n_tot),
                         diss0,
-                        rolling: None,
+                        // rolling along the crease: the spin axis is horizontal-most normal to it
+                        rolling: roll.then(|| crease_up(&c.e)),
                         spin: (0.0, Vector3::zeros()),
                         on_floor: true,
                     });
@@ -861,6 +876,14 @@ pub(crate) fn simulate(
                 let n = pl.normal();
                 let gn = g * n.z;
                 let gt = gv + n * (g * n.z);
+                // the closed-form piece moves in the facet's plane: a velocity part along its
+                // normal beyond rounding is removed as a booked transition (energy is never
+                // lost without being counted, nor the rock carried off the facet)
+                let vn = s.v.dot(&n);
+                if vn.abs() > 1e-9 * s.v.norm() {
+                    s.e_trans += 0.5 * ke_factor * vn * vn;
+                    s.v -= n * vn;
+                }
                 let speed = s.v.norm();
                 let (a, fdir) = if roll {
                     if speed <= REST_SPEED && gt.norm() <= 1e-12 * g {
@@ -965,12 +988,18 @@ pub(crate) fn simulate(
                             s.p.y += eps * dir.y / h;
                         }
                         match floor.locate(s.p.x, s.p.y, dir.x, dir.y) {
+                            Some(fc) if s.ground.is_some() && s.crease.is_none() => {
+                                // onto the new facet like at an edge: the velocity is projected
+                                // onto its plane (or the rock takes off), the loss booked
+                                change_facet(&mut s, fc, Some(n), &mut rec);
+                            }
                             Some(fc) => {
                                 if s.ground.is_some() {
                                     s.ground = Some(fc);
                                 }
+                                let kf = if s.ground.is_some() { ke_factor } else { 1.0 };
                                 let z = floor.facet_plane(fc).z(s.p.x, s.p.y);
-                                set_height(&mut s, z, g, ke_factor);
+                                set_height(&mut s, z, g, kf);
                             }
                             None => break (moving, StopReason::LeftFloor),
                         }

@@ -20,7 +20,9 @@ use rayon::prelude::*;
 pub use lumped_mass::{EventKind, MAX_TURN, MIN_REBOUND, Motion, Phase, StopReason};
 pub use monte_carlo::Distribution;
 pub use stats::{Histogram, Summary};
-pub use terrain::ContourLine;
+pub use terrain::{
+    CONTOUR_BYTES_PER_POINT, ContourLine, GRID_BYTES_PER_POINT, contour_points, grid_bytes,
+};
 
 use self::lumped_mass::{Recording, RunOut, Setup, simulate};
 use self::terrain::Floor;
