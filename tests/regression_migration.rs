@@ -219,3 +219,58 @@ async fn contour_floor_just_under_the_memory_limit_runs() {
     assert_eq!(r.status, 422, "{b}");
     assert_eq!(b["errors"][0]["field"], "/face/floor/resolution_m", "{b}");
 }
+
+/// A floor field the floor kind does not have, and a contour point out of range, are refused
+/// with the value that was sent (not null).
+#[tokio::test]
+async fn refused_floor_fields_echo_the_value_sent() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/migration",
+        &json!({"face": {"floor": {"kind": "plane", "spacing_m": 0.5, "origin_m": [1, 2]}}}),
+    )
+    .await;
+    assert_eq!(r.status, 422);
+    let b = r.json();
+    let errs = b["errors"].as_array().unwrap();
+    let get = |f: &str| {
+        errs.iter()
+            .find(|e| e["field"] == f)
+            .unwrap_or_else(|| panic!("{b}"))
+    };
+    assert_eq!(get("/face/floor/spacing_m")["value"], 0.5);
+    assert_eq!(get("/face/floor/origin_m")["value"], json!([1.0, 2.0]));
+    let r = post(
+        &app,
+        "/v1/migration",
+        &json!({"face": {"floor": {"kind": "contours", "contours": [
+            {"elevation_m": 0, "points_m": [[0, 0], [0, 10]]},
+            {"elevation_m": -5, "points_m": [[5, 0], [2e6, 10]]}]}}}),
+    )
+    .await;
+    assert_eq!(r.status, 422);
+    let b = r.json();
+    let e = &b["errors"][0];
+    assert_eq!(e["field"], "/face/floor/contours/1/points_m/1", "{b}");
+    assert_eq!(e["value"], json!([2e6, 10.0]), "{b}");
+}
+
+/// On a 0.5 m face the first rebound reaches the lower end long before its apex: the largest
+/// bounce height is 0 (no apex reached), not the apex of a flight that ended first. On the
+/// default face the reported height is an apex the closed form of physics.md §C.1 gives.
+#[tokio::test]
+async fn max_bounce_height_counts_only_apexes_reached_before_the_run_ends() {
+    let app = common::app();
+    let r = post(&app, "/v1/migration", &json!({"face": {"length_m": 0.5}})).await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    assert_eq!(b["impact_count"], 1, "{b}");
+    assert_eq!(b["max_bounce_height_m"], 0.0, "{b}");
+    // a long face: the rock flies through its apex; the apex of a rebound with normal speed r is
+    // r² / (2 g cos θ), and the reported height is one of those reached
+    let r = post(&app, "/v1/migration", &json!({"output": {"events": true}})).await;
+    let b = r.json();
+    let h = b["max_bounce_height_m"].as_f64().unwrap();
+    assert!(h > 0.0, "{b}");
+}

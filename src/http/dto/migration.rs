@@ -543,27 +543,32 @@ fn check_floor_memory(
 fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> FloorSpec {
     let base = "/face/floor";
     let p = |x: &str| format!("{base}/{x}");
-    let stray = |ck: &mut Checker, name: &str, present: bool, kind: &str| {
-        if present {
-            ck.push(
-                p(name),
-                Value::Null,
-                format!("not a field of a {kind} floor"),
-            );
+    // the value sent is echoed (a grid's heights as [rows, columns], contours as their count)
+    let stray = |ck: &mut Checker, name: &str, sent: Option<Value>, kind: &str| {
+        if let Some(v) = sent {
+            ck.push(p(name), v, format!("not a field of a {kind} floor"));
         }
     };
+    let origin_v = f.origin_m.map(|o| json!(o));
+    let spacing_v = f.spacing_m.map(num);
+    let heights_v = f
+        .heights_m
+        .as_ref()
+        .map(|h| json!([h.len(), h.first().map_or(0, Vec::len)]));
+    let contours_v = f.contours.as_ref().map(|c| json!(c.len()));
+    let resolution_v = f.resolution_m.map(num);
     match f.kind {
         FloorKind::Plane => {
-            stray(ck, "origin_m", f.origin_m.is_some(), "plane");
-            stray(ck, "spacing_m", f.spacing_m.is_some(), "plane");
-            stray(ck, "heights_m", f.heights_m.is_some(), "plane");
-            stray(ck, "contours", f.contours.is_some(), "plane");
-            stray(ck, "resolution_m", f.resolution_m.is_some(), "plane");
+            stray(ck, "origin_m", origin_v, "plane");
+            stray(ck, "spacing_m", spacing_v, "plane");
+            stray(ck, "heights_m", heights_v, "plane");
+            stray(ck, "contours", contours_v, "plane");
+            stray(ck, "resolution_m", resolution_v, "plane");
             FloorSpec::Plane
         }
         FloorKind::Grid => {
-            stray(ck, "contours", f.contours.is_some(), "grid");
-            stray(ck, "resolution_m", f.resolution_m.is_some(), "grid");
+            stray(ck, "contours", contours_v, "grid");
+            stray(ck, "resolution_m", resolution_v, "grid");
             let origin = *f.origin_m.get_or_insert([0.0, 0.0]);
             for (i, o) in origin.iter().enumerate() {
                 ck.closed(&p(&format!("origin_m/{i}")), *o, -1e6, 1e6, "m");
@@ -627,9 +632,9 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
             }
         }
         FloorKind::Contours => {
-            stray(ck, "origin_m", f.origin_m.is_some(), "contour");
-            stray(ck, "spacing_m", f.spacing_m.is_some(), "contour");
-            stray(ck, "heights_m", f.heights_m.is_some(), "contour");
+            stray(ck, "origin_m", origin_v, "contour");
+            stray(ck, "spacing_m", spacing_v, "contour");
+            stray(ck, "heights_m", heights_v, "contour");
             let resolution = *f.resolution_m.get_or_insert(1.0);
             ck.closed(&p("resolution_m"), resolution, 0.01, 100.0, "m");
             f.sha256 = Some(f.digest());
@@ -664,7 +669,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                 {
                     ck.push(
                         p(&format!("contours/{i}/points_m/{j}")),
-                        Value::Null,
+                        json!(c.points_m[j]),
                         "coordinates must lie in [−1e6, 1e6] m",
                     );
                 }
@@ -1066,7 +1071,8 @@ pub struct MigrationResponse {
     pub slide_start_along_dip_m: Option<f64>,
     /// Where the rock stopped, m (null: it did not stop).
     pub stop_along_dip_m: Option<f64>,
-    /// Largest apex after the first impact, m.
+    /// Largest apex above the struck floor after the first impact, m: only apexes the rock reached
+    /// before its flight or run ended (a flight cut short by the lower end has none).
     pub max_bounce_height_m: f64,
     /// Energy bookkeeping.
     pub energy: EnergyDto,

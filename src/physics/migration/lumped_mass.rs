@@ -166,6 +166,9 @@ struct St {
     impacts: u64,
     slide_start: Option<f64>,
     max_bounce: f64,
+    /// The last rebound's apex height above the struck facet (m) and the time it is reached (s):
+    /// it counts towards `max_bounce` only once the flight has lasted that long.
+    apex: Option<(f64, f64)>,
     e_imp: f64,
     e_fric: f64,
     e_trans: f64,
@@ -469,6 +472,7 @@ pub(crate) fn simulate(
         impacts: 0,
         slide_start: None,
         max_bounce: 0.0,
+        apex: None,
         e_imp: 0.0,
         e_fric: 0.0,
         e_trans: 0.0,
@@ -722,6 +726,12 @@ pub(crate) fn simulate(
                 s.p += s.v * dt + gv * (0.5 * dt * dt);
                 s.v += gv * dt;
                 s.t += dt;
+                // the rebound's apex counts only when this flight lasted until it
+                if let Some((h, t_apex)) = s.apex.take()
+                    && s.t >= t_apex
+                {
+                    s.max_bounce = s.max_bounce.max(h);
+                }
                 match end {
                     FlightEnd::Leaves { .. } => break (Phase::Flight, StopReason::LeftFloor),
                     FlightEnd::Clear => {
@@ -778,7 +788,7 @@ pub(crate) fn simulate(
                             }
                         } else {
                             s.v = rebound;
-                            s.max_bounce = s.max_bounce.max(r * r / (2.0 * g * n.z));
+                            s.apex = Some((r * r / (2.0 * g * n.z), s.t + r / (g * n.z)));
                         }
                     }
                 }

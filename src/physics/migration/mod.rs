@@ -392,7 +392,8 @@ pub struct MigrationResult {
     pub slide_start_along_dip: Option<f64>,
     /// Along-dip position where the rock came to rest, m (None: it did not).
     pub stop_along_dip: Option<f64>,
-    /// Largest apex height above the struck floor after the first impact, m.
+    /// Largest apex height above the struck floor after the first impact, m: only apexes reached
+    /// before the flight or the run ended.
     pub max_bounce_height: f64,
     /// Energy budget of the nominal run.
     pub energy: EnergyBudget,
