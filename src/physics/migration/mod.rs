@@ -767,7 +767,7 @@ fn arrival_of(pr: &Prepared, out: &RunOut) -> Arrival {
         phase: out.phase,
         stop_reason: out.reason,
         time: out.t,
-        speed: out.v.norm(),
+        speed: robust_norm(&out.v),
         along_dip_velocity: out.v.dot(&mean.dip_dir()),
         normal_velocity: out.v.dot(&mean.normal()),
         along_dip: mean.along(&out.p),
@@ -777,10 +777,20 @@ fn arrival_of(pr: &Prepared, out: &RunOut) -> Arrival {
             height_above_floor(&pr.floor, &out.p, &out.v)
         },
         position: v3(&out.p),
-        angular_speed: out.omega.norm(),
+        angular_speed: robust_norm(&out.omega),
         kinetic_energy: ke,
         rotational_energy: m * out.e_rot,
     }
+}
+
+/// Euclidean norm without underflow of the squares: a speed of 1e-163 m/s (a subnormal face
+/// length) is reported as such, not as 0.
+fn robust_norm(v: &Vector3<f64>) -> f64 {
+    let m = v.amax();
+    if m == 0.0 || !m.is_finite() {
+        return v.norm();
+    }
+    m * (v / m).norm()
 }
 
 fn sample_trajectory(
@@ -867,7 +877,7 @@ fn sample_trajectory(
             height_above_floor(&pr.floor, &p, &v)
         });
         tr.velocity.push(v3(&v));
-        tr.speed.push(v.norm());
+        tr.speed.push(robust_norm(&v));
         tr.angular_velocity.push(v3(&omega));
         tr.kinetic_energy.push(m * (0.5 * v.norm_squared() + rot));
         tr.rotational_energy.push(m * rot);
@@ -903,7 +913,7 @@ fn ensemble(
         let o = simulate(&su, mu, &mut draw, None, Some(control))?;
         Ok(RunSummary {
             time: o.t,
-            speed: o.v.norm(),
+            speed: robust_norm(&o.v),
             kinetic_energy: m * (0.5 * o.v.norm_squared() + o.e_rot),
             impact_count: o.impacts,
             runout: mean.along(&o.p) - pr.release_along,
