@@ -283,3 +283,47 @@ async fn max_bounce_height_counts_only_apexes_reached_before_the_run_ends() {
     let h = b["max_bounce_height_m"].as_f64().unwrap();
     assert!(h > 0.0, "{b}");
 }
+
+/// Friction drawn from a normal distribution (mean 0.2, std 1) has draws below 0 and above 2:
+/// they are clipped to the face's range [0, 2] and a `friction_clipped` warning counts them
+/// (the count is checked against an independent count of the standard normal's tails).
+#[tokio::test]
+async fn friction_drawn_outside_its_range_is_clipped_with_a_warning() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/migration",
+        &json!({"monte_carlo": {"runs": 400, "seed": 3,
+            "friction_coefficient": {"distribution": "normal", "mean": 0.2, "std": 1.0}}}),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    let w = b["warnings"].as_array().unwrap();
+    let c = w
+        .iter()
+        .find(|w| w["code"] == "friction_clipped")
+        .unwrap_or_else(|| panic!("{b}"));
+    let m = c["message"].as_str().unwrap();
+    let n: f64 = m.split(' ').next().unwrap().parse().unwrap();
+    // P(x < 0) + P(x > 2) = Φ(−0.2) + Φ(−1.8) = 0.4207 + 0.0359 = 0.4566: 183 of 400 expected,
+    // binomial std 10
+    assert!((n - 182.6).abs() < 5.0 * 10.0, "{n}: {m}");
+    // without tails to clip, no warning
+    let r = post(
+        &app,
+        "/v1/migration",
+        &json!({"monte_carlo": {"runs": 50, "seed": 3,
+            "friction_coefficient": {"distribution": "uniform", "min": 0.1, "max": 0.3}}}),
+    )
+    .await;
+    let b = r.json();
+    assert!(
+        !b["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w["code"] == "friction_clipped"),
+        "{b}"
+    );
+}

@@ -147,7 +147,8 @@ pub struct MonteCarlo {
     pub restitution_normal: Distribution,
     /// e_t, drawn at every impact after e_n and clipped to [0, 1] (default U[0.7, 0.9]).
     pub restitution_tangential: Distribution,
-    /// μ, drawn once per run and clipped to ≥ 0 (default: the face's μ for every run).
+    /// μ, drawn once per run and clipped to [0, 2], counted in a `friction_clipped` warning
+    /// (default: the face's μ for every run).
     pub friction_coefficient: Option<Distribution>,
 }
 
@@ -702,6 +703,26 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
         Some(mc) => {
             let runs = ensemble(case, &pr, mc, control)?;
             let st = statistics_of(mc, &runs);
+            if let Some(d) = &mc.friction_coefficient {
+                // μ is the first draw of each run's stream: count the draws outside [0, 2]
+                let clipped = (0..mc.runs)
+                    .filter(|&i| {
+                        let mu = monte_carlo::sample(d, &mut monte_carlo::run_stream(mc.seed, i));
+                        !(0.0..=MU_MAX).contains(&mu)
+                    })
+                    .count();
+                if clipped > 0 {
+                    warnings.push(Warning {
+                        code: "friction_clipped",
+                        message: format!(
+                            "{clipped} of {} drawn friction coefficients fell outside [0, 2] and \
+                             were clipped to it (a normal distribution has unbounded tails; use \
+                             truncated_normal to resample instead)",
+                            mc.runs
+                        ),
+                    });
+                }
+            }
             if runs.len() < 2 {
                 warnings.push(Warning {
                     code: "single_run",
@@ -782,6 +803,9 @@ fn arrival_of(pr: &Prepared, out: &RunOut) -> Arrival {
         rotational_energy: m * out.e_rot,
     }
 }
+
+/// Largest friction coefficient of the face's range [0, 2]; drawn values are clipped to it.
+const MU_MAX: f64 = 2.0;
 
 /// Euclidean norm without underflow of the squares: a speed of 1e-163 m/s (a subnormal face
 /// length) is reported as such, not as 0.
@@ -902,7 +926,7 @@ fn ensemble(
     let one = |i: u64| -> PhysicsResult<RunSummary> {
         let mut rng = monte_carlo::run_stream(mc.seed, i);
         let mu = match &mc.friction_coefficient {
-            Some(d) => monte_carlo::sample(d, &mut rng).max(0.0),
+            Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, MU_MAX),
             None => case.face.friction_coefficient,
         };
         let mut draw = || {
