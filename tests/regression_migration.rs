@@ -327,3 +327,42 @@ async fn friction_drawn_outside_its_range_is_clipped_with_a_warning() {
         "{b}"
     );
 }
+
+/// `stop_normal_speed_m_s: 0` on the plane: the rebounds r, e r, e² r, … never fall below a
+/// zero stop speed, so the series ends at the documented 1e-6 m/s cutoff and a
+/// `rebound_cutoff` warning says so; the number of impacts is the closed form's: the first
+/// k with e_n^k v_n0 < 1e-6 (e_n = 0.3 fixed, vertical drop of 3.27 m on 45°).
+#[tokio::test]
+async fn zero_stop_speed_ends_the_bounce_series_at_the_documented_cutoff_with_a_warning() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/migration",
+        &json!({"lumped_mass": {"stop_normal_speed_m_s": 0}, "face": {"restitution_normal": 0.3,
+            "restitution_tangential": 0.0, "friction_coefficient": 0.9}}),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    let w = b["warnings"].as_array().unwrap();
+    assert!(w.iter().any(|w| w["code"] == "rebound_cutoff"), "{b}");
+    // e_t = 0: every rebound is normal to the plane, r_k = 0.3^k · 0.3 v0 cos 45°
+    let v0 = (2.0f64 * 9.81 * 3.27).sqrt();
+    let mut r0 = 0.3 * v0 * 45f64.to_radians().cos();
+    let mut k = 1;
+    while r0 >= 1e-6 {
+        r0 *= 0.3;
+        k += 1;
+    }
+    assert_eq!(b["impact_count"], k, "{}", b["arrival"]);
+    // the default stop speed 0.5 m/s gives no such warning
+    let r = post(&app, "/v1/migration", &json!({})).await;
+    let b = r.json();
+    assert!(
+        !b["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w["code"] == "rebound_cutoff")
+    );
+}

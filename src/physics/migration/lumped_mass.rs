@@ -22,7 +22,9 @@ use crate::physics::error::{PhysicsError, PhysicsResult};
 
 /// Largest turn of the velocity, rad, over which the friction direction is held fixed on a facet.
 pub const MAX_TURN: f64 = 0.02;
-/// Normal rebound speed, m/s, below which bouncing ends even when the stop speed is 0.
+/// Normal rebound speed, m/s, below which bouncing ends even when the stop speed is 0: with a
+/// stop speed of 0 the rebounds r, e r, e² r, … would never end, though their flights (total
+/// time 2 r / (g cos θ (1 − e)) on a plane) do; the run says so in a `rebound_cutoff` warning.
 pub const MIN_REBOUND: f64 = 1e-6;
 /// Speed, m/s, below which a sliding rock counts as momentarily at rest.
 const REST_SPEED: f64 = 1e-9;
@@ -156,6 +158,8 @@ pub(crate) struct RunOut {
     pub(crate) steps: u64,
     /// True when the last ground phase had no deceleration (a ≥ 0 along the motion) at the end.
     pub(crate) undecelerated: bool,
+    /// True when a bounce series was ended by [`MIN_REBOUND`] rather than by the stop speed.
+    pub(crate) rebound_cutoff: bool,
 }
 
 struct St {
@@ -174,6 +178,7 @@ struct St {
     e_trans: f64,
     spin: (f64, Vector3<f64>),
     undecelerated: bool,
+    rebound_cutoff: bool,
     crease: Option<Crease>,
     /// A floor point (m) and its `along_dip` (m): the last point where the rock was on the floor.
     r: Vector3<f64>,
@@ -478,6 +483,7 @@ pub(crate) fn simulate(
         e_trans: 0.0,
         spin: (0.0, Vector3::zeros()),
         undecelerated: false,
+        rebound_cutoff: false,
         crease: None,
         r: su.base.0,
         s_r: su.base.1,
@@ -776,6 +782,7 @@ pub(crate) fn simulate(
                             },
                         );
                         if r < su.v_stop || r < MIN_REBOUND {
+                            s.rebound_cutoff |= r >= su.v_stop;
                             s.e_trans += 0.5 * r * r;
                             s.v = vt * et;
                             let ke_before = rebound.norm();
@@ -1071,6 +1078,7 @@ pub(crate) fn simulate(
         e_trans: s.e_trans,
         e_rot,
         undecelerated: !stopped && s.ground.is_some() && s.undecelerated,
+        rebound_cutoff: s.rebound_cutoff,
         steps,
     })
 }

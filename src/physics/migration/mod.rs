@@ -677,6 +677,16 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
     let pe = m * pr.g * (out.p.z - pr.z_end);
     let total_start = m * pr.e0;
     let residual = arrival.kinetic_energy + pe + imp + fric + trans - total_start;
+    if out.rebound_cutoff {
+        warnings.push(Warning {
+            code: "rebound_cutoff",
+            message: format!(
+                "the bounces ended at a normal rebound speed below {MIN_REBOUND:e} m/s (the \
+                 stop speed asked for is lower): an infinite series of ever smaller bounces, \
+                 whose total flight time is finite, is taken to end there and the rock to slide"
+            ),
+        });
+    }
     if out.reason == StopReason::EndTime && out.undecelerated {
         warnings.push(Warning {
             code: "stop_distance_infinite",
