@@ -210,7 +210,8 @@ pub struct ReleaseDto {
     /// Vertical lift above the floor point, m, in [0, 1000] (0: starts on the floor).
     #[schema(default = 3.27, minimum = 0.0, maximum = 1000.0, example = 3.27)]
     pub drop_height_m: f64,
-    /// Along-dip position of the floor point, m, in [0, length_m).
+    /// Along-dip position of the floor point, m, in [0, length_m): the upper bound depends on
+    /// `face.length_m` (at most 10 000 m).
     #[schema(default = 0.0, minimum = 0.0, example = 0.0)]
     pub along_dip_m: f64,
     /// Across-face position y, m, in [−1000, 1000].
@@ -268,8 +269,8 @@ impl Default for LumpedMassDto {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RigidBlockDto {
-    /// Time step, s, in (0, Δt_crit] (default: safety × Δt_crit).
-    #[schema(default = json!(null), exclusive_minimum = 0.0, example = 1e-5)]
+    /// Time step, s, in (0, 1] (default: safety × Δt_crit).
+    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1.0, example = 1e-5)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time_step_s: Option<f64>,
     /// Safety factor on the critical time step, in (0, 1].
@@ -306,19 +307,21 @@ pub struct DistributionDto {
     /// Kind of distribution.
     #[schema(default = "uniform", example = "uniform")]
     pub distribution: DistributionKind,
-    /// Lower bound (uniform, truncated_normal).
+    /// Lower bound (uniform, truncated_normal), inside the parameter's own range: restitution
+    /// [0, 1], friction [0, 2], damping ratio [0, 1).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.2)]
     pub min: Option<f64>,
-    /// Upper bound (uniform, truncated_normal).
+    /// Upper bound (uniform, truncated_normal), at least `min` and inside the parameter's own
+    /// range: restitution [0, 1], friction [0, 2], damping ratio [0, 1).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.4)]
     pub max: Option<f64>,
-    /// Mean (normal, truncated_normal).
+    /// Mean (normal, truncated_normal), in [−1000, 1000].
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.3)]
     pub mean: Option<f64>,
-    /// Standard deviation ≥ 0 (normal, truncated_normal).
+    /// Standard deviation, in [0, 1000] (normal, truncated_normal).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.05)]
     pub std: Option<f64>,
@@ -411,8 +414,9 @@ impl DistributionDto {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MonteCarloDto {
-    /// Number of runs, in [1, limit] (default limit 1 000 000).
-    #[schema(default = 200, minimum = 1, example = 200)]
+    /// Number of runs, in [1, limit]: the server's `max_monte_carlo_runs` (/v1/presets
+    /// `limits`), by default 1 000 000, the maximum shown here.
+    #[schema(default = 200, minimum = 1, maximum = 1000000, example = 200)]
     pub runs: u64,
     /// Seed (any u64); the same request and seed give the same bytes.
     #[schema(default = 42, example = 42)]
