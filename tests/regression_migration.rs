@@ -366,3 +366,27 @@ async fn zero_stop_speed_ends_the_bounce_series_at_the_documented_cutoff_with_a_
             .any(|w| w["code"] == "rebound_cutoff")
     );
 }
+
+/// One plan point given on two contours of different elevations (a vertical wall) is refused
+/// with 422 naming the second occurrence and echoing the point; the same point on two contours
+/// of one elevation is accepted.
+#[tokio::test]
+async fn one_point_at_two_elevations_is_refused_naming_the_point() {
+    let app = common::app();
+    let floor = |z2: f64| {
+        json!({"face": {"length_m": 10, "floor": {"kind": "contours", "contours": [
+            {"elevation_m": 0, "points_m": [[0, -5], [0, 5]]},
+            {"elevation_m": z2, "points_m": [[10, -5], [0, 5], [10, 5]]}]}},
+            "release": {"along_dip_m": 1}})
+    };
+    let r = post(&app, "/v1/migration", &floor(-10.0)).await;
+    let b = r.json();
+    assert_eq!(r.status, 422, "{b}");
+    assert_eq!(
+        b["errors"][0]["field"], "/face/floor/contours/1/points_m/1",
+        "{b}"
+    );
+    assert_eq!(b["errors"][0]["value"], json!([0.0, 5.0]), "{b}");
+    let r = post(&app, "/v1/migration", &floor(0.0)).await;
+    assert_ne!(r.status, 422, "{}", String::from_utf8_lossy(&r.body));
+}

@@ -686,6 +686,32 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                     "at most 4 000 000 points in all",
                 );
             }
+            // one plan point on two elevations: the floor would be a vertical wall there
+            let mut seen: std::collections::HashMap<(u64, u64), (usize, f64)> =
+                std::collections::HashMap::new();
+            'dup: for (i, c) in lines.iter().enumerate() {
+                for (j, q) in c.points_m.iter().enumerate() {
+                    let key = ((q[0] + 0.0).to_bits(), (q[1] + 0.0).to_bits());
+                    match seen.get(&key) {
+                        Some(&(k, z)) if z != c.elevation_m => {
+                            ck.push(
+                                p(&format!("contours/{i}/points_m/{j}")),
+                                json!(q),
+                                format!(
+                                    "this point also lies on contour {k} at elevation {z} m: one \
+                                     point cannot have two elevations"
+                                ),
+                            );
+                            break 'dup;
+                        }
+                        Some(_) => {}
+                        None => {
+                            seen.insert(key, (i, c.elevation_m));
+                        }
+                    }
+                }
+            }
+            drop(seen);
             let contours: Vec<ContourLine> = lines
                 .into_iter()
                 .map(|c| ContourLine {
