@@ -390,3 +390,31 @@ async fn one_point_at_two_elevations_is_refused_naming_the_point() {
     let r = post(&app, "/v1/migration", &floor(0.0)).await;
     assert_ne!(r.status, 422, "{}", String::from_utf8_lossy(&r.body));
 }
+
+/// Rolling a cube: the motion is a solid sphere's (a = 5/7 g sin θ on the plane, independent of
+/// the radius) and the angular speed is v / (side_length_m / 2); a `roll_as_sphere` warning says
+/// which radius was used. A sphere rolls with its own radius and gets no warning.
+#[tokio::test]
+async fn rolling_a_cube_uses_the_inscribed_sphere_and_says_so() {
+    let app = common::app();
+    let body = json!({"lumped_mass": {"motion": "roll"}, "release": {"drop_height_m": 0},
+        "face": {"friction_coefficient": 0.5}, "rock": {"side_length_m": 0.4}});
+    let r = post(&app, "/v1/migration", &body).await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    let w = b["warnings"].as_array().unwrap();
+    let m = w
+        .iter()
+        .find(|w| w["code"] == "roll_as_sphere")
+        .unwrap_or_else(|| panic!("{b}"))["message"]
+        .as_str()
+        .unwrap();
+    assert!(m.contains("0.2 m"), "{m}");
+    let a = &b["arrival"];
+    let v = a["speed_m_s"].as_f64().unwrap();
+    // from rest on the 45° plane over 120 m: v = √(2 · 5/7 g sin θ · 120)
+    let exact = (2.0 * 5.0 / 7.0 * 9.81 * 45f64.to_radians().sin() * 120.0).sqrt();
+    assert!(rel(v, exact) < 1e-9, "{v} vs {exact}");
+    let w_rad = a["angular_speed_rad_s"].as_f64().unwrap();
+    assert!(rel(w_rad, v / 0.2) < 1e-9, "{w_rad} vs {}", v / 0.2);
+}

@@ -572,6 +572,10 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
     })
 }
 
+/// Radius of the rolling sphere, m: a sphere's own radius; any other shape rolls as the sphere
+/// inscribed in its cube, side_length / 2. Rolling uses a solid sphere's inertia (spin-up ×5/7,
+/// KE 0.7 m v²) whatever the radius, so the radius sets only the reported angular speed v / R;
+/// a `roll_as_sphere` warning says so for non-spherical rocks.
 fn roll_radius(rock: &Rock) -> f64 {
     match rock.shape {
         RockShape::Sphere { radius } => radius,
@@ -677,6 +681,19 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
     let pe = m * pr.g * (out.p.z - pr.z_end);
     let total_start = m * pr.e0;
     let residual = arrival.kinetic_energy + pe + imp + fric + trans - total_start;
+    if case.lumped_mass.motion == Motion::Roll
+        && !matches!(case.rock.shape, RockShape::Sphere { .. })
+    {
+        warnings.push(Warning {
+            code: "roll_as_sphere",
+            message: format!(
+                "rolling treats the rock as a solid sphere of radius side_length_m / 2 = {} m \
+                 (the sphere inscribed in its cube): the motion and energies are a rolling \
+                 sphere's whatever the shape, and the radius sets only the angular speed",
+                roll_radius(&case.rock)
+            ),
+        });
+    }
     if out.rebound_cutoff {
         warnings.push(Warning {
             code: "rebound_cutoff",
