@@ -83,6 +83,11 @@ pub struct Config {
     #[arg(long, env = "GANGUE_MAX_BATCH_ITEMS", default_value_t = 1000)]
     pub max_batch_items: u64,
 
+    /// Largest estimated memory of one floor (grid or resampled contours), bytes (default 512 MiB);
+    /// the estimate is made before the floor is built (README "Limits").
+    #[arg(long, env = "GANGUE_MAX_FLOOR_BYTES", default_value_t = 512 * 1024 * 1024)]
+    pub max_floor_bytes: u64,
+
     /// Most time steps of one rigid-block run (default 2e7).
     #[arg(long, env = "GANGUE_MAX_RIGID_STEPS", default_value_t = 2e7)]
     pub max_rigid_steps: f64,

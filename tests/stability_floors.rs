@@ -70,9 +70,22 @@ fn check_energy(r: &MigrationResult) -> Result<(), TestCaseError> {
                 "energy created at t = {}: {mech} > {e0}",
                 tr.time[k]
             );
+            // the balance closes at every sample, not only at the end (rotation included)
+            let scale = e0.abs() + tr.potential_energy[k].abs() + tr.kinetic_energy[k];
+            let bal = mech + tr.dissipated_energy[k] - e0;
             prop_assert!(
-                tr.dissipated_energy[k] >= last - tol,
-                "dissipation decreased"
+                bal.abs() <= 1e-9 * scale,
+                "balance off by {bal} at t = {} (E_start {e0})",
+                tr.time[k]
+            );
+            // a rock caught at a crease is moved onto the edge line (up to 1e-6 of the cell
+            // aside) and its height set there; without kinetic energy to pay for a rise of a
+            // few nm the difference is booked as a (negative) transition: 1e-8 of E_start
+            prop_assert!(
+                tr.dissipated_energy[k] >= last - 10.0 * tol,
+                "dissipation decreased by {} at t = {}",
+                last - tr.dissipated_energy[k],
+                tr.time[k]
             );
             last = tr.dissipated_energy[k];
         }
@@ -112,15 +125,10 @@ fn grid_case(
 proptest! {
     #![proptest_config(ProptestConfig { cases: cases(1000), ..ProptestConfig::default() })]
 
-    /// Small, very rough grids (like the 6×15 repro): never below the floor, energy never
-    /// created, and no run loops to the step limit.
-    ///
-    /// Open defects it finds (issue 7): with the fixed seed, a rolling point mass on a very rough
-    /// 13×3 grid closes its balance only to 1.6e-6 of the starting energy (seed
-    /// 11346017944474131784, dip 15, d 0.31019, amp_rel 4.3186, μ 0, e 0, roll); a flight
-    /// grazing a grid line can miss a facet (now refused by the floor invariant, never answered).
+    /// Small, very rough grids (like the 6×15 repro): never below the floor (a refusal by the
+    /// solver's own floor invariant, a 500, is a failure too), energy never created, the balance
+    /// closed at every sample, and no run loops to the step limit.
     #[test]
-    #[ignore = "open defects listed above; run with --ignored"]
     fn rough_grids_keep_the_rock_above_the_floor(
         seed in any::<u64>(),
         dip in 15.0..=70.0f64,
@@ -168,11 +176,6 @@ proptest! {
             // a release the floor does not hold is refused before the run
             Err(gangue::physics::PhysicsError::InvalidInput { field, .. })
                 if field.starts_with("/release") => return Ok(()),
-            // the solver's own floor invariant refused the run (500, never a wrong number);
-            // known: a flight grazing a grid line can miss a facet (see the regression notes)
-            Err(gangue::physics::PhysicsError::Numerical(m)) if m.contains("below the floor") => {
-                return Ok(());
-            }
             Err(e) => return Err(TestCaseError::fail(format!("{e:?}"))),
         };
         let below = |p: [f64; 3]| -> f64 {
@@ -244,4 +247,134 @@ proptest! {
             Err(e) => return Err(TestCaseError::fail(format!("{e:?}"))),
         }
     }
+}
+
+/// The rough-grid case of a given seed and shape, set up like the property test.
+#[allow(clippy::too_many_arguments)]
+fn rough_case(
+    seed: u64,
+    dip: f64,
+    d: f64,
+    amp_rel: f64,
+    nx: usize,
+    ny: usize,
+    mu: f64,
+    en: f64,
+    et: f64,
+    h: f64,
+    along_frac: f64,
+    across_frac: f64,
+    speed: f64,
+    v_stop: f64,
+    roll: bool,
+) -> MigrationCase {
+    let (floor, _, _) = grid_case(seed, dip, d, amp_rel * d, nx, ny);
+    let mut c = MigrationCase::default();
+    c.face.dip_deg = dip;
+    let x_len = (nx - 1) as f64 * d;
+    c.face.length = 0.9 * x_len * dip.to_radians().cos();
+    c.face.floor = floor;
+    let mu_roll = 2.0 / 7.0 * dip.to_radians().tan();
+    c.face.friction_coefficient = if roll { mu.max(mu_roll) } else { mu };
+    c.lumped_mass.motion = if roll { Motion::Roll } else { Motion::Slide };
+    c.lumped_mass.stop_normal_speed = v_stop;
+    c.face.restitution_normal = en;
+    c.face.restitution_tangential = et;
+    c.release.drop_height = h;
+    c.release.along_dip = along_frac * c.face.length;
+    c.release.across = across_frac * (ny - 1) as f64 * d;
+    c.release.speed = speed;
+    c.end_time = Some(30.0);
+    c.max_steps_per_run = 200_000;
+    c.output.events = true;
+    c.output.trajectory = true;
+    c.output.sample_interval = 0.01;
+    c
+}
+
+/// A rock rolling down a very rough 13 × 3 grid (crossing creases and nodes) closes its energy
+/// balance to rounding: no energy is lost without being booked (was 1.6e-6 of E_start).
+#[test]
+fn rolling_on_a_very_rough_grid_closes_its_energy_balance() {
+    let c = rough_case(
+        11346017944474131784,
+        15.0,
+        0.3101857299755172,
+        4.318594453251201,
+        13,
+        3,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.3626754616076455,
+        -0.048951360031041787,
+        0.0,
+        0.5,
+        true,
+    );
+    let r = run(&c, &Control::unlimited()).expect("runs");
+    let e0 = r.energy.total_start;
+    assert!(
+        r.energy.residual.abs() <= 1e-9 * e0,
+        "residual {} of {e0}",
+        r.energy.residual
+    );
+    check_energy(&r).unwrap();
+}
+
+/// Checks a run of `rough_case` against the independent floor height: every event, sample and
+/// the arrival on or above the floor, energy never created and the balance closed.
+fn assert_above_the_floor(c: &MigrationCase) {
+    let FloorSpec::Grid {
+        origin,
+        spacing,
+        heights,
+    } = &c.face.floor
+    else {
+        unreachable!()
+    };
+    let r = run(c, &Control::unlimited()).expect("runs (no invariant refusal)");
+    let below = |p: [f64; 3]| -> f64 {
+        grid_height(*origin, *spacing, heights, p[0], p[1]).map_or(0.0, |z| z - p[2])
+    };
+    let tol = |p: [f64; 3]| 1e-9 * (1.0 + p[0].abs().max(p[1].abs()).max(p[2].abs()));
+    for e in r.events.as_deref().unwrap_or(&[]) {
+        assert!(below(e.position) <= tol(e.position), "event {e:?}");
+    }
+    let tr = r.trajectory.as_ref().unwrap();
+    for (k, p) in tr.position.iter().enumerate() {
+        assert!(
+            below(*p) <= tol(*p),
+            "sample at t = {} below the floor by {}",
+            tr.time[k],
+            below(*p)
+        );
+    }
+    check_energy(&r).unwrap();
+}
+
+/// A flight running along a grid line (1e-9 m beside it) strikes the facet on the line's
+/// other side instead of passing 1.2e-5 m under the floor (the crossing instant of a nearly
+/// parallel line is ill-conditioned; both cells' facets are candidates).
+#[test]
+fn flight_along_a_grid_line_strikes_the_floor_instead_of_passing_under_it() {
+    let c = rough_case(
+        16161600694145409093,
+        15.0,
+        0.4327371079638415,
+        5.360133919164552,
+        9,
+        5,
+        0.0,
+        0.0,
+        0.6593824675273946,
+        0.0,
+        0.5904562326528293,
+        0.0,
+        2.536038313083185,
+        0.5,
+        false,
+    );
+    assert_above_the_floor(&c);
 }

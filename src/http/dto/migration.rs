@@ -210,7 +210,8 @@ pub struct ReleaseDto {
     /// Vertical lift above the floor point, m, in [0, 1000] (0: starts on the floor).
     #[schema(default = 3.27, minimum = 0.0, maximum = 1000.0, example = 3.27)]
     pub drop_height_m: f64,
-    /// Along-dip position of the floor point, m, in [0, length_m).
+    /// Along-dip position of the floor point, m, in [0, length_m): the upper bound depends on
+    /// `face.length_m` (at most 10 000 m).
     #[schema(default = 0.0, minimum = 0.0, example = 0.0)]
     pub along_dip_m: f64,
     /// Across-face position y, m, in [−1000, 1000].
@@ -268,8 +269,8 @@ impl Default for LumpedMassDto {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RigidBlockDto {
-    /// Time step, s, in (0, Δt_crit] (default: safety × Δt_crit).
-    #[schema(default = json!(null), exclusive_minimum = 0.0, example = 1e-5)]
+    /// Time step, s, in (0, 1] (default: safety × Δt_crit).
+    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1.0, example = 1e-5)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time_step_s: Option<f64>,
     /// Safety factor on the critical time step, in (0, 1].
@@ -306,19 +307,21 @@ pub struct DistributionDto {
     /// Kind of distribution.
     #[schema(default = "uniform", example = "uniform")]
     pub distribution: DistributionKind,
-    /// Lower bound (uniform, truncated_normal).
+    /// Lower bound (uniform, truncated_normal), inside the parameter's own range: restitution
+    /// [0, 1], friction [0, 2], damping ratio [0, 1).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.2)]
     pub min: Option<f64>,
-    /// Upper bound (uniform, truncated_normal).
+    /// Upper bound (uniform, truncated_normal), at least `min` and inside the parameter's own
+    /// range: restitution [0, 1], friction [0, 2], damping ratio [0, 1).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.4)]
     pub max: Option<f64>,
-    /// Mean (normal, truncated_normal).
+    /// Mean (normal, truncated_normal), in [−1000, 1000].
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.3)]
     pub mean: Option<f64>,
-    /// Standard deviation ≥ 0 (normal, truncated_normal).
+    /// Standard deviation, in [0, 1000] (normal, truncated_normal).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.05)]
     pub std: Option<f64>,
@@ -411,8 +414,9 @@ impl DistributionDto {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MonteCarloDto {
-    /// Number of runs, in [1, limit] (default limit 1 000 000).
-    #[schema(default = 200, minimum = 1, example = 200)]
+    /// Number of runs, in [1, limit]: the server's `max_monte_carlo_runs` (/v1/presets
+    /// `limits`), by default 1 000 000, the maximum shown here.
+    #[schema(default = 200, minimum = 1, maximum = 1000000, example = 200)]
     pub runs: u64,
     /// Seed (any u64); the same request and seed give the same bytes.
     #[schema(default = 42, example = 42)]
@@ -523,30 +527,58 @@ impl Default for MigrationRequest {
     }
 }
 
-fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
+/// Refuses a floor whose estimated memory exceeds the configured limit, naming `field`.
+fn check_floor_memory(
+    ck: &mut Checker,
+    field: String,
+    value: Value,
+    what: &str,
+    bytes: f64,
+    limit: u64,
+) {
+    if bytes > limit as f64 {
+        ck.push(
+            field,
+            value,
+            format!(
+                "{what} would need about {:.0} MB, more than the limit of {:.0} MB \
+                 (--max-floor-bytes, GANGUE_MAX_FLOOR_BYTES; see /v1/presets limits)",
+                bytes / 1e6,
+                limit as f64 / 1e6
+            ),
+        );
+    }
+}
+
+fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> FloorSpec {
     let base = "/face/floor";
     let p = |x: &str| format!("{base}/{x}");
-    let stray = |ck: &mut Checker, name: &str, present: bool, kind: &str| {
-        if present {
-            ck.push(
-                p(name),
-                Value::Null,
-                format!("not a field of a {kind} floor"),
-            );
+    // the value sent is echoed (a grid's heights as [rows, columns], contours as their count)
+    let stray = |ck: &mut Checker, name: &str, sent: Option<Value>, kind: &str| {
+        if let Some(v) = sent {
+            ck.push(p(name), v, format!("not a field of a {kind} floor"));
         }
     };
+    let origin_v = f.origin_m.map(|o| json!(o));
+    let spacing_v = f.spacing_m.map(num);
+    let heights_v = f
+        .heights_m
+        .as_ref()
+        .map(|h| json!([h.len(), h.first().map_or(0, Vec::len)]));
+    let contours_v = f.contours.as_ref().map(|c| json!(c.len()));
+    let resolution_v = f.resolution_m.map(num);
     match f.kind {
         FloorKind::Plane => {
-            stray(ck, "origin_m", f.origin_m.is_some(), "plane");
-            stray(ck, "spacing_m", f.spacing_m.is_some(), "plane");
-            stray(ck, "heights_m", f.heights_m.is_some(), "plane");
-            stray(ck, "contours", f.contours.is_some(), "plane");
-            stray(ck, "resolution_m", f.resolution_m.is_some(), "plane");
+            stray(ck, "origin_m", origin_v, "plane");
+            stray(ck, "spacing_m", spacing_v, "plane");
+            stray(ck, "heights_m", heights_v, "plane");
+            stray(ck, "contours", contours_v, "plane");
+            stray(ck, "resolution_m", resolution_v, "plane");
             FloorSpec::Plane
         }
         FloorKind::Grid => {
-            stray(ck, "contours", f.contours.is_some(), "grid");
-            stray(ck, "resolution_m", f.resolution_m.is_some(), "grid");
+            stray(ck, "contours", contours_v, "grid");
+            stray(ck, "resolution_m", resolution_v, "grid");
             let origin = *f.origin_m.get_or_insert([0.0, 0.0]);
             for (i, o) in origin.iter().enumerate() {
                 ck.closed(&p(&format!("origin_m/{i}")), *o, -1e6, 1e6, "m");
@@ -593,6 +625,15 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
                     num(heights[i][j]),
                     "heights must lie in [−1e6, 1e6] m",
                 );
+            } else {
+                check_floor_memory(
+                    ck,
+                    p("heights_m"),
+                    json!([rows, cols]),
+                    &format!("a grid of {rows} × {cols} heights"),
+                    migration::grid_bytes(rows, cols),
+                    max_floor_bytes,
+                );
             }
             FloorSpec::Grid {
                 origin,
@@ -601,9 +642,9 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
             }
         }
         FloorKind::Contours => {
-            stray(ck, "origin_m", f.origin_m.is_some(), "contour");
-            stray(ck, "spacing_m", f.spacing_m.is_some(), "contour");
-            stray(ck, "heights_m", f.heights_m.is_some(), "contour");
+            stray(ck, "origin_m", origin_v, "contour");
+            stray(ck, "spacing_m", spacing_v, "contour");
+            stray(ck, "heights_m", heights_v, "contour");
             let resolution = *f.resolution_m.get_or_insert(1.0);
             ck.closed(&p("resolution_m"), resolution, 0.01, 100.0, "m");
             f.sha256 = Some(f.digest());
@@ -638,7 +679,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
                 {
                     ck.push(
                         p(&format!("contours/{i}/points_m/{j}")),
-                        Value::Null,
+                        json!(c.points_m[j]),
                         "coordinates must lie in [−1e6, 1e6] m",
                     );
                 }
@@ -651,14 +692,56 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker) -> FloorSpec {
                     "at most 4 000 000 points in all",
                 );
             }
+            // one plan point on two elevations: the floor would be a vertical wall there
+            let mut seen: std::collections::HashMap<(u64, u64), (usize, f64)> =
+                std::collections::HashMap::new();
+            'dup: for (i, c) in lines.iter().enumerate() {
+                for (j, q) in c.points_m.iter().enumerate() {
+                    let key = ((q[0] + 0.0).to_bits(), (q[1] + 0.0).to_bits());
+                    match seen.get(&key) {
+                        Some(&(k, z)) if z != c.elevation_m => {
+                            ck.push(
+                                p(&format!("contours/{i}/points_m/{j}")),
+                                json!(q),
+                                format!(
+                                    "this point also lies on contour {k} at elevation {z} m: one \
+                                     point cannot have two elevations"
+                                ),
+                            );
+                            break 'dup;
+                        }
+                        Some(_) => {}
+                        None => {
+                            seen.insert(key, (i, c.elevation_m));
+                        }
+                    }
+                }
+            }
+            drop(seen);
+            let contours: Vec<ContourLine> = lines
+                .into_iter()
+                .map(|c| ContourLine {
+                    elevation: c.elevation_m,
+                    points: c.points_m,
+                })
+                .collect();
+            if total <= 4_000_000 && (0.01..=100.0).contains(&resolution) {
+                // estimated before resampling: the work and memory grow with length / resolution
+                let points = migration::contour_points(&contours, resolution);
+                check_floor_memory(
+                    ck,
+                    p("resolution_m"),
+                    num(resolution),
+                    &format!(
+                        "the contours resampled every {resolution} m have about {points:.3e} \
+                         points and"
+                    ),
+                    points * migration::CONTOUR_BYTES_PER_POINT,
+                    max_floor_bytes,
+                );
+            }
             FloorSpec::Contours {
-                contours: lines
-                    .into_iter()
-                    .map(|c| ContourLine {
-                        elevation: c.elevation_m,
-                        points: c.points_m,
-                    })
-                    .collect(),
+                contours,
                 resolution,
             }
         }
@@ -717,7 +800,7 @@ impl MigrationRequest {
             "",
         );
         ck.closed_open("/face/local_damping", f.local_damping, 0.0, 1.0, "");
-        let floor = resolve_floor(&mut f.floor, &mut ck);
+        let floor = resolve_floor(&mut f.floor, &mut ck, config.max_floor_bytes);
         let rock = self.rock.resolve("/rock", false, &mut ck);
         if !rigid
             && matches!(
@@ -1097,7 +1180,8 @@ pub struct MigrationResponse {
     pub slide_start_along_dip_m: Option<f64>,
     /// Where the rock stopped, m (null: it did not stop).
     pub stop_along_dip_m: Option<f64>,
-    /// Largest apex after the first impact, m.
+    /// Largest apex above the struck floor after the first impact, m: only apexes the rock reached
+    /// before its flight or run ended (a flight cut short by the lower end has none).
     pub max_bounce_height_m: f64,
     /// Energy bookkeeping.
     pub energy: EnergyDto,

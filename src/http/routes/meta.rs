@@ -101,7 +101,8 @@ fn presets_value(state: &AppState) -> Value {
             "max_end_time_s": c.max_end_time_s,
             "max_study_points": c.max_study_points,
             "max_batch_items": c.max_batch_items,
-            "max_rigid_block_steps": c.max_rigid_steps
+            "max_rigid_block_steps": c.max_rigid_steps,
+            "max_floor_bytes": c.max_floor_bytes
         }
     })
 }

@@ -22,7 +22,9 @@ use crate::physics::error::{PhysicsError, PhysicsResult};
 
 /// Largest turn of the velocity, rad, over which the friction direction is held fixed on a facet.
 pub const MAX_TURN: f64 = 0.02;
-/// Normal rebound speed, m/s, below which bouncing ends even when the stop speed is 0.
+/// Normal rebound speed, m/s, below which bouncing ends even when the stop speed is 0: with a
+/// stop speed of 0 the rebounds r, e r, e² r, … would never end, though their flights (total
+/// time 2 r / (g cos θ (1 − e)) on a plane) do; the run says so in a `rebound_cutoff` warning.
 pub const MIN_REBOUND: f64 = 1e-6;
 /// Speed, m/s, below which a sliding rock counts as momentarily at rest.
 const REST_SPEED: f64 = 1e-9;
@@ -156,6 +158,8 @@ pub(crate) struct RunOut {
     pub(crate) steps: u64,
     /// True when the last ground phase had no deceleration (a ≥ 0 along the motion) at the end.
     pub(crate) undecelerated: bool,
+    /// True when a bounce series was ended by [`MIN_REBOUND`] rather than by the stop speed.
+    pub(crate) rebound_cutoff: bool,
 }
 
 struct St {
@@ -166,11 +170,15 @@ struct St {
     impacts: u64,
     slide_start: Option<f64>,
     max_bounce: f64,
+    /// The last rebound's apex height above the struck facet (m) and the time it is reached (s):
+    /// it counts towards `max_bounce` only once the flight has lasted that long.
+    apex: Option<(f64, f64)>,
     e_imp: f64,
     e_fric: f64,
     e_trans: f64,
     spin: (f64, Vector3<f64>),
     undecelerated: bool,
+    rebound_cutoff: bool,
     crease: Option<Crease>,
     /// A floor point (m) and its `along_dip` (m): the last point where the rock was on the floor.
     r: Vector3<f64>,
@@ -240,6 +248,13 @@ fn crease_of(
         e,
         n_tot: n_a.max(0.0) + n_b.max(0.0),
     })
+}
+
+/// Unit vector normal to the crease direction e in the vertical plane through e, pointing up:
+/// the normal about which a sphere rolling along the crease turns.
+fn crease_up(e: &Vector3<f64>) -> Vector3<f64> {
+    let z = Vector3::z();
+    (z - e * e.z).try_normalize(0.0).unwrap_or(z)
 }
 
 /// Moves the rock to height `z` (a rounding-level correction onto a facet or edge) and keeps
@@ -462,11 +477,13 @@ pub(crate) fn simulate(
         impacts: 0,
         slide_start: None,
         max_bounce: 0.0,
+        apex: None,
         e_imp: 0.0,
         e_fric: 0.0,
         e_trans: 0.0,
         spin: (0.0, Vector3::zeros()),
         undecelerated: false,
+        rebound_cutoff: false,
         crease: None,
         r: su.base.0,
         s_r: su.base.1,
@@ -715,6 +732,12 @@ pub(crate) fn simulate(
                 s.p += s.v * dt + gv * (0.5 * dt * dt);
                 s.v += gv * dt;
                 s.t += dt;
+                // the rebound's apex counts only when this flight lasted until it
+                if let Some((h, t_apex)) = s.apex.take()
+                    && s.t >= t_apex
+                {
+                    s.max_bounce = s.max_bounce.max(h);
+                }
                 match end {
                     FlightEnd::Leaves { .. } => break (Phase::Flight, StopReason::LeftFloor),
                     FlightEnd::Clear => {
@@ -759,6 +782,7 @@ pub(crate) fn simulate(
                             },
                         );
                         if r < su.v_stop || r < MIN_REBOUND {
+                            s.rebound_cutoff |= r >= su.v_stop;
                             s.e_trans += 0.5 * r * r;
                             s.v = vt * et;
                             let ke_before = rebound.norm();
@@ -771,7 +795,7 @@ pub(crate) fn simulate(
                             }
                         } else {
                             s.v = rebound;
-                            s.max_bounce = s.max_bounce.max(r * r / (2.0 * g * n.z));
+                            s.apex = Some((r * r / (2.0 * g * n.z), s.t + r / (g * n.z)));
                         }
                     }
                 }
@@ -779,6 +803,13 @@ pub(crate) fn simulate(
             Some(_) if s.crease.is_some() => {
                 let c = s.crease.expect("checked");
                 let ve = s.v.dot(&c.e);
+                // the motion is along the crease line: a velocity part across it (left by a
+                // correction at a vertex) is removed as a booked transition, never dropped
+                let across = s.v.norm_squared() - ve * ve;
+                if across > 0.0 {
+                    s.e_trans += 0.5 * ke_factor * across;
+                    s.v = c.e * ve;
+                }
                 let ge = gv.dot(&c.e);
                 let (ae, dir) = if roll {
                     (ge * (5.0 / 7.0), 0.0)
@@ -823,7 +854,8 @@ pub(crate) fn simulate(
                         a: c.e * ae,
                         fric: c.e * (dir * mu * c.n_tot),
                         diss0,
-                        rolling: None,
+                        // rolling along the crease: the spin axis is horizontal-most normal to it
+                        rolling: roll.then(|| crease_up(&c.e)),
                         spin: (0.0, Vector3::zeros()),
                         on_floor: true,
                     });
@@ -861,6 +893,14 @@ pub(crate) fn simulate(
                 let n = pl.normal();
                 let gn = g * n.z;
                 let gt = gv + n * (g * n.z);
+                // the closed-form piece moves in the facet's plane: a velocity part along its
+                // normal beyond rounding is removed as a booked transition (energy is never
+                // lost without being counted, nor the rock carried off the facet)
+                let vn = s.v.dot(&n);
+                if vn.abs() > 1e-9 * s.v.norm() {
+                    s.e_trans += 0.5 * ke_factor * vn * vn;
+                    s.v -= n * vn;
+                }
                 let speed = s.v.norm();
                 let (a, fdir) = if roll {
                     if speed <= REST_SPEED && gt.norm() <= 1e-12 * g {
@@ -965,12 +1005,18 @@ pub(crate) fn simulate(
                             s.p.y += eps * dir.y / h;
                         }
                         match floor.locate(s.p.x, s.p.y, dir.x, dir.y) {
+                            Some(fc) if s.ground.is_some() && s.crease.is_none() => {
+                                // onto the new facet like at an edge: the velocity is projected
+                                // onto its plane (or the rock takes off), the loss booked
+                                change_facet(&mut s, fc, Some(n), &mut rec);
+                            }
                             Some(fc) => {
                                 if s.ground.is_some() {
                                     s.ground = Some(fc);
                                 }
+                                let kf = if s.ground.is_some() { ke_factor } else { 1.0 };
                                 let z = floor.facet_plane(fc).z(s.p.x, s.p.y);
-                                set_height(&mut s, z, g, ke_factor);
+                                set_height(&mut s, z, g, kf);
                             }
                             None => break (moving, StopReason::LeftFloor),
                         }
@@ -1032,6 +1078,7 @@ pub(crate) fn simulate(
         e_trans: s.e_trans,
         e_rot,
         undecelerated: !stopped && s.ground.is_some() && s.undecelerated,
+        rebound_cutoff: s.rebound_cutoff,
         steps,
     })
 }

@@ -26,7 +26,9 @@ pub use rigid_block::{
     RigidBlockReport, bounce_restitution,
 };
 pub use stats::{Histogram, Summary};
-pub use terrain::ContourLine;
+pub use terrain::{
+    CONTOUR_BYTES_PER_POINT, ContourLine, GRID_BYTES_PER_POINT, contour_points, grid_bytes,
+};
 
 use self::lumped_mass::{Recording, RunOut, Setup, simulate};
 use self::terrain::Floor;
@@ -151,7 +153,8 @@ pub struct MonteCarlo {
     pub restitution_normal: Distribution,
     /// e_t, drawn at every impact after e_n and clipped to [0, 1] (default U[0.7, 0.9]).
     pub restitution_tangential: Distribution,
-    /// μ, drawn once per run and clipped to ≥ 0 (default: the face's μ for every run).
+    /// μ, drawn once per run and clipped to [0, 2], counted in a `friction_clipped` warning
+    /// (default: the face's μ for every run).
     pub friction_coefficient: Option<Distribution>,
 }
 
@@ -405,7 +408,8 @@ pub struct MigrationResult {
     pub slide_start_along_dip: Option<f64>,
     /// Along-dip position where the rock came to rest, m (None: it did not).
     pub stop_along_dip: Option<f64>,
-    /// Largest apex height above the struck floor after the first impact, m.
+    /// Largest apex height above the struck floor after the first impact, m: only apexes reached
+    /// before the flight or the run ended.
     pub max_bounce_height: f64,
     /// Energy budget of the nominal run.
     pub energy: EnergyBudget,
@@ -585,6 +589,10 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
     })
 }
 
+/// Radius of the rolling sphere, m: a sphere's own radius; any other shape rolls as the sphere
+/// inscribed in its cube, side_length / 2. Rolling uses a solid sphere's inertia (spin-up ×5/7,
+/// KE 0.7 m v²) whatever the radius, so the radius sets only the reported angular speed v / R;
+/// a `roll_as_sphere` warning says so for non-spherical rocks.
 fn roll_radius(rock: &Rock) -> f64 {
     match rock.shape {
         RockShape::Sphere { radius } => radius,
@@ -686,6 +694,29 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
     let pe = m * pr.g * (out.p.z - pr.z_end);
     let total_start = m * pr.e0;
     let residual = arrival.kinetic_energy + pe + imp + fric + trans - total_start;
+    if case.lumped_mass.motion == Motion::Roll
+        && !matches!(case.rock.shape, RockShape::Sphere { .. })
+    {
+        warnings.push(Warning {
+            code: "roll_as_sphere",
+            message: format!(
+                "rolling treats the rock as a solid sphere of radius side_length_m / 2 = {} m \
+                 (the sphere inscribed in its cube): the motion and energies are a rolling \
+                 sphere's whatever the shape, and the radius sets only the angular speed",
+                roll_radius(&case.rock)
+            ),
+        });
+    }
+    if out.rebound_cutoff {
+        warnings.push(Warning {
+            code: "rebound_cutoff",
+            message: format!(
+                "the bounces ended at a normal rebound speed below {MIN_REBOUND:e} m/s (the \
+                 stop speed asked for is lower): an infinite series of ever smaller bounces, \
+                 whose total flight time is finite, is taken to end there and the rock to slide"
+            ),
+        });
+    }
     if out.reason == StopReason::EndTime && out.undecelerated {
         warnings.push(Warning {
             code: "stop_distance_infinite",
@@ -713,6 +744,26 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
         Some(mc) => {
             let runs = ensemble(case, &pr, mc, control)?;
             let st = statistics_of(mc, &runs);
+            if let Some(d) = &mc.friction_coefficient {
+                // μ is the first draw of each run's stream: count the draws outside [0, 2]
+                let clipped = (0..mc.runs)
+                    .filter(|&i| {
+                        let mu = monte_carlo::sample(d, &mut monte_carlo::run_stream(mc.seed, i));
+                        !(0.0..=MU_MAX).contains(&mu)
+                    })
+                    .count();
+                if clipped > 0 {
+                    warnings.push(Warning {
+                        code: "friction_clipped",
+                        message: format!(
+                            "{clipped} of {} drawn friction coefficients fell outside [0, 2] and \
+                             were clipped to it (a normal distribution has unbounded tails; use \
+                             truncated_normal to resample instead)",
+                            mc.runs
+                        ),
+                    });
+                }
+            }
             if runs.len() < 2 {
                 warnings.push(Warning {
                     code: "single_run",
@@ -780,7 +831,7 @@ fn arrival_of(pr: &Prepared, out: &RunOut) -> Arrival {
         phase: out.phase,
         stop_reason: out.reason,
         time: out.t,
-        speed: out.v.norm(),
+        speed: robust_norm(&out.v),
         along_dip_velocity: out.v.dot(&mean.dip_dir()),
         normal_velocity: out.v.dot(&mean.normal()),
         along_dip: mean.along(&out.p),
@@ -790,10 +841,23 @@ fn arrival_of(pr: &Prepared, out: &RunOut) -> Arrival {
             height_above_floor(&pr.floor, &out.p, &out.v)
         },
         position: v3(&out.p),
-        angular_speed: out.omega.norm(),
+        angular_speed: robust_norm(&out.omega),
         kinetic_energy: ke,
         rotational_energy: m * out.e_rot,
     }
+}
+
+/// Largest friction coefficient of the face's range [0, 2]; drawn values are clipped to it.
+const MU_MAX: f64 = 2.0;
+
+/// Euclidean norm without underflow of the squares: a speed of 1e-163 m/s (a subnormal face
+/// length) is reported as such, not as 0.
+fn robust_norm(v: &Vector3<f64>) -> f64 {
+    let m = v.amax();
+    if m == 0.0 || !m.is_finite() {
+        return v.norm();
+    }
+    m * (v / m).norm()
 }
 
 fn sample_trajectory(
@@ -880,7 +944,7 @@ fn sample_trajectory(
             height_above_floor(&pr.floor, &p, &v)
         });
         tr.velocity.push(v3(&v));
-        tr.speed.push(v.norm());
+        tr.speed.push(robust_norm(&v));
         tr.angular_velocity.push(v3(&omega));
         tr.kinetic_energy.push(m * (0.5 * v.norm_squared() + rot));
         tr.rotational_energy.push(m * rot);
@@ -905,7 +969,7 @@ fn ensemble(
     let one = |i: u64| -> PhysicsResult<RunSummary> {
         let mut rng = monte_carlo::run_stream(mc.seed, i);
         let mu = match &mc.friction_coefficient {
-            Some(d) => monte_carlo::sample(d, &mut rng).max(0.0),
+            Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, MU_MAX),
             None => case.face.friction_coefficient,
         };
         let mut draw = || {
@@ -916,7 +980,7 @@ fn ensemble(
         let o = simulate(&su, mu, &mut draw, None, Some(control))?;
         Ok(RunSummary {
             time: o.t,
-            speed: o.v.norm(),
+            speed: robust_norm(&o.v),
             kinetic_energy: m * (0.5 * o.v.norm_squared() + o.e_rot),
             impact_count: o.impacts,
             runout: mean.along(&o.p) - pr.release_along,

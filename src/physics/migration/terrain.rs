@@ -195,6 +195,57 @@ impl CellGrid {
         Some(c as usize)
     }
 
+    /// The cell (ci, cj) and those of its neighbours whose shared boundary (edge or corner) the
+    /// straight path (x, y) + (vx, vy) t over [t0, t1] comes within `tol` of, m: a path running
+    /// along a grid line is in both cells at once as far as rounding can tell, and the instant it
+    /// crosses the line is then ill-conditioned, so both cells' facets are candidates.
+    #[allow(clippy::too_many_arguments)]
+    fn near_cells(
+        &self,
+        ci: usize,
+        cj: usize,
+        (x, y, vx, vy): (f64, f64, f64, f64),
+        t0: f64,
+        t1: f64,
+        tol: f64,
+    ) -> ([(usize, usize); 9], usize) {
+        let span = |u: f64, r: f64| {
+            let (a, b) = (u + r * t0, u + r * t1.min(1e300));
+            (a.min(b), a.max(b))
+        };
+        let (xa, xb) = span(x, vx);
+        let (ya, yb) = span(y, vy);
+        let lo_x = self.x0 + ci as f64 * self.d;
+        let lo_y = self.y0 + cj as f64 * self.d;
+        let dx: &[isize] = match (
+            ci > 0 && xa <= lo_x + tol,
+            ci + 1 < self.ncx && xb >= lo_x + self.d - tol,
+        ) {
+            (true, true) => &[0, -1, 1],
+            (true, false) => &[0, -1],
+            (false, true) => &[0, 1],
+            _ => &[0],
+        };
+        let dy: &[isize] = match (
+            cj > 0 && ya <= lo_y + tol,
+            cj + 1 < self.ncy && yb >= lo_y + self.d - tol,
+        ) {
+            (true, true) => &[0, -1, 1],
+            (true, false) => &[0, -1],
+            (false, true) => &[0, 1],
+            _ => &[0],
+        };
+        let mut out = [(ci, cj); 9];
+        let mut n = 0;
+        for &oy in dy {
+            for &ox in dx {
+                out[n] = ((ci as isize + ox) as usize, (cj as isize + oy) as usize);
+                n += 1;
+            }
+        }
+        (out, n)
+    }
+
     /// Walks the cells crossed by (x, y) + (vx, vy) t for t in [0, t_max]; `visit(ci, cj, t0, t1)`
     /// returns a hit inside the cell's time window or None to go on.
     fn walk(
@@ -468,6 +519,41 @@ pub struct ContourLine {
     pub elevation: f64,
     /// Plan points [x, y] of the polyline, m.
     pub points: Vec<[f64; 2]>,
+}
+
+/// Bound on the memory a contour floor takes while it is built and used, bytes per resampled
+/// point: the triangulation's vertices, half-edges and faces (about 2 triangles per point), the
+/// facet table (two 64-byte planes per point), the neighbour and bucket arrays; measured peak
+/// 1e5–1e6 points: see README "Limits".
+pub const CONTOUR_BYTES_PER_POINT: f64 = 512.0;
+
+/// Bound on the memory of a grid floor, bytes per height (the heights as received and as
+/// stored, with room for the allocator), besides its facet table (see [`grid_bytes`]).
+pub const GRID_BYTES_PER_POINT: f64 = 32.0;
+
+/// Estimated memory of an `rows` × `cols` grid floor, bytes: [`GRID_BYTES_PER_POINT`] per
+/// height plus the 64-byte planes of at most 2²⁰ tabled facets.
+pub fn grid_bytes(rows: usize, cols: usize) -> f64 {
+    let points = rows as f64 * cols as f64;
+    let facets = 2.0 * rows.saturating_sub(1) as f64 * cols.saturating_sub(1) as f64;
+    GRID_BYTES_PER_POINT * points + 64.0 * facets.min(MAX_TABLED_FACETS as f64)
+}
+
+/// Number of points a contour set resampled at most `resolution` m apart will have, computed
+/// before resampling (as f64, so that no count overflows): the figure the memory limit is
+/// checked against.
+pub fn contour_points(lines: &[ContourLine], resolution: f64) -> f64 {
+    let mut n = 0.0;
+    for line in lines {
+        n += line.points.len() as f64;
+        for w in line.points.windows(2) {
+            // the resampling's own arithmetic (Floor::contours)
+            let len = ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt();
+            let k = (len / resolution).ceil().max(1.0);
+            n += k - 1.0;
+        }
+    }
+    n
 }
 
 struct HPoint {
@@ -861,21 +947,32 @@ impl Floor {
                 Some(t) if t <= t_max => FlightEnd::Hit { t, facet: 0 },
                 _ => FlightEnd::Clear,
             },
+            // In each cell of the walk, the candidates are its facets and those of the cells
+            // whose boundary the path runs within `near` of; a root counts when its point lies in
+            // the facet (closed, with a rounding tolerance), not in the past and not after the cell's
+            // window. A root before the window is a strike all the same (the window's start is formed
+            // from a crossing time that is ill-conditioned when the path runs along a line), so
+            // no strike can fall between two cells' windows.
             FloorKind::Grid(gr) => {
                 let tol = 1e-9 * gr.cells.d;
+                let near = 1e-6 * gr.cells.d;
+                let path = (p.x, p.y, v.x, v.y);
                 gr.cells.walk(p.x, p.y, v.x, v.y, t_max, |ci, cj, t0, t1| {
                     let mut best: Option<(f64, Facet)> = None;
-                    for half in 0..2 {
-                        let f = gr.facet(ci, cj, half);
-                        let pl = gr.plane(f);
-                        if let Some(r) = root(&pl)
-                            && r >= t0 - 1e-12 * (1.0 + t0)
-                            && r <= t1
-                            && best.is_none_or(|b| r < b.0)
-                        {
-                            let (c, _) = gr.corners(f);
-                            if inside_tri(&c, p.x + v.x * r, p.y + v.y * r, tol) {
-                                best = Some((r.max(0.0), f));
+                    let (cells, n) = gr.cells.near_cells(ci, cj, path, t0, t1, near);
+                    for &(ni, nj) in &cells[..n] {
+                        for half in 0..2 {
+                            let f = gr.facet(ni, nj, half);
+                            let pl = gr.plane(f);
+                            if let Some(r) = root(&pl)
+                                && r >= -1e-12
+                                && r <= t1 + 1e-12 * (1.0 + t1)
+                                && best.is_none_or(|b| r < b.0)
+                            {
+                                let (c, _) = gr.corners_at(f, nj, ni);
+                                if inside_tri(&c, p.x + v.x * r, p.y + v.y * r, tol) {
+                                    best = Some((r.max(0.0), f));
+                                }
                             }
                         }
                     }
@@ -884,17 +981,22 @@ impl Floor {
             }
             FloorKind::Mesh(m) => {
                 let tol = 1e-9 * m.cells.d;
+                let near = 1e-6 * m.cells.d;
+                let path = (p.x, p.y, v.x, v.y);
                 m.cells.walk(p.x, p.y, v.x, v.y, t_max, |ci, cj, t0, t1| {
                     let mut best: Option<(f64, Facet)> = None;
-                    for &f in m.bucket(ci, cj) {
-                        let pl = m.plane(f);
-                        if let Some(r) = root(&pl)
-                            && r >= t0 - 1e-12 * (1.0 + t0)
-                            && r <= t1 + 1e-12 * (1.0 + t1)
-                            && best.is_none_or(|b| r < b.0)
-                            && inside_tri(&m.corners(f).0, p.x + v.x * r, p.y + v.y * r, tol)
-                        {
-                            best = Some((r.max(0.0), f));
+                    let (cells, n) = m.cells.near_cells(ci, cj, path, t0, t1, near);
+                    for &(ni, nj) in &cells[..n] {
+                        for &f in m.bucket(ni, nj) {
+                            let pl = m.plane(f);
+                            if let Some(r) = root(&pl)
+                                && r >= -1e-12
+                                && r <= t1 + 1e-12 * (1.0 + t1)
+                                && best.is_none_or(|b| r < b.0)
+                                && inside_tri(&m.corners(f).0, p.x + v.x * r, p.y + v.y * r, tol)
+                            {
+                                best = Some((r.max(0.0), f));
+                            }
                         }
                     }
                     best
