@@ -159,16 +159,23 @@ async fn subnormal_face_length_without_friction_gives_the_closed_form_answer_not
 #[tokio::test]
 async fn one_run_ensemble_warns_that_its_std_is_null() {
     let app = common::app();
-    let r = post(
-        &app,
-        "/v1/migration",
-        &json!({"monte_carlo": {"runs": 1, "seed": 7}}),
-    )
-    .await;
-    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
-    let b = r.json();
-    let w = b["warnings"].as_array().unwrap();
-    assert!(w.iter().any(|w| w["code"] == "single_run"), "{b}");
+    // Both methods share the ensemble's warnings (the rigid block on a short face to stay cheap).
+    for req in [
+        json!({"monte_carlo": {"runs": 1, "seed": 7}}),
+        json!({"method": "rigid_block", "face": {"length_m": 2.0},
+               "release": {"drop_height_m": 0.0},
+               "monte_carlo": {"runs": 1, "seed": 7,
+                   "friction_coefficient": {"distribution": "normal", "mean": 1.9, "std": 0.5}}}),
+    ] {
+        let r = post(&app, "/v1/migration", &req).await;
+        assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+        let b = r.json();
+        let w = b["warnings"].as_array().unwrap();
+        assert!(w.iter().any(|w| w["code"] == "single_run"), "{b}");
+        for run in b["statistics"]["impact_count"]["max"].as_f64().into_iter() {
+            assert!(run.is_finite());
+        }
+    }
 }
 
 /// Contours `[[x, ±10000]]` every 10 m resampled at 1 cm would be 3.2e7 points (7 GB, 60 s):

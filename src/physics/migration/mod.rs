@@ -744,42 +744,7 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
         Some(mc) => {
             let runs = ensemble(case, &pr, mc, control)?;
             let st = statistics_of(mc, &runs);
-            if let Some(d) = &mc.friction_coefficient {
-                // μ is the first draw of each run's stream: count the draws outside [0, 2]
-                let clipped = (0..mc.runs)
-                    .filter(|&i| {
-                        let mu = monte_carlo::sample(d, &mut monte_carlo::run_stream(mc.seed, i));
-                        !(0.0..=MU_MAX).contains(&mu)
-                    })
-                    .count();
-                if clipped > 0 {
-                    warnings.push(Warning {
-                        code: "friction_clipped",
-                        message: format!(
-                            "{clipped} of {} drawn friction coefficients fell outside [0, 2] and \
-                             were clipped to it (a normal distribution has unbounded tails; use \
-                             truncated_normal to resample instead)",
-                            mc.runs
-                        ),
-                    });
-                }
-            }
-            if runs.len() < 2 {
-                warnings.push(Warning {
-                    code: "single_run",
-                    message: "an ensemble of one run has no sample standard deviation: every \
-                              std is null; ask for runs ≥ 2"
-                        .into(),
-                });
-            }
-            if st.speed.is_none() {
-                warnings.push(Warning {
-                    code: "no_run_reached_lower_end",
-                    message: "no run reached the lower end: speed, kinetic energy and time \
-                              statistics are null"
-                        .into(),
-                });
-            }
+            warnings.extend(ensemble_warnings(mc, &runs, &st));
             (Some(st), case.output.runs_csv.then_some(runs))
         }
         None => {
@@ -848,7 +813,7 @@ fn arrival_of(pr: &Prepared, out: &RunOut) -> Arrival {
 }
 
 /// Largest friction coefficient of the face's range [0, 2]; drawn values are clipped to it.
-const MU_MAX: f64 = 2.0;
+pub(super) const MU_MAX: f64 = 2.0;
 
 /// Euclidean norm without underflow of the squares: a speed of 1e-163 m/s (a subnormal face
 /// length) is reported as such, not as 0.
@@ -1018,6 +983,53 @@ fn ensemble(
         c?;
     }
     Ok(all)
+}
+
+/// Warnings of an ensemble, whatever the method: friction draws clipped to [0, 2] (μ is the first
+/// draw of each run's stream), a single run (no standard deviation), no run at the lower end.
+pub(super) fn ensemble_warnings(
+    mc: &MonteCarlo,
+    runs: &[RunSummary],
+    st: &Statistics,
+) -> Vec<Warning> {
+    let mut warnings = Vec::new();
+    if let Some(d) = &mc.friction_coefficient {
+        // μ is the first draw of each run's stream: count the draws outside [0, 2]
+        let clipped = (0..mc.runs)
+            .filter(|&i| {
+                let mu = monte_carlo::sample(d, &mut monte_carlo::run_stream(mc.seed, i));
+                !(0.0..=MU_MAX).contains(&mu)
+            })
+            .count();
+        if clipped > 0 {
+            warnings.push(Warning {
+                code: "friction_clipped",
+                message: format!(
+                    "{clipped} of {} drawn friction coefficients fell outside [0, 2] and \
+                     were clipped to it (a normal distribution has unbounded tails; use \
+                     truncated_normal to resample instead)",
+                    mc.runs
+                ),
+            });
+        }
+    }
+    if runs.len() < 2 {
+        warnings.push(Warning {
+            code: "single_run",
+            message: "an ensemble of one run has no sample standard deviation: every \
+                      std is null; ask for runs ≥ 2"
+                .into(),
+        });
+    }
+    if st.speed.is_none() {
+        warnings.push(Warning {
+            code: "no_run_reached_lower_end",
+            message: "no run reached the lower end: speed, kinetic energy and time \
+                      statistics are null"
+                .into(),
+        });
+    }
+    warnings
 }
 
 fn statistics_of(mc: &MonteCarlo, runs: &[RunSummary]) -> Statistics {

@@ -40,7 +40,7 @@ use super::shape::BlockShape;
 use super::terrain::{Floor, FloorKind, FloorTriangle, MeanPlane};
 use super::{
     Arrival, EnergyBudget, Event, MigrationCase, MigrationResult, MonteCarlo, RunSummary,
-    Trajectory, Warning,
+    Trajectory,
 };
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
@@ -1478,14 +1478,7 @@ pub(crate) fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<Migr
         Some(mc) => {
             let runs = ensemble(case, &model, mc, control)?;
             let st = super::statistics_of(mc, &runs);
-            if st.speed.is_none() {
-                warnings.push(Warning {
-                    code: "no_run_reached_lower_end",
-                    message: "no run reached the lower end: speed, kinetic energy and time \
-                              statistics are null"
-                        .into(),
-                });
-            }
+            warnings.extend(super::ensemble_warnings(mc, &runs, &st));
             (Some(st), case.output.runs_csv.then_some(runs))
         }
         None => {
@@ -1536,7 +1529,7 @@ fn ensemble(
     let one = |i: u64| -> PhysicsResult<RunSummary> {
         let mut rng = monte_carlo::run_stream(mc.seed, i);
         let mu = match &mc.friction_coefficient {
-            Some(d) => monte_carlo::sample(d, &mut rng).max(0.0),
+            Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, super::MU_MAX),
             None => case.face.friction_coefficient,
         };
         let beta = match &o.critical_damping_ratio_distribution {
