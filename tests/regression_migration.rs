@@ -425,3 +425,71 @@ async fn rolling_a_cube_uses_the_inscribed_sphere_and_says_so() {
     let w_rad = a["angular_speed_rad_s"].as_f64().unwrap();
     assert!(rel(w_rad, v / 0.2) < 1e-9, "{w_rad} vs {}", v / 0.2);
 }
+
+/// Crossing contours have no single height where they cross: contours of different elevations
+/// that cross, and one polyline crossing itself, are 422 naming the later crossing segment by
+/// its first point and echoing that point; contours meeting at a shared point at one elevation
+/// (a closed ring, a contour ending on another) are accepted.
+#[tokio::test]
+async fn crossing_contours_are_refused_naming_the_crossing_segment() {
+    let app = common::app();
+    let floor = |extra: Value| {
+        let mut lines = vec![
+            json!({"elevation_m": 0, "points_m": [[0, -5], [0, 5]]}),
+            json!({"elevation_m": -10, "points_m": [[10, -5], [10, 5]]}),
+        ];
+        lines.push(extra);
+        json!({"face": {"length_m": 8, "floor": {"kind": "contours", "contours": lines}},
+            "release": {"along_dip_m": 1}})
+    };
+    // contour 2 at −5 m runs from x = 5 back across contour 0 at x = 0
+    let r = post(
+        &app,
+        "/v1/migration",
+        &floor(json!({"elevation_m": -5, "points_m": [[5, -5], [5, 0], [-1, 3]]})),
+    )
+    .await;
+    let b = r.json();
+    assert_eq!(r.status, 422, "{b}");
+    assert_eq!(
+        b["errors"][0]["field"], "/face/floor/contours/2/points_m/1",
+        "{b}"
+    );
+    assert_eq!(b["errors"][0]["value"], json!([5.0, 0.0]), "{b}");
+    assert_eq!(b["errors"].as_array().unwrap().len(), 1, "{b}");
+    // contour 2 at −5 m crosses itself at (5, 0)
+    let r = post(
+        &app,
+        "/v1/migration",
+        &floor(json!({"elevation_m": -5, "points_m": [[5, -5], [5, 4], [3, 0], [7, 0]]})),
+    )
+    .await;
+    let b = r.json();
+    assert_eq!(r.status, 422, "{b}");
+    assert_eq!(
+        b["errors"][0]["field"], "/face/floor/contours/2/points_m/2",
+        "{b}"
+    );
+    assert_eq!(b["errors"][0]["value"], json!([3.0, 0.0]), "{b}");
+    // a contour of another elevation ending on contour 1 (a point at two heights)
+    let r = post(
+        &app,
+        "/v1/migration",
+        &floor(json!({"elevation_m": -5, "points_m": [[5, -5], [10, 1]]})),
+    )
+    .await;
+    let b = r.json();
+    assert_eq!(r.status, 422, "{b}");
+    assert_eq!(
+        b["errors"][0]["field"], "/face/floor/contours/2/points_m/0",
+        "{b}"
+    );
+    // touching at one elevation is fine: a closed ring, and a contour ending on contour 1
+    for ok in [
+        json!({"elevation_m": -5, "points_m": [[4, -2], [6, -2], [6, 2], [4, 2], [4, -2]]}),
+        json!({"elevation_m": -10, "points_m": [[12, -5], [10, 1]]}),
+    ] {
+        let r = post(&app, "/v1/migration", &floor(ok.clone())).await;
+        assert_eq!(r.status, 200, "{ok}: {}", String::from_utf8_lossy(&r.body));
+    }
+}

@@ -695,6 +695,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
             // one plan point on two elevations: the floor would be a vertical wall there
             let mut seen: std::collections::HashMap<(u64, u64), (usize, f64)> =
                 std::collections::HashMap::new();
+            let mut dup = false;
             'dup: for (i, c) in lines.iter().enumerate() {
                 for (j, q) in c.points_m.iter().enumerate() {
                     let key = ((q[0] + 0.0).to_bits(), (q[1] + 0.0).to_bits());
@@ -708,6 +709,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                                      point cannot have two elevations"
                                 ),
                             );
+                            dup = true;
                             break 'dup;
                         }
                         Some(_) => {}
@@ -718,6 +720,34 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                 }
             }
             drop(seen);
+            // crossing contours: no single height where they cross
+            if !dup
+                && total <= 4_000_000
+                && let Some(x) = find_crossing(&lines)
+            {
+                let (i, k) = x.later;
+                let (i2, k2) = x.earlier;
+                let what = if lines[i].elevation_m == lines[i2].elevation_m {
+                    "crosses"
+                } else {
+                    "meets"
+                };
+                ck.push(
+                    p(&format!("contours/{i}/points_m/{k}")),
+                    json!(lines[i].points_m[k]),
+                    format!(
+                        "the segment from this point to points_m/{} {what} the segment \
+                             contours/{i2}/points_m/{k2}–{} (elevation {} m) near [{}, {}]: \
+                             contours must not cross (touching at a point at the same elevation \
+                             is allowed)",
+                        k + 1,
+                        k2 + 1,
+                        lines[i2].elevation_m,
+                        x.at[0],
+                        x.at[1]
+                    ),
+                );
+            }
             let contours: Vec<ContourLine> = lines
                 .into_iter()
                 .map(|c| ContourLine {
@@ -1370,4 +1400,186 @@ impl MigrationResponse {
             model_version: meta.model_version,
         }
     }
+}
+
+/// A place where contour polylines cross: the later segment (contour, first point index), the
+/// earlier one, and a plan point of the contact, m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Crossing {
+    later: (usize, usize),
+    earlier: (usize, usize),
+    at: [f64; 2],
+}
+
+/// Sign of the orientation of (a, b, c): +1 left turn, −1 right turn, 0 collinear within the
+/// rounding error of the determinant.
+fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> i8 {
+    let l = (b[0] - a[0]) * (c[1] - a[1]);
+    let r = (b[1] - a[1]) * (c[0] - a[0]);
+    let det = l - r;
+    let bound = 8.0 * f64::EPSILON * (l.abs() + r.abs());
+    if det > bound {
+        1
+    } else if det < -bound {
+        -1
+    } else {
+        0
+    }
+}
+
+/// Whether c (collinear with a–b) lies within the bounding box of a–b.
+fn on_segment(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> bool {
+    c[0] >= a[0].min(b[0])
+        && c[0] <= a[0].max(b[0])
+        && c[1] >= a[1].min(b[1])
+        && c[1] <= a[1].max(b[1])
+}
+
+/// How two plan segments meet: `None` apart, `Some(true)` crossing through each other's
+/// interiors, `Some(false)` touching (an end on the other segment, or collinear overlap);
+/// with a point of the contact.
+fn contact(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> Option<(bool, [f64; 2])> {
+    let (o1, o2) = (orient(a, b, c), orient(a, b, d));
+    let (o3, o4) = (orient(c, d, a), orient(c, d, b));
+    if o1 * o2 < 0 && o3 * o4 < 0 {
+        // the crossing point, for the message only
+        let r = [b[0] - a[0], b[1] - a[1]];
+        let s = [d[0] - c[0], d[1] - c[1]];
+        let den = r[0] * s[1] - r[1] * s[0];
+        let t = ((c[0] - a[0]) * s[1] - (c[1] - a[1]) * s[0]) / den;
+        return Some((true, [a[0] + t * r[0], a[1] + t * r[1]]));
+    }
+    if o1 == 0 && on_segment(a, b, c) {
+        return Some((false, c));
+    }
+    if o2 == 0 && on_segment(a, b, d) {
+        return Some((false, d));
+    }
+    if o3 == 0 && on_segment(c, d, a) {
+        return Some((false, a));
+    }
+    if o4 == 0 && on_segment(c, d, b) {
+        return Some((false, b));
+    }
+    None
+}
+
+/// Finds contour segments that give the floor no single height: two contours of different
+/// elevations that meet anywhere, or segments (of one polyline or of two at the same elevation)
+/// that cross through each other. Touching at a point at the same elevation is allowed. Uses a
+/// uniform grid of at most n + 16 cells (n segments), each segment entered in the cells it
+/// passes, so the work is about linear for contours spread over their extent. Reports the
+/// crossing whose later segment comes first in the request.
+fn find_crossing(lines: &[ContourDto]) -> Option<Crossing> {
+    // segments as (contour, first point index)
+    let mut segs: Vec<(u32, u32)> = Vec::new();
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    let mut total_len = 0.0;
+    for (i, c) in lines.iter().enumerate() {
+        for q in &c.points_m {
+            for a in 0..2 {
+                lo[a] = lo[a].min(q[a]);
+                hi[a] = hi[a].max(q[a]);
+            }
+        }
+        for k in 0..c.points_m.len().saturating_sub(1) {
+            let (p, q) = (c.points_m[k], c.points_m[k + 1]);
+            total_len += (q[0] - p[0]).abs().max((q[1] - p[1]).abs());
+            segs.push((i as u32, k as u32));
+        }
+    }
+    let n = segs.len();
+    if n < 2 {
+        return None;
+    }
+    let (w, h) = ((hi[0] - lo[0]).max(0.0), (hi[1] - lo[1]).max(0.0));
+    let mut cell = (total_len / n as f64)
+        .max((w * h / n as f64).sqrt())
+        .max(w.max(h) * 1e-9)
+        .max(f64::MIN_POSITIVE);
+    let max_cells = n as f64 + 16.0;
+    let dims = |cell: f64| ((w / cell).floor() + 1.0, (h / cell).floor() + 1.0);
+    while {
+        let (a, b) = dims(cell);
+        a * b > max_cells
+    } {
+        cell *= 2.0;
+    }
+    let (ncx, ncy) = dims(cell);
+    let (ncx, ncy) = (ncx as usize, ncy as usize);
+    let col = |x: f64| (((x - lo[0]) / cell).floor().max(0.0) as usize).min(ncx - 1);
+    let row = |y: f64| (((y - lo[1]) / cell).floor().max(0.0) as usize).min(ncy - 1);
+    let ends = |s: (u32, u32)| {
+        let pts = &lines[s.0 as usize].points_m;
+        (pts[s.1 as usize], pts[s.1 as usize + 1])
+    };
+    // the cells a segment passes: per column strip, the rows its y spans there (widened by one
+    // rounding step so that no cell it touches is missed)
+    let cells_of = |s: (u32, u32), f: &mut dyn FnMut(usize)| {
+        let (a, b) = ends(s);
+        let (i0, i1) = (col(a[0].min(b[0])), col(a[0].max(b[0])));
+        for i in i0..=i1 {
+            let (y0, y1) = if i0 == i1 || a[0] == b[0] {
+                (a[1].min(b[1]), a[1].max(b[1]))
+            } else {
+                let xl = (lo[0] + i as f64 * cell).max(a[0].min(b[0]));
+                let xr = (lo[0] + (i + 1) as f64 * cell).min(a[0].max(b[0]));
+                let y = |x: f64| a[1] + (x - a[0]) / (b[0] - a[0]) * (b[1] - a[1]);
+                let (ya, yb) = (y(xl), y(xr));
+                let slack = 1e-9 * cell;
+                (
+                    (ya.min(yb) - slack).max(a[1].min(b[1])),
+                    (ya.max(yb) + slack).min(a[1].max(b[1])),
+                )
+            };
+            for j in row(y0)..=row(y1) {
+                f(j * ncx + i);
+            }
+        }
+    };
+    let mut start = vec![0u32; ncx * ncy + 1];
+    for &s in &segs {
+        cells_of(s, &mut |c| start[c + 1] += 1);
+    }
+    for c in 1..start.len() {
+        start[c] += start[c - 1];
+    }
+    let mut fill = start.clone();
+    let mut items = vec![0u32; start[ncx * ncy] as usize];
+    for (id, &s) in segs.iter().enumerate() {
+        cells_of(s, &mut |c| {
+            items[fill[c] as usize] = id as u32;
+            fill[c] += 1;
+        });
+    }
+    drop(fill);
+    let mut best: Option<Crossing> = None;
+    for c in 0..ncx * ncy {
+        let bucket = &items[start[c] as usize..start[c + 1] as usize];
+        for (u, &s1) in bucket.iter().enumerate() {
+            for &s2 in &bucket[u + 1..] {
+                let (e, l) = (segs[s1.min(s2) as usize], segs[s1.max(s2) as usize]);
+                if best.is_some_and(|b| (l.0 as usize, l.1 as usize) >= b.later) {
+                    continue;
+                }
+                // neighbours on one polyline share a point by construction
+                if e.0 == l.0 && l.1 == e.1 + 1 {
+                    continue;
+                }
+                let ((a, b), (p, q)) = (ends(e), ends(l));
+                let Some((cross, at)) = contact(a, b, p, q) else {
+                    continue;
+                };
+                let same = lines[e.0 as usize].elevation_m == lines[l.0 as usize].elevation_m;
+                if cross || !same {
+                    best = Some(Crossing {
+                        later: (l.0 as usize, l.1 as usize),
+                        earlier: (e.0 as usize, e.1 as usize),
+                        at,
+                    });
+                }
+            }
+        }
+    }
+    best
 }

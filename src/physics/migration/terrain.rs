@@ -1070,7 +1070,9 @@ pub(crate) fn outward_root(f0: f64, f1: f64, f2: f64) -> Option<f64> {
     }
     let disc = f1 * f1 - 2.0 * f2 * f0;
     if disc < 0.0 {
-        return None;
+        // never on the line: past it (f0 > 0) it stays past it, i.e. it is out from the start
+        // (moving inwards a moment, then turned back out before reaching the line)
+        return (f0 >= 0.0).then_some(0.0);
     }
     let s = disc.sqrt();
     let q = -(f1 + f1.signum() * s);
@@ -1187,6 +1189,18 @@ mod tests {
         let r = descent_root(3.27, 0.0, 9.81).unwrap();
         assert!((r - (2.0 * 3.27 / 9.81_f64).sqrt()).abs() < 1e-15);
         assert!(descent_root(-1.0, -1.0, 9.81).is_none());
+    }
+
+    #[test]
+    fn outward_root_of_a_point_past_the_line_turning_back_out_is_zero() {
+        // a rock a rounding step past an edge, moving inwards a moment, accelerated outwards:
+        // it never reaches the line again, so it has left at t = 0 (was: no exit, and the rock
+        // slid on the facet's plane beyond the facet, below the floor)
+        assert_eq!(outward_root(9e-17, -5.4e-9, 2.78), Some(0.0));
+        assert_eq!(outward_root(1.0, -1.0, 1.0), Some(0.0));
+        // past the line, coming in and out again: f = 1 − t + 0.2 t² leaves at (1 + √0.2)/0.4
+        let t = outward_root(1.0, -1.0, 0.4).unwrap();
+        assert!((t - (1.0 + 0.2f64.sqrt()) / 0.4).abs() < 1e-12, "{t}");
     }
 
     #[test]
