@@ -493,3 +493,42 @@ async fn crossing_contours_are_refused_naming_the_crossing_segment() {
         assert_eq!(r.status, 200, "{ok}: {}", String::from_utf8_lossy(&r.body));
     }
 }
+
+/// A drop height of a few ulps or less (down to the subnormal 5e-324 m) cannot lift the rock off
+/// the floor: it starts on the floor and slides as with no drop, instead of falling vertically
+/// through the floor and "arriving" 170 m below it in flight.
+#[tokio::test]
+async fn vanishing_drop_height_starts_on_the_floor_instead_of_falling_through_it() {
+    let app = common::app();
+    let on_floor = post(
+        &app,
+        "/v1/migration",
+        &json!({"release": {"drop_height_m": 0.0}}),
+    )
+    .await;
+    assert_eq!(on_floor.status, 200);
+    let want = on_floor.json()["arrival"]["speed_m_s"].as_f64().unwrap();
+    for h in [5e-324, 1e-300, 1e-20, 1e-16] {
+        let r = post(
+            &app,
+            "/v1/migration",
+            &json!({"release": {"drop_height_m": h}}),
+        )
+        .await;
+        let b = r.json();
+        assert_eq!(r.status, 200, "h = {h}: {b}");
+        assert_eq!(b["arrival"]["phase"], "slide", "h = {h}: {b}");
+        let v = b["arrival"]["speed_m_s"].as_f64().unwrap();
+        assert!(common::rel(v, want) < 1e-9, "h = {h}: {v} against {want}");
+    }
+    // A small but resolvable drop still lands: one impact.
+    let r = post(
+        &app,
+        "/v1/migration",
+        &json!({"release": {"drop_height_m": 1e-9}}),
+    )
+    .await;
+    let b = r.json();
+    assert_eq!(r.status, 200, "{b}");
+    assert_eq!(b["impact_count"], 1, "{b}");
+}

@@ -1040,6 +1040,9 @@ pub(crate) fn simulate(
             }
         }
     };
+    // invariant: the state the run ends in is above the floor too (the last piece is not
+    // checked inside the loop)
+    check_above_floor(floor, &s.p, s.t)?;
     let stopped = phase == Phase::Stopped;
     if stopped {
         push_event(

@@ -566,7 +566,13 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
     };
     let pl = floor.facet_plane(facet);
     let z_floor = pl.z(x, y);
-    let p0 = Vector3::new(x, y, z_floor + rel.drop_height);
+    // A drop too small to lift the rock by more than a few ulps of its coordinates (down to the
+    // subnormal 5e-324 m) releases it on the floor: its flight would end within rounding of its
+    // start, where no landing can be resolved.
+    let lifted =
+        rel.drop_height > 8.0 * f64::EPSILON * (1.0 + x.abs().max(y.abs()).max(z_floor.abs()));
+    let drop = if lifted { rel.drop_height } else { 0.0 };
+    let p0 = Vector3::new(x, y, z_floor + drop);
     let v0 = pl.down_dip() * rel.speed;
     let g = case.gravity;
     let z_end = mean.z_at(face.length);
@@ -578,7 +584,7 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
             _ => mean.along(&Vector3::new(x, y, z_floor)),
         },
         base: Vector3::new(x, y, z_floor),
-        on_floor: (rel.drop_height == 0.0).then_some(facet),
+        on_floor: (drop == 0.0).then_some(facet),
         floor,
         mass: case.rock.mass(),
         g,
