@@ -960,7 +960,19 @@ fn ensemble(
             steps: o.steps,
         })
     };
-    // the summaries are written in place, chunk by chunk; the first error in run order wins
+    run_in_chunks(n, CHUNK as usize, control, one)
+}
+
+/// Runs `one(i)` for i in 0..n on the thread pool, `chunk` runs at a time, checking `control`
+/// before each chunk and reporting progress after it. The summaries are written in place in run
+/// order and the first error in run order wins, so the result does not depend on the thread count.
+/// Shared by every migration method's ensemble.
+pub(super) fn run_in_chunks(
+    n: u64,
+    chunk: usize,
+    control: &Control,
+    one: impl Fn(u64) -> PhysicsResult<RunSummary> + Sync,
+) -> PhysicsResult<Vec<RunSummary>> {
     let blank = RunSummary {
         time: 0.0,
         speed: 0.0,
@@ -973,11 +985,11 @@ fn ensemble(
     };
     let mut all = vec![blank; n as usize];
     let chunks: Vec<PhysicsResult<()>> = all
-        .par_chunks_mut(CHUNK as usize)
+        .par_chunks_mut(chunk)
         .enumerate()
         .map(|(c, out)| {
             control.check()?;
-            let start = c as u64 * CHUNK;
+            let start = (c * chunk) as u64;
             for (i, slot) in (start..).zip(out.iter_mut()) {
                 *slot = one(i)?;
             }

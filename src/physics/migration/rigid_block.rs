@@ -32,7 +32,6 @@
 //! `POST /v1/migration`.
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
-use rayon::prelude::*;
 
 use super::lumped_mass::{EventKind, Phase, StopReason};
 use super::monte_carlo::{self, Distribution};
@@ -1549,32 +1548,5 @@ fn ensemble(
             steps: r.steps,
         })
     };
-    let blank = RunSummary {
-        time: 0.0,
-        speed: 0.0,
-        kinetic_energy: 0.0,
-        impact_count: 0,
-        runout: 0.0,
-        max_bounce_height: 0.0,
-        stop_reason: StopReason::AtRest,
-        steps: 0,
-    };
-    let mut all = vec![blank; n as usize];
-    let chunks: Vec<PhysicsResult<()>> = all
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .map(|(c, out)| {
-            control.check()?;
-            let start = (c * CHUNK) as u64;
-            for (i, slot) in (start..).zip(out.iter_mut()) {
-                *slot = one(i)?;
-            }
-            control.add_done(out.len() as u64);
-            Ok(())
-        })
-        .collect();
-    for c in chunks {
-        c?;
-    }
-    Ok(all)
+    super::run_in_chunks(n, CHUNK, control, one)
 }
