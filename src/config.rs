@@ -3,7 +3,7 @@
 use std::net::SocketAddr;
 use std::time::Duration;
 
-use clap::Parser;
+use clap::{Args, Parser, Subcommand, ValueEnum};
 
 /// Settings of the service. Every field has a flag and an environment variable; `--help` lists them.
 #[derive(Debug, Clone, Parser, PartialEq)]
@@ -91,6 +91,110 @@ pub struct Config {
     /// Most time steps of one rigid-block run (default 2e7).
     #[arg(long, env = "GANGUE_MAX_RIGID_STEPS", default_value_t = 2e7)]
     pub max_rigid_steps: f64,
+}
+
+/// The command line: the server (no subcommand, or `serve`), or a sharded computation.
+#[derive(Debug, Clone, Parser)]
+#[command(
+    name = "gangue",
+    version,
+    about = "Flying-gangue (rockfall) hazard calculation service",
+    args_conflicts_with_subcommands = true
+)]
+pub struct Cli {
+    /// What to do (default: serve).
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    /// Server settings when no subcommand is given.
+    #[command(flatten)]
+    pub config: Config,
+}
+
+/// Subcommands.
+#[derive(Debug, Clone, Subcommand)]
+pub enum Command {
+    /// Start the HTTP service (the default).
+    Serve(Config),
+    /// Compute one shard of a request's work items into a part file.
+    Compute(ComputeArgs),
+    /// Merge part files into the response `POST` of the request returns (to standard output).
+    Merge(MergeArgs),
+}
+
+/// Kind of request of a sharded computation (the `POST /v1/{kind}` route).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Kind {
+    /// `POST /v1/migration` (items: Monte Carlo runs).
+    Migration,
+    /// `POST /v1/study` (items: study points after the base).
+    Study,
+    /// `POST /v1/batch` (items: batch items).
+    Batch,
+}
+
+impl Kind {
+    /// The route's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Migration => "migration",
+            Kind::Study => "study",
+            Kind::Batch => "batch",
+        }
+    }
+
+    /// The kind of a route name.
+    pub fn from_name(s: &str) -> Option<Self> {
+        [Kind::Migration, Kind::Study, Kind::Batch]
+            .into_iter()
+            .find(|k| k.name() == s)
+    }
+}
+
+/// `gangue compute`: one shard of a request.
+#[derive(Debug, Clone, Args)]
+pub struct ComputeArgs {
+    /// The request body (JSON; a batch may also be NDJSON), as it would be POSTed.
+    #[arg(long)]
+    pub request: std::path::PathBuf,
+    /// The route the request is for.
+    #[arg(long, value_enum)]
+    pub kind: Kind,
+    /// Shard I of K (0-based), for example 0/3; otherwise from JOB_COMPLETION_INDEX,
+    /// SLURM_ARRAY_TASK_ID or AWS_BATCH_JOB_ARRAY_INDEX with --shards (default 0/1).
+    #[arg(long)]
+    pub shard: Option<String>,
+    /// Shard count K when the index comes from the environment (Slurm: default
+    /// SLURM_ARRAY_TASK_COUNT).
+    #[arg(long)]
+    pub shards: Option<u64>,
+    /// Added to the shard index from the environment or --shard (arrays split past the
+    /// scheduler's size limit), default 0.
+    #[arg(long, default_value_t = 0)]
+    pub index_offset: u64,
+    /// Part file to write; `{shard}` is replaced by the shard index.
+    #[arg(long)]
+    pub out: String,
+    /// Time limit of the computation (of each item for a batch), s (default: none).
+    #[arg(long)]
+    pub time_limit_s: Option<f64>,
+    /// The service's limits (the same flags and environment variables).
+    #[command(flatten)]
+    pub limits: Config,
+}
+
+/// `gangue merge`: part files to one response.
+#[derive(Debug, Clone, Args)]
+pub struct MergeArgs {
+    /// The part files of every shard, in any order.
+    #[arg(required = true)]
+    pub parts: Vec<std::path::PathBuf>,
+    /// Time limit of the merge's own computation (the nominal run or the study base), s (default:
+    /// none).
+    #[arg(long)]
+    pub time_limit_s: Option<f64>,
+    /// The service's limits (the same flags and environment variables as the computation).
+    #[command(flatten)]
+    pub limits: Config,
 }
 
 impl Default for Config {

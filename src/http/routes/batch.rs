@@ -113,7 +113,8 @@ impl Drop for CancelItemsOnDrop {
     }
 }
 
-fn line(index: usize, r: Result<Vec<u8>, ApiError>) -> bytes::Bytes {
+/// The NDJSON answer line of item `index`: its result or its problem.
+pub fn line(index: usize, r: Result<Vec<u8>, ApiError>) -> bytes::Bytes {
     let mut l = format!("{{\"index\":{index},").into_bytes();
     match r {
         Ok(b) => {
@@ -234,7 +235,7 @@ async fn stream(state: AppState, items: Vec<Result<Value, ApiError>>) -> Respons
 }
 
 /// Runs one item with its own control; problems name `/items/{index}/…`.
-fn run_item(
+pub fn run_item(
     index: usize,
     item: &Result<Value, ApiError>,
     config: &Config,

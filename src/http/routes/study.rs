@@ -167,9 +167,43 @@ fn ordering_symbols(groups: &[Vec<usize>], params: &[Param]) -> String {
 /// Checks and runs a study (also used by batch).
 pub fn solve(
     config: &Config,
-    mut req: StudyRequest,
+    req: StudyRequest,
     control: &Control,
 ) -> Result<StudyResponse, ApiError> {
+    let plan = plan(config, req)?;
+    control.set_total(plan.slots.len() as u64);
+    let results: Vec<Vec<f64>> = (0..plan.slots.len())
+        .into_par_iter()
+        .map(|i| plan.eval(config, i, control))
+        .collect::<Result<_, _>>()?;
+    plan.finish(results)
+}
+
+/// A checked study: its parameters and its points (slot 0 the base, then the items in the order
+/// the response lists them: curves, grids, energy proportions, central-difference points).
+pub struct StudyPlan {
+    req: StudyRequest,
+    base_json: Value,
+    base_resolved: ColumnRequest,
+    coupled: bool,
+    outputs: Vec<String>,
+    params: Vec<Param>,
+    values: Vec<Vec<f64>>,
+    pairs: Vec<(usize, usize)>,
+    slots: Vec<Slot>,
+    warnings: Vec<Warning>,
+}
+
+impl std::fmt::Debug for StudyPlan {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("StudyPlan")
+            .field("points", &self.slots.len())
+            .finish_non_exhaustive()
+    }
+}
+
+/// Checks a study request and lists its points (no column is solved yet).
+pub fn plan(config: &Config, mut req: StudyRequest) -> Result<StudyPlan, ApiError> {
     let mut warnings = Vec::new();
     if req.base.output.is_some() {
         return Err(ApiError::invalid(
@@ -401,13 +435,46 @@ pub fn solve(
             slots.extend((0..4).map(|j| Slot::Difference(i, j)));
         }
     }
-    let mut extract_names = outputs.clone();
-    extract_names.push("energy_ratio".into());
-    control.set_total(slots.len() as u64);
-    let x_values = req.x_values.clone();
-    let eval = |slot: &Slot| -> Result<Vec<f64>, ApiError> {
+    Ok(StudyPlan {
+        req,
+        base_json,
+        base_resolved,
+        coupled,
+        outputs,
+        params,
+        values,
+        pairs,
+        slots,
+        warnings,
+    })
+}
+
+impl StudyPlan {
+    /// Number of points: the base (point 0) and the items (1 ..).
+    pub fn points(&self) -> u64 {
+        self.slots.len() as u64
+    }
+
+    /// The resolved request (the response's `inputs`).
+    pub fn inputs(&self) -> StudyRequest {
+        let mut req = self.req.clone();
+        req.base = self.base_resolved.clone();
+        req
+    }
+
+    /// Solves point `index`: the listed outputs and then the energy ratio.
+    pub fn eval(
+        &self,
+        config: &Config,
+        index: usize,
+        control: &Control,
+    ) -> Result<Vec<f64>, ApiError> {
+        let (params, values, pairs) = (&self.params, &self.values, &self.pairs);
+        let x_values = &self.req.x_values;
+        let mut extract_names = self.outputs.clone();
+        extract_names.push("energy_ratio".into());
         control.check()?;
-        let sets: Vec<(&str, f64)> = match *slot {
+        let sets: Vec<(&str, f64)> = match self.slots[index] {
             Slot::Base => Vec::new(),
             Slot::Curve(i, k) => vec![(params[i].pointer.as_str(), values[i][k])],
             Slot::Grid(g, yi, xi) => {
@@ -427,15 +494,69 @@ pub fn solve(
                 )]
             }
         };
-        let (req, case) = resolve_point(config, &point_json(&base_json, &sets))?;
+        let (req, case) = resolve_point(config, &point_json(&self.base_json, &sets))?;
         let resp = column::solve(&case, req, control)?;
         let v = serde_json::to_value(&resp).map_err(ApiError::internal)?;
         let out = extract(&v, &extract_names)?;
         control.add_done(1);
         Ok(out)
-    };
-    let results: Vec<Vec<f64>> = slots.par_iter().map(eval).collect::<Result<_, _>>()?;
+    }
 
+    /// The response from the outputs of every point, in point order.
+    pub fn finish(self, results: Vec<Vec<f64>>) -> Result<StudyResponse, ApiError> {
+        let StudyPlan {
+            req,
+            base_resolved,
+            coupled,
+            outputs,
+            params,
+            values,
+            pairs,
+            slots,
+            warnings,
+            ..
+        } = self;
+        if results.len() != slots.len() {
+            return Err(ApiError::internal(format!(
+                "{} study results for {} points",
+                results.len(),
+                slots.len()
+            )));
+        }
+        let n = req.points as usize;
+        let np = params.len();
+        finish_study(
+            req,
+            base_resolved,
+            coupled,
+            &outputs,
+            &params,
+            &values,
+            &pairs,
+            &slots,
+            warnings,
+            n,
+            np,
+            results,
+        )
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn finish_study(
+    mut req: StudyRequest,
+    base_resolved: ColumnRequest,
+    coupled: bool,
+    outputs: &[String],
+    params: &[Param],
+    values: &[Vec<f64>],
+    pairs: &[(usize, usize)],
+    slots: &[Slot],
+    mut warnings: Vec<Warning>,
+    n: usize,
+    np: usize,
+    results: Vec<Vec<f64>>,
+) -> Result<StudyResponse, ApiError> {
     // Assemble.
     let no = outputs.len();
     let ie = no; // index of energy_ratio in each result
@@ -565,9 +686,9 @@ pub fn solve(
                         .collect(),
                 ),
                 ordering: OrderingDto {
-                    span_over_base: ordering_names(&g_span, &params),
-                    ratio: ordering_names(&g_ratio, &params),
-                    elasticity: ordering_names(&g_el, &params),
+                    span_over_base: ordering_names(&g_span, params),
+                    ratio: ordering_names(&g_ratio, params),
+                    elasticity: ordering_names(&g_el, params),
                 },
             },
         ));
@@ -591,12 +712,12 @@ pub fn solve(
         ),
         orderings: prop_groups
             .iter()
-            .map(|g| ordering_names(g, &params))
+            .map(|g| ordering_names(g, params))
             .collect(),
     };
     let paper_comparison = compare_with_paper(
         &req,
-        &params,
+        params,
         coupled,
         &groups_by_output,
         &prop_groups,

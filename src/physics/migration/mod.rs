@@ -651,8 +651,30 @@ fn v3(v: &Vector3<f64>) -> [f64; 3] {
 /// assert!((r.arrival.speed - 36.35233409073599).abs() < 1e-8);
 /// ```
 pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationResult> {
+    let n = case.monte_carlo.map_or(0, |mc| mc.runs);
+    let (r, runs) = run_part(case, 0..n, true, control)?;
+    let mut r = r.expect("the nominal run was asked for");
+    if let Some(mc) = &case.monte_carlo {
+        let Ok(()) = attach_ensemble(&mut r, mc, case.output.runs_csv, runs.as_slice());
+    }
+    Ok(r)
+}
+
+/// Runs part of a migration case: the nominal run when `nominal` (its result without ensemble
+/// statistics) and the Monte Carlo runs with global indices in `range`, in run order. Run i is
+/// seeded by (seed, i) whatever the range, so the runs of any split of 0..runs are the runs of
+/// [`run`]; [`attach_ensemble`] makes the statistics from them. The case is checked as by [`run`]
+/// whatever the part.
+///
+/// Errors: as [`run`].
+pub fn run_part(
+    case: &MigrationCase,
+    range: std::ops::Range<u64>,
+    nominal: bool,
+    control: &Control,
+) -> PhysicsResult<(Option<MigrationResult>, Vec<RunSummary>)> {
     if case.method == Method::RigidBlock {
-        return rigid_block::run(case, control);
+        return rigid_block::run_part(case, range, nominal, control);
     }
     let face = &case.face;
     let dip = face.dip_deg.to_radians();
@@ -676,7 +698,26 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
         }
     }
     let pr = prepare(case)?;
-    let su = setup(case, &pr);
+    let r = if nominal {
+        Some(nominal_run(case, &pr, control)?)
+    } else {
+        None
+    };
+    let runs = match &case.monte_carlo {
+        Some(mc) if !range.is_empty() => ensemble(case, &pr, mc, range, control)?,
+        _ => Vec::new(),
+    };
+    Ok((r, runs))
+}
+
+/// The nominal run of a lumped-mass case, without ensemble statistics.
+fn nominal_run(
+    case: &MigrationCase,
+    pr: &Prepared,
+    control: &Control,
+) -> PhysicsResult<MigrationResult> {
+    let face = &case.face;
+    let su = setup(case, pr);
     let m = pr.mass;
     let (en, et) = (face.restitution_normal, face.restitution_tangential);
     let mut rec = Recording::default();
@@ -691,11 +732,11 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
     let mean = pr.floor.mean;
     let mut warnings = Vec::new();
     let trajectory = if case.output.trajectory {
-        Some(sample_trajectory(case, &pr, &out, &rec.segments)?)
+        Some(sample_trajectory(case, pr, &out, &rec.segments)?)
     } else {
         None
     };
-    let arrival = arrival_of(&pr, &out);
+    let arrival = arrival_of(pr, &out);
     let (imp, fric, trans) = (out.e_imp * m, out.e_fric * m, out.e_trans * m);
     let pe = m * pr.g * (out.p.z - pr.z_end);
     let total_start = m * pr.e0;
@@ -746,19 +787,10 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
             })
             .collect()
     });
-    let (statistics, runs) = match &case.monte_carlo {
-        Some(mc) => {
-            let runs = ensemble(case, &pr, mc, control)?;
-            let st = statistics_of(mc, &runs);
-            warnings.extend(ensemble_warnings(mc, &runs, &st));
-            (Some(st), case.output.runs_csv.then_some(runs))
-        }
-        None => {
-            control.set_total(1);
-            control.add_done(1);
-            (None, None)
-        }
-    };
+    if case.monte_carlo.is_none() {
+        control.set_total(1);
+        control.add_done(1);
+    }
     Ok(MigrationResult {
         method: case.method,
         mass: m,
@@ -778,9 +810,9 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
         },
         events,
         trajectory,
-        runs_csv: runs.as_deref().map(runs_csv),
-        runs,
-        statistics,
+        runs_csv: None,
+        runs: None,
+        statistics: None,
         warnings,
         rigid_block: None,
     })
@@ -929,12 +961,12 @@ fn ensemble(
     case: &MigrationCase,
     pr: &Prepared,
     mc: &MonteCarlo,
+    range: std::ops::Range<u64>,
     control: &Control,
 ) -> PhysicsResult<Vec<RunSummary>> {
     const CHUNK: u64 = 256;
     let su = setup(case, pr);
-    let n = mc.runs;
-    control.set_total(n);
+    control.set_total(range.end - range.start);
     let mean = pr.floor.mean;
     let m = pr.mass;
     let one = |i: u64| -> PhysicsResult<RunSummary> {
@@ -960,15 +992,16 @@ fn ensemble(
             steps: o.steps,
         })
     };
-    run_in_chunks(n, CHUNK as usize, control, one)
+    run_in_chunks(range, CHUNK as usize, control, one)
 }
 
-/// Runs `one(i)` for i in 0..n on the thread pool, `chunk` runs at a time, checking `control`
-/// before each chunk and reporting progress after it. The summaries are written in place in run
-/// order and the first error in run order wins, so the result does not depend on the thread count.
-/// Shared by every migration method's ensemble.
+/// Runs `one(i)` for the global run indices i in `range` on the thread pool, `chunk` runs at a
+/// time, checking `control` before each chunk and reporting progress after it. The summaries are
+/// written in place in run order and the first error in run order wins, so the result does not
+/// depend on the thread count, nor on how 0..runs is split into ranges (shards). Shared by every
+/// migration method's ensemble.
 pub(super) fn run_in_chunks(
-    n: u64,
+    range: std::ops::Range<u64>,
     chunk: usize,
     control: &Control,
     one: impl Fn(u64) -> PhysicsResult<RunSummary> + Sync,
@@ -983,13 +1016,13 @@ pub(super) fn run_in_chunks(
         stop_reason: StopReason::AtRest,
         steps: 0,
     };
-    let mut all = vec![blank; n as usize];
+    let mut all = vec![blank; (range.end - range.start) as usize];
     let chunks: Vec<PhysicsResult<()>> = all
         .par_chunks_mut(chunk)
         .enumerate()
         .map(|(c, out)| {
             control.check()?;
-            let start = (c * chunk) as u64;
+            let start = range.start + (c * chunk) as u64;
             for (i, slot) in (start..).zip(out.iter_mut()) {
                 *slot = one(i)?;
             }
@@ -1005,11 +1038,7 @@ pub(super) fn run_in_chunks(
 
 /// Warnings of an ensemble, whatever the method: friction draws clipped to [0, 2] (μ is the first
 /// draw of each run's stream), a single run (no standard deviation), no run at the lower end.
-pub(super) fn ensemble_warnings(
-    mc: &MonteCarlo,
-    runs: &[RunSummary],
-    st: &Statistics,
-) -> Vec<Warning> {
+pub(super) fn ensemble_warnings(mc: &MonteCarlo, runs: u64, st: &Statistics) -> Vec<Warning> {
     let mut warnings = Vec::new();
     if let Some(d) = &mc.friction_coefficient {
         // μ is the first draw of each run's stream: count the draws outside [0, 2]
@@ -1031,7 +1060,7 @@ pub(super) fn ensemble_warnings(
             });
         }
     }
-    if runs.len() < 2 {
+    if runs < 2 {
         warnings.push(Warning {
             code: "single_run",
             message: "an ensemble of one run has no sample standard deviation: every \
@@ -1050,30 +1079,131 @@ pub(super) fn ensemble_warnings(
     warnings
 }
 
-fn statistics_of(mc: &MonteCarlo, runs: &[RunSummary]) -> Statistics {
-    let reached: Vec<&RunSummary> = runs
-        .iter()
-        .filter(|r| r.stop_reason == StopReason::LowerEnd)
-        .collect();
-    let col = |f: &dyn Fn(&RunSummary) -> f64, only: bool| -> Vec<f64> {
-        if only {
-            reached.iter().map(|r| f(r)).collect()
-        } else {
-            runs.iter().map(f).collect()
-        }
-    };
-    let all = |f: &dyn Fn(&RunSummary) -> f64| {
-        stats::summarize_owned(col(f, false)).expect("an ensemble has at least one run")
-    };
-    Statistics {
-        runs: runs.len() as u64,
-        seed: mc.seed,
-        reached_fraction: reached.len() as f64 / runs.len().max(1) as f64,
-        speed: stats::summarize_owned(col(&|r| r.speed, true)),
-        kinetic_energy: stats::summarize_owned(col(&|r| r.kinetic_energy, true)),
-        time: stats::summarize_owned(col(&|r| r.time, true)),
-        impact_count: all(&|r| r.impact_count as f64),
-        runout: all(&|r| r.runout),
-        max_bounce_height: all(&|r| r.max_bounce_height),
+/// Number of statistics columns of an ensemble (see [`run_columns`]).
+pub const STATISTICS_COLUMNS: usize = 6;
+
+/// The statistics columns of one run, in the order of [`Statistics`]: arrival speed, kinetic
+/// energy and time (None for a run that did not reach the lower end), impact count, runout, largest
+/// bounce height.
+pub fn run_columns(r: &RunSummary) -> [Option<f64>; STATISTICS_COLUMNS] {
+    let reached = r.stop_reason == StopReason::LowerEnd;
+    [
+        reached.then_some(r.speed),
+        reached.then_some(r.kinetic_energy),
+        reached.then_some(r.time),
+        Some(r.impact_count as f64),
+        Some(r.runout),
+        Some(r.max_bounce_height),
+    ]
+}
+
+/// An ensemble's run records: readable in run order as often as needed (sums are taken in run
+/// order, the summation order of the contract), with the order statistics of each column. Held
+/// in memory by the service; read from part files by a sharded computation's merge.
+pub trait RunRecords {
+    /// Error of reading the records (none in memory).
+    type Error;
+    /// Number of runs.
+    fn runs(&self) -> u64;
+    /// Calls `f` with every run record in run order.
+    fn for_each_run(&self, f: &mut dyn FnMut(&RunSummary)) -> Result<(), Self::Error>;
+    /// The values at the 0-based `ranks` (ascending) of column `col` of [`run_columns`] (its
+    /// present values only) sorted by `f64::total_cmp`.
+    fn order_values(&self, col: usize, ranks: &[u64]) -> Result<Vec<f64>, Self::Error>;
+}
+
+impl RunRecords for [RunSummary] {
+    type Error = std::convert::Infallible;
+
+    fn runs(&self) -> u64 {
+        self.len() as u64
     }
+
+    fn for_each_run(&self, f: &mut dyn FnMut(&RunSummary)) -> Result<(), Self::Error> {
+        self.iter().for_each(f);
+        Ok(())
+    }
+
+    fn order_values(&self, col: usize, ranks: &[u64]) -> Result<Vec<f64>, Self::Error> {
+        let mut work: Vec<f64> = self.iter().filter_map(|r| run_columns(r)[col]).collect();
+        // selection (O(n)) of the ranks asked for, in ascending order
+        let mut start = 0;
+        for &k in ranks {
+            work[start..].select_nth_unstable_by(k as usize - start, f64::total_cmp);
+            start = k as usize + 1;
+        }
+        Ok(ranks.iter().map(|&k| work[k as usize]).collect())
+    }
+}
+
+/// Completes a nominal result (from [`run_part`]) with the ensemble's statistics, warnings and,
+/// when `runs_csv`, the per-run summaries: two passes over the records in run order and the
+/// order statistics of each column. The one way ensemble results are made, whether the records
+/// come from threads or from the parts of a sharded computation.
+///
+/// Errors: those of reading the records.
+pub fn attach_ensemble<R: RunRecords + ?Sized>(
+    r: &mut MigrationResult,
+    mc: &MonteCarlo,
+    runs_csv: bool,
+    records: &R,
+) -> Result<(), R::Error> {
+    let st = statistics_of(mc, records)?;
+    r.warnings
+        .extend(ensemble_warnings(mc, records.runs(), &st));
+    if runs_csv {
+        let mut runs = Vec::with_capacity(records.runs() as usize);
+        records.for_each_run(&mut |x| runs.push(*x))?;
+        r.runs_csv = Some(self::runs_csv(&runs));
+        r.runs = Some(runs);
+    }
+    r.statistics = Some(st);
+    Ok(())
+}
+
+fn statistics_of<R: RunRecords + ?Sized>(
+    mc: &MonteCarlo,
+    records: &R,
+) -> Result<Statistics, R::Error> {
+    let mut first = [stats::FirstPass::default(); STATISTICS_COLUMNS];
+    let mut reached = 0u64;
+    records.for_each_run(&mut |r| {
+        reached += u64::from(r.stop_reason == StopReason::LowerEnd);
+        for (p, x) in first.iter_mut().zip(run_columns(r)) {
+            if let Some(x) = x {
+                p.push(x);
+            }
+        }
+    })?;
+    let mut second = first.map(|p| p.second_pass());
+    records.for_each_run(&mut |r| {
+        for (p, x) in second.iter_mut().zip(run_columns(r)) {
+            if let (Some(p), Some(x)) = (p, x) {
+                p.push(x);
+            }
+        }
+    })?;
+    let mut summaries = Vec::with_capacity(STATISTICS_COLUMNS);
+    for (col, (p, f)) in second.iter().zip(&first).enumerate() {
+        summaries.push(match p {
+            Some(p) => Some(p.finish(&records.order_values(col, &stats::order_ranks(f.count()))?)),
+            None => None,
+        });
+    }
+    let mut s = summaries.into_iter();
+    let mut next = || s.next().flatten();
+    let n = records.runs();
+    let (speed, kinetic_energy, time) = (next(), next(), next());
+    let all = "an ensemble has at least one run";
+    Ok(Statistics {
+        runs: n,
+        seed: mc.seed,
+        reached_fraction: reached as f64 / n.max(1) as f64,
+        speed,
+        kinetic_energy,
+        time,
+        impact_count: next().expect(all),
+        runout: next().expect(all),
+        max_bounce_height: next().expect(all),
+    })
 }

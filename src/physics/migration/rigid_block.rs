@@ -1430,8 +1430,15 @@ fn edge_contact(
     })
 }
 
-/// Runs a rigid-block case: the nominal run and, when asked, the Monte Carlo ensemble.
-pub(crate) fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationResult> {
+/// Runs part of a rigid-block case: the nominal run when `nominal` (without ensemble
+/// statistics) and the Monte Carlo runs with global indices in `range` (see
+/// [`super::run_part`]).
+pub(crate) fn run_part(
+    case: &MigrationCase,
+    range: std::ops::Range<u64>,
+    nominal: bool,
+    control: &Control,
+) -> PhysicsResult<(Option<MigrationResult>, Vec<RunSummary>)> {
     let pr = super::prepare(case)?;
     let model = Model::new(case, &pr)?;
     let o = &case.rigid_block;
@@ -1443,6 +1450,26 @@ pub(crate) fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<Migr
             limit: o.max_steps,
         });
     }
+    let r = if nominal {
+        Some(nominal_run(case, &model, control)?)
+    } else {
+        None
+    };
+    let runs = match &case.monte_carlo {
+        Some(mc) if !range.is_empty() => ensemble(case, &model, mc, range, control)?,
+        _ => Vec::new(),
+    };
+    Ok((r, runs))
+}
+
+/// The nominal run of a rigid-block case, without ensemble statistics.
+fn nominal_run(
+    case: &MigrationCase,
+    model: &Model<'_>,
+    control: &Control,
+) -> PhysicsResult<MigrationResult> {
+    let o = &case.rigid_block;
+    let mu = case.face.friction_coefficient;
     let out = model.simulate(
         mu,
         o.critical_damping_ratio,
@@ -1472,20 +1499,11 @@ pub(crate) fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<Migr
         rotational_energy: kr,
     };
     let residual = kt + kr + pe + out.stored + out.damping + out.friction - out.e_start;
-    let mut warnings = Vec::new();
-    let (statistics, runs) = match &case.monte_carlo {
-        Some(mc) => {
-            let runs = ensemble(case, &model, mc, control)?;
-            let st = super::statistics_of(mc, &runs);
-            warnings.extend(super::ensemble_warnings(mc, &runs, &st));
-            (Some(st), case.output.runs_csv.then_some(runs))
-        }
-        None => {
-            control.set_total(1);
-            control.add_done(1);
-            (None, None)
-        }
-    };
+    let warnings = Vec::new();
+    if case.monte_carlo.is_none() {
+        control.set_total(1);
+        control.add_done(1);
+    }
     let _ = m;
     Ok(MigrationResult {
         method: case.method,
@@ -1506,9 +1524,9 @@ pub(crate) fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<Migr
         },
         events: case.output.events.then_some(out.events),
         trajectory: out.trajectory,
-        runs_csv: runs.as_deref().map(super::runs_csv),
-        runs,
-        statistics,
+        runs_csv: None,
+        runs: None,
+        statistics: None,
         warnings,
         rigid_block: Some(model.report(out.steps, out.max_overlap)),
     })
@@ -1518,11 +1536,11 @@ fn ensemble(
     case: &MigrationCase,
     model: &Model<'_>,
     mc: &MonteCarlo,
+    range: std::ops::Range<u64>,
     control: &Control,
 ) -> PhysicsResult<Vec<RunSummary>> {
     const CHUNK: usize = 16;
-    let n = mc.runs;
-    control.set_total(n);
+    control.set_total(range.end - range.start);
     let o = &case.rigid_block;
     let release_along = model.mean.along(&model.c0);
     let one = |i: u64| -> PhysicsResult<RunSummary> {
@@ -1548,5 +1566,5 @@ fn ensemble(
             steps: r.steps,
         })
     };
-    super::run_in_chunks(n, CHUNK, control, one)
+    super::run_in_chunks(range, CHUNK, control, one)
 }

@@ -80,76 +80,163 @@ pub fn summarize(values: &[f64]) -> Option<Summary> {
 /// [`summarize`] of values the caller no longer needs: they are reordered in place by the
 /// percentile selection instead of being copied.
 pub(crate) fn summarize_owned(mut work: Vec<f64>) -> Option<Summary> {
-    let values = &work[..];
-    let n = values.len();
-    if n == 0 {
-        return None;
+    let mut first = FirstPass::default();
+    work.iter().for_each(|&x| first.push(x));
+    let mut second = first.second_pass()?;
+    work.iter().for_each(|&x| second.push(x));
+    // the order statistics the percentiles need, found by selection (O(n)) instead of a sort
+    let ranks = order_ranks(first.count());
+    let mut start = 0;
+    for &k in &ranks {
+        work[start..].select_nth_unstable_by(k as usize - start, f64::total_cmp);
+        start = k as usize + 1;
     }
-    let mean = values.iter().sum::<f64>() / n as f64;
-    let std = (n > 1).then(|| {
-        let ss: f64 = values.iter().map(|x| (x - mean) * (x - mean)).sum();
-        (ss / (n - 1) as f64).sqrt()
-    });
-    let (min, max) = values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
-        });
-    let width = (max - min) / HISTOGRAM_BINS as f64;
-    let edges: Vec<f64> = (0..=HISTOGRAM_BINS)
-        .map(|k| {
-            if k == HISTOGRAM_BINS {
-                max
-            } else {
-                min + k as f64 * width
-            }
+    let values: Vec<f64> = ranks.iter().map(|&k| work[k as usize]).collect();
+    Some(second.finish(&values))
+}
+
+/// First streaming pass over a column, in its given (run) order: count, sum, min, max.
+///
+/// The sum is the left-to-right sum from −0 (that of `Iterator::sum`), so the same values in
+/// the same order give the same bits whether they come from memory or from part files.
+#[derive(Debug, Clone, Copy)]
+pub struct FirstPass {
+    n: u64,
+    sum: f64,
+    min: f64,
+    max: f64,
+}
+
+impl Default for FirstPass {
+    fn default() -> Self {
+        Self {
+            n: 0,
+            sum: -0.0,
+            min: f64::INFINITY,
+            max: f64::NEG_INFINITY,
+        }
+    }
+}
+
+impl FirstPass {
+    /// Adds the next value.
+    pub fn push(&mut self, x: f64) {
+        self.n += 1;
+        self.sum += x;
+        self.min = self.min.min(x);
+        self.max = self.max.max(x);
+    }
+
+    /// Number of values seen.
+    pub fn count(&self) -> u64 {
+        self.n
+    }
+
+    /// The second pass this one sets up (mean, histogram bins), or None for no values.
+    pub fn second_pass(&self) -> Option<SecondPass> {
+        (self.n > 0).then(|| SecondPass {
+            n: self.n,
+            mean: self.sum / self.n as f64,
+            min: self.min,
+            max: self.max,
+            width: (self.max - self.min) / HISTOGRAM_BINS as f64,
+            ss: -0.0,
+            counts: [0; HISTOGRAM_BINS],
         })
-        .collect();
-    let mut counts = vec![0u64; HISTOGRAM_BINS];
-    for &x in values {
-        let k = if width > 0.0 {
-            (((x - min) / width) as usize).min(HISTOGRAM_BINS - 1)
+    }
+}
+
+/// Second streaming pass over a column, in the same order as the first: the sum of squared
+/// deviations from the mean and the histogram counts.
+#[derive(Debug, Clone, Copy)]
+pub struct SecondPass {
+    n: u64,
+    mean: f64,
+    min: f64,
+    max: f64,
+    width: f64,
+    ss: f64,
+    counts: [u64; HISTOGRAM_BINS],
+}
+
+impl SecondPass {
+    /// Adds the next value (the same sequence as the first pass).
+    pub fn push(&mut self, x: f64) {
+        self.ss += (x - self.mean) * (x - self.mean);
+        let k = if self.width > 0.0 {
+            (((x - self.min) / self.width) as usize).min(HISTOGRAM_BINS - 1)
         } else {
             0
         };
-        counts[k] += 1;
+        self.counts[k] += 1;
     }
-    // the order statistics the percentiles need, found by selection (O(n)) instead of a sort
-    let ps = [0.05, 0.50, 0.95, 0.99];
-    let mut idx: Vec<usize> = ps
+
+    /// The summary, given the values of the sorted column at the ranks [`order_ranks`] listed
+    /// (same length and order).
+    pub fn finish(&self, order_values: &[f64]) -> Summary {
+        let n = self.n as usize;
+        let ranks = order_ranks(self.n);
+        let at = |k: usize| {
+            let i = ranks.binary_search(&(k as u64)).expect("a listed rank");
+            order_values[i]
+        };
+        let pct = |p: f64| {
+            let h = (n - 1) as f64 * p;
+            let lo = h.floor() as usize;
+            if lo + 1 >= n {
+                return at(n - 1);
+            }
+            at(lo) + (h - lo as f64) * (at(lo + 1) - at(lo))
+        };
+        let edges: Vec<f64> = (0..=HISTOGRAM_BINS)
+            .map(|k| {
+                if k == HISTOGRAM_BINS {
+                    self.max
+                } else {
+                    self.min + k as f64 * self.width
+                }
+            })
+            .collect();
+        Summary {
+            count: self.n,
+            mean: self.mean.clamp(self.min, self.max),
+            std: (n > 1).then(|| (self.ss / (n - 1) as f64).sqrt()),
+            min: self.min,
+            p05: pct(0.05),
+            p50: pct(0.50),
+            p95: pct(0.95),
+            p99: pct(0.99),
+            max: self.max,
+            histogram: Histogram {
+                edges,
+                counts: self.counts.to_vec(),
+            },
+        }
+    }
+}
+
+/// Percentile levels reported (5th, 50th, 95th, 99th).
+pub const PERCENTILES: [f64; 4] = [0.05, 0.50, 0.95, 0.99];
+
+/// The 0-based ranks in the column sorted by `f64::total_cmp` whose values the type-7
+/// percentiles of `n` values need (⌊h⌋ and ⌊h⌋ + 1 for each level), ascending, without repeats.
+/// Empty for n = 0.
+pub fn order_ranks(n: u64) -> Vec<u64> {
+    if n == 0 {
+        return Vec::new();
+    }
+    let mut idx: Vec<u64> = PERCENTILES
         .iter()
         .flat_map(|p| {
-            let lo = ((n - 1) as f64 * p).floor() as usize;
+            let lo = ((n - 1) as f64 * p).floor() as u64;
             [lo, (lo + 1).min(n - 1)]
         })
         .collect();
+    // the last value is needed when ⌊h⌋ + 1 reaches n (the percentile is then the maximum)
+    idx.push(n - 1);
     idx.sort_unstable();
     idx.dedup();
-    let mut start = 0;
-    for &k in &idx {
-        work[start..].select_nth_unstable_by(k - start, f64::total_cmp);
-        start = k + 1;
-    }
-    let pct = |p: f64| {
-        let h = (n - 1) as f64 * p;
-        let lo = h.floor() as usize;
-        if lo + 1 >= n {
-            return work[n - 1];
-        }
-        work[lo] + (h - lo as f64) * (work[lo + 1] - work[lo])
-    };
-    Some(Summary {
-        count: n as u64,
-        mean: mean.clamp(min, max),
-        std,
-        min,
-        p05: pct(0.05),
-        p50: pct(0.50),
-        p95: pct(0.95),
-        p99: pct(0.99),
-        max,
-        histogram: Histogram { edges, counts },
-    })
+    idx
 }
 
 #[cfg(test)]

@@ -1,0 +1,817 @@
+//! Sharded computations: `gangue compute` runs the work items of one request with global
+//! indices ⌊I·N/K⌋ … ⌊(I+1)·N/K⌋ − 1 into a part file, `gangue merge` turns the parts into the
+//! bytes `POST` of the same request answers (README "Beyond one machine").
+//!
+//! Items: the Monte Carlo runs of a migration (N = runs), the points of a study after its base
+//! (N = points − 1, in the order the response lists them: curves, grids, energy proportions,
+//! central-difference points), the items of a batch. What is not an item (the nominal run of a
+//! migration, a study's base point) is computed by the merge from the request the parts carry:
+//! one run or one column solution.
+//!
+//! Part file (format version 1): one JSON header line ([`Header`]: kind, build id, SHA-256 of the
+//! resolved inputs, the request, the item range, section sizes), then a little-endian binary
+//! body: a migration's run records (57 bytes each) followed by its six statistics columns, each
+//! sorted by `f64::total_cmp`; a study's point outputs (f64 each); a batch's answer lines, each
+//! preceded by its length (u64). A part is written to a temporary name in the same directory and
+//! renamed, so a shard run twice leaves one whole part.
+//!
+//! The merge checks that the parts come from one request and one build and that their ranges
+//! tile 0..N exactly (no index missing, none twice), then feeds the records to the same response
+//! builder as the service ([`migration::attach_ensemble`], [`study::StudyPlan::finish`]): sums
+//! stream the records in index order (run order, the summation order of the contract) and order
+//! statistics come from a k-way merge of the per-part sorted columns, so the merge holds O(parts)
+//! records, not O(runs) (a `runs_csv` answer is itself O(runs)).
+
+use std::collections::BinaryHeap;
+use std::fs::File;
+use std::io::{BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use sha2::{Digest, Sha256};
+
+use crate::config::{ComputeArgs, Config, Kind, MergeArgs};
+use crate::http::dto::batch::{json_items, ndjson_items};
+use crate::http::dto::migration::{MigrationRequest, MigrationResponse};
+use crate::http::error::ApiError;
+use crate::http::json::{from_value, parse_json};
+use crate::http::routes::{batch, study};
+use crate::http::runner::to_json_bytes;
+use crate::physics::Control;
+use crate::physics::migration::{
+    self, MigrationCase, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason, run_columns,
+};
+
+/// Name of the part file format.
+pub const FORMAT: &str = "gangue-part";
+/// Version of the part file format.
+pub const FORMAT_VERSION: u32 = 1;
+/// Bytes of one migration run record.
+const RUN_RECORD_BYTES: u64 = 57;
+
+/// Header line of a part file.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Header {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// [`FORMAT_VERSION`].
+    pub version: u32,
+    /// Request kind: migration, study or batch.
+    pub kind: String,
+    /// Build id of the binary that computed the part ([`build_id`]).
+    pub build: String,
+    /// SHA-256 (hex) of the kind and the resolved inputs.
+    pub inputs_sha256: String,
+    /// The request as given (UTF-8 JSON or NDJSON), from which the merge computes the non-items.
+    pub request: String,
+    /// Number of items N of the whole request.
+    pub items: u64,
+    /// Shard index I (0-based) and count K this part was computed as.
+    pub shard: u64,
+    /// Shard count K.
+    pub shards: u64,
+    /// First global item index of the part.
+    pub start: u64,
+    /// One past the last global item index of the part.
+    pub end: u64,
+    /// Sizes of the body's sections in bytes: records, then (migration) the sorted columns.
+    pub sections: Vec<u64>,
+}
+
+/// The build id: the crate version and the git commit it was built from when the sources were
+/// exactly that commit, else the crate version and a SHA-256 of the running binary.
+pub fn build_id() -> String {
+    let version = env!("CARGO_PKG_VERSION");
+    match option_env!("GANGUE_GIT_HASH") {
+        Some(h) if !h.is_empty() => format!("{version}+git.{h}"),
+        _ => {
+            let digest = std::env::current_exe()
+                .and_then(std::fs::read)
+                .map(|b| hex(&Sha256::digest(&b))[..16].to_string())
+                .unwrap_or_else(|_| "unknown".into());
+            format!("{version}+bin.{digest}")
+        }
+    }
+}
+
+fn hex(b: &[u8]) -> String {
+    b.iter().map(|x| format!("{x:02x}")).collect()
+}
+
+fn inputs_hash(kind: Kind, inputs: &[u8]) -> String {
+    let mut h = Sha256::new();
+    h.update(kind.name().as_bytes());
+    h.update(b"\n");
+    h.update(inputs);
+    hex(&h.finalize())
+}
+
+/// The global item range of shard `i` of `k` over `n` items: ⌊i·n/k⌋ .. ⌊(i+1)·n/k⌋.
+pub fn shard_range(i: u64, k: u64, n: u64) -> std::ops::Range<u64> {
+    let at = |j: u64| (u128::from(j) * u128::from(n) / u128::from(k)) as u64;
+    at(i)..at(i + 1)
+}
+
+/// The shard index and count: `--shard I/K`, or an array index from the environment
+/// (`JOB_COMPLETION_INDEX`, `SLURM_ARRAY_TASK_ID`, `AWS_BATCH_JOB_ARRAY_INDEX`) with `--shards K`
+/// (Slurm: `SLURM_ARRAY_TASK_COUNT` when `--shards` is not given), plus `--index-offset`; 0/1
+/// when none is given.
+pub fn shard_of(
+    args: &ComputeArgs,
+    env: &dyn Fn(&str) -> Option<String>,
+) -> Result<(u64, u64), String> {
+    let num = |name: &str, v: &str| -> Result<u64, String> {
+        v.trim()
+            .parse::<u64>()
+            .map_err(|_| format!("{name} must be a whole number ≥ 0, got {v:?}"))
+    };
+    let (i, k) = if let Some(s) = &args.shard {
+        let (i, k) = s
+            .split_once('/')
+            .ok_or_else(|| format!("--shard must be I/K (for example 0/3), got {s:?}"))?;
+        (num("--shard I", i)?, num("--shard K", k)?)
+    } else {
+        let from_env = [
+            "JOB_COMPLETION_INDEX",
+            "SLURM_ARRAY_TASK_ID",
+            "AWS_BATCH_JOB_ARRAY_INDEX",
+        ]
+        .iter()
+        .find_map(|name| env(name).map(|v| (*name, v)));
+        match from_env {
+            Some((name, v)) => {
+                let i = num(name, &v)?;
+                let k = match (args.shards, name) {
+                    (Some(k), _) => k,
+                    (None, "SLURM_ARRAY_TASK_ID") => match env("SLURM_ARRAY_TASK_COUNT") {
+                        Some(c) => num("SLURM_ARRAY_TASK_COUNT", &c)?,
+                        None => return Err("--shards K is needed with SLURM_ARRAY_TASK_ID".into()),
+                    },
+                    (None, _) => return Err(format!("--shards K is needed with {name}")),
+                };
+                (i, k)
+            }
+            None => (0, args.shards.unwrap_or(1)),
+        }
+    };
+    let i = i
+        .checked_add(args.index_offset)
+        .ok_or("--index-offset is too large")?;
+    if k == 0 {
+        return Err("the shard count K must be at least 1".into());
+    }
+    if i >= k {
+        return Err(format!(
+            "shard index {i} (with --index-offset {}) is not below the shard count {k}",
+            args.index_offset
+        ));
+    }
+    Ok((i, k))
+}
+
+/// A failure of `compute` or `merge`: the message, and the problem of a refused request.
+#[derive(Debug)]
+pub struct Failure {
+    /// What went wrong, for a person.
+    pub message: String,
+    /// The problem+json body the service would answer, when the request itself was refused.
+    pub problem: Option<Value>,
+}
+
+impl From<String> for Failure {
+    fn from(message: String) -> Self {
+        Self {
+            message,
+            problem: None,
+        }
+    }
+}
+
+impl From<&str> for Failure {
+    fn from(message: &str) -> Self {
+        Self::from(message.to_string())
+    }
+}
+
+impl From<ApiError> for Failure {
+    fn from(e: ApiError) -> Self {
+        Self {
+            message: format!("the request was refused: {e}"),
+            problem: Some(e.to_problem()),
+        }
+    }
+}
+
+fn io_err(path: &Path, e: std::io::Error) -> Failure {
+    Failure::from(format!("{}: {e}", path.display()))
+}
+
+/// The request of a part: parsed, resolved and counted.
+enum Prepared {
+    Migration {
+        case: Box<MigrationCase>,
+        req: Box<MigrationRequest>,
+    },
+    Study(Box<study::StudyPlan>),
+    Batch(Vec<Result<Value, ApiError>>),
+}
+
+struct Resolved {
+    prepared: Prepared,
+    items: u64,
+    hash: String,
+}
+
+fn resolve(kind: Kind, request: &[u8], config: &Config) -> Result<Resolved, Failure> {
+    match kind {
+        Kind::Migration => {
+            let v = parse_json(request)?;
+            let mut req: MigrationRequest = from_value(&v)?;
+            let case = req.resolve(config)?;
+            let hash = inputs_hash(kind, &serde_json::to_vec(&req).map_err(ApiError::internal)?);
+            Ok(Resolved {
+                items: case.monte_carlo.map_or(0, |mc| mc.runs),
+                prepared: Prepared::Migration {
+                    case: Box::new(case),
+                    req: Box::new(req),
+                },
+                hash,
+            })
+        }
+        Kind::Study => {
+            let v = parse_json(request)?;
+            let plan = study::plan(config, from_value(&v)?)?;
+            let inputs = serde_json::to_vec(&plan.inputs()).map_err(ApiError::internal)?;
+            Ok(Resolved {
+                items: plan.points() - 1,
+                hash: inputs_hash(kind, &inputs),
+                prepared: Prepared::Study(Box::new(plan)),
+            })
+        }
+        Kind::Batch => {
+            // a JSON envelope {"items": [...]}, or one item per line (NDJSON)
+            let items: Vec<Result<Value, ApiError>> = match parse_json(request) {
+                Ok(body) if body.is_object() => json_items(&body)?.into_iter().map(Ok).collect(),
+                _ => ndjson_items(request),
+            };
+            let limit = config.max_batch_items;
+            if items.len() as u64 > limit {
+                return Err(ApiError::invalid(
+                    "/items",
+                    serde_json::json!(items.len()),
+                    format!("at most {limit} items in one batch (see limits in /v1/presets)"),
+                )
+                .into());
+            }
+            let canon: Vec<Value> = items
+                .iter()
+                .map(|r| match r {
+                    Ok(v) => v.clone(),
+                    Err(e) => e.to_problem(),
+                })
+                .collect();
+            let hash = inputs_hash(
+                kind,
+                &serde_json::to_vec(&canon).map_err(ApiError::internal)?,
+            );
+            Ok(Resolved {
+                items: items.len() as u64,
+                prepared: Prepared::Batch(items),
+                hash,
+            })
+        }
+    }
+}
+
+fn control(limit: Option<f64>) -> Control {
+    Control::with_deadline(limit.map(|s| Instant::now() + Duration::from_secs_f64(s)))
+}
+
+/// `gangue compute`: computes the items of one shard and writes its part file. Returns the path
+/// written.
+pub fn compute(args: &ComputeArgs) -> Result<PathBuf, Failure> {
+    args.limits.validate()?;
+    let (i, k) = shard_of(args, &|n| std::env::var(n).ok())?;
+    let request = std::fs::read(&args.request).map_err(|e| io_err(&args.request, e))?;
+    let request_text = String::from_utf8(request.clone())
+        .map_err(|_| format!("{}: the request is not UTF-8", args.request.display()))?;
+    let config = &args.limits;
+    let r = resolve(args.kind, &request, config)?;
+    let range = shard_range(i, k, r.items);
+    let mut sections = Vec::new();
+    let mut body: Vec<u8> = Vec::new();
+    match &r.prepared {
+        Prepared::Migration { case, .. } => {
+            let ctl = control(args.time_limit_s);
+            let (_, runs) = migration::run_part(case, range.clone(), false, &ctl)
+                .map_err(|e| Failure::from(ApiError::from(e)))?;
+            for run in &runs {
+                encode_run(run, &mut body);
+            }
+            sections.push(body.len() as u64);
+            for col in 0..STATISTICS_COLUMNS {
+                let mut v: Vec<f64> = runs.iter().filter_map(|r| run_columns(r)[col]).collect();
+                v.sort_unstable_by(f64::total_cmp);
+                let before = body.len();
+                v.iter()
+                    .for_each(|x| body.extend_from_slice(&x.to_le_bytes()));
+                sections.push((body.len() - before) as u64);
+            }
+        }
+        Prepared::Study(plan) => {
+            let ctl = control(args.time_limit_s);
+            let out: Vec<Vec<f64>> = (range.start..range.end)
+                .into_par_iter()
+                .map(|g| plan.eval(config, g as usize + 1, &ctl))
+                .collect::<Result<_, _>>()?;
+            for v in &out {
+                body.extend_from_slice(&(v.len() as u64).to_le_bytes());
+                v.iter()
+                    .for_each(|x| body.extend_from_slice(&x.to_le_bytes()));
+            }
+            sections.push(body.len() as u64);
+        }
+        Prepared::Batch(items) => {
+            // each item has a time limit of its own (api.md), here none unless asked for
+            let lines: Vec<bytes::Bytes> = (range.start..range.end)
+                .into_par_iter()
+                .map(|g| {
+                    let g = g as usize;
+                    let ctl = control(args.time_limit_s);
+                    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        batch::run_item(g, &items[g], config, &ctl)
+                    }))
+                    .unwrap_or_else(|_| {
+                        Err(ApiError::internal(format!("batch item {g} panicked")))
+                    });
+                    batch::line(g, out)
+                })
+                .collect();
+            for l in &lines {
+                body.extend_from_slice(&(l.len() as u64).to_le_bytes());
+                body.extend_from_slice(l);
+            }
+            sections.push(body.len() as u64);
+        }
+    }
+    let header = Header {
+        format: FORMAT.into(),
+        version: FORMAT_VERSION,
+        kind: args.kind.name().into(),
+        build: build_id(),
+        inputs_sha256: r.hash,
+        request: request_text,
+        items: r.items,
+        shard: i,
+        shards: k,
+        start: range.start,
+        end: range.end,
+        sections,
+    };
+    let out = PathBuf::from(args.out.replace("{shard}", &i.to_string()));
+    write_part(&out, &header, &body)?;
+    Ok(out)
+}
+
+fn write_part(out: &Path, header: &Header, body: &[u8]) -> Result<(), Failure> {
+    let name = out
+        .file_name()
+        .ok_or_else(|| format!("--out {}: not a file name", out.display()))?;
+    let tmp = out.with_file_name(format!(
+        ".{}.tmp-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let write = || -> std::io::Result<()> {
+        let mut w = BufWriter::new(File::create(&tmp)?);
+        serde_json::to_writer(&mut w, header)?;
+        w.write_all(b"\n")?;
+        w.write_all(body)?;
+        let f = w.into_inner().map_err(|e| e.into_error())?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, out)
+    };
+    write().map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io_err(out, e)
+    })
+}
+
+fn encode_run(r: &RunSummary, out: &mut Vec<u8>) {
+    // every field, so that a new one fails to compile here
+    let RunSummary {
+        time,
+        speed,
+        kinetic_energy,
+        impact_count,
+        runout,
+        max_bounce_height,
+        stop_reason,
+        steps,
+    } = *r;
+    for x in [time, speed, kinetic_energy, runout, max_bounce_height] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    out.extend_from_slice(&impact_count.to_le_bytes());
+    out.extend_from_slice(&steps.to_le_bytes());
+    out.push(match stop_reason {
+        StopReason::LowerEnd => 0,
+        StopReason::AtRest => 1,
+        StopReason::EndTime => 2,
+        StopReason::LeftFloor => 3,
+    });
+}
+
+fn decode_run(b: &[u8; RUN_RECORD_BYTES as usize]) -> Result<RunSummary, String> {
+    let f = |k: usize| f64::from_le_bytes(b[8 * k..8 * k + 8].try_into().expect("8 bytes"));
+    let u = |k: usize| u64::from_le_bytes(b[8 * k..8 * k + 8].try_into().expect("8 bytes"));
+    Ok(RunSummary {
+        time: f(0),
+        speed: f(1),
+        kinetic_energy: f(2),
+        runout: f(3),
+        max_bounce_height: f(4),
+        impact_count: u(5),
+        steps: u(6),
+        stop_reason: match b[56] {
+            0 => StopReason::LowerEnd,
+            1 => StopReason::AtRest,
+            2 => StopReason::EndTime,
+            3 => StopReason::LeftFloor,
+            x => return Err(format!("unknown stop reason code {x}")),
+        },
+    })
+}
+
+/// One part file, its header read.
+#[derive(Debug)]
+struct Part {
+    path: PathBuf,
+    header: Header,
+    body_offset: u64,
+}
+
+fn read_part(path: &Path) -> Result<Part, Failure> {
+    let f = File::open(path).map_err(|e| io_err(path, e))?;
+    let len = f.metadata().map_err(|e| io_err(path, e))?.len();
+    let mut r = BufReader::new(f);
+    let mut line = Vec::new();
+    r.read_until(b'\n', &mut line)
+        .map_err(|e| io_err(path, e))?;
+    let not_part = || {
+        Failure::from(format!(
+            "{}: not a gangue part file (no {FORMAT} header line)",
+            path.display()
+        ))
+    };
+    if line.last() != Some(&b'\n') {
+        return Err(not_part());
+    }
+    let v: Value = serde_json::from_slice(&line).map_err(|_| not_part())?;
+    if v.get("format").and_then(Value::as_str) != Some(FORMAT) {
+        return Err(not_part());
+    }
+    if v.get("version").and_then(Value::as_u64) != Some(u64::from(FORMAT_VERSION)) {
+        return Err(Failure::from(format!(
+            "{}: part format version {} cannot be read by this build (it reads version {FORMAT_VERSION})",
+            path.display(),
+            v.get("version").unwrap_or(&Value::Null)
+        )));
+    }
+    let header: Header = serde_json::from_value(v)
+        .map_err(|e| format!("{}: malformed part header: {e}", path.display()))?;
+    let body_offset = line.len() as u64;
+    let body: u64 = header.sections.iter().sum();
+    if len != body_offset + body {
+        return Err(Failure::from(format!(
+            "{}: the part is {len} bytes, its header says {} (truncated or damaged)",
+            path.display(),
+            body_offset + body
+        )));
+    }
+    if header.start > header.end || header.end > header.items {
+        return Err(Failure::from(format!(
+            "{}: item range {}..{} is not within 0..{}",
+            path.display(),
+            header.start,
+            header.end,
+            header.items
+        )));
+    }
+    Ok(Part {
+        path: path.to_path_buf(),
+        header,
+        body_offset,
+    })
+}
+
+/// Checks that the parts come from one request and one build and tile 0..N; sorts them by start.
+fn check_parts(parts: &mut [Part]) -> Result<(), Failure> {
+    let first = parts.first().ok_or("no part files given")?;
+    let (h0, p0) = (first.header.clone(), first.path.clone());
+    for p in parts.iter() {
+        let h = &p.header;
+        if h.kind != h0.kind {
+            return Err(Failure::from(format!(
+                "parts of different kinds of request: {} is {}, {} is {}",
+                p0.display(),
+                h0.kind,
+                p.path.display(),
+                h.kind
+            )));
+        }
+        if h.inputs_sha256 != h0.inputs_sha256 || h.items != h0.items {
+            return Err(Failure::from(format!(
+                "parts of different requests: {} and {} were computed from different inputs \
+                 (SHA-256 {} and {}); compute every part from the same request file",
+                p0.display(),
+                p.path.display(),
+                &h0.inputs_sha256[..16.min(h0.inputs_sha256.len())],
+                &h.inputs_sha256[..16.min(h.inputs_sha256.len())]
+            )));
+        }
+        if h.build != h0.build {
+            return Err(Failure::from(format!(
+                "parts of different builds: {} was computed by {}, {} by {}; compute every part \
+                 with the same gangue binary",
+                p0.display(),
+                h0.build,
+                p.path.display(),
+                h.build
+            )));
+        }
+    }
+    parts.sort_by_key(|p| (p.header.start, p.header.end));
+    let n = h0.items;
+    let mut next = 0u64;
+    let mut prev: Option<&Part> = None;
+    for p in parts.iter() {
+        let h = &p.header;
+        if h.start > next {
+            return Err(Failure::from(format!(
+                "items {next} to {} are missing: no part holds them (the next part, shard {} of \
+                 {}, starts at item {}; was a part not computed or not given?)",
+                h.start - 1,
+                h.shard,
+                h.shards,
+                h.start
+            )));
+        }
+        if h.start < next && h.end > h.start {
+            let q = prev.expect("an earlier part");
+            return Err(Failure::from(format!(
+                "items {} to {} are in two parts, {} and {} (a part given twice, or parts of \
+                 different splits)",
+                h.start,
+                next.min(h.end) - 1,
+                q.path.display(),
+                p.path.display()
+            )));
+        }
+        if h.end > next {
+            next = h.end;
+            prev = Some(p);
+        }
+    }
+    if next < n {
+        return Err(Failure::from(format!(
+            "items {next} to {} of {n} are missing: no part holds them",
+            n - 1
+        )));
+    }
+    // empty parts (more shards than items) are harmless, but the same part twice is not
+    for w in parts.windows(2) {
+        let (a, b) = (&w[0].header, &w[1].header);
+        if a.start == a.end && a.shard == b.shard && a.shards == b.shards && a.start == b.start {
+            return Err(Failure::from(format!(
+                "shard {} of {} is given twice: {} and {}",
+                a.shard,
+                a.shards,
+                w[0].path.display(),
+                w[1].path.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The run records of a migration's parts (sorted by start, tiling 0..N).
+struct PartRuns<'a>(&'a [Part]);
+
+impl PartRuns<'_> {
+    fn reader(&self, p: &Part, offset: u64) -> Result<BufReader<File>, String> {
+        let mut f = File::open(&p.path).map_err(|e| format!("{}: {e}", p.path.display()))?;
+        f.seek(SeekFrom::Start(p.body_offset + offset))
+            .map_err(|e| format!("{}: {e}", p.path.display()))?;
+        Ok(BufReader::with_capacity(1 << 16, f))
+    }
+}
+
+/// A key ordered by `f64::total_cmp`, smallest first in a max-heap.
+struct Next(f64, usize);
+
+impl PartialEq for Next {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == std::cmp::Ordering::Equal
+    }
+}
+impl Eq for Next {}
+impl PartialOrd for Next {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Next {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        o.0.total_cmp(&self.0).then(o.1.cmp(&self.1))
+    }
+}
+
+impl RunRecords for PartRuns<'_> {
+    type Error = String;
+
+    fn runs(&self) -> u64 {
+        self.0.first().map_or(0, |p| p.header.items)
+    }
+
+    fn for_each_run(&self, f: &mut dyn FnMut(&RunSummary)) -> Result<(), String> {
+        let mut buf = [0u8; RUN_RECORD_BYTES as usize];
+        for p in self.0 {
+            let mut r = self.reader(p, 0)?;
+            for _ in p.header.start..p.header.end {
+                r.read_exact(&mut buf)
+                    .map_err(|e| format!("{}: {e}", p.path.display()))?;
+                f(&decode_run(&buf).map_err(|e| format!("{}: {e}", p.path.display()))?);
+            }
+        }
+        Ok(())
+    }
+
+    fn order_values(&self, col: usize, ranks: &[u64]) -> Result<Vec<f64>, String> {
+        // one reader per part on its sorted column, merged through a heap: O(parts) memory
+        let mut readers = Vec::with_capacity(self.0.len());
+        let mut left = Vec::with_capacity(self.0.len());
+        let mut heap = BinaryHeap::with_capacity(self.0.len());
+        let read = |r: &mut BufReader<File>, p: &Part| -> Result<f64, String> {
+            let mut b = [0u8; 8];
+            r.read_exact(&mut b)
+                .map_err(|e| format!("{}: {e}", p.path.display()))?;
+            Ok(f64::from_le_bytes(b))
+        };
+        for (k, p) in self.0.iter().enumerate() {
+            let s = &p.header.sections;
+            let offset: u64 = s[..=col].iter().sum();
+            let mut r = self.reader(p, offset)?;
+            let count = s[col + 1] / 8;
+            if count > 0 {
+                heap.push(Next(read(&mut r, p)?, k));
+            }
+            readers.push(r);
+            left.push(count.saturating_sub(1));
+        }
+        let mut out = Vec::with_capacity(ranks.len());
+        let mut want = ranks.iter().peekable();
+        let mut rank = 0u64;
+        while let Some(&&w) = want.peek() {
+            let Next(x, k) = heap
+                .pop()
+                .ok_or_else(|| format!("column {col} has fewer than {} values", w + 1))?;
+            while want.peek() == Some(&&rank) {
+                out.push(x);
+                want.next();
+            }
+            rank += 1;
+            if left[k] > 0 {
+                left[k] -= 1;
+                heap.push(Next(read(&mut readers[k], &self.0[k])?, k));
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// `gangue merge`: checks the parts and writes the response body to `out`.
+pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
+    args.limits.validate()?;
+    let mut parts = args
+        .parts
+        .iter()
+        .map(|p| read_part(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    check_parts(&mut parts)?;
+    let h = parts[0].header.clone();
+    let kind = Kind::from_name(&h.kind).ok_or_else(|| format!("unknown kind {:?}", h.kind))?;
+    if h.build != build_id() {
+        return Err(Failure::from(format!(
+            "the parts were computed by {}, this merge is {}: merge with the same gangue binary",
+            h.build,
+            build_id()
+        )));
+    }
+    let config = &args.limits;
+    let r = resolve(kind, h.request.as_bytes(), config)?;
+    if r.hash != h.inputs_sha256 {
+        return Err(Failure::from(
+            "the request resolves to other inputs under this merge's limits than under the \
+             parts': give the merge the same limit flags as the computation"
+                .to_string(),
+        ));
+    }
+    let ctl = control(args.time_limit_s);
+    let bytes = match r.prepared {
+        Prepared::Migration { case, req } => {
+            let (nominal, _) = migration::run_part(&case, 0..0, true, &ctl)
+                .map_err(|e| Failure::from(ApiError::from(e)))?;
+            let mut res = nominal.ok_or("no nominal run")?;
+            if let Some(mc) = &case.monte_carlo {
+                migration::attach_ensemble(&mut res, mc, case.output.runs_csv, &PartRuns(&parts))?;
+            }
+            to_json_bytes(&MigrationResponse::new(res, *req))?
+        }
+        Prepared::Study(plan) => {
+            let mut results = Vec::with_capacity(plan.points() as usize);
+            results.push(plan.eval(config, 0, &ctl)?);
+            for p in &parts {
+                let mut r = PartRuns(&parts).reader(p, 0)?;
+                for _ in p.header.start..p.header.end {
+                    let len = read_u64(&mut r, p)?;
+                    let mut v = Vec::with_capacity(len.min(1 << 16) as usize);
+                    for _ in 0..len {
+                        v.push(f64::from_bits(read_u64(&mut r, p)?));
+                    }
+                    results.push(v);
+                }
+            }
+            to_json_bytes(&(*plan).finish(results)?)?
+        }
+        Prepared::Batch(_) => {
+            // the answer lines, streamed in index order
+            for p in &parts {
+                let mut r = PartRuns(&parts).reader(p, 0)?;
+                for _ in p.header.start..p.header.end {
+                    let len = read_u64(&mut r, p)?;
+                    let mut l = vec![0u8; len as usize];
+                    r.read_exact(&mut l)
+                        .map_err(|e| format!("{}: {e}", p.path.display()))?;
+                    out.write_all(&l)
+                        .map_err(|e| format!("writing the answer: {e}"))?;
+                }
+            }
+            Vec::new()
+        }
+    };
+    out.write_all(&bytes)
+        .and_then(|()| out.flush())
+        .map_err(|e| Failure::from(format!("writing the answer: {e}")))
+}
+
+fn read_u64(r: &mut BufReader<File>, p: &Part) -> Result<u64, String> {
+    let mut b = [0u8; 8];
+    r.read_exact(&mut b)
+        .map_err(|e| format!("{}: {e}", p.path.display()))?;
+    Ok(u64::from_le_bytes(b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shard_ranges_tile_the_items() {
+        for n in [0u64, 1, 2, 7, 100, 1_000_003] {
+            for k in [1u64, 2, 3, 7, 64] {
+                let mut next = 0;
+                for i in 0..k {
+                    let r = shard_range(i, k, n);
+                    assert_eq!(r.start, next);
+                    next = r.end;
+                }
+                assert_eq!(next, n);
+            }
+        }
+        assert_eq!(shard_range(1, 3, 10), 3..6);
+    }
+
+    #[test]
+    fn run_records_round_trip() {
+        let r = RunSummary {
+            time: 1.5,
+            speed: -0.0,
+            kinetic_energy: 3e300,
+            impact_count: 7,
+            runout: 5e-324,
+            max_bounce_height: 0.25,
+            stop_reason: StopReason::LeftFloor,
+            steps: u64::MAX,
+        };
+        let mut b = Vec::new();
+        encode_run(&r, &mut b);
+        assert_eq!(b.len() as u64, RUN_RECORD_BYTES);
+        let back = decode_run(b.as_slice().try_into().unwrap()).unwrap();
+        assert_eq!(back.speed.to_bits(), r.speed.to_bits());
+        assert_eq!(back, r);
+    }
+}
