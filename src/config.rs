@@ -314,4 +314,43 @@ mod tests {
             assert!(c.validate().unwrap_err().contains(flag), "{flag}");
         }
     }
+
+    #[test]
+    fn no_subcommand_or_serve_starts_the_server_with_the_same_flags() {
+        let c = Cli::parse_from(["gangue", "--bind", "0.0.0.0:9000", "--max-runs", "7"]);
+        assert!(c.command.is_none());
+        assert_eq!((c.config.bind.port(), c.config.max_runs), (9000, 7));
+        let c = Cli::parse_from(["gangue", "serve", "--bind", "0.0.0.0:9001"]);
+        match c.command {
+            Some(Command::Serve(s)) => assert_eq!(s.bind.port(), 9001),
+            other => panic!("{other:?}"),
+        }
+        let c = Cli::parse_from([
+            "gangue",
+            "compute",
+            "--request",
+            "case.json",
+            "--kind",
+            "study",
+            "--shard",
+            "1/3",
+            "--out",
+            "part-1",
+            "--max-study-points",
+            "11",
+        ]);
+        match c.command {
+            Some(Command::Compute(a)) => {
+                assert_eq!(a.kind, Kind::Study);
+                assert_eq!(a.shard.as_deref(), Some("1/3"));
+                assert_eq!(a.limits.max_study_points, 11);
+                assert_eq!(a.time_limit_s, None, "no time limit by default");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(
+            Cli::try_parse_from(["gangue", "merge"]).is_err(),
+            "parts are required"
+        );
+    }
 }

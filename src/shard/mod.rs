@@ -84,17 +84,26 @@ pub struct Header {
 /// The build id: the crate version and the git commit it was built from when the sources were
 /// exactly that commit, else the crate version and a SHA-256 of the running binary.
 pub fn build_id() -> String {
-    let version = env!("CARGO_PKG_VERSION");
-    match option_env!("GANGUE_GIT_HASH") {
-        Some(h) if !h.is_empty() => format!("{version}+git.{h}"),
-        _ => {
-            let digest = std::env::current_exe()
-                .and_then(std::fs::read)
-                .map(|b| hex(&Sha256::digest(&b))[..16].to_string())
-                .unwrap_or_else(|_| "unknown".into());
-            format!("{version}+bin.{digest}")
+    static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    ID.get_or_init(|| {
+        let version = env!("CARGO_PKG_VERSION");
+        match option_env!("GANGUE_GIT_HASH") {
+            Some(h) if !h.is_empty() => format!("{version}+git.{h}"),
+            _ => {
+                let digest = std::env::current_exe()
+                    .and_then(|p| {
+                        // streamed: the binary is never held in memory
+                        let mut r = BufReader::with_capacity(1 << 16, File::open(p)?);
+                        let mut h = Sha256::new();
+                        std::io::copy(&mut r, &mut h)?;
+                        Ok(hex(&h.finalize())[..16].to_string())
+                    })
+                    .unwrap_or_else(|_: std::io::Error| "unknown".into());
+                format!("{version}+bin.{digest}")
+            }
         }
-    }
+    })
+    .clone()
 }
 
 fn hex(b: &[u8]) -> String {
@@ -813,5 +822,45 @@ mod tests {
         let back = decode_run(b.as_slice().try_into().unwrap()).unwrap();
         assert_eq!(back.speed.to_bits(), r.speed.to_bits());
         assert_eq!(back, r);
+    }
+
+    fn args(shard: Option<&str>, shards: Option<u64>, offset: u64) -> ComputeArgs {
+        ComputeArgs {
+            request: "case.json".into(),
+            kind: Kind::Migration,
+            shard: shard.map(Into::into),
+            shards,
+            index_offset: offset,
+            out: "part-{shard}".into(),
+            time_limit_s: None,
+            limits: Config::default(),
+        }
+    }
+
+    #[test]
+    fn shard_index_from_flags_and_schedulers() {
+        let none = |_: &str| None;
+        assert_eq!(shard_of(&args(Some("2/5"), None, 0), &none), Ok((2, 5)));
+        assert_eq!(shard_of(&args(None, None, 0), &none), Ok((0, 1)));
+        let k8s = |n: &str| (n == "JOB_COMPLETION_INDEX").then(|| "3".to_string());
+        assert_eq!(shard_of(&args(None, Some(8), 0), &k8s), Ok((3, 8)));
+        assert!(
+            shard_of(&args(None, None, 0), &k8s)
+                .unwrap_err()
+                .contains("--shards")
+        );
+        let slurm = |n: &str| match n {
+            "SLURM_ARRAY_TASK_ID" => Some("1".to_string()),
+            "SLURM_ARRAY_TASK_COUNT" => Some("4".to_string()),
+            _ => None,
+        };
+        assert_eq!(shard_of(&args(None, None, 0), &slurm), Ok((1, 4)));
+        // a second array of a split: offset 4, 7 shards in all
+        assert_eq!(shard_of(&args(None, Some(7), 4), &slurm), Ok((5, 7)));
+        let aws = |n: &str| (n == "AWS_BATCH_JOB_ARRAY_INDEX").then(|| "0".to_string());
+        assert_eq!(shard_of(&args(None, Some(2), 0), &aws), Ok((0, 2)));
+        for bad in ["3", "1/0", "a/3", "3/3"] {
+            assert!(shard_of(&args(Some(bad), None, 0), &none).is_err(), "{bad}");
+        }
     }
 }
