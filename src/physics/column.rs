@@ -7,6 +7,7 @@ use super::control::Control;
 use super::coupled::{CoupledInput, solve_coupled};
 use super::error::{PhysicsError, PhysicsResult};
 use super::material::{Damping, ImpactCase, Section};
+use super::validity;
 
 /// Which column model to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -80,14 +81,8 @@ impl Default for ColumnCase {
     }
 }
 
-/// A named warning attached to a result.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Warning {
-    /// Stable code, e.g. `energy_ratio_above_one`.
-    pub code: &'static str,
-    /// Human-readable explanation.
-    pub message: String,
-}
+/// A named warning attached to a result (defined with the validity checks).
+pub use super::validity::Warning;
 
 /// Largest bending stress σ = E_s·(D₁/2)·max|w″|, Pa.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -235,18 +230,10 @@ pub struct ColumnResult {
 /// The contact law of a solved impact (k = P_cap/δ_cap, P_ref = e·P_cap; Hertz κ).
 pub fn force_law_of(impact: &ImpactResult) -> ForceLaw {
     match &impact.detail {
-        ImpactDetail::Line(l) => ForceLaw::Log {
-            k: l.force_capacity / l.deformation_capacity,
-            p_ref: std::f64::consts::E * l.force_capacity,
-        },
+        ImpactDetail::Line(l) => {
+            ForceLaw::log_from_capacity(l.force_capacity, l.deformation_capacity)
+        }
         ImpactDetail::Hertz(h) => ForceLaw::Hertz { kappa: h.stiffness },
-    }
-}
-
-fn max_deformation_and_force(impact: &ImpactResult) -> (f64, f64) {
-    match &impact.detail {
-        ImpactDetail::Line(l) => (l.max_deformation, l.max_force),
-        ImpactDetail::Hertz(h) => (h.max_deformation, h.max_force),
     }
 }
 
@@ -438,7 +425,7 @@ fn solve_inner(
     let col = &case.impact.column;
     let single = SingleMode::new(col, case.mode_shapes, case.rotary_inertia)?;
     let ke = impact.kinetic_energy;
-    let (dmax, _) = max_deformation_and_force(impact);
+    let dmax = impact.max_deformation();
     if !(ke >= MIN_KINETIC_ENERGY && dmax >= f64::MIN_POSITIVE) {
         return Err(PhysicsError::invalid(
             "/velocity_m_s",
@@ -461,14 +448,42 @@ fn solve_inner(
                 .into(),
         });
     }
-    match case.model {
+    let mut result = match case.model {
         ColumnModel::Decoupled => decoupled(case, impact, &single, ke, warnings),
         ColumnModel::Coupled => coupled(case, impact, law, &single, ke, warnings, control),
-    }
+    }?;
+    result
+        .warnings
+        .extend(validity_warnings(case, impact, &result));
+    Ok(result)
+}
+
+/// The validity warnings of a column result ([`super::validity`]): the contact's pressure and
+/// approach at the largest contact force of the model run (the rigid-column maxima for the
+/// decoupled model; for the coupled model the largest over all maxima of approach), and the
+/// stress utilisation.
+fn validity_warnings(
+    case: &ColumnCase,
+    impact: &ImpactResult,
+    result: &ColumnResult,
+) -> Vec<Warning> {
+    let (force, approach) = match &result.detail {
+        ColumnDetail::Decoupled(d) => (d.max_force, d.max_deformation),
+        ColumnDetail::Coupled(c) => (c.max_force, c.max_contact_deformation),
+    };
+    let column = &case.impact.column;
+    let mut out = validity::contact_warnings(
+        validity::contact_pressure_at(impact, force),
+        approach,
+        column.yield_stress,
+        column.contact_radius,
+    );
+    out.extend(validity::stress_warning(result.stress_utilisation));
+    out
 }
 
 #[allow(clippy::too_many_arguments)] // private assembly of the shared fields
-fn common(
+fn assemble_result(
     single: &SingleMode,
     ke: f64,
     stress: BendingStress,
@@ -558,7 +573,7 @@ fn decoupled(
             "end_time_s applies to the coupled model only",
         ));
     }
-    let (dmax, pmax) = max_deformation_and_force(impact);
+    let (dmax, pmax) = (impact.max_deformation(), impact.max_force());
     let w_mid0 = match case.initial_midpoint_displacement {
         Some(w) => {
             if !(w > 0.0 && w <= 1.0) {
@@ -620,7 +635,7 @@ fn decoupled(
         (w0 * mode.curvature(0.0) / (l * l)).abs(),
         (w0 * mode.curvature(0.5) / (l * l)).abs(),
     );
-    common(
+    assemble_result(
         single,
         ke,
         stress,
@@ -701,7 +716,7 @@ fn coupled(
         *t = sorted;
         idx
     });
-    let (dmax, _) = max_deformation_and_force(impact);
+    let dmax = impact.max_deformation();
     let v = case.impact.velocity;
     let input = CoupledInput {
         rock_mass: impact.mass,
@@ -768,7 +783,7 @@ fn coupled(
         r.max_curvature_clamp,
         r.max_curvature_midpoint,
     );
-    common(
+    assemble_result(
         single,
         ke,
         stress,

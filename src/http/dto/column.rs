@@ -461,7 +461,13 @@ pub struct ColumnResponse {
     /// Histories, when `output` asks.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub history: Option<ColumnHistoryDto>,
-    /// Named warnings.
+    /// Named warnings. Besides the model's own (`energy_ratio_above_one`, `paper_damping`,
+    /// `no_damping`, `decay_time_unrepresentable`, `integrator_error_above_target`,
+    /// `contact_not_ended`), validity warnings with documented, strict thresholds:
+    /// `contact_pressure_above_yield` (the contact pressure at the largest contact force >
+    /// column.yield_stress_pa), `approach_above_tenth_of_radius` (the largest approach > 0.1 ×
+    /// column.contact_radius_m), `stress_utilisation_above_one` (stress_utilisation > 1: the
+    /// linear-elastic column yields).
     pub warnings: Vec<Warning>,
     /// Stages run or skipped.
     pub plan: Vec<PlanStep>,

@@ -615,6 +615,15 @@ impl Warning {
     }
 }
 
+impl From<crate::physics::validity::Warning> for Warning {
+    fn from(w: crate::physics::validity::Warning) -> Self {
+        Self {
+            code: w.code.into(),
+            message: w.message,
+        }
+    }
+}
+
 /// Whether a stage of the calculation ran.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, ToSchema)]
 #[serde(rename_all = "snake_case")]

@@ -197,7 +197,10 @@ pub struct ImpactResponse {
     /// The force–approach curve, when `output.curve_points` > 0.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub curve: Option<CurveDto>,
-    /// Named warnings.
+    /// Named warnings, each with a documented threshold (strict): `near_capacity` (log laws,
+    /// G > 0.9), `contact_pressure_above_yield` (max_contact_pressure_pa > column.yield_stress_pa:
+    /// the elastic contact law is outside its validity), `approach_above_tenth_of_radius`
+    /// (max_deformation_m > 0.1 × contact_radius_m: the approach is not small against the radius).
     pub warnings: Vec<super::Warning>,
     /// Stages run or skipped.
     pub plan: Vec<super::PlanStep>,
@@ -270,23 +273,4 @@ impl ImpactResponse {
         }
         out
     }
-}
-
-/// Warnings about an impact result.
-pub fn impact_warnings(r: &ImpactResult) -> Vec<super::Warning> {
-    let mut w = Vec::new();
-    if let ImpactDetail::Line(l) = &r.detail
-        && l.energy_parameter > 0.9
-    {
-        w.push(super::Warning::new(
-            "near_capacity",
-            format!(
-                "G = {:.6} is within 10 % of the law's capacity (G = 1): the impact stores most of \
-                 the energy the law can hold; force, half-width and pressure are ill-conditioned \
-                 there (only the approach is well-conditioned)",
-                l.energy_parameter
-            ),
-        ));
-    }
-    w
 }
