@@ -812,3 +812,82 @@ fn coupled(
         warnings,
     )
 }
+
+#[cfg(test)]
+#[allow(clippy::field_reassign_with_default)] // cases read as "the default, except …"
+mod tests {
+    use super::*;
+    use crate::physics::contact::force_law;
+
+    fn rel(a: f64, b: f64) -> f64 {
+        ((a - b) / b).abs()
+    }
+
+    #[test]
+    fn decoupled_default_matches_the_verification_case() {
+        // api_column / analytic_column: energy ratio 1.4712097663375543 (U₀/KE), c = 1 warned.
+        let r = solve_column(&ColumnCase::default(), &Control::unlimited()).unwrap();
+        let ColumnDetail::Decoupled(d) = &r.detail else {
+            panic!("decoupled expected")
+        };
+        assert!(rel(d.energy_ratio, 1.471_209_766_337_554_3) < 1e-9);
+        let codes: Vec<&str> = r.warnings.iter().map(|w| w.code).collect();
+        assert!(codes.contains(&"paper_damping"), "{codes:?}");
+        // 221.9 % of the yield stress: the validity warning is attached.
+        assert!(r.stress_utilisation > 1.0);
+        assert!(codes.contains(&"stress_utilisation_above_one"), "{codes:?}");
+    }
+
+    #[test]
+    fn the_law_of_a_solved_impact_is_the_law_of_its_case() {
+        let case = ImpactCase::default();
+        let impact = solve_impact(&case).unwrap();
+        let (ForceLaw::Log { k: k1, p_ref: p1 }, ForceLaw::Log { k: k2, p_ref: p2 }) =
+            (force_law_of(&impact), force_law(&case).unwrap())
+        else {
+            panic!("log laws expected")
+        };
+        assert!(rel(k1, k2) < 1e-14 && rel(p1, p2) < 1e-14);
+    }
+
+    #[test]
+    fn coupled_run_past_the_step_limit_is_refused_before_integrating() {
+        // An expired deadline stops any integration at its first check (TimedOut); the estimate
+        // refuses first, so the answer is TooManySteps with an estimate above the limit.
+        let mut case = ColumnCase::default();
+        case.model = ColumnModel::Coupled;
+        case.modes = Some(50);
+        case.impact.column.inner_diameter = 0.2499;
+        case.impact.column.length = 0.3;
+        case.end_time = Some(10.0);
+        let expired = Control::with_deadline(Some(std::time::Instant::now()));
+        match solve_column(&case, &expired) {
+            Err(PhysicsError::TooManySteps { estimated, limit }) => {
+                assert!(estimated > limit, "{estimated} ≤ {limit}");
+            }
+            other => panic!("expected TooManySteps, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn history_times_are_checked_against_the_window() {
+        assert!(check_times(&[0.0, 1e-3], Some(1e-2)).is_ok());
+        assert!(check_times(&[0.0, 2e-2], Some(1e-2)).is_err());
+        assert!(check_times(&[-1e-9], None).is_err());
+        let grid = sample_times(
+            &HistoryRequest::Uniform {
+                duration: Some(0.01),
+                samples: Some(11),
+            },
+            100.0,
+            None,
+            1000,
+        )
+        .unwrap()
+        .unwrap()
+        .times();
+        assert_eq!(grid.len(), 11);
+        assert_eq!(grid[0], 0.0);
+        assert!(rel(grid[10], 0.01) < 1e-15);
+    }
+}

@@ -1295,4 +1295,57 @@ mod tests {
             assert!(r.energy_residual > 0.0);
         }
     }
+
+    /// The step estimate brackets what the integrator does: the lower bound is below the steps
+    /// of every pass, and the expected count is within a factor 2 of the last pass's, for 1 to
+    /// 50 modes (flight dominates the default window of 50 contact durations).
+    #[test]
+    fn step_estimate_brackets_the_steps_taken() {
+        for n in [1usize, 5, 20, 50] {
+            let input = base_input(n, 1e-9);
+            let e = estimate_steps(&input).unwrap();
+            let r = solve_coupled(&input, &Control::unlimited()).unwrap();
+            let steps = r.steps as f64;
+            assert!(
+                e.lower_bound <= steps,
+                "{n} modes: bound {} > {steps}",
+                e.lower_bound
+            );
+            assert!(
+                (0.5..2.0).contains(&(steps / e.expected)),
+                "{n} modes: {steps} steps, expected {}",
+                e.expected
+            );
+        }
+    }
+
+    /// A limit below the lower bound is refused before any step (no `TimedOut` from an
+    /// expired deadline, which the first 1000 steps would meet).
+    #[test]
+    fn step_limit_below_the_estimate_is_refused_at_once() {
+        let mut input = base_input(50, 1e-9);
+        let e = estimate_steps(&input).unwrap();
+        input.max_steps = (0.9 * e.lower_bound) as u64;
+        let expired = Control::with_deadline(Some(std::time::Instant::now()));
+        match solve_coupled(&input, &expired) {
+            Err(PhysicsError::TooManySteps { estimated, limit }) => {
+                assert_eq!(estimated, e.expected);
+                assert_eq!(limit, input.max_steps as f64);
+            }
+            other => panic!("expected TooManySteps, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn state_layout_names_every_slot_once() {
+        let layout = StateLayout { n: 3 };
+        let mut slots = vec![ROCK_DISPLACEMENT, ROCK_VELOCITY];
+        slots.extend((0..3).map(|j| layout.modal_displacement(j)));
+        slots.extend((0..3).map(|j| layout.modal_velocity(j)));
+        slots.push(layout.dissipated());
+        slots.push(layout.work());
+        slots.sort_unstable();
+        assert_eq!(slots, (0..layout.len()).collect::<Vec<_>>());
+        assert_eq!(layout.column(), 2..8);
+    }
 }

@@ -261,3 +261,42 @@ pub fn contact_duration(detail: &ImpactDetail, mass: f64, v: f64) -> f64 {
         ImpactDetail::Hertz(h) => HERTZ_DURATION_FACTOR * h.max_deformation / v,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::contact::solve_impact;
+    use crate::physics::material::{ContactLaw, ContactModel, ImpactCase};
+
+    #[test]
+    fn hertz_duration_is_the_beta_factor_times_delta_over_v() {
+        let case = ImpactCase {
+            contact: ContactModel {
+                law: ContactLaw::HertzPoint,
+                ..ContactModel::default()
+            },
+            ..ImpactCase::default()
+        };
+        let r = solve_impact(&case).unwrap();
+        let expected = HERTZ_DURATION_FACTOR * r.max_deformation() / case.velocity;
+        assert_eq!(contact_duration(&r.detail, r.mass, case.velocity), expected);
+        // (4/5)·B(2/5, 1/2) = (4/5)·Γ(2/5)Γ(1/2)/Γ(9/10) (mpmath: 2.9432751843247046573).
+        assert!((HERTZ_DURATION_FACTOR - 2.943_275_184_324_704_6).abs() < 1e-15);
+    }
+
+    #[test]
+    fn line_duration_by_logarithms_continues_the_direct_form() {
+        // Below Pmax = 1e-280 N the duration is formed from logarithms; both forms agree where
+        // both are representable.
+        let r = solve_impact(&ImpactCase::default()).unwrap();
+        let ImpactDetail::Line(mut l) = r.detail else {
+            panic!("line expected")
+        };
+        let direct = contact_duration(&ImpactDetail::Line(l), r.mass, 5.0);
+        let j = line_duration_factor(l.u);
+        let logs = 2.0 * r.mass * j * (5.0f64.ln() - l.force_capacity.ln() + 0.5 * l.u).exp();
+        assert!((direct / logs - 1.0).abs() < 1e-12, "{direct} vs {logs}");
+        l.max_force = 1e-300;
+        assert!((contact_duration(&ImpactDetail::Line(l), r.mass, 5.0) / logs - 1.0).abs() < 1e-15);
+    }
+}

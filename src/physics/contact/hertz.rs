@@ -236,3 +236,39 @@ pub(super) fn hertz_max_deformation(mass: f64, v: f64, kappa: f64) -> f64 {
         (1.25 * mass / kappa).powf(0.4) * v.powf(0.8)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equivalent_radius_form_is_the_circular_hertz_law() {
+        // κ = (4/3)E*√R_e with R_e = r_c√(R/(R + r_c)).
+        let (es, rc, r) = (5.3e9, 0.02, 0.125);
+        let h = hertz_geometry(es, rc, r, false);
+        let re = rc * (r / (r + rc)).sqrt();
+        assert!((h.equivalent_radius / re - 1.0).abs() < 1e-15);
+        assert!((h.stiffness / (4.0 / 3.0 * es * re.sqrt()) - 1.0).abs() < 1e-15);
+        assert_eq!((h.axis_ratio, h.eccentricity_squared), (1.0, 0.0));
+    }
+
+    #[test]
+    fn exact_form_tends_to_the_circular_one_for_a_small_corner() {
+        // r_c/R → 0: the contact becomes circular and the exact κ tends to (4/3)E*√R_e.
+        let h = hertz_geometry(1.0, 1e-9, 1.0, true);
+        assert!((h.stiffness / h.stiffness_equivalent_radius - 1.0).abs() < 1e-8);
+        assert!(h.axis_ratio > 0.999_999);
+    }
+
+    #[test]
+    fn max_deformation_is_continuous_across_its_two_forms() {
+        // (5mv²/(4κ))^{2/5}: the direct power and the v^{4/5} form agree where both apply.
+        let (m, kappa) = (67.5f64, 1e9f64);
+        let v = 1e-145f64; // v² = 1e-290: the edge of the direct form
+        let direct = (1.25 * m * (v * v) / kappa).powf(0.4);
+        let split = (1.25 * m / kappa).powf(0.4) * v.powf(0.8);
+        assert!((direct / split - 1.0).abs() < 1e-13);
+        assert!((hertz_max_deformation(m, v, kappa) / split - 1.0).abs() < 1e-13);
+        assert!(hertz_max_deformation(m, 1e-300, kappa) > 0.0);
+    }
+}

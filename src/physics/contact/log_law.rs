@@ -178,3 +178,49 @@ fn solve_log_dd(case: &ImpactCase, e_star: DoubleDouble) -> PhysicsResult<LogSol
     };
     Ok(log_solution(k, p_ref, p_cap, g, u, (-0.25 * u).exp()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::material::ContactModel;
+
+    #[test]
+    fn capacity_approaches_are_the_papers_closed_forms() {
+        // δ_cap = P_ref/(ek) with k = πLE*: paper L²/R, johnson 4R/e².
+        let (es, l, r) = (5.4e9, 0.3, 0.125);
+        let k = PI * l * es;
+        let (p_cap, p_ref) = log_law_forces(ContactLaw::Paper, es, l, r);
+        assert_eq!(p_ref, E * p_cap);
+        assert!((p_ref / (E * k) / (l * l / r) - 1.0).abs() < 1e-15);
+        let (p_cap, p_ref) = log_law_forces(ContactLaw::Johnson, es, l, r);
+        assert!((p_ref / (E * p_cap) - 1.0).abs() < 1e-15);
+        assert!((p_ref / (E * k) / (4.0 * r / (E * E)) - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_f64_and_double_double_paths_agree_far_from_the_branch_point() {
+        for law in [ContactLaw::Paper, ContactLaw::Johnson] {
+            for v in [0.1, 1.0, 5.0] {
+                let case = ImpactCase {
+                    velocity: v,
+                    contact: ContactModel {
+                        law,
+                        ..ContactModel::default()
+                    },
+                    ..ImpactCase::default()
+                };
+                let far = solve_log_far(&case).expect("G < 0.5");
+                let e_star = effective_modulus_dd(&case.rock, &case.column, case.contact.modulus);
+                let dd = solve_log_dd(&case, e_star).unwrap();
+                for (a, b) in [
+                    (far.g, dd.g),
+                    (far.u, dd.u),
+                    (far.p_max, dd.p_max),
+                    (far.d_max, dd.d_max),
+                ] {
+                    assert!((a / b - 1.0).abs() < 1e-14, "{law:?} v = {v}: {a} vs {b}");
+                }
+            }
+        }
+    }
+}

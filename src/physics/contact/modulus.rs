@@ -62,3 +62,26 @@ pub(super) fn effective_modulus_f64(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn both_conventions_match_their_closed_forms() {
+        let (rock, column) = (Rock::default(), Column::default());
+        // Paper: E/(1 − ν²) = 5e9/0.9216 (P01: 5 425 347 222.222 222 Pa).
+        let paper = effective_modulus(&rock, &column, ModulusConvention::Paper);
+        assert!((paper / 5_425_347_222.222_222 - 1.0).abs() < 1e-15);
+        // Two-body: 1/E* = 0.9216/5e9 + 0.91/208e9.
+        let two_body = effective_modulus(&rock, &column, ModulusConvention::TwoBody);
+        let expected = 1.0 / (0.9216 / 5e9 + 0.91 / 208e9);
+        assert!((two_body / expected - 1.0).abs() < 1e-15);
+        // The f64 path agrees with the double-double one to a few ulp.
+        for convention in [ModulusConvention::Paper, ModulusConvention::TwoBody] {
+            let a = effective_modulus(&rock, &column, convention);
+            let b = effective_modulus_f64(&rock, &column, convention);
+            assert!((a / b - 1.0).abs() < 4.0 * f64::EPSILON, "{convention:?}");
+        }
+    }
+}
