@@ -230,3 +230,114 @@ async fn capacity_is_checked_before_the_column() {
     let r = post(&app, "/v1/column", &json!({"model": "coupled", "velocity_m_s": 400, "rock": {"side_length_m": 0.05, "elastic_modulus_pa": 5e8}})).await;
     assert_problem(&r, 422, "capacity_exceeded");
 }
+
+fn warning_codes(b: &Value) -> Vec<String> {
+    b["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["code"].as_str().unwrap().to_owned())
+        .collect()
+}
+
+/// Validity (issue 12): a stress utilisation above 1 is warned, exactly 1 is not; the bending
+/// stress does not depend on the yield stress, so σ_y = σ_max gives a utilisation of exactly 1.
+#[tokio::test]
+async fn stress_utilisation_above_one_is_warned_on_both_sides_of_the_threshold() {
+    let app = common::app();
+    for model in ["decoupled", "coupled"] {
+        let base = post(&app, "/v1/column", &json!({"model": model}))
+            .await
+            .json();
+        let s = &base["max_bending_stress_pa"];
+        let sigma = s["clamp"]
+            .as_f64()
+            .unwrap()
+            .max(s["midpoint"].as_f64().unwrap());
+        // The defaults are past yield (221.9 % decoupled): warned.
+        assert!(base["stress_utilisation"].as_f64().unwrap() > 1.0);
+        assert!(warning_codes(&base).contains(&"stress_utilisation_above_one".into()));
+        for (yield_stress, warned) in [
+            (sigma, false),
+            (sigma * (1.0 + 1e-12), false),
+            (sigma * (1.0 - 1e-12), true),
+        ] {
+            let b = post(
+                &app,
+                "/v1/column",
+                &json!({"model": model, "column": {"yield_stress_pa": yield_stress}}),
+            )
+            .await
+            .json();
+            assert_eq!(
+                warning_codes(&b).contains(&"stress_utilisation_above_one".into()),
+                warned,
+                "{model}, σ_y = {yield_stress}: utilisation {}",
+                b["stress_utilisation"]
+            );
+        }
+    }
+}
+
+/// Validity (issue 12): the column responses carry the contact's validity warnings too — a
+/// Hertz corner at the defaults presses far above the yield stress of 16Mn steel.
+#[tokio::test]
+async fn column_responses_carry_the_contact_validity_warnings() {
+    let app = common::app();
+    for model in ["decoupled", "coupled"] {
+        let hertz = post(
+            &app,
+            "/v1/column",
+            &json!({"model": model, "contact": {"law": "hertz_point"}}),
+        )
+        .await
+        .json();
+        assert!(
+            warning_codes(&hertz).contains(&"contact_pressure_above_yield".into()),
+            "{model}: {}",
+            hertz["warnings"]
+        );
+        let soft = post(
+            &app,
+            "/v1/column",
+            &json!({"model": model, "contact": {"law": "hertz_point"},
+                    "column": {"yield_stress_pa": 1e10}}),
+        )
+        .await
+        .json();
+        assert!(
+            !warning_codes(&soft).contains(&"contact_pressure_above_yield".into()),
+            "{model}: {}",
+            soft["warnings"]
+        );
+    }
+}
+
+/// Issue 7: a thin-walled, short coupled column with 50 modes needs tens of millions of steps;
+/// it used to integrate for seconds until the step limit and only then answer. The step count
+/// is now estimated from the stiffest mode and the window before integrating, so the refusal
+/// (422 `too_many_steps` with the estimate, naming `/end_time_s`) comes at once. A time limit
+/// far below the old run time proves that no integration happened: the service would answer
+/// 504 `timeout` if it integrated first.
+#[tokio::test]
+async fn thin_walled_coupled_column_is_refused_at_once_with_the_step_estimate() {
+    let app = gangue::app(gangue::config::Config {
+        compute_timeout_s: 0.5,
+        ..gangue::config::Config::default()
+    });
+    let r = post(
+        &app,
+        "/v1/column",
+        &json!({"model": "coupled", "galerkin": {"modes": 50}, "end_time_s": 10.0,
+                "column": {"inner_diameter_m": 0.2499, "length_m": 0.3}}),
+    )
+    .await;
+    let p = assert_problem(&r, 422, "too_many_steps");
+    let estimated = p["estimated_steps"].as_f64().unwrap();
+    let limit = p["limit"].as_f64().unwrap();
+    assert!(
+        estimated > 4.0 * limit,
+        "estimate {estimated}, limit {limit}"
+    );
+    assert_eq!(p["errors"][0]["field"], "/end_time_s", "{p}");
+}

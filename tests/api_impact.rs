@@ -379,3 +379,82 @@ async fn progress_stream_ends_with_one_result_line() {
     let last: Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
     assert_eq!(last["problem"]["type"], "/problems/capacity_exceeded");
 }
+
+fn warning_codes(b: &Value) -> Vec<String> {
+    b["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["code"].as_str().unwrap().to_owned())
+        .collect()
+}
+
+/// Validity (issue 12): a contact pressure above the column's yield stress is warned; the
+/// threshold is strict (p₀ equal to σ_y is not warned), and the pressure itself does not depend
+/// on σ_y, so both sides are sent with the same impact.
+#[tokio::test]
+async fn contact_pressure_above_yield_is_warned_on_both_sides_of_the_threshold() {
+    let app = common::app();
+    let base = post(&app, "/v1/impact", &json!({})).await.json();
+    let p0 = base["max_contact_pressure_pa"].as_f64().unwrap();
+    assert!(!warning_codes(&base).contains(&"contact_pressure_above_yield".into()));
+    for (yield_stress, warned) in [
+        (p0, false),
+        (p0 * (1.0 + 1e-12), false),
+        (p0 * (1.0 - 1e-12), true),
+        (p0 / 2.0, true),
+    ] {
+        let b = post(
+            &app,
+            "/v1/impact",
+            &json!({"column": {"yield_stress_pa": yield_stress}}),
+        )
+        .await
+        .json();
+        assert_eq!(b["max_contact_pressure_pa"].as_f64().unwrap(), p0);
+        assert_eq!(
+            warning_codes(&b).contains(&"contact_pressure_above_yield".into()),
+            warned,
+            "σ_y = {yield_stress}: {b}"
+        );
+    }
+    // The issue's case: a 1 m block at 50 m/s on a Hertz corner, far above 345 MPa.
+    let b = post(
+        &app,
+        "/v1/impact",
+        &json!({"velocity_m_s": 50.0, "rock": {"side_length_m": 1.0}, "column": {"length_m": 1.31},
+                "contact": {"law": "hertz_point"}}),
+    )
+    .await
+    .json();
+    assert!(
+        warning_codes(&b).contains(&"contact_pressure_above_yield".into()),
+        "{b}"
+    );
+}
+
+/// Validity (issue 12): an approach δmax above a tenth of the contact radius is warned, and
+/// not at or below it, over radii on both sides of the threshold.
+#[tokio::test]
+async fn approach_above_a_tenth_of_the_radius_is_warned_on_both_sides_of_the_threshold() {
+    let app = common::app();
+    let (mut seen_warned, mut seen_quiet) = (false, false);
+    for radius in [0.001, 0.003, 0.01, 0.0179, 0.018, 0.03, 0.125, 1.0] {
+        let b = post(
+            &app,
+            "/v1/impact",
+            &json!({"contact": {"law": "hertz_point"}, "column": {"contact_radius_m": radius}}),
+        )
+        .await
+        .json();
+        let d = b["max_deformation_m"].as_f64().unwrap();
+        let warned = warning_codes(&b).contains(&"approach_above_tenth_of_radius".into());
+        assert_eq!(warned, d > 0.1 * radius, "R = {radius}, δmax = {d}: {b}");
+        seen_warned |= warned;
+        seen_quiet |= !warned;
+    }
+    assert!(
+        seen_warned && seen_quiet,
+        "both sides of the threshold were sent"
+    );
+}

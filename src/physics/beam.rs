@@ -10,6 +10,7 @@ use nalgebra::DMatrix;
 
 use super::error::{PhysicsError, PhysicsResult};
 use super::material::{Column, Damping, Section};
+use super::numeric::quadrature::gauss_legendre;
 
 /// Largest number of exact modes the Galerkin model supports.
 pub const MAX_MODES: usize = 50;
@@ -144,31 +145,6 @@ pub struct ModeIntegrals {
     pub rotary: f64,
     /// Stiffness integral (∫φ″², or ∫φφ⁗ for the paper's printed constants).
     pub stiffness: f64,
-}
-
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton on the Legendre recurrence).
-fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    let mut out = Vec::with_capacity(n);
-    for i in 1..=n {
-        let mut x = (PI * (i as f64 - 0.25) / (n as f64 + 0.5)).cos();
-        let mut dp = 1.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, x);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-            let dx = p1 / dp;
-            x -= dx;
-            if dx.abs() < 1e-16 {
-                break;
-            }
-        }
-        out.push((x, 2.0 / ((1.0 - x * x) * dp * dp)));
-    }
-    out
 }
 
 /// ∫φ², ∫φ′², ∫φ″² over [0, 1] by composite Gauss–Legendre quadrature (32 panels × 20 points).

@@ -7,6 +7,7 @@ use super::control::Control;
 use super::coupled::{CoupledInput, solve_coupled};
 use super::error::{PhysicsError, PhysicsResult};
 use super::material::{Damping, ImpactCase, Section};
+use super::validity;
 
 /// Which column model to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -80,14 +81,8 @@ impl Default for ColumnCase {
     }
 }
 
-/// A named warning attached to a result.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Warning {
-    /// Stable code, e.g. `energy_ratio_above_one`.
-    pub code: &'static str,
-    /// Human-readable explanation.
-    pub message: String,
-}
+/// A named warning attached to a result (defined with the validity checks).
+pub use super::validity::Warning;
 
 /// Largest bending stress σ = E_s·(D₁/2)·max|w″|, Pa.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -235,18 +230,10 @@ pub struct ColumnResult {
 /// The contact law of a solved impact (k = P_cap/δ_cap, P_ref = e·P_cap; Hertz κ).
 pub fn force_law_of(impact: &ImpactResult) -> ForceLaw {
     match &impact.detail {
-        ImpactDetail::Line(l) => ForceLaw::Log {
-            k: l.force_capacity / l.deformation_capacity,
-            p_ref: std::f64::consts::E * l.force_capacity,
-        },
+        ImpactDetail::Line(l) => {
+            ForceLaw::log_from_capacity(l.force_capacity, l.deformation_capacity)
+        }
         ImpactDetail::Hertz(h) => ForceLaw::Hertz { kappa: h.stiffness },
-    }
-}
-
-fn max_deformation_and_force(impact: &ImpactResult) -> (f64, f64) {
-    match &impact.detail {
-        ImpactDetail::Line(l) => (l.max_deformation, l.max_force),
-        ImpactDetail::Hertz(h) => (h.max_deformation, h.max_force),
     }
 }
 
@@ -438,7 +425,7 @@ fn solve_inner(
     let col = &case.impact.column;
     let single = SingleMode::new(col, case.mode_shapes, case.rotary_inertia)?;
     let ke = impact.kinetic_energy;
-    let (dmax, _) = max_deformation_and_force(impact);
+    let dmax = impact.max_deformation();
     if !(ke >= MIN_KINETIC_ENERGY && dmax >= f64::MIN_POSITIVE) {
         return Err(PhysicsError::invalid(
             "/velocity_m_s",
@@ -461,14 +448,42 @@ fn solve_inner(
                 .into(),
         });
     }
-    match case.model {
+    let mut result = match case.model {
         ColumnModel::Decoupled => decoupled(case, impact, &single, ke, warnings),
         ColumnModel::Coupled => coupled(case, impact, law, &single, ke, warnings, control),
-    }
+    }?;
+    result
+        .warnings
+        .extend(validity_warnings(case, impact, &result));
+    Ok(result)
+}
+
+/// The validity warnings of a column result ([`super::validity`]): the contact's pressure and
+/// approach at the largest contact force of the model run (the rigid-column maxima for the
+/// decoupled model; for the coupled model the largest over all maxima of approach), and the
+/// stress utilisation.
+fn validity_warnings(
+    case: &ColumnCase,
+    impact: &ImpactResult,
+    result: &ColumnResult,
+) -> Vec<Warning> {
+    let (force, approach) = match &result.detail {
+        ColumnDetail::Decoupled(d) => (d.max_force, d.max_deformation),
+        ColumnDetail::Coupled(c) => (c.max_force, c.max_contact_deformation),
+    };
+    let column = &case.impact.column;
+    let mut out = validity::contact_warnings(
+        validity::contact_pressure_at(impact, force),
+        approach,
+        column.yield_stress,
+        column.contact_radius,
+    );
+    out.extend(validity::stress_warning(result.stress_utilisation));
+    out
 }
 
 #[allow(clippy::too_many_arguments)] // private assembly of the shared fields
-fn common(
+fn assemble_result(
     single: &SingleMode,
     ke: f64,
     stress: BendingStress,
@@ -558,7 +573,7 @@ fn decoupled(
             "end_time_s applies to the coupled model only",
         ));
     }
-    let (dmax, pmax) = max_deformation_and_force(impact);
+    let (dmax, pmax) = (impact.max_deformation(), impact.max_force());
     let w_mid0 = match case.initial_midpoint_displacement {
         Some(w) => {
             if !(w > 0.0 && w <= 1.0) {
@@ -620,7 +635,7 @@ fn decoupled(
         (w0 * mode.curvature(0.0) / (l * l)).abs(),
         (w0 * mode.curvature(0.5) / (l * l)).abs(),
     );
-    common(
+    assemble_result(
         single,
         ke,
         stress,
@@ -701,7 +716,7 @@ fn coupled(
         *t = sorted;
         idx
     });
-    let (dmax, _) = max_deformation_and_force(impact);
+    let dmax = impact.max_deformation();
     let v = case.impact.velocity;
     let input = CoupledInput {
         rock_mass: impact.mass,
@@ -768,7 +783,7 @@ fn coupled(
         r.max_curvature_clamp,
         r.max_curvature_midpoint,
     );
-    common(
+    assemble_result(
         single,
         ke,
         stress,
@@ -796,4 +811,83 @@ fn coupled(
         }),
         warnings,
     )
+}
+
+#[cfg(test)]
+#[allow(clippy::field_reassign_with_default)] // cases read as "the default, except …"
+mod tests {
+    use super::*;
+    use crate::physics::contact::force_law;
+
+    fn rel(a: f64, b: f64) -> f64 {
+        ((a - b) / b).abs()
+    }
+
+    #[test]
+    fn decoupled_default_matches_the_verification_case() {
+        // api_column / analytic_column: energy ratio 1.4712097663375543 (U₀/KE), c = 1 warned.
+        let r = solve_column(&ColumnCase::default(), &Control::unlimited()).unwrap();
+        let ColumnDetail::Decoupled(d) = &r.detail else {
+            panic!("decoupled expected")
+        };
+        assert!(rel(d.energy_ratio, 1.471_209_766_337_554_3) < 1e-9);
+        let codes: Vec<&str> = r.warnings.iter().map(|w| w.code).collect();
+        assert!(codes.contains(&"paper_damping"), "{codes:?}");
+        // 221.9 % of the yield stress: the validity warning is attached.
+        assert!(r.stress_utilisation > 1.0);
+        assert!(codes.contains(&"stress_utilisation_above_one"), "{codes:?}");
+    }
+
+    #[test]
+    fn the_law_of_a_solved_impact_is_the_law_of_its_case() {
+        let case = ImpactCase::default();
+        let impact = solve_impact(&case).unwrap();
+        let (ForceLaw::Log { k: k1, p_ref: p1 }, ForceLaw::Log { k: k2, p_ref: p2 }) =
+            (force_law_of(&impact), force_law(&case).unwrap())
+        else {
+            panic!("log laws expected")
+        };
+        assert!(rel(k1, k2) < 1e-14 && rel(p1, p2) < 1e-14);
+    }
+
+    #[test]
+    fn coupled_run_past_the_step_limit_is_refused_before_integrating() {
+        // An expired deadline stops any integration at its first check (TimedOut); the estimate
+        // refuses first, so the answer is TooManySteps with an estimate above the limit.
+        let mut case = ColumnCase::default();
+        case.model = ColumnModel::Coupled;
+        case.modes = Some(50);
+        case.impact.column.inner_diameter = 0.2499;
+        case.impact.column.length = 0.3;
+        case.end_time = Some(10.0);
+        let expired = Control::with_deadline(Some(std::time::Instant::now()));
+        match solve_column(&case, &expired) {
+            Err(PhysicsError::TooManySteps { estimated, limit }) => {
+                assert!(estimated > limit, "{estimated} ≤ {limit}");
+            }
+            other => panic!("expected TooManySteps, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn history_times_are_checked_against_the_window() {
+        assert!(check_times(&[0.0, 1e-3], Some(1e-2)).is_ok());
+        assert!(check_times(&[0.0, 2e-2], Some(1e-2)).is_err());
+        assert!(check_times(&[-1e-9], None).is_err());
+        let grid = sample_times(
+            &HistoryRequest::Uniform {
+                duration: Some(0.01),
+                samples: Some(11),
+            },
+            100.0,
+            None,
+            1000,
+        )
+        .unwrap()
+        .unwrap()
+        .times();
+        assert_eq!(grid.len(), 11);
+        assert_eq!(grid[0], 0.0);
+        assert!(rel(grid[10], 0.01) < 1e-15);
+    }
 }

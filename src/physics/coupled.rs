@@ -15,6 +15,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::beam::Galerkin;
 use super::contact::ForceLaw;
+pub use super::contact::contact_energy;
 use super::control::Control;
 use super::error::{PhysicsError, PhysicsResult};
 use super::ode::{Dopri5, OdeError, OdeSystem, find_roots};
@@ -122,26 +123,48 @@ pub struct CoupledResult {
     pub history: CoupledHistory,
 }
 
-/// Energy ∫₀^δ P dδ′ stored in the contact at approach δ, J.
-///
-/// # Special cases
-/// δ ≤ 0 gives 0; past the log law's capacity `None`.
-///
-/// # References
-/// physics.md §A.5: E(P) = P²/(4k)·(2 ln(P_ref/P) − 1); §A.7: E = (2/5)κδ^{5/2}.
-pub fn contact_energy(law: &ForceLaw, delta: f64) -> Option<f64> {
-    if delta <= 0.0 {
-        return Some(0.0);
+/// Position of the rock displacement u (towards the column, m) in the coupled state.
+const ROCK_DISPLACEMENT: usize = 0;
+/// Position of the rock velocity u̇ (m/s) in the coupled state.
+const ROCK_VELOCITY: usize = 1;
+
+/// Positions in the coupled state y = [u, u̇, w₁…wₙ, ẇ₁…ẇₙ, D, W] of n active (symmetric)
+/// modes: named accessors instead of index arithmetic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct StateLayout {
+    /// Number of active modes n.
+    n: usize,
+}
+
+impl StateLayout {
+    /// Length of the state, 4 + 2n.
+    fn len(self) -> usize {
+        4 + 2 * self.n
     }
-    match *law {
-        ForceLaw::Log { k, p_ref } => {
-            let p = law.force(delta)?;
-            if p == 0.0 {
-                return Some(0.0);
-            }
-            Some(p * p / (4.0 * k) * (2.0 * (p_ref / p).ln() - 1.0))
-        }
-        ForceLaw::Hertz { kappa } => Some(0.4 * kappa * delta * delta * delta.sqrt()),
+
+    /// Position of the modal displacement wⱼ, m.
+    fn modal_displacement(self, j: usize) -> usize {
+        2 + j
+    }
+
+    /// Position of the modal velocity ẇⱼ, m/s.
+    fn modal_velocity(self, j: usize) -> usize {
+        2 + self.n + j
+    }
+
+    /// The column block z = [w, ẇ] (the free propagator's state).
+    fn column(self) -> std::ops::Range<usize> {
+        2..2 + 2 * self.n
+    }
+
+    /// Position of the energy dissipated by the column's damping D, J.
+    fn dissipated(self) -> usize {
+        2 + 2 * self.n
+    }
+
+    /// Position of the work of the contact force on the column W, J.
+    fn work(self) -> usize {
+        3 + 2 * self.n
     }
 }
 
@@ -154,14 +177,16 @@ struct System {
     k: Vec<f64>,
     c: Vec<f64>,
     n: usize,
+    layout: StateLayout,
     in_contact: std::cell::Cell<bool>,
 }
 
 impl System {
     fn delta(&self, y: &[f64]) -> f64 {
-        let mut d = y[0];
+        let layout = self.layout;
+        let mut d = y[ROCK_DISPLACEMENT];
         for j in 0..self.n {
-            d -= self.phi[j] * y[2 + j];
+            d -= self.phi[j] * y[layout.modal_displacement(j)];
         }
         d
     }
@@ -170,6 +195,7 @@ impl System {
 impl OdeSystem for System {
     fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) -> bool {
         let n = self.n;
+        let layout = self.layout;
         let p = if self.in_contact.get() {
             match self.law.force(self.delta(y)) {
                 Some(p) if p.is_finite() => p,
@@ -178,24 +204,24 @@ impl OdeSystem for System {
         } else {
             0.0
         };
-        dy[0] = y[1];
-        dy[1] = -p / self.m;
+        dy[ROCK_DISPLACEMENT] = y[ROCK_VELOCITY];
+        dy[ROCK_VELOCITY] = -p / self.m;
         let mut f = [0.0f64; 32];
         let mut dis = 0.0;
         let mut mid_rate = 0.0;
         for j in 0..n {
-            let wd = y[2 + n + j];
-            f[j] = self.phi[j] * p - self.c[j] * wd - self.k[j] * y[2 + j];
+            let wd = y[layout.modal_velocity(j)];
+            f[j] = self.phi[j] * p - self.c[j] * wd - self.k[j] * y[layout.modal_displacement(j)];
             dis += self.c[j] * wd * wd;
             mid_rate += self.phi[j] * wd;
-            dy[2 + j] = wd;
+            dy[layout.modal_displacement(j)] = wd;
         }
         let f = &f[..n];
         for (i, row) in self.minv.chunks_exact(n).enumerate() {
-            dy[2 + n + i] = row.iter().zip(f).map(|(a, b)| a * b).sum();
+            dy[layout.modal_velocity(i)] = row.iter().zip(f).map(|(a, b)| a * b).sum();
         }
-        dy[2 + 2 * n] = dis;
-        dy[3 + 2 * n] = p * mid_rate;
+        dy[layout.dissipated()] = dis;
+        dy[layout.work()] = p * mid_rate;
         true
     }
 }
@@ -370,6 +396,15 @@ fn hermite(g0: f64, d0: f64, g1: f64, d1: f64, th: f64) -> f64 {
 /// # References
 /// physics.md §B.7.
 pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<CoupledResult> {
+    // Refuse at once what cannot finish within the step limit, instead of integrating until
+    // the limit is reached.
+    let estimate = estimate_steps(input)?;
+    if estimate.lower_bound > input.max_steps as f64 {
+        return Err(PhysicsError::TooManySteps {
+            estimated: estimate.expected,
+            limit: input.max_steps as f64,
+        });
+    }
     let ke0 = 0.5 * input.rock_mass * input.velocity * input.velocity;
     // Pass 1: modal states controlled on the scale of the rock's energy.
     let mut res = run_pass(input, control, input.tolerance, ke0)?;
@@ -398,6 +433,67 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
     Ok(res)
 }
 
+/// Largest |hλ| at which Dormand–Prince 5(4) is stable on the negative real axis (3.307); on
+/// the imaginary axis the bound is about 1, so this is the most generous for any mode.
+const DOPRI5_STABILITY_LIMIT: f64 = 3.307;
+
+/// The number of integrator steps one pass over the window needs, before integrating.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepEstimate {
+    /// Highest angular frequency ω_max of the active (symmetric) modes, rad/s.
+    pub omega_max: f64,
+    /// A bound no pass goes below: T·ω_max/3.307. In flight the exact propagator steps at
+    /// ω_max·h = π/4, and in contact (or in flight with heavy damping) the explicit integrator
+    /// is stable only for |hλ| ≤ 3.307 with |λ| ≥ ω_max for the stiffest mode.
+    pub lower_bound: f64,
+    /// The expected count: 8 steps per period of the stiffest mode over the window (the flight
+    /// propagator's rate, which the contact phases take about as well), T·8·ω_max/(2π).
+    pub expected: f64,
+}
+
+/// Estimates the steps of one pass of [`solve_coupled`] from the stiffest active mode and the
+/// window length, without integrating.
+///
+/// # Errors
+/// `Numerical` when the mass matrix is not positive definite.
+///
+/// # References
+/// Hairer & Wanner, *Solving ODEs II*, §IV.2 (stability regions of explicit Runge–Kutta methods).
+pub fn estimate_steps(input: &CoupledInput) -> PhysicsResult<StepEstimate> {
+    let omega_max = 2.0 * std::f64::consts::PI * highest_active_frequency(&input.galerkin)?;
+    let t = input.end_time;
+    Ok(StepEstimate {
+        omega_max,
+        lower_bound: t * omega_max / DOPRI5_STABILITY_LIMIT,
+        expected: t * 8.0 * omega_max / (2.0 * std::f64::consts::PI),
+    })
+}
+
+/// The symmetric modes (0-based even indices) of a Galerkin model: the antisymmetric ones have
+/// φ(½) = 0 and are never excited by a midpoint impact.
+fn active_modes(g: &Galerkin) -> Vec<usize> {
+    (0..g.modes.len()).step_by(2).collect()
+}
+
+/// Highest undamped frequency of the active modes, Hz (their own mass and stiffness matrices).
+fn highest_active_frequency(g: &Galerkin) -> PhysicsResult<f64> {
+    let active = active_modes(g);
+    let n = active.len();
+    let mass = DMatrix::from_fn(n, n, |i, j| g.mass[(active[i], active[j])]);
+    if mass.clone().cholesky().is_none() {
+        return Err(PhysicsError::Numerical(
+            "mass matrix not positive definite".into(),
+        ));
+    }
+    let stiffness = DVector::from_iterator(n, active.iter().map(|&i| g.stiffness[(i, i)]));
+    Ok(
+        super::beam::generalized_frequencies(&mass, &DMatrix::from_diagonal(&stiffness))
+            .last()
+            .copied()
+            .unwrap_or(0.0),
+    )
+}
+
 /// Relative accuracy the coupled results must meet (physics.md §G, coupled ODE): the estimated
 /// error (rock balance relative to its energy, column balance relative to the transferred
 /// energy) above it triggers a refinement, and a warning when refinement does not reach it.
@@ -413,10 +509,10 @@ fn run_pass(
     energy_scale: f64,
 ) -> PhysicsResult<CoupledResult> {
     let g = &input.galerkin;
-    let n_all = g.modes.len();
-    // Symmetric modes only (0-based even indices): the others are never excited.
-    let active: Vec<usize> = (0..n_all).step_by(2).collect();
+    // Symmetric modes only: the others are never excited.
+    let active = active_modes(g);
     let n = active.len();
+    let layout = StateLayout { n };
     let l = input.column_length;
     let mass = DMatrix::from_fn(n, n, |i, j| g.mass[(active[i], active[j])]);
     let minv = mass
@@ -432,6 +528,7 @@ fn run_pass(
         k: active.iter().map(|&i| g.stiffness[(i, i)]).collect(),
         c: active.iter().map(|&i| g.damping[(i, i)]).collect(),
         n,
+        layout,
         in_contact: std::cell::Cell::new(true),
     };
     let curv0: Vec<f64> = active
@@ -442,46 +539,62 @@ fn run_pass(
         .iter()
         .map(|&i| g.modes[i].curvature(0.5) / (l * l))
         .collect();
-    let dim = 4 + 2 * n;
+    let dim = layout.len();
     let v = input.velocity;
     let ke0 = 0.5 * input.rock_mass * v * v;
     let ds = input.displacement_scale;
     let mut atol = vec![tol * ds; dim];
-    atol[1] = tol * v;
+    atol[ROCK_VELOCITY] = tol * v;
     for j in 0..n {
-        atol[2 + j] = tol * (2.0 * energy_scale / sys.k[j]).sqrt();
-        atol[2 + n + j] = tol * (2.0 * energy_scale / mass[(j, j)]).sqrt();
+        atol[layout.modal_displacement(j)] = tol * (2.0 * energy_scale / sys.k[j]).sqrt();
+        atol[layout.modal_velocity(j)] = tol * (2.0 * energy_scale / mass[(j, j)]).sqrt();
     }
-    atol[2 + 2 * n] = tol * energy_scale;
-    atol[3 + 2 * n] = tol * energy_scale;
+    atol[layout.dissipated()] = tol * energy_scale;
+    atol[layout.work()] = tol * energy_scale;
     let t_end = input.end_time;
     let mut st = Dopri5::new(tol, atol, (input.time_scale * 1e-3).min(t_end));
     st.max_step = input.time_scale / 20.0;
 
     // Linear functionals of the state.
-    let f_delta: Vec<(usize, f64)> = std::iter::once((0, 1.0))
-        .chain((0..n).map(|j| (2 + j, -sys.phi[j])))
+    let f_delta: Vec<(usize, f64)> = std::iter::once((ROCK_DISPLACEMENT, 1.0))
+        .chain((0..n).map(|j| (layout.modal_displacement(j), -sys.phi[j])))
         .collect();
-    let f_delta_rate: Vec<(usize, f64)> = std::iter::once((1, 1.0))
-        .chain((0..n).map(|j| (2 + n + j, -sys.phi[j])))
+    let f_delta_rate: Vec<(usize, f64)> = std::iter::once((ROCK_VELOCITY, 1.0))
+        .chain((0..n).map(|j| (layout.modal_velocity(j), -sys.phi[j])))
         .collect();
-    let f_wmid: Vec<(usize, f64)> = (0..n).map(|j| (2 + j, sys.phi[j])).collect();
-    let f_wmid_rate: Vec<(usize, f64)> = (0..n).map(|j| (2 + n + j, sys.phi[j])).collect();
-    let f_c0: Vec<(usize, f64)> = (0..n).map(|j| (2 + j, curv0[j])).collect();
-    let f_c0_rate: Vec<(usize, f64)> = (0..n).map(|j| (2 + n + j, curv0[j])).collect();
-    let f_cm: Vec<(usize, f64)> = (0..n).map(|j| (2 + j, curvm[j])).collect();
-    let f_cm_rate: Vec<(usize, f64)> = (0..n).map(|j| (2 + n + j, curvm[j])).collect();
+    let f_wmid: Vec<(usize, f64)> = (0..n)
+        .map(|j| (layout.modal_displacement(j), sys.phi[j]))
+        .collect();
+    let f_wmid_rate: Vec<(usize, f64)> = (0..n)
+        .map(|j| (layout.modal_velocity(j), sys.phi[j]))
+        .collect();
+    let f_c0: Vec<(usize, f64)> = (0..n)
+        .map(|j| (layout.modal_displacement(j), curv0[j]))
+        .collect();
+    let f_c0_rate: Vec<(usize, f64)> = (0..n)
+        .map(|j| (layout.modal_velocity(j), curv0[j]))
+        .collect();
+    let f_cm: Vec<(usize, f64)> = (0..n)
+        .map(|j| (layout.modal_displacement(j), curvm[j]))
+        .collect();
+    let f_cm_rate: Vec<(usize, f64)> = (0..n)
+        .map(|j| (layout.modal_velocity(j), curvm[j]))
+        .collect();
     let apply = |f: &[(usize, f64)], y: &[f64]| f.iter().map(|&(i, a)| a * y[i]).sum::<f64>();
 
     let column_energy = |y: &[f64]| {
-        let wd = DVector::from_fn(n, |i, _| y[2 + n + i]);
+        let wd = DVector::from_fn(n, |i, _| y[layout.modal_velocity(i)]);
         let kin = 0.5 * wd.dot(&(&mass * &wd));
-        let strain: f64 = (0..n).map(|j| 0.5 * sys.k[j] * y[2 + j] * y[2 + j]).sum();
+        let strain: f64 = (0..n)
+            .map(|j| {
+                0.5 * sys.k[j] * y[layout.modal_displacement(j)] * y[layout.modal_displacement(j)]
+            })
+            .sum();
         (kin, strain)
     };
 
     let mut y = vec![0.0; dim];
-    y[1] = v;
+    y[ROCK_VELOCITY] = v;
     let mut t = 0.0;
     let mut res = CoupledResult {
         max_force: 0.0,
@@ -514,12 +627,9 @@ fn run_pass(
     let mut ysave = vec![0.0; dim];
     let mut ytmp = vec![0.0; dim];
     let capacity_error = || {
-        let (g_par, vmax) = match input.law {
-            ForceLaw::Log { k, p_ref } => {
-                let e_cap = p_ref * p_ref / (4.0 * std::f64::consts::E.powi(2) * k);
-                (ke0 / e_cap, (2.0 * e_cap / input.rock_mass).sqrt())
-            }
-            ForceLaw::Hertz { .. } => (f64::INFINITY, f64::INFINITY),
+        let (g_par, vmax) = match input.law.energy_capacity() {
+            Some(e_cap) => (ke0 / e_cap, (2.0 * e_cap / input.rock_mass).sqrt()),
+            None => (f64::INFINITY, f64::INFINITY),
         };
         PhysicsError::CapacityExceeded {
             energy_parameter: g_par,
@@ -546,10 +656,10 @@ fn run_pass(
         h.midpoint_displacement.push(apply(&f_wmid, ys));
         h.kinetic_energy.push(kin);
         h.strain_energy.push(strain);
-        h.dissipated_energy.push(ys[2 + 2 * n]);
-        h.rock_displacement.push(ys[0]);
+        h.dissipated_energy.push(ys[layout.dissipated()]);
+        h.rock_displacement.push(ys[ROCK_DISPLACEMENT]);
         h.rock_kinetic_energy
-            .push(0.5 * input.rock_mass * ys[1] * ys[1]);
+            .push(0.5 * input.rock_mass * ys[ROCK_VELOCITY] * ys[ROCK_VELOCITY]);
         h.contact_force.push(p);
         h.contact_energy.push(ec);
     };
@@ -760,7 +870,7 @@ fn run_pass(
                 if !first_separated {
                     first_separated = true;
                     res.first_contact_duration = Some(te);
-                    res.rebound_velocity = y[1];
+                    res.rebound_velocity = y[ROCK_VELOCITY];
                     let (kin, strain) = column_energy(&y);
                     res.column_energy_after_contact = kin + strain;
                 }
@@ -799,24 +909,24 @@ fn run_pass(
     }
     let (kin, strain) = column_energy(&y);
     res.column_energy_end = kin + strain;
-    res.rock_velocity_end = y[1];
-    res.damping_energy = y[2 + 2 * n];
+    res.rock_velocity_end = y[ROCK_VELOCITY];
+    res.damping_energy = y[layout.dissipated()];
     res.contact_energy_end = if in_contact {
         contact_energy(&input.law, sys.delta(&y)).unwrap_or(0.0)
     } else {
         0.0
     };
     if !first_separated {
-        res.rebound_velocity = y[1];
+        res.rebound_velocity = y[ROCK_VELOCITY];
         res.column_energy_after_contact = kin + strain;
     }
-    let total = 0.5 * input.rock_mass * y[1] * y[1]
+    let total = 0.5 * input.rock_mass * y[ROCK_VELOCITY] * y[ROCK_VELOCITY]
         + res.contact_energy_end
         + res.column_energy_end
         + res.damping_energy;
     res.energy_residual = ((total - ke0) / ke0).abs();
     // The column's own balance: energy + dissipated = work done on it by the contact force.
-    let work = y[3 + 2 * n];
+    let work = y[layout.work()];
     let column_total = res.column_energy_end + res.damping_energy;
     res.column_energy_scale = work
         .abs()
@@ -855,8 +965,14 @@ fn free_flight(
 ) -> PhysicsResult<(bool, f64)> {
     let n = ff.n;
     let zl = 2 * n;
+    let layout = StateLayout { n };
     let dim = y.len();
-    let delta = |yy: &[f64]| yy[0] - (0..n).map(|j| sys.phi[j] * yy[2 + j]).sum::<f64>();
+    let delta = |yy: &[f64]| {
+        yy[ROCK_DISPLACEMENT]
+            - (0..n)
+                .map(|j| sys.phi[j] * yy[layout.modal_displacement(j)])
+                .sum::<f64>()
+    };
     // y ← M x for a column-major zl × zl matrix.
     let matvec = |m: &[f64], x: &[f64], out: &mut [f64]| {
         out.fill(0.0);
@@ -870,19 +986,23 @@ fn free_flight(
     };
     // ẏ of the free system (u̇, 0, Az, ·): slopes of the linear functionals.
     let deriv = |yy: &[f64], d: &mut [f64]| {
-        d[0] = yy[1];
-        d[1] = 0.0;
-        matvec(ff.a.as_slice(), &yy[2..2 + zl], &mut d[2..2 + zl]);
-        d[2 + zl] = 0.0;
-        d[3 + zl] = 0.0;
+        d[ROCK_DISPLACEMENT] = yy[ROCK_VELOCITY];
+        d[ROCK_VELOCITY] = 0.0;
+        matvec(
+            ff.a.as_slice(),
+            &yy[layout.column()],
+            &mut d[layout.column()],
+        );
+        d[layout.dissipated()] = 0.0;
+        d[layout.work()] = 0.0;
     };
     // State at θ of a step of size h from y0.
     let at = |y0: &[f64], h: f64, th: f64, dissipation: bool| {
-        let (z, dd) = ff.taylor(&y0[2..2 + zl], th * h, dissipation);
+        let (z, dd) = ff.taylor(&y0[layout.column()], th * h, dissipation);
         let mut out = y0.to_vec();
-        out[0] = y0[0] + y0[1] * th * h;
-        out[2..2 + zl].copy_from_slice(z.as_slice());
-        out[2 + zl] = y0[2 + zl] + dd;
+        out[ROCK_DISPLACEMENT] = y0[ROCK_DISPLACEMENT] + y0[ROCK_VELOCITY] * th * h;
+        out[layout.column()].copy_from_slice(z.as_slice());
+        out[layout.dissipated()] = y0[layout.dissipated()] + dd;
         out
     };
     let (mut y0, mut y1) = (vec![0.0; dim], vec![0.0; dim]);
@@ -910,13 +1030,21 @@ fn free_flight(
         if last {
             y1.copy_from_slice(&at(&y0, h, 1.0, true));
         } else {
-            y1[0] = y0[0] + y0[1] * h;
-            y1[1] = y0[1];
-            matvec(ff.phi.as_slice(), &y0[2..2 + zl], &mut y1[2..2 + zl]);
-            matvec(ff.gram.as_slice(), &y0[2..2 + zl], &mut gz);
-            let dd: f64 = gz.iter().zip(&y0[2..2 + zl]).map(|(a, b)| a * b).sum();
-            y1[2 + zl] = y0[2 + zl] + dd;
-            y1[3 + zl] = y0[3 + zl];
+            y1[ROCK_DISPLACEMENT] = y0[ROCK_DISPLACEMENT] + y0[ROCK_VELOCITY] * h;
+            y1[ROCK_VELOCITY] = y0[ROCK_VELOCITY];
+            matvec(
+                ff.phi.as_slice(),
+                &y0[layout.column()],
+                &mut y1[layout.column()],
+            );
+            matvec(ff.gram.as_slice(), &y0[layout.column()], &mut gz);
+            let dd: f64 = gz
+                .iter()
+                .zip(&y0[layout.column()])
+                .map(|(a, b)| a * b)
+                .sum();
+            y1[layout.dissipated()] = y0[layout.dissipated()] + dd;
+            y1[layout.work()] = y0[layout.work()];
         }
         deriv(&y1, &mut dy1);
         // Re-contact: δ crossing upward; Hermite to detect, the exact series to locate.
@@ -941,9 +1069,9 @@ fn free_flight(
             for th in find_roots(herm, r0, r1, 0, 4, false) {
                 if th <= th_end {
                     ff.propagate_into(
-                        &y0[2..2 + zl],
+                        &y0[layout.column()],
                         th * h,
-                        &mut ye[2..2 + zl],
+                        &mut ye[layout.column()],
                         &mut tb1,
                         &mut tb2,
                     );
@@ -1166,5 +1294,58 @@ mod tests {
             assert!(r.energy_residual < 1e-7, "{}", r.energy_residual);
             assert!(r.energy_residual > 0.0);
         }
+    }
+
+    /// The step estimate brackets what the integrator does: the lower bound is below the steps
+    /// of every pass, and the expected count is within a factor 2 of the last pass's, for 1 to
+    /// 50 modes (flight dominates the default window of 50 contact durations).
+    #[test]
+    fn step_estimate_brackets_the_steps_taken() {
+        for n in [1usize, 5, 20, 50] {
+            let input = base_input(n, 1e-9);
+            let e = estimate_steps(&input).unwrap();
+            let r = solve_coupled(&input, &Control::unlimited()).unwrap();
+            let steps = r.steps as f64;
+            assert!(
+                e.lower_bound <= steps,
+                "{n} modes: bound {} > {steps}",
+                e.lower_bound
+            );
+            assert!(
+                (0.5..2.0).contains(&(steps / e.expected)),
+                "{n} modes: {steps} steps, expected {}",
+                e.expected
+            );
+        }
+    }
+
+    /// A limit below the lower bound is refused before any step (no `TimedOut` from an
+    /// expired deadline, which the first 1000 steps would meet).
+    #[test]
+    fn step_limit_below_the_estimate_is_refused_at_once() {
+        let mut input = base_input(50, 1e-9);
+        let e = estimate_steps(&input).unwrap();
+        input.max_steps = (0.9 * e.lower_bound) as u64;
+        let expired = Control::with_deadline(Some(std::time::Instant::now()));
+        match solve_coupled(&input, &expired) {
+            Err(PhysicsError::TooManySteps { estimated, limit }) => {
+                assert_eq!(estimated, e.expected);
+                assert_eq!(limit, input.max_steps as f64);
+            }
+            other => panic!("expected TooManySteps, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn state_layout_names_every_slot_once() {
+        let layout = StateLayout { n: 3 };
+        let mut slots = vec![ROCK_DISPLACEMENT, ROCK_VELOCITY];
+        slots.extend((0..3).map(|j| layout.modal_displacement(j)));
+        slots.extend((0..3).map(|j| layout.modal_velocity(j)));
+        slots.push(layout.dissipated());
+        slots.push(layout.work());
+        slots.sort_unstable();
+        assert_eq!(slots, (0..layout.len()).collect::<Vec<_>>());
+        assert_eq!(layout.column(), 2..8);
     }
 }

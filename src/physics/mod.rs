@@ -8,16 +8,16 @@ pub mod column;
 pub mod contact;
 pub mod control;
 pub mod coupled;
-pub mod elliptic;
 pub mod error;
-pub mod lambert;
 pub mod material;
 pub mod migration;
-pub mod ode;
-pub mod quadrature;
+pub mod numeric;
 pub mod spalling;
 pub mod stats_interval;
 pub mod study;
+pub mod validity;
 
 pub use control::Control;
 pub use error::{PhysicsError, PhysicsResult};
+/// The numeric building blocks at their former paths (`physics::ode`, `physics::quadrature`, …).
+pub use numeric::{elliptic, lambert, ode, quadrature};

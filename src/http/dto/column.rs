@@ -4,7 +4,10 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use utoipa::ToSchema;
 
-use super::common::{Checker, ColumnDto, ContactDto, Meta, PlanStep, RockDto, Warning, some};
+use super::common::{
+    Bound, Checker, ColumnDto, ContactDto, FieldDefault, Meta, NumberField, PlanStep, RockDto,
+    VELOCITY, Warning, non_null, number_schemas, velocity_schema,
+};
 use super::impact::resolve_impact_case;
 use crate::config::Config;
 use crate::http::error::ApiError;
@@ -12,6 +15,36 @@ use crate::physics::beam::ModeShapes;
 use crate::physics::column::{
     ColumnCase, ColumnDetail, ColumnHistory, ColumnModel, ColumnResult, HistoryRequest,
 };
+
+/// `initial_midpoint_displacement_m` (decoupled only; `null`: δmax).
+pub const INITIAL_MIDPOINT_DISPLACEMENT: NumberField = NumberField {
+    description: "Initial midpoint displacement, m, in (0, 1] (decoupled only; default δmax).",
+    default: FieldDefault::Null,
+    lo: Bound::Open(0.0),
+    hi: Bound::Closed(1.0),
+    unit: "m",
+    example: 0.0018,
+    nullable: true,
+};
+
+/// `end_time_s` (coupled only; `null`: 50 × the rigid contact duration). The documented maximum
+/// is the default `--max-end-time-s`.
+pub const END_TIME: NumberField = NumberField {
+    description: "End of the coupled window, s, in [1e-9, 1e3] (coupled only; default 50 × the \
+                  rigid contact duration; shorter windows resolve nothing of a contact; the \
+                  maximum is the service's --max-end-time-s, 1e3 by default).",
+    default: FieldDefault::Null,
+    lo: Bound::Closed(crate::physics::column::MIN_END_TIME),
+    hi: Bound::Closed(1000.0),
+    unit: "s",
+    example: 0.05,
+    nullable: true,
+};
+
+number_schemas! {
+    initial_midpoint_displacement_schema => INITIAL_MIDPOINT_DISPLACEMENT;
+    end_time_schema => END_TIME;
+}
 
 /// Which column model to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema, Default)]
@@ -43,7 +76,7 @@ pub enum ModeShapesDto {
 pub struct GalerkinDto {
     /// Number of modes 1…n: decoupled 1 only; coupled up to 50 (default 1 decoupled, 3 coupled).
     #[schema(minimum = 1, maximum = 50, example = 3)]
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     pub modes: Option<u32>,
     /// Mode shapes (`paper` and `approx` are defined for mode 1 only: decoupled).
     #[schema(default = "exact", example = "exact")]
@@ -68,15 +101,15 @@ impl Default for GalerkinDto {
 #[serde(deny_unknown_fields, default)]
 pub struct ColumnOutputDto {
     /// Sample times, s, each in [0, 1e6] (coupled: within the window).
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     #[schema(example = json!([0.0, 0.0001, 0.001]))]
     pub times_s: Option<Vec<f64>>,
     /// Duration sampled from 0, s, in (0, 1e6] (coupled default: the whole window).
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     #[schema(exclusive_minimum = 0.0, maximum = 1e6, example = 0.01)]
     pub duration_s: Option<f64>,
     /// Number of samples ≥ 2 (default ⌈40·f₁·duration⌉ + 1, capped by the samples limit).
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     #[schema(minimum = 2, example = 401)]
     pub samples: Option<u64>,
 }
@@ -86,12 +119,7 @@ pub struct ColumnOutputDto {
 #[serde(deny_unknown_fields, default)]
 pub struct ColumnRequest {
     /// Normal impact speed v, m/s, in (0, 1000].
-    #[schema(
-        default = 5.0,
-        exclusive_minimum = 0.0,
-        maximum = 1000.0,
-        example = 5.0
-    )]
+    #[schema(schema_with = velocity_schema)]
     pub velocity_m_s: f64,
     /// The rock block.
     pub rock: RockDto,
@@ -105,12 +133,12 @@ pub struct ColumnRequest {
     /// Galerkin modes.
     pub galerkin: GalerkinDto,
     /// Initial midpoint displacement, m, in (0, 1] (decoupled only; default δmax).
-    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1.0, example = 0.0018)]
+    #[schema(schema_with = initial_midpoint_displacement_schema)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub initial_midpoint_displacement_m: Option<f64>,
     /// End of the coupled window, s, in [1e-9, 1e3] (coupled only; default 50 × the rigid contact
     /// duration; shorter windows resolve nothing of a contact).
-    #[schema(default = json!(null), minimum = 1e-9, maximum = 1000.0, example = 0.05)]
+    #[schema(schema_with = end_time_schema)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub end_time_s: Option<f64>,
     /// History output (null: no history).
@@ -122,7 +150,7 @@ pub struct ColumnRequest {
 impl Default for ColumnRequest {
     fn default() -> Self {
         Self {
-            velocity_m_s: 5.0,
+            velocity_m_s: VELOCITY.value(),
             rock: RockDto::default(),
             column: ColumnDto::default(),
             contact: ContactDto::default(),
@@ -138,13 +166,13 @@ impl Default for ColumnRequest {
 impl ColumnRequest {
     /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
     pub fn resolve(&mut self, config: &Config) -> Result<ColumnCase, ApiError> {
-        let mut ck = Checker::new();
+        let mut checker = Checker::new();
         let impact = resolve_impact_case(
             self.velocity_m_s,
             &mut self.rock,
             &mut self.column,
             self.contact,
-            &mut ck,
+            &mut checker,
         );
         let coupled = self.model == ColumnModelDto::Coupled;
         let modes = *self
@@ -152,7 +180,7 @@ impl ColumnRequest {
             .modes
             .get_or_insert(if coupled { 3 } else { 1 });
         if coupled {
-            ck.count(
+            checker.count(
                 "/galerkin/modes",
                 u64::from(modes),
                 1,
@@ -160,45 +188,50 @@ impl ColumnRequest {
                 "modes",
             );
             if self.galerkin.mode_shapes != ModeShapesDto::Exact {
-                ck.push(
+                checker.push(
                     "/galerkin/mode_shapes",
                     json!(self.galerkin.mode_shapes),
                     "the coupled model uses exact mode shapes (paper and approx are defined for mode 1 only)",
                 );
             }
             if let Some(w) = self.initial_midpoint_displacement_m {
-                ck.push(
+                checker.push(
                     "/initial_midpoint_displacement_m",
                     crate::http::error::num(w),
                     "applies to the decoupled model only",
                 );
             }
             if let Some(t) = self.end_time_s {
-                ck.closed(
+                // The documented maximum is the default limit (--max-end-time-s).
+                checker.range(
                     "/end_time_s",
                     t,
-                    crate::physics::column::MIN_END_TIME,
-                    config.max_end_time_s,
-                    "s",
+                    END_TIME.lo,
+                    Bound::Closed(config.max_end_time_s),
+                    END_TIME.unit,
                 );
             }
         } else {
             if modes != 1 {
-                ck.push(
+                checker.push(
                     "/galerkin/modes",
                     json!(modes),
                     "the decoupled model uses mode 1 only (modes = 1)",
                 );
             }
             if let Some(t) = self.end_time_s {
-                ck.push(
+                checker.push(
                     "/end_time_s",
                     crate::http::error::num(t),
                     "applies to the coupled model only",
                 );
             }
             if let Some(w) = self.initial_midpoint_displacement_m {
-                ck.open_closed("/initial_midpoint_displacement_m", w, 0.0, 1.0, "m");
+                INITIAL_MIDPOINT_DISPLACEMENT.check(
+                    &mut checker,
+                    "/initial_midpoint_displacement_m",
+                    w,
+                );
             }
         }
         let max_samples = config.max_samples;
@@ -206,27 +239,27 @@ impl ColumnRequest {
             None => HistoryRequest::None,
             Some(o) => {
                 if let Some(d) = o.duration_s {
-                    ck.open_closed("/output/duration_s", d, 0.0, 1e6, "s");
+                    checker.open_closed("/output/duration_s", d, 0.0, 1e6, "s");
                 }
                 if let Some(n) = o.samples {
-                    ck.count("/output/samples", n, 2, max_samples, "samples");
+                    checker.count("/output/samples", n, 2, max_samples, "samples");
                 }
                 match (&o.times_s, o.duration_s, o.samples) {
                     (Some(t), None, None) => {
                         if t.len() as u64 > max_samples {
-                            ck.push(
+                            checker.push(
                                 "/output/times_s",
                                 json!(t.len()),
                                 format!("at most {max_samples} times"),
                             );
                         }
                         for (i, &ti) in t.iter().enumerate() {
-                            ck.closed(&format!("/output/times_s/{i}"), ti, 0.0, 1e6, "s");
+                            checker.closed(&format!("/output/times_s/{i}"), ti, 0.0, 1e6, "s");
                         }
                         HistoryRequest::Times(t.clone())
                     }
                     (Some(_), _, _) => {
-                        ck.push(
+                        checker.push(
                             "/output/times_s",
                             Value::Null,
                             "give either times_s or duration_s (with samples), not both",
@@ -234,7 +267,7 @@ impl ColumnRequest {
                         HistoryRequest::None
                     }
                     (None, None, _) if !coupled => {
-                        ck.push(
+                        checker.push(
                             "/output/duration_s",
                             Value::Null,
                             "the decoupled history needs times_s or duration_s in (0, 1e6] s",
@@ -248,7 +281,7 @@ impl ColumnRequest {
                 }
             }
         };
-        ck.finish()?;
+        checker.finish()?;
         Ok(ColumnCase {
             impact,
             model: if coupled {
@@ -461,7 +494,13 @@ pub struct ColumnResponse {
     /// Histories, when `output` asks.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub history: Option<ColumnHistoryDto>,
-    /// Named warnings.
+    /// Named warnings. Besides the model's own (`energy_ratio_above_one`, `paper_damping`,
+    /// `no_damping`, `decay_time_unrepresentable`, `integrator_error_above_target`,
+    /// `contact_not_ended`), validity warnings with documented, strict thresholds:
+    /// `contact_pressure_above_yield` (the contact pressure at the largest contact force >
+    /// column.yield_stress_pa), `approach_above_tenth_of_radius` (the largest approach > 0.1 ×
+    /// column.contact_radius_m), `stress_utilisation_above_one` (stress_utilisation > 1: the
+    /// linear-elastic column yields).
     pub warnings: Vec<Warning>,
     /// Stages run or skipped.
     pub plan: Vec<PlanStep>,

@@ -13,13 +13,23 @@ use crate::physics::material::{
 pub const MODEL_VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// Deserializes an optional field that may be omitted but not sent as `null` (api.md: only fields
-/// shown with a null default accept null). Use with `#[serde(default, deserialize_with = "some")]`.
-pub fn some<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
+/// shown with a null default accept null). Use with
+/// `#[serde(default, deserialize_with = "non_null")]`.
+pub fn non_null<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
 where
     D: serde::Deserializer<'de>,
     T: Deserialize<'de>,
 {
     T::deserialize(d).map(Some)
+}
+
+/// The former name of [`non_null`], kept for the DTOs that still use it.
+pub fn some<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    non_null(d)
 }
 
 /// Collects range errors so that one answer names every bad field.
@@ -133,6 +143,365 @@ impl Checker {
     }
 }
 
+/// The default of a request field, as the OpenAPI document shows it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FieldDefault {
+    /// A fixed value, filled into `inputs` when the field is absent.
+    Value(f64),
+    /// Derived from other fields (the description says how); no `default` in the schema.
+    Derived,
+    /// `null`: the field is unused unless sent (the schema shows `"default": null`).
+    Null,
+}
+
+/// One numeric request field, written once: its description, default, documented interval,
+/// unit and example. Validation ([`NumberField::check`]), the OpenAPI schema
+/// ([`NumberField::schema`]), the DTO `Default`s and `/v1/presets` all read it.
+#[derive(Debug, Clone, Copy)]
+pub struct NumberField {
+    /// The schema's description.
+    pub description: &'static str,
+    /// The default.
+    pub default: FieldDefault,
+    /// Lower end of the documented interval.
+    pub lo: Bound,
+    /// Upper end of the documented interval.
+    pub hi: Bound,
+    /// Unit named in range messages (empty for dimensionless).
+    pub unit: &'static str,
+    /// The schema's example.
+    pub example: f64,
+    /// Whether `null` is accepted (only fields with a `null` default, api.md).
+    pub nullable: bool,
+}
+
+impl NumberField {
+    /// The fixed default (the field's [`FieldDefault::Value`]).
+    ///
+    /// # Panics
+    /// On a field without a fixed default (a programming error caught by the unit tests).
+    #[track_caller]
+    pub const fn value(&self) -> f64 {
+        match self.default {
+            FieldDefault::Value(v) => v,
+            _ => panic!("field without a fixed default"),
+        }
+    }
+
+    /// Checks `v` against the documented interval, naming `field` (a JSON Pointer).
+    pub fn check(&self, checker: &mut Checker, field: &str, v: f64) -> bool {
+        checker.range(field, v, self.lo, self.hi, self.unit)
+    }
+
+    /// The OpenAPI schema of the field: number (double), description, default, example and the
+    /// documented bounds.
+    #[allow(deprecated)] // `example`: the document keeps the single example of its other fields
+    pub fn schema(&self) -> utoipa::openapi::schema::Object {
+        use utoipa::openapi::schema::{KnownFormat, ObjectBuilder, SchemaFormat, SchemaType, Type};
+        let ty = if self.nullable {
+            SchemaType::from_iter([Type::Number, Type::Null])
+        } else {
+            SchemaType::Type(Type::Number)
+        };
+        let mut b = ObjectBuilder::new()
+            .schema_type(ty)
+            .format(Some(SchemaFormat::KnownFormat(KnownFormat::Double)))
+            .description(Some(self.description))
+            .example(Some(json!(self.example)));
+        b = match self.default {
+            FieldDefault::Value(v) => b.default(Some(json!(v))),
+            FieldDefault::Null => b.default(Some(Value::Null)),
+            FieldDefault::Derived => b,
+        };
+        b = match self.lo {
+            Bound::Closed(x) => b.minimum(Some(x)),
+            Bound::Open(x) => b.exclusive_minimum(Some(x)),
+        };
+        b = match self.hi {
+            Bound::Closed(x) => b.maximum(Some(x)),
+            Bound::Open(x) => b.exclusive_maximum(Some(x)),
+        };
+        b.build()
+    }
+}
+
+/// Declares a schema function per [`NumberField`] for `#[schema(schema_with = …)]`.
+macro_rules! number_schemas {
+    ($($name:ident => $field:path;)*) => {
+        $(
+            #[doc = concat!("OpenAPI schema of [`", stringify!($field), "`].")]
+            pub fn $name() -> utoipa::openapi::schema::Object {
+                $field.schema()
+            }
+        )*
+    };
+}
+pub(crate) use number_schemas;
+
+/// The impact speed `velocity_m_s` (impact and column requests).
+pub const VELOCITY: NumberField = NumberField {
+    description: "Normal impact speed v, m/s, in (0, 1000].",
+    default: FieldDefault::Value(5.0),
+    lo: Bound::Open(0.0),
+    hi: Bound::Closed(1000.0),
+    unit: "m/s",
+    example: 5.0,
+    nullable: false,
+};
+
+/// `rock.side_length_m`.
+pub const ROCK_SIDE_LENGTH: NumberField = NumberField {
+    description: "Cube side L, m; also the contact length on the column.",
+    default: FieldDefault::Value(0.3),
+    lo: Bound::Closed(0.01),
+    hi: Bound::Closed(5.0),
+    unit: "m",
+    example: 0.3,
+    nullable: false,
+};
+
+/// `rock.radius_m` (derived default: side_length_m / 2).
+pub const ROCK_RADIUS: NumberField = NumberField {
+    description: "Sphere radius, m (default side_length_m / 2).",
+    default: FieldDefault::Derived,
+    lo: Bound::Closed(0.005),
+    hi: Bound::Closed(2.5),
+    unit: "m",
+    example: 0.15,
+    nullable: false,
+};
+
+/// `rock.density_kg_m3`.
+pub const ROCK_DENSITY: NumberField = NumberField {
+    description: "Density ρ, kg/m³.",
+    default: FieldDefault::Value(2500.0),
+    lo: Bound::Closed(100.0),
+    hi: Bound::Closed(20000.0),
+    unit: "kg/m³",
+    example: 2500.0,
+    nullable: false,
+};
+
+/// `rock.elastic_modulus_pa`.
+pub const ROCK_ELASTIC_MODULUS: NumberField = NumberField {
+    description: "Young's modulus E, Pa.",
+    default: FieldDefault::Value(5e9),
+    lo: Bound::Closed(1e7),
+    hi: Bound::Closed(1e12),
+    unit: "Pa",
+    example: 5e9,
+    nullable: false,
+};
+
+/// `rock.poisson_ratio`.
+pub const ROCK_POISSON_RATIO: NumberField = NumberField {
+    description: "Poisson ratio ν, in [0, 0.5).",
+    default: FieldDefault::Value(0.28),
+    lo: Bound::Closed(0.0),
+    hi: Bound::Open(0.5),
+    unit: "",
+    example: 0.28,
+    nullable: false,
+};
+
+/// `rock.corner_radius_m` (derived default min(0.02, L/2); cross-field bound r_c ≤ L/2 where
+/// used).
+pub const ROCK_CORNER_RADIUS: NumberField = NumberField {
+    description: "Rounded-corner radius r_c of `hertz_point`, m, in (0, 2.5]; where used \
+                  (`hertz_point`, not a sphere) also at most L/2 = side_length_m/2 (default \
+                  min(0.02, L/2)).",
+    default: FieldDefault::Derived,
+    lo: Bound::Open(0.0),
+    hi: Bound::Closed(2.5),
+    unit: "m",
+    example: 0.02,
+    nullable: false,
+};
+
+/// `column.outer_diameter_m`.
+pub const COLUMN_OUTER_DIAMETER: NumberField = NumberField {
+    description: "Outer diameter D₁, m.",
+    default: FieldDefault::Value(0.25),
+    lo: Bound::Closed(0.01),
+    hi: Bound::Closed(2.0),
+    unit: "m",
+    example: 0.25,
+    nullable: false,
+};
+
+/// `column.inner_diameter_m` (cross-field bound D₂ < D₁; the documented maximum is D₁'s).
+pub const COLUMN_INNER_DIAMETER: NumberField = NumberField {
+    description: "Inner diameter D₂, m, in [0, D₁) (0 = solid).",
+    default: FieldDefault::Value(0.235),
+    lo: Bound::Closed(0.0),
+    hi: Bound::Closed(2.0),
+    unit: "m (0 ≤ D₂ < D₁)",
+    example: 0.235,
+    nullable: false,
+};
+
+/// `column.length_m` (cross-field bound: at least a cube's contact length L).
+pub const COLUMN_LENGTH: NumberField = NumberField {
+    description: "Length between the clamps l, m; at least the contact length L of a cube.",
+    default: FieldDefault::Value(1.31),
+    lo: Bound::Closed(0.1),
+    hi: Bound::Closed(20.0),
+    unit: "m",
+    example: 1.31,
+    nullable: false,
+};
+
+/// `column.elastic_modulus_pa`.
+pub const COLUMN_ELASTIC_MODULUS: NumberField = NumberField {
+    description: "Young's modulus E_s, Pa.",
+    default: FieldDefault::Value(208e9),
+    lo: Bound::Closed(1e9),
+    hi: Bound::Closed(1e12),
+    unit: "Pa",
+    example: 208e9,
+    nullable: false,
+};
+
+/// `column.poisson_ratio`.
+pub const COLUMN_POISSON_RATIO: NumberField = NumberField {
+    description: "Poisson ratio ν_s, in [0, 0.5).",
+    default: FieldDefault::Value(0.3),
+    lo: Bound::Closed(0.0),
+    hi: Bound::Open(0.5),
+    unit: "",
+    example: 0.3,
+    nullable: false,
+};
+
+/// `column.density_kg_m3`.
+pub const COLUMN_DENSITY: NumberField = NumberField {
+    description: "Density ρ_s, kg/m³.",
+    default: FieldDefault::Value(7850.0),
+    lo: Bound::Closed(100.0),
+    hi: Bound::Closed(20000.0),
+    unit: "kg/m³",
+    example: 7850.0,
+    nullable: false,
+};
+
+/// `column.yield_stress_pa`.
+pub const COLUMN_YIELD_STRESS: NumberField = NumberField {
+    description: "Yield stress, Pa (16Mn steel), for the stress utilisation and the validity \
+                  warnings (contact_pressure_above_yield, stress_utilisation_above_one).",
+    default: FieldDefault::Value(345e6),
+    lo: Bound::Open(0.0),
+    hi: Bound::Closed(1e10),
+    unit: "Pa",
+    example: 345e6,
+    nullable: false,
+};
+
+/// `column.contact_radius_m` (derived default D₁/2).
+pub const COLUMN_CONTACT_RADIUS: NumberField = NumberField {
+    description: "Radius R of the cylinder at the contact, m (default D₁/2).",
+    default: FieldDefault::Derived,
+    lo: Bound::Closed(0.001),
+    hi: Bound::Closed(10.0),
+    unit: "m",
+    example: 0.125,
+    nullable: false,
+};
+
+/// `column.damping_coefficient_n_s_m2` (default 1.0 unless `damping_ratio` is given).
+pub const COLUMN_DAMPING_COEFFICIENT: NumberField = NumberField {
+    description: "Viscous damping per unit length c, N·s/m² (default 1.0, the paper's value; \
+                  not filled in when damping_ratio is given).",
+    default: FieldDefault::Value(1.0),
+    lo: Bound::Closed(0.0),
+    hi: Bound::Closed(1e9),
+    unit: "N·s/m²",
+    example: 1.0,
+    nullable: false,
+};
+
+/// `column.damping_ratio`.
+pub const COLUMN_DAMPING_RATIO: NumberField = NumberField {
+    description: "Damping ratio ζ₁ of mode 1 instead of c (recommended 0.02); giving both is 422.",
+    default: FieldDefault::Null,
+    lo: Bound::Closed(0.0),
+    hi: Bound::Closed(10.0),
+    unit: "",
+    example: 0.02,
+    nullable: true,
+};
+
+/// The numeric fields shared by `/v1/impact` and `/v1/column`, by JSON Pointer in those requests
+/// (what `/v1/presets` lists under `fields`).
+pub const IMPACT_FIELDS: &[(&str, NumberField)] = &[
+    ("/velocity_m_s", VELOCITY),
+    ("/rock/side_length_m", ROCK_SIDE_LENGTH),
+    ("/rock/radius_m", ROCK_RADIUS),
+    ("/rock/density_kg_m3", ROCK_DENSITY),
+    ("/rock/elastic_modulus_pa", ROCK_ELASTIC_MODULUS),
+    ("/rock/poisson_ratio", ROCK_POISSON_RATIO),
+    ("/rock/corner_radius_m", ROCK_CORNER_RADIUS),
+    ("/column/outer_diameter_m", COLUMN_OUTER_DIAMETER),
+    ("/column/inner_diameter_m", COLUMN_INNER_DIAMETER),
+    ("/column/length_m", COLUMN_LENGTH),
+    ("/column/elastic_modulus_pa", COLUMN_ELASTIC_MODULUS),
+    ("/column/poisson_ratio", COLUMN_POISSON_RATIO),
+    ("/column/density_kg_m3", COLUMN_DENSITY),
+    ("/column/yield_stress_pa", COLUMN_YIELD_STRESS),
+    ("/column/contact_radius_m", COLUMN_CONTACT_RADIUS),
+    (
+        "/column/damping_coefficient_n_s_m2",
+        COLUMN_DAMPING_COEFFICIENT,
+    ),
+    ("/column/damping_ratio", COLUMN_DAMPING_RATIO),
+];
+
+impl NumberField {
+    /// The field as `/v1/presets` lists it: default (number, `null` or `"derived"`), the bounds
+    /// under their JSON Schema names, the unit and the description.
+    pub fn preset(&self) -> Value {
+        let mut o = serde_json::Map::new();
+        o.insert(
+            "default".into(),
+            match self.default {
+                FieldDefault::Value(v) => json!(v),
+                FieldDefault::Null => Value::Null,
+                FieldDefault::Derived => json!("derived"),
+            },
+        );
+        match self.lo {
+            Bound::Closed(x) => o.insert("minimum".into(), json!(x)),
+            Bound::Open(x) => o.insert("exclusiveMinimum".into(), json!(x)),
+        };
+        match self.hi {
+            Bound::Closed(x) => o.insert("maximum".into(), json!(x)),
+            Bound::Open(x) => o.insert("exclusiveMaximum".into(), json!(x)),
+        };
+        o.insert("unit".into(), json!(self.unit));
+        o.insert("description".into(), json!(self.description));
+        Value::Object(o)
+    }
+}
+
+number_schemas! {
+    velocity_schema => VELOCITY;
+    rock_side_length_schema => ROCK_SIDE_LENGTH;
+    rock_radius_schema => ROCK_RADIUS;
+    rock_density_schema => ROCK_DENSITY;
+    rock_elastic_modulus_schema => ROCK_ELASTIC_MODULUS;
+    rock_poisson_ratio_schema => ROCK_POISSON_RATIO;
+    rock_corner_radius_schema => ROCK_CORNER_RADIUS;
+    column_outer_diameter_schema => COLUMN_OUTER_DIAMETER;
+    column_inner_diameter_schema => COLUMN_INNER_DIAMETER;
+    column_length_schema => COLUMN_LENGTH;
+    column_elastic_modulus_schema => COLUMN_ELASTIC_MODULUS;
+    column_poisson_ratio_schema => COLUMN_POISSON_RATIO;
+    column_density_schema => COLUMN_DENSITY;
+    column_yield_stress_schema => COLUMN_YIELD_STRESS;
+    column_contact_radius_schema => COLUMN_CONTACT_RADIUS;
+    column_damping_coefficient_schema => COLUMN_DAMPING_COEFFICIENT;
+    column_damping_ratio_schema => COLUMN_DAMPING_RATIO;
+}
+
 /// Shape of the rock block.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema, Default)]
 #[serde(rename_all = "snake_case")]
@@ -182,21 +551,21 @@ pub struct RockDto {
     #[schema(default = "cube", example = "cube")]
     pub shape: ShapeKind,
     /// Cube side L, m; also the contact length on the column.
-    #[schema(default = 0.3, minimum = 0.01, maximum = 5.0, example = 0.3)]
+    #[schema(schema_with = rock_side_length_schema)]
     pub side_length_m: f64,
     /// Sphere radius, m (default side_length_m / 2).
-    #[schema(minimum = 0.005, maximum = 2.5, example = 0.15)]
+    #[schema(schema_with = rock_radius_schema)]
     #[serde(
         skip_serializing_if = "Option::is_none",
         default,
-        deserialize_with = "some"
+        deserialize_with = "non_null"
     )]
     pub radius_m: Option<f64>,
     /// Cuboid edges [a, b, c], m, each in [0.01, 5].
     #[serde(
         skip_serializing_if = "Option::is_none",
         default,
-        deserialize_with = "some"
+        deserialize_with = "non_null"
     )]
     #[schema(example = json!([0.4, 0.3, 0.2]))]
     pub dimensions_m: Option<[f64; 3]>,
@@ -205,32 +574,32 @@ pub struct RockDto {
     #[serde(
         skip_serializing_if = "Option::is_none",
         default,
-        deserialize_with = "some"
+        deserialize_with = "non_null"
     )]
     pub vertices_m: Option<Vec<[f64; 3]>>,
     /// Random polyhedron parameters.
     #[serde(
         skip_serializing_if = "Option::is_none",
         default,
-        deserialize_with = "some"
+        deserialize_with = "non_null"
     )]
     pub random: Option<RandomShapeDto>,
     /// Density ρ, kg/m³.
-    #[schema(default = 2500.0, minimum = 100.0, maximum = 20000.0, example = 2500.0)]
+    #[schema(schema_with = rock_density_schema)]
     pub density_kg_m3: f64,
     /// Young's modulus E, Pa.
-    #[schema(default = 5e9, minimum = 1e7, maximum = 1e12, example = 5e9)]
+    #[schema(schema_with = rock_elastic_modulus_schema)]
     pub elastic_modulus_pa: f64,
     /// Poisson ratio ν, in [0, 0.5).
-    #[schema(default = 0.28, minimum = 0.0, exclusive_maximum = 0.5, example = 0.28)]
+    #[schema(schema_with = rock_poisson_ratio_schema)]
     pub poisson_ratio: f64,
     /// Rounded-corner radius r_c of `hertz_point`, m, in (0, 2.5]; where used (`hertz_point`, not a
     /// sphere) also at most L/2 = side_length_m/2 (default min(0.02, L/2)).
-    #[schema(exclusive_minimum = 0.0, maximum = 2.5, example = 0.02)]
+    #[schema(schema_with = rock_corner_radius_schema)]
     #[serde(
         skip_serializing_if = "Option::is_none",
         default,
-        deserialize_with = "some"
+        deserialize_with = "non_null"
     )]
     pub corner_radius_m: Option<f64>,
 }
@@ -239,14 +608,14 @@ impl Default for RockDto {
     fn default() -> Self {
         Self {
             shape: ShapeKind::Cube,
-            side_length_m: 0.3,
+            side_length_m: ROCK_SIDE_LENGTH.value(),
             radius_m: None,
             dimensions_m: None,
             vertices_m: None,
             random: None,
-            density_kg_m3: 2500.0,
-            elastic_modulus_pa: 5e9,
-            poisson_ratio: 0.28,
+            density_kg_m3: ROCK_DENSITY.value(),
+            elastic_modulus_pa: ROCK_ELASTIC_MODULUS.value(),
+            poisson_ratio: ROCK_POISSON_RATIO.value(),
             corner_radius_m: None,
         }
     }
@@ -255,38 +624,26 @@ impl Default for RockDto {
 impl RockDto {
     /// Checks ranges (under `base`, a JSON Pointer prefix), fills derived defaults, and converts.
     /// `corner_needed`: whether the Hertz corner radius is used (checked only then).
-    pub fn resolve(&mut self, base: &str, corner_needed: bool, ck: &mut Checker) -> Rock {
+    pub fn resolve(&mut self, base: &str, corner_needed: bool, checker: &mut Checker) -> Rock {
         let p = |f: &str| format!("{base}/{f}");
-        ck.closed(&p("side_length_m"), self.side_length_m, 0.01, 5.0, "m");
-        ck.closed(
-            &p("density_kg_m3"),
-            self.density_kg_m3,
-            100.0,
-            20000.0,
-            "kg/m³",
-        );
-        ck.closed(
-            &p("elastic_modulus_pa"),
-            self.elastic_modulus_pa,
-            1e7,
-            1e12,
-            "Pa",
-        );
-        ck.closed_open(&p("poisson_ratio"), self.poisson_ratio, 0.0, 0.5, "");
+        ROCK_SIDE_LENGTH.check(checker, &p("side_length_m"), self.side_length_m);
+        ROCK_DENSITY.check(checker, &p("density_kg_m3"), self.density_kg_m3);
+        ROCK_ELASTIC_MODULUS.check(checker, &p("elastic_modulus_pa"), self.elastic_modulus_pa);
+        ROCK_POISSON_RATIO.check(checker, &p("poisson_ratio"), self.poisson_ratio);
         let l = self.side_length_m;
         // Every field that is sent is checked against its own range, whether the shape uses it
         // or not; rules relating two fields (r_c ≤ L/2) apply only where the field is used.
         if let Some(r) = self.radius_m {
-            ck.closed(&p("radius_m"), r, 0.005, 2.5, "m");
+            ROCK_RADIUS.check(checker, &p("radius_m"), r);
         }
         if let Some(d) = self.dimensions_m {
             for (i, v) in d.iter().enumerate() {
-                ck.closed(&p(&format!("dimensions_m/{i}")), *v, 0.01, 5.0, "m");
+                checker.closed(&p(&format!("dimensions_m/{i}")), *v, 0.01, 5.0, "m");
             }
         }
         if let Some(v) = &self.vertices_m {
             if !(4..=1000).contains(&v.len()) {
-                ck.push(
+                checker.push(
                     p("vertices_m"),
                     json!(v),
                     format!("must hold 4 to 1000 points; {} were sent", v.len()),
@@ -298,14 +655,14 @@ impl RockDto {
                     .find(|(_, c)| !c.is_finite() || c.abs() > 10.0)
                     .map(|(j, c)| (i, j, *c))
             }) {
-                ck.closed(&p(&format!("vertices_m/{i}/{j}")), c, -10.0, 10.0, "m");
+                checker.closed(&p(&format!("vertices_m/{i}/{j}")), c, -10.0, 10.0, "m");
             }
         }
         if let Some(r) = &self.random {
             for (i, v) in r.semi_axes_m.iter().enumerate() {
-                ck.closed(&p(&format!("random/semi_axes_m/{i}")), *v, 0.005, 2.5, "m");
+                checker.closed(&p(&format!("random/semi_axes_m/{i}")), *v, 0.005, 2.5, "m");
             }
-            ck.count(
+            checker.count(
                 &p("random/vertices"),
                 u64::from(r.vertices),
                 4,
@@ -314,13 +671,7 @@ impl RockDto {
             );
         }
         if let Some(rc) = self.corner_radius_m {
-            ck.range(
-                &p("corner_radius_m"),
-                rc,
-                Bound::Open(0.0),
-                Bound::Closed(2.5),
-                "m",
-            );
+            ROCK_CORNER_RADIUS.check(checker, &p("corner_radius_m"), rc);
         }
         let shape = match self.shape {
             ShapeKind::Cube => RockShape::Cube,
@@ -331,7 +682,7 @@ impl RockDto {
             ShapeKind::Cuboid => match self.dimensions_m {
                 Some(d) => RockShape::Cuboid { dimensions: d },
                 None => {
-                    ck.push(
+                    checker.push(
                         p("dimensions_m"),
                         Value::Null,
                         "a cuboid needs dimensions_m [a, b, c] in m",
@@ -344,7 +695,7 @@ impl RockDto {
                     vertices: v.clone(),
                 },
                 None => {
-                    ck.push(
+                    checker.push(
                         p("vertices_m"),
                         Value::Null,
                         "a polyhedron needs vertices_m (4 to 1000 points, m)",
@@ -359,7 +710,7 @@ impl RockDto {
                     seed: r.seed,
                 },
                 None => {
-                    ck.push(
+                    checker.push(
                         p("random"),
                         Value::Null,
                         "a random polyhedron needs `random` {semi_axes_m, vertices, seed}",
@@ -373,7 +724,7 @@ impl RockDto {
             _ => *self.corner_radius_m.get_or_insert(0.02f64.min(l / 2.0)),
         };
         if corner_needed && !matches!(shape, RockShape::Sphere { .. }) {
-            ck.range(
+            checker.range(
                 &p("corner_radius_m"),
                 corner,
                 Bound::Open(0.0),
@@ -397,49 +748,44 @@ impl RockDto {
 #[serde(deny_unknown_fields, default)]
 pub struct ColumnDto {
     /// Outer diameter D₁, m.
-    #[schema(default = 0.25, minimum = 0.01, maximum = 2.0, example = 0.25)]
+    #[schema(schema_with = column_outer_diameter_schema)]
     pub outer_diameter_m: f64,
     /// Inner diameter D₂, m, in [0, D₁) (0 = solid).
-    #[schema(default = 0.235, minimum = 0.0, maximum = 2.0, example = 0.235)]
+    #[schema(schema_with = column_inner_diameter_schema)]
     pub inner_diameter_m: f64,
     /// Length between the clamps l, m; at least the contact length L of a cube.
-    #[schema(default = 1.31, minimum = 0.1, maximum = 20.0, example = 1.31)]
+    #[schema(schema_with = column_length_schema)]
     pub length_m: f64,
     /// Young's modulus E_s, Pa.
-    #[schema(default = 208e9, minimum = 1e9, maximum = 1e12, example = 208e9)]
+    #[schema(schema_with = column_elastic_modulus_schema)]
     pub elastic_modulus_pa: f64,
     /// Poisson ratio ν_s, in [0, 0.5).
-    #[schema(default = 0.3, minimum = 0.0, exclusive_maximum = 0.5, example = 0.3)]
+    #[schema(schema_with = column_poisson_ratio_schema)]
     pub poisson_ratio: f64,
     /// Density ρ_s, kg/m³.
-    #[schema(default = 7850.0, minimum = 100.0, maximum = 20000.0, example = 7850.0)]
+    #[schema(schema_with = column_density_schema)]
     pub density_kg_m3: f64,
     /// Yield stress, Pa (16Mn steel), for the stress utilisation.
-    #[schema(
-        default = 345e6,
-        exclusive_minimum = 0.0,
-        maximum = 1e10,
-        example = 345e6
-    )]
+    #[schema(schema_with = column_yield_stress_schema)]
     pub yield_stress_pa: f64,
     /// Radius R of the cylinder at the contact, m (default D₁/2).
-    #[schema(minimum = 0.001, maximum = 10.0, example = 0.125)]
+    #[schema(schema_with = column_contact_radius_schema)]
     #[serde(
         skip_serializing_if = "Option::is_none",
         default,
-        deserialize_with = "some"
+        deserialize_with = "non_null"
     )]
     pub contact_radius_m: Option<f64>,
     /// Viscous damping per unit length c, N·s/m² (default 1.0, the paper's value).
-    #[schema(default = 1.0, minimum = 0.0, maximum = 1e9, example = 1.0)]
+    #[schema(schema_with = column_damping_coefficient_schema)]
     #[serde(
         skip_serializing_if = "Option::is_none",
         default,
-        deserialize_with = "some"
+        deserialize_with = "non_null"
     )]
     pub damping_coefficient_n_s_m2: Option<f64>,
     /// Damping ratio ζ₁ of mode 1 instead of c (recommended 0.02); giving both is 422.
-    #[schema(minimum = 0.0, maximum = 10.0, example = 0.02)]
+    #[schema(schema_with = column_damping_ratio_schema)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub damping_ratio: Option<f64>,
 }
@@ -447,13 +793,13 @@ pub struct ColumnDto {
 impl Default for ColumnDto {
     fn default() -> Self {
         Self {
-            outer_diameter_m: 0.25,
-            inner_diameter_m: 0.235,
-            length_m: 1.31,
-            elastic_modulus_pa: 208e9,
-            poisson_ratio: 0.3,
-            density_kg_m3: 7850.0,
-            yield_stress_pa: 345e6,
+            outer_diameter_m: COLUMN_OUTER_DIAMETER.value(),
+            inner_diameter_m: COLUMN_INNER_DIAMETER.value(),
+            length_m: COLUMN_LENGTH.value(),
+            elastic_modulus_pa: COLUMN_ELASTIC_MODULUS.value(),
+            poisson_ratio: COLUMN_POISSON_RATIO.value(),
+            density_kg_m3: COLUMN_DENSITY.value(),
+            yield_stress_pa: COLUMN_YIELD_STRESS.value(),
             contact_radius_m: None,
             damping_coefficient_n_s_m2: None,
             damping_ratio: None,
@@ -463,39 +809,30 @@ impl Default for ColumnDto {
 
 impl ColumnDto {
     /// Checks ranges (under `base`), fills derived defaults, and converts.
-    pub fn resolve(&mut self, base: &str, ck: &mut Checker) -> Column {
+    pub fn resolve(&mut self, base: &str, checker: &mut Checker) -> Column {
         let p = |f: &str| format!("{base}/{f}");
         let d1 = self.outer_diameter_m;
-        ck.closed(&p("outer_diameter_m"), d1, 0.01, 2.0, "m");
-        ck.closed_open(
+        COLUMN_OUTER_DIAMETER.check(checker, &p("outer_diameter_m"), d1);
+        // The documented maximum of D₂ is D₁'s; the bound enforced is the cross-field D₂ < D₁.
+        checker.range(
             &p("inner_diameter_m"),
             self.inner_diameter_m,
-            0.0,
-            d1,
-            "m (0 ≤ D₂ < D₁)",
+            COLUMN_INNER_DIAMETER.lo,
+            Bound::Open(d1),
+            COLUMN_INNER_DIAMETER.unit,
         );
-        ck.closed(&p("length_m"), self.length_m, 0.1, 20.0, "m");
-        ck.closed(
-            &p("elastic_modulus_pa"),
-            self.elastic_modulus_pa,
-            1e9,
-            1e12,
-            "Pa",
-        );
-        ck.closed_open(&p("poisson_ratio"), self.poisson_ratio, 0.0, 0.5, "");
-        ck.closed(
-            &p("density_kg_m3"),
-            self.density_kg_m3,
-            100.0,
-            20000.0,
-            "kg/m³",
-        );
-        ck.open_closed(&p("yield_stress_pa"), self.yield_stress_pa, 0.0, 1e10, "Pa");
+        COLUMN_LENGTH.check(checker, &p("length_m"), self.length_m);
+        COLUMN_ELASTIC_MODULUS.check(checker, &p("elastic_modulus_pa"), self.elastic_modulus_pa);
+        COLUMN_POISSON_RATIO.check(checker, &p("poisson_ratio"), self.poisson_ratio);
+        COLUMN_DENSITY.check(checker, &p("density_kg_m3"), self.density_kg_m3);
+        COLUMN_YIELD_STRESS.check(checker, &p("yield_stress_pa"), self.yield_stress_pa);
         let r = *self.contact_radius_m.get_or_insert(d1 / 2.0);
-        ck.closed(&p("contact_radius_m"), r, 0.001, 10.0, "m");
+        COLUMN_CONTACT_RADIUS.check(checker, &p("contact_radius_m"), r);
         let damping = match (self.damping_coefficient_n_s_m2, self.damping_ratio) {
             (Some(c), Some(z)) => {
-                ck.push(
+                COLUMN_DAMPING_COEFFICIENT.check(checker, &p("damping_coefficient_n_s_m2"), c);
+                COLUMN_DAMPING_RATIO.check(checker, &p("damping_ratio"), z);
+                checker.push(
                     p("damping_ratio"),
                     crate::http::error::num(z),
                     format!(
@@ -505,14 +842,14 @@ impl ColumnDto {
                 Damping::Coefficient(c)
             }
             (None, Some(z)) => {
-                ck.closed(&p("damping_ratio"), z, 0.0, 10.0, "");
+                COLUMN_DAMPING_RATIO.check(checker, &p("damping_ratio"), z);
                 Damping::Ratio(z)
             }
             (c, None) => {
                 let c = *self
                     .damping_coefficient_n_s_m2
-                    .get_or_insert(c.unwrap_or(1.0));
-                ck.closed(&p("damping_coefficient_n_s_m2"), c, 0.0, 1e9, "N·s/m²");
+                    .get_or_insert(c.unwrap_or(COLUMN_DAMPING_COEFFICIENT.value()));
+                COLUMN_DAMPING_COEFFICIENT.check(checker, &p("damping_coefficient_n_s_m2"), c);
                 Damping::Coefficient(c)
             }
         };
@@ -615,6 +952,15 @@ impl Warning {
     }
 }
 
+impl From<crate::physics::validity::Warning> for Warning {
+    fn from(w: crate::physics::validity::Warning) -> Self {
+        Self {
+            code: w.code.into(),
+            message: w.message,
+        }
+    }
+}
+
 /// Whether a stage of the calculation ran.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, ToSchema)]
 #[serde(rename_all = "snake_case")]
@@ -675,5 +1021,84 @@ impl Meta {
             plan,
             warnings: Vec::new(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dto_defaults_are_the_field_defaults() {
+        let (rock, column) = (RockDto::default(), ColumnDto::default());
+        for (pointer, field) in IMPACT_FIELDS {
+            let Some(name) = pointer
+                .strip_prefix("/rock/")
+                .or(pointer.strip_prefix("/column/"))
+            else {
+                continue;
+            };
+            let object = if pointer.starts_with("/rock/") {
+                serde_json::to_value(&rock).unwrap()
+            } else {
+                serde_json::to_value(&column).unwrap()
+            };
+            match field.default {
+                FieldDefault::Value(v) if name != "damping_coefficient_n_s_m2" => {
+                    assert_eq!(object[name].as_f64(), Some(v), "{pointer}");
+                }
+                _ => assert!(object.get(name).is_none(), "{pointer}: filled at resolve"),
+            }
+        }
+    }
+
+    #[test]
+    fn check_enforces_exactly_the_documented_interval() {
+        for (pointer, field) in IMPACT_FIELDS {
+            let (lo, lo_in) = match field.lo {
+                Bound::Closed(x) => (x, true),
+                Bound::Open(x) => (x, false),
+            };
+            let (hi, hi_in) = match field.hi {
+                Bound::Closed(x) => (x, true),
+                Bound::Open(x) => (x, false),
+            };
+            for (v, ok) in [
+                (lo, lo_in),
+                (lo.next_down(), false),
+                (lo.next_up(), true),
+                (hi, hi_in),
+                (hi.next_up(), false),
+                (hi.next_down(), true),
+                (f64::NAN, false),
+            ] {
+                let mut checker = Checker::new();
+                assert_eq!(
+                    field.check(&mut checker, pointer, v),
+                    ok,
+                    "{pointer} = {v:e}"
+                );
+                assert_eq!(checker.is_ok(), ok);
+            }
+        }
+    }
+
+    #[test]
+    fn schema_and_preset_show_the_same_bounds_and_default() {
+        let schema = serde_json::to_value(COLUMN_YIELD_STRESS.schema()).unwrap();
+        assert_eq!(schema["exclusiveMinimum"].as_f64(), Some(0.0));
+        assert_eq!(schema["maximum"].as_f64(), Some(1e10));
+        assert_eq!(schema["default"].as_f64(), Some(345e6));
+        assert_eq!(schema["type"], "number");
+        let preset = COLUMN_YIELD_STRESS.preset();
+        for key in ["exclusiveMinimum", "maximum", "default"] {
+            assert_eq!(preset[key].as_f64(), schema[key].as_f64(), "{key}");
+        }
+        let ratio = serde_json::to_value(COLUMN_DAMPING_RATIO.schema()).unwrap();
+        assert_eq!(ratio["type"], json!(["number", "null"]));
+        assert!(ratio["default"].is_null() && ratio.get("default").is_some());
+        let radius = serde_json::to_value(COLUMN_CONTACT_RADIUS.schema()).unwrap();
+        assert!(radius.get("default").is_none(), "derived: no default");
+        assert_eq!(COLUMN_CONTACT_RADIUS.preset()["default"], "derived");
     }
 }

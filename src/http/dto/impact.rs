@@ -3,7 +3,10 @@
 use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
 
-use super::common::{Checker, ColumnDto, ContactDto, LawDto, Meta, ModulusDto, RockDto, ShapeKind};
+use super::common::{
+    Checker, ColumnDto, ContactDto, LawDto, Meta, ModulusDto, RockDto, ShapeKind, VELOCITY,
+    velocity_schema,
+};
 use crate::config::Config;
 use crate::http::error::ApiError;
 use crate::physics::contact::{ImpactDetail, ImpactResult};
@@ -23,12 +26,7 @@ pub struct ImpactOutputDto {
 #[serde(deny_unknown_fields, default)]
 pub struct ImpactRequest {
     /// Normal impact speed v, m/s, in (0, 1000].
-    #[schema(
-        default = 5.0,
-        exclusive_minimum = 0.0,
-        maximum = 1000.0,
-        example = 5.0
-    )]
+    #[schema(schema_with = velocity_schema)]
     pub velocity_m_s: f64,
     /// The rock block.
     pub rock: RockDto,
@@ -43,7 +41,7 @@ pub struct ImpactRequest {
 impl Default for ImpactRequest {
     fn default() -> Self {
         Self {
-            velocity_m_s: 5.0,
+            velocity_m_s: VELOCITY.value(),
             rock: RockDto::default(),
             column: ColumnDto::default(),
             contact: ContactDto::default(),
@@ -59,19 +57,19 @@ pub fn resolve_impact_case(
     rock: &mut RockDto,
     column: &mut ColumnDto,
     contact: ContactDto,
-    ck: &mut Checker,
+    checker: &mut Checker,
 ) -> ImpactCase {
-    ck.open_closed("/velocity_m_s", velocity, 0.0, 1000.0, "m/s");
+    VELOCITY.check(checker, "/velocity_m_s", velocity);
     let hertz = contact.law == LawDto::HertzPoint;
-    let rock_p = rock.resolve("/rock", hertz, ck);
-    let column_p = column.resolve("/column", ck);
+    let rock_p = rock.resolve("/rock", hertz, checker);
+    let column_p = column.resolve("/column", checker);
     match rock.shape {
         ShapeKind::Cube => {
             if rock.side_length_m.is_finite()
                 && column.length_m.is_finite()
                 && column.length_m < rock.side_length_m
             {
-                ck.push(
+                checker.push(
                     "/column/length_m",
                     crate::http::error::num(column.length_m),
                     format!(
@@ -83,14 +81,14 @@ pub fn resolve_impact_case(
         }
         ShapeKind::Sphere => {
             if !hertz {
-                ck.push(
+                checker.push(
                     "/contact/law",
                     serde_json::json!(contact.law),
                     "a sphere touches the column at a point: only hertz_point is defined",
                 );
             }
         }
-        other => ck.push(
+        other => checker.push(
             "/rock/shape",
             serde_json::json!(other),
             "the impact is defined for a cube (line or point contact) or a sphere (hertz_point)",
@@ -107,8 +105,8 @@ pub fn resolve_impact_case(
 impl ImpactRequest {
     /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
     pub fn resolve(&mut self, config: &Config) -> Result<ImpactCase, ApiError> {
-        let mut ck = Checker::new();
-        ck.count(
+        let mut checker = Checker::new();
+        checker.count(
             "/output/curve_points",
             u64::from(self.output.curve_points),
             0,
@@ -120,9 +118,9 @@ impl ImpactRequest {
             &mut self.rock,
             &mut self.column,
             self.contact,
-            &mut ck,
+            &mut checker,
         );
-        ck.finish()?;
+        checker.finish()?;
         Ok(case)
     }
 }
@@ -197,7 +195,10 @@ pub struct ImpactResponse {
     /// The force–approach curve, when `output.curve_points` > 0.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub curve: Option<CurveDto>,
-    /// Named warnings.
+    /// Named warnings, each with a documented threshold (strict): `near_capacity` (log laws,
+    /// G > 0.9), `contact_pressure_above_yield` (max_contact_pressure_pa > column.yield_stress_pa:
+    /// the elastic contact law is outside its validity), `approach_above_tenth_of_radius`
+    /// (max_deformation_m > 0.1 × contact_radius_m: the approach is not small against the radius).
     pub warnings: Vec<super::Warning>,
     /// Stages run or skipped.
     pub plan: Vec<super::PlanStep>,
@@ -270,23 +271,4 @@ impl ImpactResponse {
         }
         out
     }
-}
-
-/// Warnings about an impact result.
-pub fn impact_warnings(r: &ImpactResult) -> Vec<super::Warning> {
-    let mut w = Vec::new();
-    if let ImpactDetail::Line(l) = &r.detail
-        && l.energy_parameter > 0.9
-    {
-        w.push(super::Warning::new(
-            "near_capacity",
-            format!(
-                "G = {:.6} is within 10 % of the law's capacity (G = 1): the impact stores most of \
-                 the energy the law can hold; force, half-width and pressure are ill-conditioned \
-                 there (only the approach is well-conditioned)",
-                l.energy_parameter
-            ),
-        ));
-    }
-    w
 }

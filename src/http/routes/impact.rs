@@ -4,13 +4,13 @@ use axum::extract::State;
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 
-use crate::http::dto::common::{Meta, PlanStep};
-use crate::http::dto::impact::{CurveDto, ImpactRequest, ImpactResponse, impact_warnings};
+use crate::http::dto::common::{Meta, PlanStep, Warning};
+use crate::http::dto::impact::{CurveDto, ImpactRequest, ImpactResponse};
 use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
-use crate::physics::contact;
 use crate::physics::material::ImpactCase;
+use crate::physics::{contact, validity};
 
 /// Hertz contact of a rock on a column: maximum deformation, force, contact stress.
 #[utoipa::path(
@@ -40,7 +40,8 @@ pub async fn impact(
     .await
 }
 
-/// Solves a resolved impact request (also used by batch and scene).
+/// Solves a resolved impact request (also used by batch and scene): the physics runs the
+/// impact, the curve and the validity checks; this only renders them.
 pub fn solve(case: &ImpactCase, req: ImpactRequest) -> Result<ImpactResponse, ApiError> {
     let result = contact::solve_impact(case)?;
     let n = req.output.curve_points as usize;
@@ -49,28 +50,23 @@ pub fn solve(case: &ImpactCase, req: ImpactRequest) -> Result<ImpactResponse, Ap
         "closed-form maxima on the W₋₁ branch (log laws) or Hertz; duration t_c = (2mv/Pmax)·J(u₀)",
     )];
     let curve = if n > 0 {
-        let law = contact::force_law(case)?;
-        let (deformation_m, force_n) = contact::force_curve(&law, max_deformation(&result), n);
+        let c = contact::impact_force_curve(case, &result, n)?;
         plan.push(PlanStep::ran(
             "curve",
             format!("{n} points of P(δ) from 0 to δmax"),
         ));
         Some(CurveDto {
-            deformation_m,
-            force_n,
+            deformation_m: c.deformation,
+            force_n: c.force,
         })
     } else {
         plan.push(PlanStep::skipped("curve", "output.curve_points = 0"));
         None
     };
     let mut meta = Meta::new(plan);
-    meta.warnings = impact_warnings(&result);
+    meta.warnings = validity::impact_warnings(case, &result)
+        .into_iter()
+        .map(Warning::from)
+        .collect();
     Ok(ImpactResponse::new(&result, curve, req, meta))
-}
-
-fn max_deformation(r: &contact::ImpactResult) -> f64 {
-    match &r.detail {
-        contact::ImpactDetail::Line(l) => l.max_deformation,
-        contact::ImpactDetail::Hertz(h) => h.max_deformation,
-    }
 }

@@ -6,7 +6,7 @@ use axum::response::{Html, IntoResponse, Response};
 use include_dir::{Dir, include_dir};
 use serde_json::{Value, json};
 
-use crate::http::dto::common::MODEL_VERSION;
+use crate::http::dto::common::{self, MODEL_VERSION};
 use crate::http::error::{ApiError, problem_type};
 use crate::http::runner::AppState;
 
@@ -32,11 +32,11 @@ fn presets_value(state: &AppState) -> Value {
     json!({
         "rock": {
             "source": "paper Table 2",
-            "density_kg_m3": 2500.0,
-            "elastic_modulus_pa": 5e9,
-            "poisson_ratio": 0.28,
+            "density_kg_m3": common::ROCK_DENSITY.value(),
+            "elastic_modulus_pa": common::ROCK_ELASTIC_MODULUS.value(),
+            "poisson_ratio": common::ROCK_POISSON_RATIO.value(),
             "friction_coefficient": 0.2,
-            "side_length_m": 0.3,
+            "side_length_m": common::ROCK_SIDE_LENGTH.value(),
             "normal_stiffness_n_m": 1e8,
             "shear_stiffness_n_m": 1e8,
             "note": "Table 2 prints normal and tangential stiffness as 1 N/m, which cannot hold a 67.5 kg block; the service uses 1e8 N/m (physics.md §C.3)"
@@ -53,19 +53,27 @@ fn presets_value(state: &AppState) -> Value {
         "column": {
             "source": "paper Table 4, hydraulic support ZZ6500/22/48",
             "support_type": "ZZ6500/22/48",
-            "first_stage": {"outer_diameter_m": 0.25, "inner_diameter_m": 0.235, "length_m": 1.31},
+            "first_stage": {
+                "outer_diameter_m": common::COLUMN_OUTER_DIAMETER.value(),
+                "inner_diameter_m": common::COLUMN_INNER_DIAMETER.value(),
+                "length_m": common::COLUMN_LENGTH.value()
+            },
             "second_stage": {"outer_diameter_m": 0.18, "inner_diameter_m": 0.16, "length_m": 1.285},
-            "elastic_modulus_pa": 208e9,
-            "poisson_ratio": 0.3,
-            "density_kg_m3": 7850.0,
-            "yield_stress_pa": 345e6,
+            "elastic_modulus_pa": common::COLUMN_ELASTIC_MODULUS.value(),
+            "poisson_ratio": common::COLUMN_POISSON_RATIO.value(),
+            "density_kg_m3": common::COLUMN_DENSITY.value(),
+            "yield_stress_pa": common::COLUMN_YIELD_STRESS.value(),
             "note": "Table 4's piston and rod diameters are read as outer and inner diameter of the first stage (physics.md §B.1)"
         },
+        "fields": common::IMPACT_FIELDS
+            .iter()
+            .map(|(pointer, field)| ((*pointer).to_owned(), field.preset()))
+            .collect::<serde_json::Map<String, Value>>(),
         "presets": {
             "paper": {
                 "contact": {"law": "paper", "effective_modulus": "paper"},
                 "galerkin": {"mode_shapes": "paper"},
-                "column": {"damping_coefficient_n_s_m2": 1.0}
+                "column": {"damping_coefficient_n_s_m2": common::COLUMN_DAMPING_COEFFICIENT.value()}
             },
             "recommended": {
                 "contact": {"law": "johnson", "effective_modulus": "two_body"},

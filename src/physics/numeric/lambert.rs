@@ -10,7 +10,7 @@
 ///
 /// # Examples
 /// ```
-/// let u = gangue::physics::lambert::branch_u(0.5).unwrap();
+/// let u = gangue::physics::numeric::lambert::branch_u(0.5).unwrap();
 /// assert!(((1.0 + u) * (-u).exp() - 0.5).abs() < 1e-15);
 /// ```
 ///
@@ -46,7 +46,7 @@ pub fn branch_u(g: f64) -> Option<f64> {
 /// # Examples
 /// ```
 /// // G = e^{-2000} is not representable, its logarithm is.
-/// let u = gangue::physics::lambert::branch_u_log(2000.0).unwrap();
+/// let u = gangue::physics::numeric::lambert::branch_u_log(2000.0).unwrap();
 /// assert!((u - u.ln_1p() - 2000.0).abs() < 1e-12);
 /// ```
 ///
@@ -206,7 +206,7 @@ pub(crate) fn branch_u_far(inv_g: f64, y: f64) -> (f64, f64) {
 ///
 /// # Examples
 /// ```
-/// let y = gangue::physics::lambert::u_minus_ln1p(1e-8);
+/// let y = gangue::physics::numeric::lambert::u_minus_ln1p(1e-8);
 /// assert!((y / 5e-17 - 1.0).abs() < 1e-7); // u²/2 − u³/3 …
 /// ```
 ///

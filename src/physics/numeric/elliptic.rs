@@ -27,7 +27,7 @@ pub struct CompleteElliptic {
 ///
 /// # Examples
 /// ```
-/// use gangue::physics::elliptic::complete_elliptic_parts;
+/// use gangue::physics::numeric::elliptic::complete_elliptic_parts;
 /// let r = complete_elliptic_parts(0.5, 0.5);
 /// assert!((r.k - 1.854_074_677_301_372).abs() < 1e-15);
 /// assert!((r.e - 1.350_643_881_047_675_5).abs() < 1e-15);
@@ -83,7 +83,7 @@ pub fn complete_elliptic_parts(m: f64, m1: f64) -> CompleteElliptic {
 ///
 /// # Examples
 /// ```
-/// let (k, e) = gangue::physics::elliptic::complete_elliptic(0.0);
+/// let (k, e) = gangue::physics::numeric::elliptic::complete_elliptic(0.0);
 /// assert_eq!((k, e), (std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2));
 /// ```
 ///

@@ -8,8 +8,8 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use super::control::Control;
-use super::error::PhysicsResult;
+use crate::physics::control::Control;
+use crate::physics::error::PhysicsResult;
 
 /// Kronrod abscissae on [−1, 1] (non-negative half, descending); the odd-indexed ones are the
 /// 7-point Gauss nodes. Values from QUADPACK `qk15` (Piessens et al. 1983).
@@ -157,7 +157,7 @@ pub fn kronrod15<F: FnMut(f64) -> f64>(f: &mut F, a: f64, b: f64) -> (f64, f64) 
 ///
 /// # Examples
 /// ```
-/// use gangue::physics::quadrature::{integrate, QuadOptions};
+/// use gangue::physics::numeric::quadrature::{integrate, QuadOptions};
 /// // ∫₀¹ ln(1/x) dx = 1, an end-point singularity.
 /// let r = integrate(|x: f64| -x.ln(), &[0.0, 1e-3, 1.0], QuadOptions::default());
 /// assert!(r.converged && (r.value - 1.0).abs() < 1e-10);
@@ -265,6 +265,32 @@ fn integrate_inner<F: FnMut(f64) -> f64>(
     })
 }
 
+/// The `n` Gauss–Legendre nodes and weights (x, w) on [−1, 1], by Newton on the Legendre
+/// recurrence (exact for polynomials of degree ≤ 2n − 1).
+pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+    let mut out = Vec::with_capacity(n);
+    for i in 1..=n {
+        let mut x = (std::f64::consts::PI * (i as f64 - 0.25) / (n as f64 + 0.5)).cos();
+        let mut dp = 1.0;
+        for _ in 0..100 {
+            let (mut p0, mut p1) = (1.0, x);
+            for k in 2..=n {
+                let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+            let dx = p1 / dp;
+            x -= dx;
+            if dx.abs() < 1e-16 {
+                break;
+            }
+        }
+        out.push((x, 2.0 / ((1.0 - x * x) * dp * dp)));
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -347,5 +373,17 @@ mod tests {
         };
         let r = integrate_with_control(|x: f64| (1.0 / x).sin(), &[1e-9, 1.0], opts, &c);
         assert!(r.is_err());
+    }
+
+    #[test]
+    fn gauss_legendre_integrates_polynomials_exactly() {
+        // 20 points: exact up to degree 39; ∫₋₁¹ x³⁸ dx = 2/39, weights sum to 2.
+        let nodes = gauss_legendre(20);
+        let sum: f64 = nodes.iter().map(|&(_, w)| w).sum();
+        assert!((sum - 2.0).abs() < 1e-14);
+        let x38: f64 = nodes.iter().map(|&(x, w)| w * x.powi(38)).sum();
+        assert!((x38 / (2.0 / 39.0) - 1.0).abs() < 1e-13, "{x38}");
+        let odd: f64 = nodes.iter().map(|&(x, w)| w * x.powi(37)).sum();
+        assert!(odd.abs() < 1e-15);
     }
 }

@@ -1,0 +1,426 @@
+//! The OpenAPI document tells the truth about defaults and ranges.
+//!
+//! Expectation: for every route's request schema, (1) each documented `default` is what the
+//! server fills into the echoed `inputs` for `{}` (a documented `null` default: the field is
+//! absent or null), and every field the server fills in has a documented default unless it is a
+//! documented derived default (listed in [`DERIVED`]); (2) each documented `minimum`/`maximum`
+//! (or exclusive bound) is what validation enforces: the value just inside is not refused naming
+//! the field, the value just outside is 422 naming exactly that field by its JSON Pointer.
+//! Bounds that depend on another field are documented as such and listed in [`CROSS_FIELD`].
+//!
+//! Routes: impact, column, spalling and study (the study's own fields; its `base` is a column
+//! request, checked on `/v1/column`). Migration is on the to-do list ([`TODO_ROUTES`]): its
+//! mismatches are reported (run with `--nocapture`), not failed, while its DTO is being reworked.
+
+mod common;
+
+use serde_json::{Map, Value, json};
+
+/// Routes whose mismatches are reported but do not fail the test yet: the migration request is
+/// being reworked in another change; move it to [`ROUTES`] when that lands.
+const TODO_ROUTES: &[(&str, &str)] = &[("/v1/migration", "MigrationRequest")];
+
+/// Routes checked strictly: (path, request schema).
+const ROUTES: &[(&str, &str)] = &[
+    ("/v1/impact", "ImpactRequest"),
+    ("/v1/column", "ColumnRequest"),
+    ("/v1/spalling", "SpallingRequest"),
+    ("/v1/study", "StudyRequest"),
+];
+
+/// Documented derived defaults (filled from other fields; the description says how), by the
+/// field's name within its object.
+const DERIVED: &[&str] = &[
+    "radius_m",         // side_length_m / 2
+    "corner_radius_m",  // min(0.02, L/2)
+    "contact_radius_m", // D₁/2
+    "modes",            // 1 decoupled, 3 coupled
+    "outputs",          // the study's outputs follow the base's model
+    "zones",            // spalling: Table 1 unless `events` is given
+];
+
+/// Bounds that depend on another field: (pointer, which bound). Documented in the field's
+/// description; the schema shows the widest value.
+const CROSS_FIELD: &[(&str, &str)] = &[
+    // l ≥ L (a cube's contact length): the documented minimum 0.1 is below the default L = 0.3,
+    // so the value just inside is refused naming l by that rule (not by its range).
+    ("/column/length_m", "min"),
+    // D₂ < D₁: the documented maximum 2 is D₁'s.
+    ("/column/inner_diameter_m", "max"),
+    ("/base/column/inner_diameter_m", "max"),
+    // The column at least the contact length L of a cube: L ≥ 0.01 < l's minimum, but L = 5 m
+    // needs a longer column than the default.
+    ("/rock/side_length_m", "max"),
+    // spalling: low ≤ high.
+    ("/low_resistance_n", "max"),
+];
+
+/// Objects that must carry members before their fields can be varied: (schema name, base).
+fn base_object(schema: &str) -> Value {
+    match schema {
+        "MonteCarloDto" => json!({"runs": 20}),
+        "RandomShapeDto" => json!({"semi_axes_m": [0.2, 0.15, 0.1]}),
+        "ColumnOutputDto" => json!({"duration_s": 0.01}),
+        _ => json!({}),
+    }
+}
+
+/// A base request in which a field is used rather than refused as not applicable: (path,
+/// pointer prefix, base body).
+fn context(path: &str, pointer: &str) -> Value {
+    let table: &[(&str, &str, Value)] = &[
+        ("/v1/column", "/galerkin/", json!({"model": "coupled"})),
+        ("/v1/column", "/end_time_s", json!({"model": "coupled"})),
+        (
+            "/v1/spalling",
+            "/",
+            json!({"events": [{"support": 1, "resistance_n": 5e6, "spalling": true}]}),
+        ),
+    ];
+    table
+        .iter()
+        .find(|(p, prefix, _)| *p == path && pointer.starts_with(prefix))
+        .map(|(_, _, base)| base.clone())
+        .unwrap_or_else(|| json!({}))
+}
+
+fn resolve<'a>(doc: &'a Value, mut s: &'a Value) -> (&'a Value, Option<String>) {
+    let mut name = None;
+    loop {
+        if let Some(r) = s.get("$ref").and_then(Value::as_str) {
+            name = r.rsplit('/').next().map(str::to_string);
+            s = doc.pointer(r.trim_start_matches('#')).unwrap();
+        } else if let Some(alts) = s.get("oneOf").and_then(Value::as_array) {
+            match alts.iter().find(|a| a.get("type") != Some(&json!("null"))) {
+                Some(a) => s = a,
+                None => return (s, name),
+            }
+        } else {
+            return (s, name);
+        }
+    }
+}
+
+fn has_type(s: &Value, t: &str) -> bool {
+    match s.get("type") {
+        Some(Value::String(x)) => x == t,
+        Some(Value::Array(a)) => a.iter().any(|x| x == t),
+        _ => false,
+    }
+}
+
+/// Compares a documented default with the filled-in value (numbers as f64, objects by the keys
+/// the default names).
+fn default_matches(documented: &Value, filled: Option<&Value>) -> bool {
+    match (documented, filled) {
+        (Value::Null, None | Some(Value::Null)) => true,
+        (Value::Number(a), Some(Value::Number(b))) => a.as_f64() == b.as_f64(),
+        (Value::Object(a), Some(Value::Object(b))) => {
+            a.iter().all(|(k, v)| default_matches(v, b.get(k)))
+        }
+        (Value::Array(a), Some(Value::Array(b))) => {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| default_matches(x, Some(y)))
+        }
+        (a, Some(b)) => a == b,
+        _ => false,
+    }
+}
+
+/// Walks an object schema against the filled-in object, collecting default mismatches.
+fn check_defaults(doc: &Value, schema: &Value, filled: &Value, at: &str, out: &mut Vec<String>) {
+    let Some(props) = schema.get("properties").and_then(Value::as_object) else {
+        return;
+    };
+    for (name, prop) in props {
+        let pointer = format!("{at}/{name}");
+        let (s, _) = resolve(doc, prop);
+        let value = filled.get(name);
+        let documented = prop.get("default").or_else(|| s.get("default"));
+        match documented {
+            Some(d) => {
+                if !default_matches(d, value) {
+                    out.push(format!(
+                        "{pointer}: documented default {d}, filled in {}",
+                        value.map_or("nothing".into(), Value::to_string)
+                    ));
+                }
+            }
+            None => {
+                if let Some(v) = value
+                    && !DERIVED.contains(&name.as_str())
+                    && !has_type(s, "object")
+                {
+                    out.push(format!(
+                        "{pointer}: filled in {v} without a documented default"
+                    ));
+                }
+            }
+        }
+        if has_type(s, "object")
+            && let Some(v) = value
+        {
+            check_defaults(doc, s, v, &pointer, out);
+        }
+    }
+}
+
+/// A documented bound: (value, closed).
+type Bound = Option<(f64, bool)>;
+
+/// A numeric leaf with a documented bound.
+#[derive(Debug, Clone)]
+struct Leaf {
+    pointer: String,
+    parents: Vec<(String, Value)>,
+    integer: bool,
+    min: Bound,
+    max: Bound,
+}
+
+fn bounds(s: &Value) -> (Bound, Bound) {
+    let f = |k: &str| s.get(k).and_then(Value::as_f64);
+    let min = f("minimum")
+        .map(|v| (v, true))
+        .or(f("exclusiveMinimum").map(|v| (v, false)));
+    let max = f("maximum")
+        .map(|v| (v, true))
+        .or(f("exclusiveMaximum").map(|v| (v, false)));
+    (min, max)
+}
+
+fn leaves(doc: &Value, schema: &Value, at: &str, parents: &[(String, Value)], out: &mut Vec<Leaf>) {
+    let Some(props) = schema.get("properties").and_then(Value::as_object) else {
+        return;
+    };
+    for (name, prop) in props {
+        let pointer = format!("{at}/{name}");
+        // The study's base is a column request, checked on /v1/column.
+        if pointer == "/base" {
+            continue;
+        }
+        let (s, ref_name) = resolve(doc, prop);
+        let integer = has_type(s, "integer");
+        if integer || has_type(s, "number") {
+            let (min, max) = bounds(s);
+            if min.is_some() || max.is_some() {
+                out.push(Leaf {
+                    pointer,
+                    parents: parents.to_vec(),
+                    integer,
+                    min,
+                    max,
+                });
+            }
+        } else if has_type(s, "object") {
+            let mut p = parents.to_vec();
+            p.push((
+                pointer.clone(),
+                base_object(ref_name.as_deref().unwrap_or("")),
+            ));
+            leaves(doc, s, &pointer, &p, out);
+        }
+    }
+}
+
+fn set(body: &mut Value, pointer: &str, v: Value) {
+    let mut parts: Vec<&str> = pointer.trim_start_matches('/').split('/').collect();
+    let last = parts.pop().unwrap();
+    let mut cur = body;
+    for p in parts {
+        let obj = cur.as_object_mut().unwrap();
+        cur = obj
+            .entry(p.to_string())
+            .or_insert_with(|| Value::Object(Map::new()));
+    }
+    cur.as_object_mut().unwrap().insert(last.to_string(), v);
+}
+
+fn request(path: &str, leaf: &Leaf, v: f64) -> Value {
+    let mut body = context(path, &leaf.pointer);
+    for (p, base) in &leaf.parents {
+        if body.pointer(p).is_none() {
+            set(&mut body, p, base.clone());
+        }
+    }
+    let value = if leaf.integer {
+        json!(v as i64)
+    } else {
+        json!(v)
+    };
+    set(&mut body, &leaf.pointer, value);
+    body
+}
+
+/// Whether validation refused `pointer` for its range (the range checker's "must be in …").
+/// Refusals for another documented reason (a cross-field rule, a model limit such as an energy
+/// below what double precision resolves, a step-count estimate) are not range refusals.
+fn refused_for_range(r: &common::Reply, pointer: &str) -> bool {
+    if r.status.as_u16() != 422 {
+        return false;
+    }
+    let p = r.json();
+    p["errors"].as_array().is_some_and(|e| {
+        e.iter().any(|x| {
+            x["field"] == pointer
+                && x["message"]
+                    .as_str()
+                    .is_some_and(|m| m.starts_with("must be in"))
+        })
+    })
+}
+
+/// Whether the answer refuses the request naming `pointer`.
+fn names_field(r: &common::Reply, pointer: &str) -> bool {
+    if r.status.as_u16() != 422 {
+        return false;
+    }
+    let p = r.json();
+    p["errors"]
+        .as_array()
+        .is_some_and(|e| e.iter().any(|x| x["field"] == pointer))
+}
+
+fn inward(bound: f64, closed: bool, up: bool, integer: bool) -> f64 {
+    if closed {
+        bound
+    } else if integer {
+        if up { bound + 1.0 } else { bound - 1.0 }
+    } else if up {
+        bound.next_up()
+    } else {
+        bound.next_down()
+    }
+}
+
+fn outward(bound: f64, closed: bool, up: bool, integer: bool) -> f64 {
+    if !closed {
+        bound
+    } else if integer {
+        if up { bound + 1.0 } else { bound - 1.0 }
+    } else if up {
+        bound.next_up()
+    } else {
+        bound.next_down()
+    }
+}
+
+async fn mismatches(app: &axum::Router, doc: &Value, path: &str, schema: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let s = &doc["components"]["schemas"][schema];
+    // (1) Defaults: documented == filled in for `{}`.
+    let r = common::post(app, path, &json!({})).await;
+    assert_eq!(
+        r.status,
+        200,
+        "{path} {{}}: {}",
+        String::from_utf8_lossy(&r.body)
+    );
+    check_defaults(doc, s, &r.json()["inputs"], "", &mut out);
+    // (2) Ranges: documented == enforced.
+    let mut all = Vec::new();
+    leaves(doc, s, "", &[], &mut all);
+    for leaf in &all {
+        for (bound, up, which) in [(leaf.min, false, "min"), (leaf.max, true, "max")] {
+            let Some((b, closed)) = bound else { continue };
+            if CROSS_FIELD.contains(&(leaf.pointer.as_str(), which)) {
+                continue;
+            }
+            // A u64/u32 field cannot go below 0 in JSON: that is a type error, still 422.
+            let inside = inward(b, closed, !up, leaf.integer);
+            let outside = outward(b, closed, up, leaf.integer);
+            let body = request(path, leaf, inside);
+            let r = common::post(app, path, &body).await;
+            if !refused_for_range(&r, &leaf.pointer) && names_field(&r, &leaf.pointer) {
+                eprintln!(
+                    "note: {path} {} = {inside:e} passes validation and is refused for another \
+                     documented reason: {}",
+                    leaf.pointer,
+                    String::from_utf8_lossy(&r.body)
+                );
+            }
+            if refused_for_range(&r, &leaf.pointer) || r.status.is_server_error() {
+                out.push(format!(
+                    "{} = {inside:e} (just inside the documented {which}): {} {}",
+                    leaf.pointer,
+                    r.status,
+                    String::from_utf8_lossy(&r.body)
+                ));
+            }
+            let body = request(path, leaf, outside);
+            let r = common::post(app, path, &body).await;
+            if !names_field(&r, &leaf.pointer) {
+                out.push(format!(
+                    "{} = {outside:e} (just outside the documented {which}): {} {}",
+                    leaf.pointer,
+                    r.status,
+                    String::from_utf8_lossy(&r.body)
+                ));
+            }
+        }
+    }
+    out
+}
+
+#[tokio::test]
+async fn documented_defaults_and_ranges_are_what_the_server_does() {
+    let app = common::app();
+    let doc: Value = serde_json::from_str(&gangue::http::openapi::openapi_json()).unwrap();
+    let mut failures = Vec::new();
+    for (path, schema) in ROUTES {
+        for m in mismatches(&app, &doc, path, schema).await {
+            failures.push(format!("{path} {m}"));
+        }
+    }
+    for (path, schema) in TODO_ROUTES {
+        let found = mismatches(&app, &doc, path, schema).await;
+        eprintln!("to do, {path}: {} mismatches", found.len());
+        for m in found {
+            eprintln!("  {path} {m}");
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The schema of the shared rock and column fields, their validation and `/v1/presets` come
+/// from one definition: the presets' `fields` equal the OpenAPI bounds and defaults.
+#[tokio::test]
+async fn presets_list_the_documented_fields() {
+    let app = common::app();
+    let doc: Value = serde_json::from_str(&gangue::http::openapi::openapi_json()).unwrap();
+    let presets = common::get(&app, "/v1/presets").await.json();
+    let fields = presets["fields"].as_object().expect("presets list fields");
+    assert!(fields.len() >= 17, "{}", fields.len());
+    let request = &doc["components"]["schemas"]["ImpactRequest"];
+    for (pointer, f) in fields {
+        let mut s = request;
+        for part in pointer.trim_start_matches('/').split('/') {
+            let (obj, _) = resolve(&doc, s);
+            s = &obj["properties"][part];
+        }
+        let (s, _) = resolve(&doc, s);
+        for key in ["minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"] {
+            assert_eq!(
+                s.get(key).and_then(Value::as_f64),
+                f.get(key).and_then(Value::as_f64),
+                "{pointer} {key}"
+            );
+        }
+        match &f["default"] {
+            Value::String(d) => {
+                assert_eq!(d, "derived");
+                assert!(s.get("default").is_none(), "{pointer}");
+            }
+            d => assert_eq!(s.get("default"), Some(d), "{pointer}"),
+        }
+    }
+    // The paper's tables in the presets are the request defaults.
+    let column = &presets["column"];
+    assert_eq!(
+        column["first_stage"]["outer_diameter_m"],
+        fields["/column/outer_diameter_m"]["default"]
+    );
+    assert_eq!(
+        presets["rock"]["density_kg_m3"],
+        fields["/rock/density_kg_m3"]["default"]
+    );
+}
