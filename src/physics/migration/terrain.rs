@@ -1191,12 +1191,26 @@ impl Floor {
     }
 
     fn flight_any(&self, p: &Vector3<f64>, v: &Vector3<f64>, g: f64, t_max: f64) -> FlightEnd {
+        // rounding of the start point's height against a facet's plane (a few ulps of its
+        // coordinates), far below the invariant's 1e-9 tolerance
+        let h_round = 1e-12 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()));
         let root = |pl: &FacetPlane| -> Option<f64> {
+            let h0 = pl.height(p);
             let b = pl.height_rate(v);
-            let r = descent_root(pl.height(p), b, g)?;
+            let r = descent_root(h0, b, g)?;
             // a strike: the height decreases through zero (not a graze at the start)
             let slope = b - g * r;
-            (slope < -1e-12 * (1.0 + b.abs())).then_some(r)
+            if slope >= -1e-12 * (1.0 + b.abs()) {
+                return None;
+            }
+            // A start a rounding error below the plane, sinking further below it, is a strike
+            // now: its root lies h0/|b| in the past, which is long for a slow rock (a rock
+            // bounced off a node at 6 mm/s into a steeper facet 9e-16 m below the node's height
+            // had its root 3.6e-12 s back, was refused as past, and fell through the floor).
+            if r < -1e-12 && h0 >= -h_round {
+                return Some(0.0);
+            }
+            Some(r)
         };
         match &self.kind {
             FloorKind::Plane(pl) => match root(pl) {
@@ -1499,6 +1513,26 @@ mod tests {
             assert!((p.bx - g.plane(id).bx).abs() < 1e-12);
             assert!((p.by - g.plane(id).by).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn a_slow_flight_starting_a_rounding_error_below_a_facet_strikes_it_at_once() {
+        // the grid z = −x; the start 1e-15 m (rounding) below it, sinking 0.25 mm/s relative
+        // to it: the root lies 4e-12 s in the past, a strike now, not a fall through the floor
+        let h = vec![vec![0.0, -1.0, -2.0]; 3];
+        let f = Floor::grid(0.7, [0.0, 0.0], 1.0, &h).unwrap();
+        let p = Vector3::new(1.3, 0.6, -1.3 - 1e-15);
+        let v = Vector3::new(0.0, 0.0, -2.5e-4);
+        match f.flight(&p, &v, 9.81, 1.0) {
+            FlightEnd::Hit { t, .. } => assert_eq!(t, 0.0),
+            e => panic!("{e:?}"),
+        }
+        // clearly below (1e-6 m) is not a rounding error: no strike from underneath
+        let p = Vector3::new(1.3, 0.6, -1.3 - 1e-6);
+        assert!(!matches!(
+            f.flight(&p, &v, 9.81, 1.0),
+            FlightEnd::Hit { .. }
+        ));
     }
 
     #[test]
