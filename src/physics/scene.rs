@@ -188,7 +188,7 @@ pub struct Check {
     pub value: Option<f64>,
     /// The allowed value.
     pub allowed: f64,
-    /// value / allowed (None with the value).
+    /// value / allowed (None with the value, or when the ratio overflows).
     pub utilisation: Option<f64>,
     /// value > allowed, or the capacity exceeded.
     pub exceeded: bool,
@@ -275,7 +275,8 @@ pub fn checks(limits: &DesignLimits, strike: &Strike) -> Vec<Check> {
                 limit,
                 value,
                 allowed,
-                utilisation: value.map(|x| x / allowed),
+                // a limit near 0 can make the ratio overflow: then it is not reported
+                utilisation: value.map(|x| x / allowed).filter(|u| u.is_finite()),
                 exceeded: value.is_none_or(|x| x > allowed),
             }
         })

@@ -727,7 +727,7 @@ pub struct CheckDto {
     pub value: Option<f64>,
     /// The allowed value.
     pub allowed: f64,
-    /// value / allowed (omitted past the contact capacity).
+    /// value / allowed (omitted past the contact capacity, or when it overflows a double).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub utilisation: Option<f64>,
     /// value > allowed, or past the contact capacity.
