@@ -483,3 +483,91 @@ async fn a_sliding_rock_reaches_a_column_at_the_closed_form_time() {
     assert!(b["impacts"].as_array().unwrap().is_empty());
     assert_eq!(b["plan"][2]["status"], "skipped");
 }
+
+#[tokio::test]
+async fn a_rigid_block_stops_where_it_comes_within_reach_of_a_column() {
+    let app = common::app();
+    // the block's bounding radius is √3 L/2 (a cube), the column's radius D/2
+    let r = 0.25 / 2.0 + 3f64.sqrt() * 0.3 / 2.0;
+    let body = json!({
+        "method": "rigid_block",
+        "face": {"length_m": 20},
+        "release": {"drop_height_m": 0.5},
+        "supports": [{"along_dip_m": 10, "across_m": 0.1}],
+        "contact": {"law": "hertz_point"},
+    });
+    let b = ok(&post(&app, "/v1/scene", &body).await);
+    let a = &b["migration"]["arrival"];
+    assert_eq!(a["stop_reason"], "support");
+    let s = a["along_dip_m"].as_f64().unwrap();
+    let y = a["position_m"][1].as_f64().unwrap();
+    let d = (10.0 - s).hypot(y - 0.1);
+    assert!(rel(d, r) < 1e-9, "distance {d} vs reach {r}");
+    let v = b["impacts"][0]["impact_velocity_m_s"].as_f64().unwrap();
+    assert!(v > 0.0 && v <= a["speed_m_s"].as_f64().unwrap());
+}
+
+#[tokio::test]
+async fn compare_methods_puts_both_methods_side_by_side() {
+    let app = common::app();
+    let body = json!({
+        "face": {"length_m": 15},
+        "release": {"drop_height_m": 0.5},
+        "supports": [{"along_dip_m": 15}],
+        "monte_carlo": {"runs": 6, "seed": 1},
+        "contact": {"law": "hertz_point"},
+        "compare_methods": true,
+    });
+    let b = ok(&post(&app, "/v1/scene", &body).await);
+    let c = b["comparison"].as_array().unwrap();
+    assert_eq!(c.len(), 2);
+    assert_eq!(c[0]["method"], "lumped_mass");
+    assert_eq!(c[1]["method"], "rigid_block");
+    for m in c {
+        let o = &m["outcomes"];
+        let sum: f64 = ["support", "lower_end", "at_rest", "left_floor", "end_time"]
+            .iter()
+            .map(|k| o[k].as_f64().unwrap())
+            .sum();
+        assert!((sum - 1.0).abs() < 1e-12);
+        assert_eq!(m["supports"][0]["reached_fraction"], 1.0);
+        assert!(
+            m["supports"][0]["impact_velocity_median_m_s"]
+                .as_f64()
+                .unwrap()
+                > 1.0
+        );
+    }
+    // the request's own method is the ensemble of the statistics
+    assert_eq!(
+        c[0]["supports"][0]["impact_velocity_median_m_s"],
+        b["statistics"]["supports"][0]["impact_velocity_m_s"]["p50"]
+    );
+}
+
+#[tokio::test]
+async fn a_scene_streams_progress_and_one_result() {
+    let app = common::app();
+    let body = json!({"monte_carlo": {"runs": 300, "seed": 2}, "face": {"length_m": 30}});
+    let r = common::send(
+        &app,
+        axum::http::Method::POST,
+        "/v1/scene",
+        Some("application/json"),
+        serde_json::to_vec(&body).unwrap(),
+        Some("application/x-ndjson"),
+    )
+    .await;
+    assert_eq!(r.status, 200);
+    let lines: Vec<Value> = String::from_utf8_lossy(&r.body)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let last = lines.last().unwrap();
+    assert_eq!(last["result"]["statistics"]["runs"], 300);
+    assert!(
+        lines[..lines.len() - 1]
+            .iter()
+            .all(|l| l.get("progress").is_some())
+    );
+}

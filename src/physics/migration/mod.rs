@@ -1309,3 +1309,58 @@ fn statistics_of(mc: &MonteCarlo, runs: &[RunSummary]) -> Statistics {
         max_bounce_height: all(&|r| r.max_bounce_height),
     }
 }
+
+#[cfg(test)]
+mod support_stop_tests {
+    //! The column stop: the first time a quadratic piece comes within reach of a column's axis in
+    //! the mean plane. Expectation: at the time found the distance equals the reach (to rounding),
+    //! and no earlier time of the piece is within reach; without a time, no time of the piece is.
+    use super::*;
+    use proptest::prelude::*;
+
+    fn dist(mean: &terrain::MeanPlane, s: &SupportStop, p: &Vector3<f64>) -> f64 {
+        (mean.along(p) - s.along_dip).hypot(p.y - s.across.unwrap())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+        #[test]
+        fn the_first_reach_of_a_column_is_the_first_crossing(
+            dip in 5.0f64..80.0,
+            x in 0.0f64..50.0, y in -3.0f64..3.0, h in 0.0f64..5.0,
+            vx in -20.0f64..20.0, vy in -5.0f64..5.0, vz in -20.0f64..20.0,
+            flight in any::<bool>(),
+            sc in 0.0f64..80.0, yc in -3.0f64..3.0, reach in 0.005f64..3.0,
+            dt in 1e-6f64..5.0,
+        ) {
+            let floor = terrain::Floor::plane(dip.to_radians());
+            let mean = floor.mean;
+            let p = Vector3::new(x, y, -x * mean.sin / mean.cos + h);
+            let v = Vector3::new(vx, vy, vz);
+            let a = if flight { Vector3::new(0.0, 0.0, -9.81) } else { mean.dip_dir() * 3.0 };
+            let s = SupportStop { along_dip: sc, across: Some(yc), reach };
+            let at = |t: f64| p + v * t + a * (0.5 * t * t);
+            let found = first_column_reach(&mean, &[s], &p, &v, &a, dt);
+            let scale = 1e-9 * (1.0 + reach + (v.norm() + a.norm() * dt) * dt + sc.abs());
+            let end = match found {
+                Some((t, k)) => {
+                    prop_assert_eq!(k, 0);
+                    prop_assert!((0.0..=dt).contains(&t));
+                    let d = dist(&mean, &s, &at(t));
+                    prop_assert!(d <= reach + scale, "distance {} at t {} > reach {}", d, t, reach);
+                    if t > 0.0 {
+                        prop_assert!(dist(&mean, &s, &p) > reach - scale);
+                    }
+                    t
+                }
+                None => dt,
+            };
+            // before the time found (nothing to sample when reached at once)
+            for i in (0..400).filter(|_| end > 0.0) {
+                let t = end * f64::from(i) / 400.0;
+                let d = dist(&mean, &s, &at(t));
+                prop_assert!(d > reach - scale, "within reach at t {} (d {}) before {}", t, d, end);
+            }
+        }
+    }
+}
