@@ -565,6 +565,14 @@ async fn a_scene_streams_progress_and_one_result() {
         .collect();
     let last = lines.last().unwrap();
     assert_eq!(last["result"]["statistics"]["runs"], 300);
+    // progress never runs past its total (the nominal run and the 300 of the ensemble)
+    for l in &lines[..lines.len() - 1] {
+        let p = &l["progress"];
+        assert!(
+            p["done"].as_u64().unwrap() <= p["total"].as_u64().unwrap(),
+            "{p}"
+        );
+    }
     assert!(
         lines[..lines.len() - 1]
             .iter()

@@ -679,6 +679,10 @@ pub fn solve(case: &SceneCase, control: &Control) -> SceneResult<SceneReport> {
     nominal_case.supports = stops(case, r_rock);
     let mc = nominal_case.monte_carlo.take();
     let nominal = migration::run(&nominal_case, control)?;
+    // progress: the nominal run, the ensemble's runs, and those of a comparison (both methods)
+    let per = if case.compare_methods { 3 } else { 1 };
+    let total = 1 + mc.as_ref().map_or(0, |m| m.runs) * per + u64::from(mc.is_none()) * (per - 1);
+    control.set_total(total);
     plan.push(stage(
         true,
         "migration",
@@ -733,7 +737,7 @@ pub fn solve(case: &SceneCase, control: &Control) -> SceneResult<SceneReport> {
     };
     push_strike_plan(case, &mut plan, struck, &impacts);
     let comparison = if case.compare_methods {
-        Some(compare(case, &nominal_case, mc.as_ref(), control)?)
+        Some(compare(case, &nominal_case, mc.as_ref(), control, total)?)
     } else {
         None
     };
@@ -805,7 +809,6 @@ fn push_strike_plan(
 fn ensemble(case: &SceneCase, mc: &MonteCarlo, control: &Control) -> SceneResult<Vec<SceneRun>> {
     const CHUNK: usize = 64;
     let n = mc.runs as usize;
-    control.set_total(mc.runs);
     let limits = case.limits.active();
     let one = |i: u64| -> SceneResult<SceneRun> {
         let (mut m, rock, _, mass) = run_case(case, mc.seed, i)?;
@@ -930,6 +933,7 @@ fn compare(
     nominal_case: &MigrationCase,
     mc: Option<&MonteCarlo>,
     control: &Control,
+    total: u64,
 ) -> SceneResult<Vec<MethodSummary>> {
     let mut out = Vec::new();
     for method in [Method::LumpedMass, Method::RigidBlock] {
@@ -965,6 +969,9 @@ fn compare(
                 m.output.events = false;
                 m.output.trajectory = false;
                 let r = migration::run(&m, control)?;
+                // the run announces a total of its own (and counts itself done): restore the
+                // scene's
+                control.set_total(total);
                 let a = &r.arrival;
                 let summary = RunSummary {
                     time: a.time,
