@@ -715,6 +715,7 @@ pub fn solve(case: &SceneCase, control: &Control) -> SceneResult<SceneReport> {
         Some(mc) => {
             let runs = ensemble(case, mc, control)?;
             let st = statistics_of(case, mc, &runs);
+            warnings.extend(draw_warnings(mc));
             for (k, e) in st.entries.iter().enumerate() {
                 if e.impact_velocity.is_none() {
                     let s = &case.supports[k];
@@ -750,6 +751,39 @@ pub fn solve(case: &SceneCase, control: &Control) -> SceneResult<SceneReport> {
         comparison,
         warnings,
     })
+}
+
+/// Warnings about the ensemble's migration draws, as `/v1/migration` gives them: friction drawn
+/// outside [0, 2] and clipped (μ is the first draw of each run's stream), a single run.
+fn draw_warnings(mc: &MonteCarlo) -> Vec<SceneWarning> {
+    let mut w = Vec::new();
+    if let Some(d) = &mc.friction_coefficient {
+        let clipped = (0..mc.runs)
+            .filter(|&i| {
+                let mu = monte_carlo::sample(d, &mut monte_carlo::run_stream(mc.seed, i));
+                !(0.0..=2.0).contains(&mu)
+            })
+            .count();
+        if clipped > 0 {
+            w.push(SceneWarning {
+                code: "friction_clipped",
+                message: format!(
+                    "{clipped} of {} drawn friction coefficients fell outside [0, 2] and were \
+                     clipped to it",
+                    mc.runs
+                ),
+            });
+        }
+    }
+    if mc.runs < 2 {
+        w.push(SceneWarning {
+            code: "single_run",
+            message: "an ensemble of one run has no sample standard deviation: every std is \
+                      null; ask for runs ≥ 2"
+                .into(),
+        });
+    }
+    w
 }
 
 fn stage(ran: bool, stage: &'static str, reason: impl Into<String>) -> Stage {
