@@ -568,7 +568,7 @@ fn ensemble_is_thread_count_independent() {
     assert_eq!(a, b);
     let csv = a.runs_csv.unwrap();
     assert!(csv.starts_with(
-        "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason\n"
+        "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s\n"
     ));
     assert_eq!(csv.lines().count(), 3001);
 }

@@ -6,7 +6,7 @@
 //! outside a documented bound the answer is 422 naming exactly that field (documented bound ==
 //! enforced bound).
 //!
-//! For each POST body schema (impact, column, migration) the test walks the properties (through
+//! For each POST body schema (impact, column, migration, scene) the test walks the properties (through
 //! `$ref` and nullable `oneOf`), and for every numeric leaf with a documented minimum or maximum
 //! sends, one field at a time with everything else at its default: the bound, the value just
 //! inside (next f64, ±1 for integers), 5e-324 and 1e-300 where in range, and the value just
@@ -31,6 +31,13 @@ const KNOWN_ELSEWHERE: &[(&str, &str, &str)] = &[];
 const RELATED: &[(&str, &str)] = &[
     ("/column/outer_diameter_m", "/column/inner_diameter_m"),
     ("/rock/side_length_m", "/column/length_m"),
+    ("/rock/side_length_m", "/supports/0/column/length_m"),
+    ("/support_rows/lowest_along_dip_m", "/support_rows/count"),
+    ("/support_rows/spacing_m", "/support_rows/count"),
+    (
+        "/support_rows/column/outer_diameter_m",
+        "/support_rows/column/inner_diameter_m",
+    ),
 ];
 
 /// Objects that must carry members before their fields can be varied: (schema, base object).
@@ -38,7 +45,7 @@ const RELATED: &[(&str, &str)] = &[
 /// test are not the run count, whose own extremes are sent as such).
 fn base_object(schema: &str) -> Value {
     match schema {
-        "MonteCarloDto" => json!({"runs": 20}),
+        "MonteCarloDto" | "SceneMonteCarloDto" => json!({"runs": 20}),
         "RandomShapeDto" => json!({"semi_axes_m": [0.2, 0.15, 0.1]}),
         // A decoupled history needs a window; 10 ms as in the README.
         "ColumnOutputDto" => json!({"duration_s": 0.01}),
@@ -51,6 +58,7 @@ fn base_object(schema: &str) -> Value {
 const COST_LIMITED: &[(&str, &str, f64)] = &[
     // 1e6 runs of the default migration: tens of seconds; 2000 shows the same code path.
     ("/v1/migration", "/monte_carlo/runs", 2000.0),
+    ("/v1/scene", "/monte_carlo/runs", 2000.0),
 ];
 
 /// Cases in which a field is used rather than only range-checked: (endpoint, pointer prefix,
@@ -315,7 +323,7 @@ async fn every_documented_numeric_bound_is_answered_or_refused_by_name() {
     let mut failures: Vec<(String, String, String, String)> = Vec::new();
     let mut sent = 0usize;
     let t0 = std::time::Instant::now();
-    for path in ["/v1/impact", "/v1/column", "/v1/migration"] {
+    for path in ["/v1/impact", "/v1/column", "/v1/migration", "/v1/scene"] {
         let body_schema =
             &doc["paths"][path]["post"]["requestBody"]["content"]["application/json"]["schema"];
         let (schema, _) = resolve(&doc, body_schema);

@@ -10,7 +10,7 @@
 //!
 //! Part file (format version 1): one JSON header line ([`Header`]: kind, build id, SHA-256 of the
 //! resolved inputs, the request, the item range, section sizes), then a little-endian binary
-//! body: a migration's run records (57 bytes each) followed by its six statistics columns, each
+//! body: a migration's run records (81 bytes each) followed by its seven statistics columns, each
 //! sorted by `f64::total_cmp`; a study's point outputs (f64 each); a batch's answer lines, each
 //! preceded by its length (u64). A part is written to a temporary name in the same directory and
 //! renamed, so a shard run twice leaves one whole part.
@@ -48,9 +48,9 @@ use crate::physics::migration::{
 /// Name of the part file format.
 pub const FORMAT: &str = "gangue-part";
 /// Version of the part file format.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Bytes of one migration run record.
-const RUN_RECORD_BYTES: u64 = 57;
+const RUN_RECORD_BYTES: u64 = 81;
 
 /// Header line of a part file.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -420,17 +420,30 @@ fn encode_run(r: &RunSummary, out: &mut Vec<u8>) {
         max_bounce_height,
         stop_reason,
         steps,
+        along_dip_velocity,
+        support,
+        impact_speed,
     } = *r;
-    for x in [time, speed, kinetic_energy, runout, max_bounce_height] {
+    for x in [
+        time,
+        speed,
+        kinetic_energy,
+        runout,
+        max_bounce_height,
+        along_dip_velocity,
+        impact_speed,
+    ] {
         out.extend_from_slice(&x.to_le_bytes());
     }
     out.extend_from_slice(&impact_count.to_le_bytes());
     out.extend_from_slice(&steps.to_le_bytes());
+    out.extend_from_slice(&support.map_or(u64::MAX, |k| k as u64).to_le_bytes());
     out.push(match stop_reason {
         StopReason::LowerEnd => 0,
         StopReason::AtRest => 1,
         StopReason::EndTime => 2,
         StopReason::LeftFloor => 3,
+        StopReason::Support => 4,
     });
 }
 
@@ -443,13 +456,20 @@ fn decode_run(b: &[u8; RUN_RECORD_BYTES as usize]) -> Result<RunSummary, String>
         kinetic_energy: f(2),
         runout: f(3),
         max_bounce_height: f(4),
-        impact_count: u(5),
-        steps: u(6),
-        stop_reason: match b[56] {
+        along_dip_velocity: f(5),
+        impact_speed: f(6),
+        impact_count: u(7),
+        steps: u(8),
+        support: match u(9) {
+            u64::MAX => None,
+            k => Some(usize::try_from(k).map_err(|_| format!("support index {k} out of range"))?),
+        },
+        stop_reason: match b[80] {
             0 => StopReason::LowerEnd,
             1 => StopReason::AtRest,
             2 => StopReason::EndTime,
             3 => StopReason::LeftFloor,
+            4 => StopReason::Support,
             x => return Err(format!("unknown stop reason code {x}")),
         },
     })
@@ -815,6 +835,9 @@ mod tests {
             max_bounce_height: 0.25,
             stop_reason: StopReason::LeftFloor,
             steps: u64::MAX,
+            along_dip_velocity: -2.5,
+            support: Some(3),
+            impact_speed: 1.25,
         };
         let mut b = Vec::new();
         encode_run(&r, &mut b);
