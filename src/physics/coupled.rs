@@ -494,6 +494,54 @@ fn highest_active_frequency(g: &Galerkin) -> PhysicsResult<f64> {
     )
 }
 
+impl CoupledResult {
+    /// The result before the first step: rock at the column at speed `v` (m/s), nothing
+    /// transferred, over the window [0, `end_time`] (s) at tolerance `tolerance`.
+    fn at_start(v: f64, end_time: f64, tolerance: f64) -> Self {
+        CoupledResult {
+            max_force: 0.0,
+            max_contact_deformation: 0.0,
+            max_midpoint_displacement: 0.0,
+            max_curvature_clamp: 0.0,
+            max_curvature_midpoint: 0.0,
+            contact_count: 1,
+            first_contact_duration: None,
+            rebound_velocity: v,
+            column_energy_after_contact: 0.0,
+            rock_velocity_end: v,
+            column_energy_end: 0.0,
+            damping_energy: 0.0,
+            contact_energy_end: 0.0,
+            energy_residual: 0.0,
+            column_energy_residual: 0.0,
+            column_energy_scale: 0.0,
+            estimated_error: 0.0,
+            passes: 1,
+            end_time,
+            steps: 0,
+            rejected_steps: 0,
+            tolerance,
+            history: CoupledHistory::default(),
+        }
+    }
+}
+
+/// The capacity error of a coupled run whose approach reached δ_cap: G = KE/E_cap and the
+/// speed at which G = 1 (infinite for Hertz, which has no capacity).
+fn capacity_exceeded(input: &CoupledInput) -> PhysicsError {
+    let ke0 = 0.5 * input.rock_mass * input.velocity * input.velocity;
+    let (g_par, vmax) = match input.law.energy_capacity() {
+        Some(e_cap) => (ke0 / e_cap, (2.0 * e_cap / input.rock_mass).sqrt()),
+        None => (f64::INFINITY, f64::INFINITY),
+    };
+    PhysicsError::CapacityExceeded {
+        energy_parameter: g_par,
+        max_velocity_m_s: vmax,
+        message: "the approach reached the capacity of the contact law during the coupled run"
+            .into(),
+    }
+}
+
 /// Relative accuracy the coupled results must meet (physics.md §G, coupled ODE): the estimated
 /// error (rock balance relative to its energy, column balance relative to the transferred
 /// energy) above it triggers a refinement, and a warning when refinement does not reach it.
@@ -596,48 +644,13 @@ fn run_pass(
     let mut y = vec![0.0; dim];
     y[ROCK_VELOCITY] = v;
     let mut t = 0.0;
-    let mut res = CoupledResult {
-        max_force: 0.0,
-        max_contact_deformation: 0.0,
-        max_midpoint_displacement: 0.0,
-        max_curvature_clamp: 0.0,
-        max_curvature_midpoint: 0.0,
-        contact_count: 1,
-        first_contact_duration: None,
-        rebound_velocity: v,
-        column_energy_after_contact: 0.0,
-        rock_velocity_end: v,
-        column_energy_end: 0.0,
-        damping_energy: 0.0,
-        contact_energy_end: 0.0,
-        energy_residual: 0.0,
-        column_energy_residual: 0.0,
-        column_energy_scale: 0.0,
-        estimated_error: 0.0,
-        passes: 1,
-        end_time: t_end,
-        steps: 0,
-        rejected_steps: 0,
-        tolerance: tol,
-        history: CoupledHistory::default(),
-    };
+    let mut res = CoupledResult::at_start(v, t_end, tol);
     let mut first_separated = false;
     let mut next_sample = 0usize;
     let samples = &input.sample_times;
     let mut ysave = vec![0.0; dim];
     let mut ytmp = vec![0.0; dim];
-    let capacity_error = || {
-        let (g_par, vmax) = match input.law.energy_capacity() {
-            Some(e_cap) => (ke0 / e_cap, (2.0 * e_cap / input.rock_mass).sqrt()),
-            None => (f64::INFINITY, f64::INFINITY),
-        };
-        PhysicsError::CapacityExceeded {
-            energy_parameter: g_par,
-            max_velocity_m_s: vmax,
-            message: "the approach reached the capacity of the contact law during the coupled run"
-                .into(),
-        }
-    };
+    let capacity_error = || capacity_exceeded(input);
 
     // Records a history sample from state ys at time ts.
     let record = |res: &mut CoupledResult, ts: f64, ys: &[f64], in_contact: bool| {

@@ -1,8 +1,9 @@
 //! Contact of the rock block on the column (physics.md §A), one algorithm per file:
 //! [`modulus`] (E*), [`log_law`] (the logarithmic line laws `paper`, `johnson` on the W₋₁
-//! branch), [`hertz`] (Hertz point contact), [`duration`] (contact duration), [`force_law`]
-//! (P(δ), capacity, stored energy) and [`force_curve`]. This file holds the case checks, the
-//! result types and the entry points [`impact_maxima`] and [`solve_impact`].
+//! branch), [`hertz`] (Hertz point contact), [`duration`] (contact duration),
+//! [`force_law`](mod@force_law) (P(δ), capacity, stored energy) and
+//! [`force_curve`](mod@force_curve). This file holds the case checks, the result types and the
+//! entry points [`impact_maxima`] and [`solve_impact`].
 
 use std::f64::consts::{E, PI};
 
@@ -209,7 +210,7 @@ pub(super) fn corner_radius(case: &ImpactCase) -> f64 {
 ///
 /// # Errors
 /// `CapacityExceeded` when G > 1 (with the speed at which G = 1); `InvalidInput` as
-/// [`force_law`].
+/// [`force_law()`].
 ///
 /// # Examples
 /// ```
