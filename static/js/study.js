@@ -57,9 +57,9 @@ function csvLink(rows, name) {
 function tableOf(rows, name, { numeric = true } = {}) {
   const [head, ...body] = rows;
   return h('div', { class: 'table-block' },
-    h('table', { class: 'results-table' },
+    h('div', { class: 'table-scroll' }, h('table', { class: 'results-table' },
       h('thead', {}, h('tr', {}, ...head.map((c) => h('th', {}, c)))),
-      h('tbody', {}, ...body.map((r) => h('tr', {}, ...r.map((c, j) => (j === 0 ? h('th', { scope: 'row' }, c) : h('td', {}, numeric && typeof c === 'number' ? fmt(c, 5) : c ?? '—'))))))),
+      h('tbody', {}, ...body.map((r) => h('tr', {}, ...r.map((c, j) => (j === 0 ? h('th', { scope: 'row' }, c) : h('td', {}, numeric && typeof c === 'number' ? fmt(c, 5) : c ?? '—')))))))),
     csvLink(rows, name));
 }
 
