@@ -199,8 +199,8 @@ export function locate(pointer, forms) {
   for (let n = keys.length; n > 1; n--) {
     const prefix = keys.slice(0, n).join('/');
     for (const form of forms) {
-      const input = form.querySelector(`[data-pointer="${CSS.escape(prefix)}"]`);
-      if (input) return { form, input, target: input.closest('.field') };
+      const input = form.querySelector(`[data-pointer="${CSS.escape(prefix)}"], [data-target="${CSS.escape(prefix)}"]`);
+      if (input) return { form, input, target: input.closest('.field, td, th') ?? input.parentElement };
       const group = form.querySelector(`[data-group="${CSS.escape(prefix)}"]`);
       if (group) return { form, input: null, target: group };
     }
@@ -222,7 +222,11 @@ export function markErrors(errors, forms) {
       continue;
     }
     const { input, target } = found;
-    const p = target.querySelector(input ? '.field-error' : '.group-error');
+    let p = target.querySelector(input ? '.field-error' : '.group-error');
+    if (!p) {
+      p = h('p', { class: 'field-error', role: 'alert' });
+      target.append(p);
+    }
     const message = input ? localise(rawMessage, input) : humanMessage(rawMessage);
     p.textContent = p.textContent ? `${p.textContent}; ${message}` : message;
     p.hidden = false;

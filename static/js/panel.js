@@ -14,7 +14,8 @@ import { bringIntoView, hideStatus, showBusy, showInfo, showProblem } from './st
  *   fields the request carries, own form first (problems are marked there).
  * - `endpoint`: e.g. "v1/impact" (POSTed by the default `send`).
  * - `status`, `progress` (optional `.progress` box with a cancel button).
- * - `build(reads)`: the request from `readForm` of each of `forms` (in order).
+ * - `build(reads)`: the request from `readForm` of each of `forms` (in order);
+ *   it may throw `{fieldErrors: [{field, message}]}` for inputs it reads itself.
  * - `send(request, {signal, onProgress})`: optional; resolves to an answer
  *   `{ok, data}` or `{ok: false, problem, label?}`.
  * - `stream(request)`: true when progress should be asked for.
@@ -52,9 +53,9 @@ export function initPanel(opts) {
     try {
       request = opts.build(reads);
     } catch (err) {
-      if (!err.field) throw err;
+      if (!err.fieldErrors) throw err;
       opts.clear();
-      showProblem(status, { errors: [{ field: err.field, message: err.message }] }, { forms });
+      showProblem(status, { errors: err.fieldErrors }, { forms });
       return null;
     }
 

@@ -634,6 +634,15 @@ async function studySection(page) {
   });
 
   await screenshot(page, 'study.png');
+
+  await check('study: letters in a range are a field error beside it; the old result is cleared', async () => {
+    await page.locator('#study-parameters-1-min').fill('x');
+    await page.locator('#study-form button[type="submit"]').click();
+    const cell = page.locator('#study-parameters td:has(#study-parameters-1-min) .field-error');
+    await cell.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/not a number/.test(await cell.textContent()), `message: ${await cell.textContent()}`);
+    assert(await page.locator('#study-results').isHidden(), 'the old study result is still shown');
+  });
 }
 
 async function spallingSection(page) {
@@ -652,6 +661,16 @@ async function spallingSection(page) {
   });
 
   await screenshot(page, 'spalling.png');
+
+  await check('spalling: A∩B larger than B is refused and marked beside that count', async () => {
+    await page.locator('#spalling-zones-0-spalling_and_high').fill('50');
+    const response = await submit(page, '#spalling-form', '/v1/spalling');
+    assert(response.status() === 422, `status ${response.status()}`);
+    const marked = await page.locator('#spalling-input [aria-invalid="true"]').count();
+    assert(marked >= 1, 'no count marked');
+    const summary = await page.locator('#spalling-status .summary').textContent();
+    assert(!/422/.test(summary), `summary: ${summary}`);
+  });
 }
 
 // ---- main ------------------------------------------------------------------
