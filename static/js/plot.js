@@ -19,9 +19,10 @@ const resizer = new ResizeObserver((entries) => {
  * - `x`: {label, values, range?}
  * - `series`: [{label, values, color?, axis?: 'y'|'y2', points?, width?, dash?, bars?}]
  * - `y`, `y2`: {label, range?}; y2 only when a series uses it.
+ * - `vlines`: [{x, color}] vertical marks across the plot (supports on a face).
  * The x values must be ascending (uPlot's own rule) unless `x.range` is given.
  */
-export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true }) {
+export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true, vlines = [] }) {
   destroy(el);
   const axisStyle = { stroke: '#3b4350', grid: { stroke: '#e3e7ed', width: 1 }, ticks: { stroke: '#c9d0da', width: 1 } };
   // Drag-to-zoom: the selection is turned into a zoom range here (uPlot's own
@@ -47,6 +48,22 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true 
     legend: { show: legend },
     cursor: { drag: { x: true, y: false, setScale: false } },
     hooks: {
+      draw: [(u) => {
+        if (!vlines.length) return;
+        const { ctx } = u;
+        ctx.save();
+        ctx.lineWidth = Math.max(1, devicePixelRatio);
+        for (const mark of vlines) {
+          const px = u.valToPos(mark.x, 'x', true);
+          if (px < u.bbox.left || px > u.bbox.left + u.bbox.width) continue;
+          ctx.strokeStyle = mark.color ?? '#555e6b';
+          ctx.beginPath();
+          ctx.moveTo(px, u.bbox.top);
+          ctx.lineTo(px, u.bbox.top + u.bbox.height);
+          ctx.stroke();
+        }
+        ctx.restore();
+      }],
       setSelect: [(u) => {
         if (u.select.width > 4) {
           const min = u.posToVal(u.select.left, 'x');

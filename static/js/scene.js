@@ -260,7 +260,7 @@ export function initScene() {
 
   function sendButton(speed) {
     const b = h('button', { type: 'button', class: 'chip send', disabled: typeof speed !== 'number' || speed <= 0 },
-      'Open this impact in Impact and Column');
+      'Send to Impact and Column');
     b.addEventListener('click', () => sendImpact(speed));
     return b;
   }
@@ -346,39 +346,47 @@ export function initScene() {
     });
   }
 
+  /** Side view (a vertical section along the dip) and plan view, supports as vertical marks coloured by verdict. */
   function renderFace(data, entries) {
     const length = data.inputs?.face?.length_m ?? 120;
+    const dip = (data.inputs?.face?.dip_deg ?? 45) * Math.PI / 180;
     const tr = data.migration?.trajectory;
-    const supportXs = entries.map((e) => e.along_dip_m);
-    const zones = data.inputs?.release_zones === 'table1' || data.inputs?.release_zones === undefined && data.statistics
+    const marks = entries.map((e) => ({
+      x: e.along_dip_m,
+      color: e.verdict === 'exceeded' ? '#c8423b' : (e.single || e.reached_fraction > 0) ? '#2a8f4f' : '#aab2bd',
+    }));
+    const zones = data.inputs?.release_zones === 'table1'
       ? [[0, length / 3], [length / 3, 2 * length / 3], [2 * length / 3, length]]
       : Array.isArray(data.inputs?.release_zones) ? data.inputs.release_zones.map((z) => [z.from_along_dip_m, z.to_along_dip_m]) : [];
-    const zoneTable = [[], []];
-    for (const [a, b] of zones) zoneTable[0].push(a, b, (a + b) / 2), zoneTable[1].push(0, 0, null);
-    const order = zoneTable[0].map((x, i) => [x, zoneTable[1][i]]).sort((p, q) => p[0] - q[0]);
-    const tables = [
-      [[0, length], [0, 0]],
-      [supportXs.slice().sort((a, b) => a - b), supportXs.map(() => 0)],
-    ];
-    if (order.length) tables.push([order.map((p) => p[0]), order.map((p) => p[1])]);
-    if (tr) tables.push([tr.along_dip_m, tr.height_m]);
-    const joined = joinSeries(tables.map(([x, y]) => dedupe(x, y)));
-    const series = [
-      { label: 'floor', values: joined[1], color: '#555e6b' },
-      { label: 'supports', values: joined[2], points: 'only', color: '#c8423b', pointSize: 7 },
-    ];
-    let k = 3;
-    if (order.length) series.push({ label: 'release zones', values: joined[k++], color: '#d88a1c', width: 6 });
-    if (tr) series.push({ label: 'nominal run: height above the floor', values: joined[k++], color: '#1d5fa8' });
+    const elevation = (s) => -s * Math.sin(dip);
+    const floor = [[0, length], [elevation(0), elevation(length)]];
+    const tables = [floor];
+    if (zones.length) {
+      const xs = [];
+      const ys = [];
+      for (const [a, b] of zones) {
+        xs.push(a + 1e-9 * length, b - 1e-9 * length, (a + b) / 2 + 1e-7 * length);
+        ys.push(elevation(a), elevation(b), null);
+      }
+      tables.push(dedupe(xs, ys));
+    }
+    // The rock's height above the floor, measured along the normal, raises it by h / cos θ vertically.
+    if (tr) tables.push(dedupe(tr.along_dip_m, tr.along_dip_m.map((s, i) => elevation(s) + tr.height_m[i] / Math.cos(dip))));
+    const joined = joinSeries(tables);
+    const series = [{ label: 'floor (plane of the face)', values: joined[1], color: '#555e6b' }];
+    let k = 2;
+    if (zones.length) series.push({ label: 'release zones (Table 1 thirds)', values: joined[k++], color: '#d88a1c', width: 7 });
+    if (tr) series.push({ label: 'nominal run', values: joined[k++], color: '#1d5fa8' });
     linePlot(plots.side, {
-      x: { label: 'along the dip (m)', values: joined[0] },
-      y: { label: 'height above the floor (m)' },
+      x: { label: 'along the dip (m); supports as vertical lines', values: joined[0] },
+      y: { label: 'elevation (m)' },
       series,
+      vlines: marks,
       height: 240,
     });
     if (tr) plots.side.csv = () => [['along_dip_m', 'height_m'], ...tr.along_dip_m.map((s, i) => [s, tr.height_m[i]])];
 
-    // Plan: along the dip against across the face.
+    // Plan: along the dip against across the face; columns as points, spanning supports as lines.
     const cols = entries.filter((e) => e.across_m !== null && e.across_m !== undefined);
     const planTables = [[[0, length], [0, 0]]];
     if (cols.length) planTables.push(dedupe(cols.map((e) => e.along_dip_m), cols.map((e) => e.across_m)));
@@ -390,11 +398,11 @@ export function initScene() {
     if (tr) planSeries.push({ label: 'nominal run', values: pj[q++], color: '#1d5fa8' });
     linePlot(plots.plan, {
       x: { label: 'along the dip (m)', values: pj[0] },
-      y: { label: 'across the face (m)' },
+      y: { label: 'across the face (m)', range: [-2, 2] },
       series: planSeries,
+      vlines: marks.filter((m, i) => entries[i].across_m === null || entries[i].across_m === undefined),
       height: 240,
     });
-    if (!cols.length && !tr) plots.plan.append(h('p', { class: 'note' }, 'Every support spans the face; no run path to draw for an ensemble.'));
   }
 
   function renderDistributions(data) {

@@ -571,10 +571,50 @@ async function phoneSection(context) {
   });
 }
 
+/**
+ * A POST /v1/scene answer of api.md's shape, for checking the page's rendering
+ * while the server has no scene route: one entry per requested support, the
+ * lower ones reached more often; values are placeholders, not physics.
+ */
+function sceneFixture(request) {
+  const rows = request.support_rows;
+  const entries = rows
+    ? Array.from({ length: rows.count }, (_, k) => ({ support: k + 1, column_index: 0, along_dip_m: rows.lowest_along_dip_m - k * rows.spacing_m, across_m: rows.across_m?.[0] ?? null }))
+    : request.supports.map((e, k) => ({ support: k + 1, column_index: 0, along_dip_m: e.along_dip_m, across_m: e.across_m }));
+  const summary = (m) => ({ mean: m, std: m / 10, min: m / 2, p05: m * 0.8, p50: m, p95: m * 1.2, p99: m * 1.3, max: m * 1.5 });
+  const base = { plan: [{ stage: 'release', status: 'ran', reason: 'fixture' }], warnings: [], inputs: { ...request, face: { length_m: 120, ...request.face } }, model_version: 'fixture' };
+  if (!request.monte_carlo) {
+    const e = entries[0];
+    return {
+      ...base,
+      migration: { arrival: { stop_reason: 'support', along_dip_m: e.along_dip_m }, trajectory: { along_dip_m: [-2, 0, 60, e.along_dip_m], height_m: [3, 0, 0, 0], position_m: [[0, 0, 0], [0, 0, 0], [40, 0, -40], [80, 0, -80]] } },
+      impacts: [{ ...e, impact_velocity_m_s: 30, impact: {}, column: {}, checks: [{ limit: 'stress_utilisation', value: 2.5, allowed: 1, utilisation: 2.5, exceeded: true }], verdict: 'exceeded' }],
+    };
+  }
+  const runs = request.monte_carlo.runs;
+  const supports = entries.map((e, k) => {
+    const reached = k < 3 ? 0.3 - 0.1 * k : 0;
+    const p = k === 0 ? 0.2 : k === 1 ? 0.005 : 0;
+    return {
+      ...e, reached_fraction: reached, capacity_exceeded_fraction: 0,
+      impact_velocity_m_s: reached ? summary(30) : null, max_deformation_m: reached ? summary(0.002) : null,
+      max_force_n: reached ? summary(1e6) : null, absorbed_energy_j: reached ? summary(100) : null, stress_utilisation: reached ? summary(1.5) : null,
+      exceedance: { stress_utilisation: { probability: p, ci95: [Math.max(0, p - 0.05), p + 0.05] } },
+      verdict: p > request.design_limits.acceptable_probability ? 'exceeded' : 'ok',
+    };
+  });
+  return {
+    ...base,
+    statistics: { runs, seed: request.monte_carlo.seed, outcomes: { support: 0.6, lower_end: 0, at_rest: 0.4, left_floor: 0, end_time: 0 }, supports, any_exceeded: { probability: 0.205, ci95: [0.15, 0.27] } },
+    runs_csv: 'run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s,support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded\n0,1,1,1,1,1,1,support,1,1,0,1,1,1,1,false\n',
+  };
+}
+
 async function sceneSection(page) {
   const status = await endpointStatus('/v1/scene');
-  if (status === 404) {
-    skip('scene', 'the server answers 404 for POST /v1/scene');
+  const real = status !== 404;
+  if (!real) {
+    skip('scene (server)', 'the server answers 404 for POST /v1/scene; the tab is checked against a fixture of api.md\'s shape');
     await check('scene: the first tab says in words that the server lacks the scene route', async () => {
       await open(page);
       assert(await page.locator('#tab-scene').getAttribute('aria-selected') === 'true', 'Scene is not the first tab');
@@ -583,25 +623,43 @@ async function sceneSection(page) {
       await box.waitFor({ state: 'visible', timeout: WAIT_MS });
       assert(/does not offer/.test(await box.textContent()), 'no words for the missing route');
     });
-    return;
+    await page.route('**/v1/scene', async (route) => {
+      const request = JSON.parse(route.request().postData());
+      await route.fulfill({ status: 200, contentType: 'application/json', body: JSON.stringify(sceneFixture(request)) });
+    });
   }
+  const what = real ? '' : ' (fixture)';
 
-  await check('scene: an ensemble over the Table 1 supports shows the per-support chart, table and verdicts', async () => {
+  await check(`scene${what}: the request follows api.md; an ensemble over the Table 1 supports shows chart, table, verdicts, distributions`, async () => {
     await open(page);
     await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
     const response = await submit(page, '#scene-form', '/v1/scene');
+    const body = JSON.parse((await request).postData());
     assert(response.status() === 200, `POST /v1/scene answered ${response.status()}`);
+    assert(body.support_rows?.count === 62 && body.release_zones === 'table1' && body.monte_carlo?.runs === 100 && body.design_limits?.stress_utilisation === 1,
+      `request: ${JSON.stringify(body).slice(0, 300)}`);
+    for (const key of Object.keys(body)) {
+      assert(['face', 'rock', 'release', 'method', 'gravity_m_s2', 'lumped_mass', 'rigid_block', 'monte_carlo', 'contact', 'galerkin', 'column', 'column_model',
+        'supports', 'support_rows', 'impact_velocity_m_s', 'release_zones', 'design_limits', 'compare_methods', 'migration_output', 'column_output'].includes(key), `unknown field ${key}`);
+    }
     await page.locator('#scene-table tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
     await page.locator('#scene-support-plot canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
-    const rows = await page.locator('#scene-table tbody tr').count();
-    assert(rows === 62, `${rows} support rows`);
+    assert(await page.locator('#scene-table tbody tr').count() === 62, `${await page.locator('#scene-table tbody tr').count()} support rows`);
+    const answer = await response.json();
+    const worst = answer.statistics.supports.filter((x) => x.verdict === 'exceeded').length;
+    assert(await page.locator('#scene-table tbody tr.verdict-exceeded').count() === worst, 'exceeded rows differ from the answer');
+    assert(/never reached/.test(await page.locator('#scene-table').textContent()), 'an unreached support is not said so');
+    assert(await page.locator('#scene-dist-table tbody tr').count() === 5, 'no distributions for the chosen support');
     const csv = await downloaded(page, page.locator('#panel-scene .card:has(#scene-table) .export-bar [data-csv]'));
-    assert(csv.bytes.toString('utf8').startsWith('Support,Column'), 'per-support CSV header');
+    assert(csv.bytes.toString('utf8').startsWith('Support,Column,Along the dip'), `per-support CSV: ${csv.bytes.toString('utf8').slice(0, 60)}`);
+    const runs = await downloaded(page, page.locator('[data-csv="scene_runs.csv"]'));
+    assert(runs.bytes.toString('utf8').startsWith('run,'), 'runs CSV header');
   });
 
   await screenshot(page, 'scene.png');
 
-  await check('scene: one click sends a support\'s impact to the Impact tab', async () => {
+  await check(`scene${what}: a single run shows its impact, and one click sends it to the Impact tab`, async () => {
     await page.locator('#scene-form input[name="scene_monte_carlo"]').uncheck();
     await page.locator('#scene-form [data-local="supports"]').selectOption('lower_end');
     await submit(page, '#scene-form', '/v1/scene');
@@ -611,7 +669,10 @@ async function sceneSection(page) {
     await send.click();
     assert((await answer).status() === 200, 'impact of the sent support failed');
     assert(await page.locator('#tab-impact').getAttribute('aria-selected') === 'true', 'Impact tab not shown');
+    await page.locator('[data-out="max_force_n"]').waitFor({ state: 'visible', timeout: WAIT_MS });
   });
+
+  if (!real) await page.unroute('**/v1/scene');
 }
 
 async function studySection(page) {
