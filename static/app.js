@@ -362,7 +362,8 @@ function initCases() {
     const note = document.getElementById('case-link-note');
     try {
       await navigator.clipboard.writeText(link);
-      note.textContent = 'Link copied: opening it fills every form and computes this tab.';
+      note.textContent = 'Link copied: opening it fills every form and computes this tab.' +
+        (document.querySelector('[data-floor-uploaded="true"]') ? ' The uploaded floor is not in it: whoever opens it must upload the same file.' : '');
     } catch {
       note.textContent = `Link (copy it from the address bar): ${link}`;
     }

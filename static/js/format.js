@@ -107,6 +107,8 @@ export function showWarnings(el, warnings, heading = 'Warnings') {
 
 /** Server text with exponent notation ("2.335413e0") shown as people write numbers. */
 export function humanMessage(text) {
+  const unknown = /^unknown field `([^`]+)`/.exec(String(text ?? ''));
+  if (unknown) return `this server does not accept "${unknown[1]}" yet (the page is newer than the server)`;
   return String(text ?? '').replace(/(-?\d+(?:\.\d+)?)e([+-]?\d+)/g, (_, m, e) => fmt(Number(`${m}e${e}`), 5));
 }
 

@@ -2,6 +2,7 @@
 // rigid block (DEM): one trajectory, or a seeded Monte Carlo ensemble streamed
 // with progress.
 
+import { initFloor } from './floor.js';
 import { buildForm } from './form.js';
 import { csvButton, fillTable, fmt, h, showWarnings } from './format.js';
 import { initPanel } from './panel.js';
@@ -142,6 +143,8 @@ export function initMigration() {
     energy: document.getElementById('migration-energy-plot'),
   };
   buildForm(form, MIGRATION_GROUPS);
+  const floor = initFloor(form);
+  form.floor = floor;
   const sideNote = document.getElementById('migration-side-note');
   let runsCsv = null;
   percentilesCard.append(csvButton('migration_runs.csv', () => {
@@ -197,6 +200,7 @@ export function initMigration() {
     unit: 'runs',
     build: ([own]) => {
       const request = own.request;
+      floor.apply(request, own.local);
       const rigid = request.method === 'rigid_block';
       const mc = request.monte_carlo;
       if (mc && rigid) {
@@ -239,6 +243,7 @@ export function initMigration() {
     runsCsv = data.runs_csv ?? null;
     renderStatistics(data.statistics);
     renderTrajectory(data.trajectory, data);
+    floor.showPath(data);
   }
 
   function renderStatistics(stats) {

@@ -43,7 +43,7 @@ export function initPanel(opts) {
     if (bad.length) {
       opts.clear();
       showProblem(status, {
-        errors: bad.map(({ el, message }) => ({ field: el.dataset.pointer, message })),
+        errors: bad.map(({ el, message }) => ({ field: el.dataset.pointer ?? el.dataset.target, message })),
       }, { forms, endpoint: `POST /${opts.endpoint}` });
       status.dataset.local = 'true';
       return null;

@@ -139,6 +139,7 @@ export function initScene() {
       }, { rock: imp.request.rock, column: imp.request.column, contact: imp.request.contact });
       request.galerkin = { ...(col.request.galerkin ?? {}) };
       request.column = { ...request.column, ...(col.request.column ?? {}) };
+      migrationForm.floor?.apply(request, mig.local);
       const own2 = structuredClone(own.request);
       if (own.local.supports === 'rows') {
         const rows = own2.support_rows ?? {};
