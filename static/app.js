@@ -432,7 +432,7 @@ function updatePrintHeader() {
     h('h1', {}, 'gangue calculation report'),
     h('p', {}, `Printed ${new Date().toISOString().slice(0, 16).replace('T', ' ')} UTC · model_version ${modelVersion || 'unknown'} · ${settings} settings`),
     h('p', {}, Object.values(caseParts()).join(' · ')),
-    h('p', {}, `Link to this case: ${linkFor(caseState(currentTab()))}`),
+    h('p', {}, 'The inputs are the form below; verdicts, warnings and results follow it.'),
   );
 }
 

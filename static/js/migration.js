@@ -315,7 +315,7 @@ export function initMigration() {
     const xs = tr.position_m.map((p) => p[0]);
     const ys = tr.position_m.map((p) => p[1]);
     linePlot(plots.plan, {
-      x: { label: 'x: horizontal distance in the dip direction (m), plan projection', values: xs, range: range(xs) },
+      x: { label: 'x, horizontal in the dip direction (m)', values: xs, range: range(xs) },
       y: { label: 'y: across the face (m)', range: range(ys, 1) },
       series: [{ label: 'path', values: ys }],
     });

@@ -581,6 +581,7 @@ async function caseSection(page, context) {
     assert(/model_version \d/.test(header) && /Rock/.test(header), `print header: ${header}`);
     assert(await page.locator('#migration-form').isVisible(), 'the inputs are not printed');
     assert(!(await page.locator('.tabs').isVisible()), 'the tabs are printed');
+    await noHorizontalScroll(page, 'the printed report');
     await screenshot(page, 'print.png');
     await page.emulateMedia({ media: 'screen' });
   });
