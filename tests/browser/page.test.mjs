@@ -186,22 +186,28 @@ async function pageSection(page) {
   });
 
   await check('page: no select option is clipped by its box', async () => {
-    const clipped = await page.evaluate(() => {
-      const out = [];
-      const ctx = document.createElement('canvas').getContext('2d');
-      for (const tab of document.querySelectorAll('[role="tab"]')) {
-        tab.click();
-        for (const sel of document.querySelectorAll('.case-form select')) {
-          if (!sel.offsetParent) continue;
-          ctx.font = getComputedStyle(sel).font;
-          const widest = Math.max(...[...sel.options].map((o) => ctx.measureText(o.text).width));
-          if (widest + 34 > sel.clientWidth) out.push(`${sel.dataset.pointer ?? sel.dataset.local ?? sel.name}: ${Math.round(widest)} px text in ${sel.clientWidth} px`);
-        }
-      }
-      document.getElementById('tab-impact').click();
-      return out;
-    });
+    const clipped = await clippedSelects(page);
     assert(clipped.length === 0, clipped.join('; '));
+  });
+}
+
+/** Selects (on every tab) whose widest option does not fit their box. */
+async function clippedSelects(page) {
+  return page.evaluate(() => {
+    const out = [];
+    const ctx = document.createElement('canvas').getContext('2d');
+    const was = document.querySelector('[role="tab"][aria-selected="true"]');
+    for (const tab of document.querySelectorAll('[role="tab"]')) {
+      tab.click();
+      for (const sel of document.querySelectorAll('.case-form select')) {
+        if (!sel.offsetParent) continue;
+        ctx.font = getComputedStyle(sel).font;
+        const widest = Math.max(...[...sel.options].map((o) => ctx.measureText(o.text).width));
+        if (widest + 34 > sel.clientWidth) out.push(`${tab.dataset.tab} ${sel.dataset.pointer ?? sel.dataset.local ?? sel.name}: ${Math.round(widest)} px text in ${sel.clientWidth} px`);
+      }
+    }
+    was?.click();
+    return out;
   });
 }
 
@@ -486,6 +492,17 @@ async function migrationSection(page) {
   });
 
   await screenshot(page, 'migration-ensemble.png');
+
+  await check('migration: Cancel stops a long ensemble, says so and shows no partial result', async () => {
+    await field(page, form, '/monte_carlo/runs').fill('200000');
+    await page.locator(`${form} button[type="submit"]`).click();
+    await page.locator('#migration-progress').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await page.locator('#migration-cancel').click();
+    await page.waitForFunction(() => /Cancelled/.test(document.getElementById('migration-status').textContent), null, { timeout: WAIT_MS });
+    assert(await page.locator('#migration-progress').isHidden(), 'the progress bar stays');
+    assert(await page.locator('[data-out="statistics.speed_m_s.mean"]').count() === 0, 'the old ensemble is still shown');
+    await field(page, form, '/monte_carlo/runs').fill('200');
+  });
 }
 
 async function floorSection(page) {
@@ -615,6 +632,8 @@ async function phoneSection(context) {
       await page.locator(`#tab-${tab}`).click();
       await noHorizontalScroll(page, tab);
     }
+    const clipped = await clippedSelects(page);
+    assert(clipped.length === 0, `at 390 px: ${clipped.join('; ')}`);
     await page.close();
   });
 }
