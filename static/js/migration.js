@@ -284,10 +284,12 @@ export function initMigration() {
     for (const [key, label, unit, scale] of STATS) {
       const s = stats[key];
       if (!s) continue;
+      // A spread below 1e-12 of the values themselves is rounding noise (a run-out of exactly the face length).
+      const noise = Math.max(Math.abs(s.mean ?? 0), Math.abs(s.max ?? 0), Math.abs(s.min ?? 0)) * scale;
       body.append(h('tr', {},
         h('th', { scope: 'row' }, label),
         STAT_COLUMNS.map((c) => h('td', { class: 'num', dataset: { out: `statistics.${key}.${c}` } },
-          fmt(s[c] === null || s[c] === undefined ? s[c] : s[c] * scale, 5))),
+          fmt(s[c] === null || s[c] === undefined ? s[c] : s[c] * scale, 5, noise))),
         h('td', { class: 'unit' }, unit)));
     }
   }

@@ -421,7 +421,8 @@ export function initScene() {
         const s = e[key];
         if (!s) return h('tr', {}, h('th', { scope: 'row' }, words), h('td', { colspan: STAT_COLUMNS.length + 1 }, 'never reached within capacity: no distribution'));
         return h('tr', {}, h('th', { scope: 'row' }, words),
-          STAT_COLUMNS.map((c) => h('td', { class: 'num' }, fmt(s[c] === null || s[c] === undefined ? s[c] : s[c] * scale, 4))),
+          STAT_COLUMNS.map((c) => h('td', { class: 'num' }, fmt(s[c] === null || s[c] === undefined ? s[c] : s[c] * scale, 4,
+            Math.max(Math.abs(s.mean ?? 0), Math.abs(s.max ?? 0)) * scale))),
           h('td', { class: 'unit' }, unit));
       })),
     );

@@ -480,6 +480,8 @@ async function migrationSection(page) {
       `mean arrival speed ${mean}, expected ${EXPECTED.ensembleMeanSpeed} ± ${tolerance.toFixed(3)}`);
     await page.locator('#migration-histogram canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
     assert(/Nominal run/.test(await page.locator('#migration-table-title').textContent()), 'arrival table not labelled nominal');
+    const spread = await page.locator('[data-out="statistics.runout_m.std"]').textContent();
+    assert(!/× 10⁻1[0-9]/.test(spread), `run-out spread shows float noise: ${spread}`);
   });
 
   await check('migration: the percentiles and every run download as CSV with their headers', async () => {
