@@ -22,8 +22,8 @@ const SCENE_GROUPS = [
       { pointer: '/support_rows/spacing_m', label: 'Spacing', unit: 'm', value: 1.5 },
       { pointer: '/support_rows/count', label: 'Number of supports', kind: 'integer', value: 62 },
       {
-        local: 'across', label: 'Column position across the face', unit: 'm', value: '', placeholder: 'spans',
-        hint: 'empty: each support spans the face; a value: one column there (a rock can pass beside it)',
+        local: 'across', label: 'Column position across the face', unit: 'm', value: 0.9,
+        hint: 'one column of each support stands there (api.md default 0.9 m); a rock can pass beside it',
       },
     ],
   },
@@ -59,6 +59,11 @@ const SCENE_GROUPS = [
     fields: [
       { pointer: '/monte_carlo/runs', label: 'Runs', kind: 'integer', value: 200 },
       { pointer: '/monte_carlo/seed', label: 'Seed', kind: 'integer', value: 42 },
+      { pointer: '/monte_carlo/release_across_m/min', label: 'Release across the face, from', unit: 'm', value: 0 },
+      {
+        pointer: '/monte_carlo/release_across_m/max', label: 'to', unit: 'm', value: 1.8,
+        hint: 'uniform; where along the strike the rock leaves the wall (an assumed range: set your face\'s)',
+      },
       { local: 'vary_rock', label: 'Vary size 0.2–0.3 m and density 2000–3000 kg/m³', kind: 'checkbox', value: false },
     ],
   },
@@ -98,6 +103,7 @@ export function initScene() {
   const table = document.getElementById('scene-table');
   const distSelect = document.getElementById('scene-dist-support');
   const distTable = document.getElementById('scene-dist-table');
+  const distPlot = document.getElementById('scene-dist-plot');
   const planList = document.getElementById('scene-plan');
   const plots = {
     side: document.getElementById('scene-side-plot'),
@@ -112,7 +118,6 @@ export function initScene() {
   const rowFields = ['/support_rows/lowest_along_dip_m', '/support_rows/spacing_m', '/support_rows/count']
     .map((p) => form.querySelector(`[data-pointer="${p}"]`));
   const across = form.querySelector('[data-local="across"]');
-  across.dataset.optional = 'true';
   const kind = form.querySelector('[data-local="supports"]');
   const syncSupports = () => {
     for (const el of [...rowFields, across]) el.disabled = kind.value !== 'rows';
@@ -143,8 +148,7 @@ export function initScene() {
       const own2 = structuredClone(own.request);
       if (own.local.supports === 'rows') {
         const rows = own2.support_rows ?? {};
-        rows.across_m = own.local.across === undefined ? [null] : [own.local.across];
-        if (rows.across_m[0] === null) delete rows.across_m;
+        rows.across_m = [own.local.across];
         own2.support_rows = rows;
       } else {
         delete own2.support_rows;
@@ -155,6 +159,7 @@ export function initScene() {
       else if (request.galerkin.mode_shapes && request.galerkin.mode_shapes !== 'exact') delete request.galerkin.mode_shapes;
       if (request.monte_carlo) {
         if (own.local.release_zones === 'table1') request.release_zones = 'table1';
+        if (request.monte_carlo.release_across_m) request.monte_carlo.release_across_m = { distribution: 'uniform', ...request.monte_carlo.release_across_m };
         if (own.local.vary_rock) {
           request.monte_carlo.side_length_m = { distribution: 'uniform', min: 0.2, max: 0.3 };
           request.monte_carlo.density_kg_m3 = { distribution: 'uniform', min: 2000, max: 3000 };
@@ -410,7 +415,22 @@ export function initScene() {
     const entries = supportEntries(data);
     const e = entries[Number(distSelect.value)];
     distTable.replaceChildren();
+    destroy(distPlot);
     if (!e) return;
+    const hist = e.impact_velocity_m_s?.histogram;
+    if (hist?.counts?.length) {
+      const centres = hist.counts.map((_, i) => (hist.edges[i] + hist.edges[i + 1]) / 2);
+      const lo = hist.edges[0];
+      const hi = hist.edges[hist.edges.length - 1];
+      const pad = hi > lo ? 0 : Math.max(Math.abs(lo) * 1e-3, 1e-3);
+      linePlot(distPlot, {
+        x: { label: `impact speed at ${label(e)} (m/s)`, values: centres, range: [lo - pad, hi + pad] },
+        y: { label: 'runs', range: [0, Math.max(...hist.counts) * 1.1 || 1] },
+        series: [{ label: 'runs', values: hist.counts, bars: true }],
+        height: 200,
+      });
+      distPlot.csv = () => [['edge_low_m_s', 'edge_high_m_s', 'runs'], ...hist.counts.map((c, i) => [hist.edges[i], hist.edges[i + 1], c])];
+    }
     if (e.single) {
       distTable.append(h('tbody', {}, h('tr', {}, h('td', {}, 'A single run has no distributions: switch on the Monte Carlo ensemble.'))));
       return;
