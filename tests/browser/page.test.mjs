@@ -185,6 +185,20 @@ async function pageSection(page) {
     assert(/primary solid [1-9]/.test(outline), `focused main button outline: ${outline}`);
   });
 
+  await check('page: keyboard only: arrow keys move between tabs, Enter in a field computes', async () => {
+    await page.locator('#tab-impact').focus();
+    await page.keyboard.press('ArrowRight');
+    assert(await page.locator('#tab-column').getAttribute('aria-selected') === 'true', 'ArrowRight did not select Column');
+    await page.keyboard.press('ArrowLeft');
+    assert(await page.locator('#tab-impact').getAttribute('aria-selected') === 'true', 'ArrowLeft did not return to Impact');
+    await field(page, '#impact-form', '/velocity_m_s').focus();
+    await page.keyboard.press('Control+A');
+    await page.keyboard.type('6');
+    const answer = page.waitForResponse((r) => r.url().endsWith('/v1/impact'), { timeout: WAIT_MS });
+    await page.keyboard.press('Enter');
+    assert((await answer).status() === 200, 'Enter did not compute');
+  });
+
   await check('page: no select option is clipped by its box', async () => {
     const clipped = await clippedSelects(page);
     assert(clipped.length === 0, clipped.join('; '));
