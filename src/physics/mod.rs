@@ -15,6 +15,7 @@ pub mod material;
 pub mod migration;
 pub mod ode;
 pub mod quadrature;
+pub mod scene;
 pub mod spalling;
 pub mod stats_interval;
 pub mod study;

@@ -16,7 +16,7 @@ pub enum BatchKind {
     Column,
     /// `POST /v1/migration`.
     Migration,
-    /// `POST /v1/scene` (answered with a problem line while that endpoint is not built).
+    /// `POST /v1/scene`.
     Scene,
     /// `POST /v1/study`.
     Study,

@@ -339,7 +339,7 @@ impl DistributionDto {
     }
 
     /// Checks the fields the kind needs (bounds within [lo, hi]) and converts.
-    fn resolve(&self, base: &str, lo: f64, hi: f64, ck: &mut Checker) -> Distribution {
+    pub(crate) fn resolve(&self, base: &str, lo: f64, hi: f64, ck: &mut Checker) -> Distribution {
         let p = |f: &str| format!("{base}/{f}");
         let need = |v: Option<f64>, f: &str, ck: &mut Checker| -> f64 {
             match v {
@@ -1011,7 +1011,7 @@ impl MigrationRequest {
 pub struct ArrivalDto {
     /// Motion at the end: flight, slide, roll or stopped.
     pub phase: String,
-    /// Why the run ended: lower_end, at_rest, end_time or left_floor.
+    /// Why the run ended: lower_end, at_rest, end_time or left_floor (in a scene also support).
     pub stop_reason: String,
     /// Time since release, s.
     pub time_s: f64,
@@ -1168,6 +1168,9 @@ pub struct StatisticsDto {
     pub reached_fraction: f64,
     /// Arrival speed over the runs that reached the lower end (null if none did), m/s.
     pub speed_m_s: Option<SummaryDto>,
+    /// Arrival down-dip velocity over the runs that reached the lower end (null if none did),
+    /// m/s.
+    pub along_dip_velocity_m_s: Option<SummaryDto>,
     /// Arrival kinetic energy over the runs that reached the lower end, J.
     pub kinetic_energy_j: Option<SummaryDto>,
     /// Arrival time over the runs that reached the lower end, s.
@@ -1380,6 +1383,7 @@ impl MigrationResponse {
                 seed: s.seed,
                 reached_fraction: s.reached_fraction,
                 speed_m_s: s.speed.as_ref().map(Into::into),
+                along_dip_velocity_m_s: s.along_dip_velocity.as_ref().map(Into::into),
                 kinetic_energy_j: s.kinetic_energy.as_ref().map(Into::into),
                 time_s: s.time.as_ref().map(Into::into),
                 impact_count: (&s.impact_count).into(),

@@ -6,6 +6,7 @@ pub mod column;
 pub mod common;
 pub mod impact;
 pub mod migration;
+pub mod scene;
 pub mod spalling;
 pub mod study;
 

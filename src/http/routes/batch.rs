@@ -21,11 +21,12 @@ use crate::http::dto::batch::{BatchKind, check_item, json_items, ndjson_items};
 use crate::http::dto::column::ColumnRequest;
 use crate::http::dto::impact::ImpactRequest;
 use crate::http::dto::migration::MigrationRequest;
+use crate::http::dto::scene::SceneRequest;
 use crate::http::dto::spalling::SpallingRequest;
 use crate::http::dto::study::StudyRequest;
 use crate::http::error::ApiError;
 use crate::http::json::{from_value, is_json, parse_json, read_body};
-use crate::http::routes::{column, impact, migration, spalling, study};
+use crate::http::routes::{column, impact, migration, scene, spalling, study};
 use crate::http::runner::{AppState, NDJSON, run_solver_without_deadline, to_json_bytes};
 use crate::physics::Control;
 
@@ -268,10 +269,10 @@ fn run_item(
             let req: StudyRequest = from_value(&item.request).map_err(nest)?;
             to_json_bytes(&study::solve(config, req, control).map_err(nest)?)
         }
-        BatchKind::Scene => Err(ApiError::invalid(
-            format!("/items/{index}/kind"),
-            serde_json::json!("scene"),
-            "POST /v1/scene is not available in this version of the service",
-        )),
+        BatchKind::Scene => {
+            let mut req: SceneRequest = from_value(&item.request).map_err(nest)?;
+            let (case, ctx) = req.resolve(config).map_err(nest)?;
+            to_json_bytes(&scene::solve(&case, ctx, req, control).map_err(nest)?)
+        }
     }
 }

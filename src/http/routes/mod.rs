@@ -6,5 +6,6 @@ pub mod column;
 pub mod impact;
 pub mod meta;
 pub mod migration;
+pub mod scene;
 pub mod spalling;
 pub mod study;

@@ -62,6 +62,8 @@ pub enum StopReason {
     EndTime,
     /// The rock left the floor's extent.
     LeftFloor,
+    /// The rock reached a support (api.md `POST /v1/scene`).
+    Support,
 }
 
 /// Kind of a recorded event.
@@ -126,6 +128,11 @@ pub(crate) struct Setup<'a> {
     pub(crate) v_stop: f64,
     pub(crate) radius: f64,
     pub(crate) length: f64,
+    /// The spanning support standing at `length`, if the run ends there rather than at the face's
+    /// lower end.
+    pub(crate) span_support: Option<usize>,
+    /// Supports of a scene; columns among them are checked along every piece.
+    pub(crate) supports: &'a [super::SupportStop],
     pub(crate) end_time: Option<f64>,
     pub(crate) max_steps: u64,
     /// Release point (lifted), velocity and, for a release on the floor, its facet.
@@ -160,6 +167,8 @@ pub(crate) struct RunOut {
     pub(crate) undecelerated: bool,
     /// True when a bounce series was ended by [`MIN_REBOUND`] rather than by the stop speed.
     pub(crate) rebound_cutoff: bool,
+    /// The support reached, when the run ended there.
+    pub(crate) support: Option<usize>,
 }
 
 struct St {
@@ -579,6 +588,15 @@ pub(crate) fn simulate(
     let mut still_at = s.p;
     let mut caught = 0u32;
     let mut p_last = s.p;
+    let has_columns = su.supports.iter().any(|c| c.across.is_some());
+    let column_reach = |s: &St, v: &Vector3<f64>, a: &Vector3<f64>, dt: f64| {
+        if has_columns {
+            super::first_column_reach(&mean, su.supports, &s.p, v, a, dt)
+        } else {
+            None
+        }
+    };
+    let mut hit: Option<usize> = None;
     let (phase, reason) = loop {
         steps += 1;
         if steps.is_multiple_of(4096)
@@ -714,6 +732,9 @@ pub(crate) fn simulate(
                     FlightEnd::Hit { t, .. } | FlightEnd::Leaves { t } => t,
                     FlightEnd::Clear => past_end.map_or(t_lim, |t| t.min(t_lim)),
                 };
+                // a column reached inside the flight ends it there
+                let col = column_reach(&s, &s.v, &gv, dt);
+                let dt = col.map_or(dt, |c| c.0);
                 let p_start = s.p;
                 if let Some(r) = rec.as_deref_mut() {
                     r.segments.push(Segment {
@@ -737,6 +758,10 @@ pub(crate) fn simulate(
                     && s.t >= t_apex
                 {
                     s.max_bounce = s.max_bounce.max(h);
+                }
+                if let Some((_, k)) = col {
+                    hit = Some(k);
+                    break (Phase::Flight, StopReason::Support);
                 }
                 match end {
                     FlightEnd::Leaves { .. } => break (Phase::Flight, StopReason::LeftFloor),
@@ -841,8 +866,13 @@ pub(crate) fn simulate(
                     .into_iter()
                     .chain(super::terrain::outward_root(-u0, -ve, -ae))
                     .fold(f64::INFINITY, f64::min);
-                let at_vertex = t_end_edge <= t_max;
-                let dt = if at_vertex { t_end_edge } else { t_max };
+                let mut at_vertex = t_end_edge <= t_max;
+                let mut dt = if at_vertex { t_end_edge } else { t_max };
+                let col = column_reach(&s, &(c.e * ve), &(c.e * ae), dt);
+                if let Some((tc, _)) = col {
+                    dt = tc;
+                    at_vertex = false;
+                }
                 let du = ve * dt + 0.5 * ae * dt * dt;
                 s.undecelerated = ae * ve >= 0.0;
                 if let Some(r) = rec.as_deref_mut() {
@@ -865,6 +895,10 @@ pub(crate) fn simulate(
                 s.t += dt;
                 if !roll {
                     s.e_fric += dir * mu * c.n_tot * du;
+                }
+                if let Some((_, k)) = col {
+                    hit = Some(k);
+                    break (moving, StopReason::Support);
                 }
                 if at_vertex {
                     s.crease = None;
@@ -942,8 +976,13 @@ pub(crate) fn simulate(
                     s.undecelerated = a.dot(&s.v) >= 0.0;
                 }
                 t_max = t_max.min(stop_at).min(turn_at);
-                let exit = floor.slide_exit(f, &s.p, &s.v, &a, t_max);
-                let dt = exit.map_or(t_max, |e| e.0);
+                let mut exit = floor.slide_exit(f, &s.p, &s.v, &a, t_max);
+                let mut dt = exit.map_or(t_max, |e| e.0);
+                let col = column_reach(&s, &s.v, &a, dt);
+                if let Some((tc, _)) = col {
+                    dt = tc;
+                    exit = None;
+                }
                 let fric = fdir * (mu * gn);
                 if let Some(r) = rec.as_deref_mut() {
                     r.segments.push(Segment {
@@ -970,6 +1009,10 @@ pub(crate) fn simulate(
                     zero_steps += 1;
                 } else {
                     zero_steps = 0;
+                }
+                if let Some((_, k)) = col {
+                    hit = Some(k);
+                    break (moving, StopReason::Support);
                 }
                 if let Some((_, next, edge)) = exit {
                     let Some(fb) = next else {
@@ -1043,6 +1086,14 @@ pub(crate) fn simulate(
     // invariant: the state the run ends in is above the floor too (the last piece is not
     // checked inside the loop)
     check_above_floor(floor, &s.p, s.t)?;
+    // the lower end of this run is a spanning support's position when one stands there
+    let reason = match (reason, su.span_support) {
+        (StopReason::LowerEnd, Some(k)) => {
+            hit = Some(k);
+            StopReason::Support
+        }
+        (r, _) => r,
+    };
     let stopped = phase == Phase::Stopped;
     if stopped {
         push_event(
@@ -1083,5 +1134,6 @@ pub(crate) fn simulate(
         undecelerated: !stopped && s.ground.is_some() && s.undecelerated,
         rebound_cutoff: s.rebound_cutoff,
         steps,
+        support: hit,
     })
 }

@@ -222,6 +222,179 @@ pub struct MigrationCase {
     pub output: OutputOptions,
     /// Largest number of events (flights, impacts, slide pieces) per run (default 1e7).
     pub max_steps_per_run: u64,
+    /// Supports that end a run when reached (api.md `POST /v1/scene`; default none).
+    pub supports: Vec<SupportStop>,
+}
+
+/// A support that ends a run when the rock reaches it (api.md `POST /v1/scene`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SupportStop {
+    /// Along-dip position in the mean plane, m.
+    pub along_dip: f64,
+    /// Across position y of a column's axis in the mean plane, m (None: spans the face).
+    pub across: Option<f64>,
+    /// Column: distance from the axis at which the rock reaches it (outer radius + the rock's
+    /// bounding radius), m.
+    pub reach: f64,
+}
+
+impl MigrationCase {
+    /// Along-dip position where a run ends at the latest (the face length, or the nearest
+    /// spanning support at or below the release), m, and that support's index.
+    pub fn stop_length(&self) -> (f64, Option<usize>) {
+        let mut best = (self.face.length, None);
+        for (i, s) in self.supports.iter().enumerate() {
+            if s.across.is_none()
+                && s.along_dip >= self.release.along_dip
+                && (s.along_dip < best.0 || (s.along_dip == best.0 && best.1.is_none()))
+            {
+                best = (s.along_dip, Some(i));
+            }
+        }
+        best
+    }
+}
+
+/// Impact speed at a support, m/s: spanning, the down-dip velocity; a column, the velocity in the
+/// mean plane towards its axis (positive when approaching).
+pub(crate) fn support_impact_speed(
+    mean: &terrain::MeanPlane,
+    stop: &SupportStop,
+    p: &Vector3<f64>,
+    v: &Vector3<f64>,
+) -> f64 {
+    let vu = v.dot(&mean.dip_dir());
+    match stop.across {
+        None => vu,
+        Some(y) => {
+            let (du, dw) = (stop.along_dip - mean.along(p), y - p.y);
+            let d = du.hypot(dw);
+            if d > 0.0 {
+                (vu * du + v.y * dw) / d
+            } else {
+                vu.hypot(v.y)
+            }
+        }
+    }
+}
+
+/// First time τ in [0, dt] at which a piece p(τ) = p + v τ + ½ a τ² reaches one of the columns
+/// (distance in the mean plane from its axis ≤ its reach), and that column's index.
+pub(crate) fn first_column_reach(
+    mean: &terrain::MeanPlane,
+    supports: &[SupportStop],
+    p: &Vector3<f64>,
+    v: &Vector3<f64>,
+    a: &Vector3<f64>,
+    dt: f64,
+) -> Option<(f64, usize)> {
+    let dip = mean.dip_dir();
+    let (u0, vu, au) = (mean.along(p), v.dot(&dip), a.dot(&dip));
+    let mut best: Option<(f64, usize)> = None;
+    for (k, s) in supports.iter().enumerate() {
+        let Some(y) = s.across else { continue };
+        let (cu, cw) = (u0 - s.along_dip, p.y - y);
+        let (bu, bw) = (vu, v.y);
+        let (qu, qw) = (0.5 * au, 0.5 * a.y);
+        let horizon = best.map_or(dt, |b| b.0);
+        // quick rejection: the piece cannot come within reach before `horizon`
+        let near =
+            cu.hypot(cw) - (bu.hypot(bw) * horizon + qu.hypot(qw) * horizon * horizon) - s.reach;
+        if near > 1e-9 * (1.0 + cu.hypot(cw)) {
+            continue;
+        }
+        // |C + B τ + Q τ²|² − R², a quartic in τ (ascending coefficients)
+        let r2 = s.reach * s.reach;
+        let c = [
+            cu * cu + cw * cw - r2,
+            2.0 * (bu * cu + bw * cw),
+            bu * bu + bw * bw + 2.0 * (qu * cu + qw * cw),
+            2.0 * (qu * bu + qw * bw),
+            qu * qu + qw * qw,
+        ];
+        if let Some(t) = first_root_nonpositive(&c, horizon)
+            && best.is_none_or(|b| t < b.0)
+        {
+            best = Some((t, k));
+        }
+    }
+    best
+}
+
+fn poly_eval(c: &[f64], t: f64) -> f64 {
+    c.iter().rev().fold(0.0, |acc, &x| acc * t + x)
+}
+
+/// Real roots of the polynomial `c` (ascending coefficients) in (lo, hi), sorted, found by
+/// isolating them between the roots of its derivative (monotone pieces) and bisecting.
+fn poly_roots(c: &[f64], lo: f64, hi: f64) -> Vec<f64> {
+    if c.len() < 2 {
+        return Vec::new();
+    }
+    let d: Vec<f64> = c
+        .iter()
+        .enumerate()
+        .skip(1)
+        .map(|(i, &x)| x * i as f64)
+        .collect();
+    let mut pts = vec![lo];
+    pts.extend(poly_roots(&d, lo, hi));
+    pts.push(hi);
+    let mut out = Vec::new();
+    for w in pts.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let (fa, fb) = (poly_eval(c, a), poly_eval(c, b));
+        if fa == 0.0 && a > lo {
+            out.push(a);
+        } else if (fa < 0.0) != (fb < 0.0) && fb != 0.0 {
+            out.push(bisect(c, a, b, fa));
+        }
+    }
+    out
+}
+
+/// Bisection on a monotone piece [a, b] with f(a) of sign `fa`: the smallest point found where
+/// the sign has changed.
+fn bisect(c: &[f64], mut a: f64, mut b: f64, fa: f64) -> f64 {
+    for _ in 0..200 {
+        let m = 0.5 * (a + b);
+        if m <= a || m >= b {
+            break;
+        }
+        let fm = poly_eval(c, m);
+        if (fm < 0.0) == (fa < 0.0) && fm != 0.0 {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    b
+}
+
+/// First τ in [0, t1] where the polynomial `c` is ≤ 0, if any.
+pub(crate) fn first_root_nonpositive(c: &[f64], t1: f64) -> Option<f64> {
+    if poly_eval(c, 0.0) <= 0.0 {
+        return Some(0.0);
+    }
+    if t1.is_nan() || t1 <= 0.0 {
+        return None;
+    }
+    let d: Vec<f64> = c
+        .iter()
+        .enumerate()
+        .skip(1)
+        .map(|(i, &x)| x * i as f64)
+        .collect();
+    let mut pts = vec![0.0];
+    pts.extend(poly_roots(&d, 0.0, t1));
+    pts.push(t1);
+    for w in pts.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        if poly_eval(c, b) <= 0.0 {
+            return Some(bisect(c, a, b, poly_eval(c, a)));
+        }
+    }
+    None
 }
 
 impl Default for MigrationCase {
@@ -238,6 +411,7 @@ impl Default for MigrationCase {
             monte_carlo: None,
             output: OutputOptions::default(),
             max_steps_per_run: 10_000_000,
+            supports: Vec::new(),
         }
     }
 }
@@ -269,6 +443,10 @@ pub struct Arrival {
     pub kinetic_energy: f64,
     /// Rotational kinetic energy, J.
     pub rotational_energy: f64,
+    /// The support reached (index into [`MigrationCase::supports`]) when the run ended there.
+    pub support: Option<usize>,
+    /// Speed towards the support reached, m/s (see [`SupportStop`]).
+    pub impact_speed: Option<f64>,
 }
 
 /// Energy budget of the nominal run, J.
@@ -359,6 +537,12 @@ pub struct RunSummary {
     pub stop_reason: StopReason,
     /// Closed-form pieces the run took (flights, slide pieces, edge crossings).
     pub steps: u64,
+    /// Velocity along the mean plane's down-dip direction at the end, m/s.
+    pub along_dip_velocity: f64,
+    /// The support reached (index into [`MigrationCase::supports`]), if the run ended there.
+    pub support: Option<usize>,
+    /// Speed towards the support reached, m/s (0 when none was).
+    pub impact_speed: f64,
 }
 
 /// Ensemble statistics (api.md `statistics`).
@@ -372,6 +556,8 @@ pub struct Statistics {
     pub reached_fraction: f64,
     /// Arrival speed over the runs that reached the lower end, m/s (None if none did).
     pub speed: Option<Summary>,
+    /// Arrival down-dip velocity over the runs that reached the lower end, m/s.
+    pub along_dip_velocity: Option<Summary>,
     /// Arrival kinetic energy over the runs that reached the lower end, J.
     pub kinetic_energy: Option<Summary>,
     /// Arrival time over the runs that reached the lower end, s.
@@ -436,6 +622,7 @@ pub fn stop_reason_name(r: StopReason) -> &'static str {
         StopReason::AtRest => "at_rest",
         StopReason::EndTime => "end_time",
         StopReason::LeftFloor => "left_floor",
+        StopReason::Support => "support",
     }
 }
 
@@ -443,18 +630,19 @@ pub fn stop_reason_name(r: StopReason) -> &'static str {
 /// numbered from 0 (the run index of the random stream).
 pub fn runs_csv(runs: &[RunSummary]) -> String {
     let mut s = String::from(
-        "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason\n",
+        "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s\n",
     );
     for (i, r) in runs.iter().enumerate() {
         s.push_str(&format!(
-            "{i},{},{},{},{},{},{},{}\n",
+            "{i},{},{},{},{},{},{},{},{}\n",
             r.time,
             r.speed,
             r.kinetic_energy,
             r.impact_count,
             r.runout,
             r.max_bounce_height,
-            stop_reason_name(r.stop_reason)
+            stop_reason_name(r.stop_reason),
+            r.along_dip_velocity
         ));
     }
     s
@@ -606,14 +794,16 @@ fn roll_radius(rock: &Rock) -> f64 {
     }
 }
 
-fn setup<'a>(case: &MigrationCase, pr: &'a Prepared) -> Setup<'a> {
+fn setup<'a>(case: &'a MigrationCase, pr: &'a Prepared) -> Setup<'a> {
     Setup {
         floor: &pr.floor,
         g: pr.g,
         motion: case.lumped_mass.motion,
         v_stop: case.lumped_mass.stop_normal_speed,
         radius: roll_radius(&case.rock),
-        length: case.face.length,
+        length: case.stop_length().0,
+        span_support: case.stop_length().1,
+        supports: &case.supports,
         end_time: case.end_time,
         max_steps: case.max_steps_per_run,
         p0: pr.p0,
@@ -695,7 +885,7 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
     } else {
         None
     };
-    let arrival = arrival_of(&pr, &out);
+    let arrival = arrival_of(case, &pr, &out);
     let (imp, fric, trans) = (out.e_imp * m, out.e_fric * m, out.e_trans * m);
     let pe = m * pr.g * (out.p.z - pr.z_end);
     let total_start = m * pr.e0;
@@ -793,7 +983,7 @@ fn height_above_floor(floor: &Floor, p: &Vector3<f64>, v: &Vector3<f64>) -> f64 
     })
 }
 
-fn arrival_of(pr: &Prepared, out: &RunOut) -> Arrival {
+fn arrival_of(case: &MigrationCase, pr: &Prepared, out: &RunOut) -> Arrival {
     let m = pr.mass;
     let mean = pr.floor.mean;
     let ke = 0.5 * m * out.v.norm_squared() + m * out.e_rot;
@@ -815,6 +1005,10 @@ fn arrival_of(pr: &Prepared, out: &RunOut) -> Arrival {
         angular_speed: robust_norm(&out.omega),
         kinetic_energy: ke,
         rotational_energy: m * out.e_rot,
+        support: out.support,
+        impact_speed: out
+            .support
+            .map(|k| support_impact_speed(&mean, &case.supports[k], &out.p, &out.v)),
     }
 }
 
@@ -935,32 +1129,66 @@ fn ensemble(
     let su = setup(case, pr);
     let n = mc.runs;
     control.set_total(n);
+    let one = |i: u64| lumped_one(case, pr, &su, mc, i, control);
+    run_in_chunks(n, CHUNK as usize, control, one)
+}
+
+/// Run `i` of a lumped-mass ensemble: μ then (e_n, e_t) at every impact from the run's stream.
+fn lumped_one(
+    case: &MigrationCase,
+    pr: &Prepared,
+    su: &Setup<'_>,
+    mc: &MonteCarlo,
+    i: u64,
+    control: &Control,
+) -> PhysicsResult<RunSummary> {
     let mean = pr.floor.mean;
     let m = pr.mass;
-    let one = |i: u64| -> PhysicsResult<RunSummary> {
-        let mut rng = monte_carlo::run_stream(mc.seed, i);
-        let mu = match &mc.friction_coefficient {
-            Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, MU_MAX),
-            None => case.face.friction_coefficient,
-        };
-        let mut draw = || {
-            let en = monte_carlo::sample(&mc.restitution_normal, &mut rng).clamp(0.0, 1.0);
-            let et = monte_carlo::sample(&mc.restitution_tangential, &mut rng).clamp(0.0, 1.0);
-            (en, et)
-        };
-        let o = simulate(&su, mu, &mut draw, None, Some(control))?;
-        Ok(RunSummary {
-            time: o.t,
-            speed: robust_norm(&o.v),
-            kinetic_energy: m * (0.5 * o.v.norm_squared() + o.e_rot),
-            impact_count: o.impacts,
-            runout: mean.along(&o.p) - pr.release_along,
-            max_bounce_height: o.max_bounce,
-            stop_reason: o.reason,
-            steps: o.steps,
-        })
+    let mut rng = monte_carlo::run_stream(mc.seed, i);
+    let mu = match &mc.friction_coefficient {
+        Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, MU_MAX),
+        None => case.face.friction_coefficient,
     };
-    run_in_chunks(n, CHUNK as usize, control, one)
+    let mut draw = || {
+        let en = monte_carlo::sample(&mc.restitution_normal, &mut rng).clamp(0.0, 1.0);
+        let et = monte_carlo::sample(&mc.restitution_tangential, &mut rng).clamp(0.0, 1.0);
+        (en, et)
+    };
+    let o = simulate(su, mu, &mut draw, None, Some(control))?;
+    Ok(RunSummary {
+        time: o.t,
+        speed: robust_norm(&o.v),
+        kinetic_energy: m * (0.5 * o.v.norm_squared() + o.e_rot),
+        impact_count: o.impacts,
+        runout: mean.along(&o.p) - pr.release_along,
+        max_bounce_height: o.max_bounce,
+        stop_reason: o.reason,
+        steps: o.steps,
+        along_dip_velocity: o.v.dot(&mean.dip_dir()),
+        support: o.support,
+        impact_speed: o.support.map_or(0.0, |k| {
+            support_impact_speed(&mean, &case.supports[k], &o.p, &o.v)
+        }),
+    })
+}
+
+/// Run `index` of the ensemble `mc` of `case`, alone: the summary `/v1/migration`'s ensemble of
+/// the same case gives for that run (same streams). A caller may change the release, the rock or
+/// the supports between runs (api.md `POST /v1/scene`); the floor is rebuilt for each call.
+///
+/// Errors: as [`run`].
+pub fn ensemble_run(
+    case: &MigrationCase,
+    mc: &MonteCarlo,
+    index: u64,
+    control: &Control,
+) -> PhysicsResult<RunSummary> {
+    if case.method == Method::RigidBlock {
+        return rigid_block::ensemble_run(case, mc, index, control);
+    }
+    let pr = prepare(case)?;
+    let su = setup(case, &pr);
+    lumped_one(case, &pr, &su, mc, index, control)
 }
 
 /// Runs `one(i)` for i in 0..n on the thread pool, `chunk` runs at a time, checking `control`
@@ -982,6 +1210,9 @@ pub(super) fn run_in_chunks(
         max_bounce_height: 0.0,
         stop_reason: StopReason::AtRest,
         steps: 0,
+        along_dip_velocity: 0.0,
+        support: None,
+        impact_speed: 0.0,
     };
     let mut all = vec![blank; n as usize];
     let chunks: Vec<PhysicsResult<()>> = all
@@ -1070,6 +1301,7 @@ fn statistics_of(mc: &MonteCarlo, runs: &[RunSummary]) -> Statistics {
         seed: mc.seed,
         reached_fraction: reached.len() as f64 / runs.len().max(1) as f64,
         speed: stats::summarize_owned(col(&|r| r.speed, true)),
+        along_dip_velocity: stats::summarize_owned(col(&|r| r.along_dip_velocity, true)),
         kinetic_energy: stats::summarize_owned(col(&|r| r.kinetic_energy, true)),
         time: stats::summarize_owned(col(&|r| r.time, true)),
         impact_count: all(&|r| r.impact_count as f64),

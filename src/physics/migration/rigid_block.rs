@@ -179,6 +179,10 @@ struct Model<'a> {
     dt: f64,
     dt_crit: f64,
     length: f64,
+    /// The spanning support standing at `length`, if any (scene).
+    span_support: Option<usize>,
+    /// Supports of a scene (columns are checked along every flight and step).
+    supports: Vec<super::SupportStop>,
     end_time: Option<f64>,
     c0: Vector3<f64>,
     v0: Vector3<f64>,
@@ -225,6 +229,7 @@ struct RunOut {
     max_overlap: f64,
     events: Vec<Event>,
     trajectory: Option<Trajectory>,
+    support: Option<usize>,
 }
 
 struct Recorder {
@@ -369,7 +374,9 @@ impl<'a> Model<'a> {
             alpha: o.local_damping,
             dt,
             dt_crit,
-            length: case.face.length,
+            length: case.stop_length().0,
+            span_support: case.stop_length().1,
+            supports: case.supports.clone(),
             end_time: case.end_time,
             c0,
             v0: pr.v0,
@@ -854,6 +861,8 @@ impl<'a> Model<'a> {
         let along_start = self.mean.along(&st.c);
         let _ = along_start;
         let mut prev_along = self.mean.along(&st.c);
+        let has_columns = self.supports.iter().any(|c| c.across.is_some());
+        let mut hit: Option<usize> = None;
         loop {
             // sample the trajectory
             if let Some(r) = rec.as_mut()
@@ -894,7 +903,21 @@ impl<'a> Model<'a> {
                     let t_target = st.t + tau;
                     // lower end inside the flight?
                     let cross = self.along_cross(&st, tau);
-                    let t_stop = cross.map(|tc| st.t + tc);
+                    // a column reached inside the flight ends it there
+                    let col = if has_columns {
+                        super::first_column_reach(
+                            &self.mean,
+                            &self.supports,
+                            &st.c,
+                            &st.v,
+                            &gravity,
+                            cross.unwrap_or(tau),
+                        )
+                    } else {
+                        None
+                    };
+                    let cross = if col.is_some() { None } else { cross };
+                    let t_stop = col.map(|c| st.t + c.0).or(cross.map(|tc| st.t + tc));
                     let t_final = t_stop.unwrap_or(t_target);
                     // apex for the bounce height (centre above its resting height)
                     if first_impact_done {
@@ -919,6 +942,11 @@ impl<'a> Model<'a> {
                     st = self.fly(&st, t_final - st.t);
                     acc_prev = gravity;
                     wacc_prev = Vector3::zeros();
+                    if let Some((_, k)) = col {
+                        hit = Some(k);
+                        reason = StopReason::Support;
+                        break;
+                    }
                     if t_stop.is_some() {
                         reason = StopReason::LowerEnd;
                         break;
@@ -1167,6 +1195,24 @@ impl<'a> Model<'a> {
             if !in_contact && first_impact_done {
                 max_bounce = max_bounce.max(self.height_of_centre(&st.c));
             }
+            // a column reached inside the step (the centre moved by v h along a line)
+            if has_columns {
+                let c_prev = st.c - st.v * h;
+                if let Some((tc, k)) = super::first_column_reach(
+                    &self.mean,
+                    &self.supports,
+                    &c_prev,
+                    &st.v,
+                    &Vector3::zeros(),
+                    h,
+                ) {
+                    st.t -= h - tc;
+                    st.c = c_prev + st.v * tc;
+                    hit = Some(k);
+                    reason = StopReason::Support;
+                    break;
+                }
+            }
             // lower end
             let along = self.mean.along(&st.c);
             if along >= self.length {
@@ -1200,6 +1246,13 @@ impl<'a> Model<'a> {
         {
             self.close_episode(ep, false, &mut evs, events);
         }
+        let reason = match (reason, self.span_support) {
+            (StopReason::LowerEnd, Some(k)) => {
+                hit = Some(k);
+                StopReason::Support
+            }
+            (r, _) => r,
+        };
         let in_contact = !springs.is_empty();
         let phase = match reason {
             StopReason::AtRest => Phase::Stopped,
@@ -1232,6 +1285,7 @@ impl<'a> Model<'a> {
             max_overlap,
             events: evs,
             trajectory: rec.map(|r| r.tr),
+            support: hit,
         })
     }
 
@@ -1470,6 +1524,10 @@ pub(crate) fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<Migr
         angular_speed: w.norm(),
         kinetic_energy: kt + kr,
         rotational_energy: kr,
+        support: out.support,
+        impact_speed: out
+            .support
+            .map(|k| super::support_impact_speed(&mean, &case.supports[k], &st.c, &st.v)),
     };
     let residual = kt + kr + pe + out.stored + out.damping + out.friction - out.e_start;
     let mut warnings = Vec::new();
@@ -1523,30 +1581,66 @@ fn ensemble(
     const CHUNK: usize = 16;
     let n = mc.runs;
     control.set_total(n);
-    let o = &case.rigid_block;
     let release_along = model.mean.along(&model.c0);
-    let one = |i: u64| -> PhysicsResult<RunSummary> {
-        let mut rng = monte_carlo::run_stream(mc.seed, i);
-        let mu = match &mc.friction_coefficient {
-            Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, super::MU_MAX),
-            None => case.face.friction_coefficient,
-        };
-        let beta = match &o.critical_damping_ratio_distribution {
-            Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, 0.999),
-            None => o.critical_damping_ratio,
-        };
-        let r = model.simulate(mu, beta, None, false, Some(control))?;
-        let (kt, kr, _) = model.energy(&r.st);
-        Ok(RunSummary {
-            time: r.st.t,
-            speed: r.st.v.norm(),
-            kinetic_energy: kt + kr,
-            impact_count: r.impacts,
-            runout: model.mean.along(&r.st.c) - release_along,
-            max_bounce_height: r.max_bounce,
-            stop_reason: r.reason,
-            steps: r.steps,
-        })
-    };
+    let one = |i: u64| rigid_one(case, model, mc, i, control, release_along);
     super::run_in_chunks(n, CHUNK, control, one)
+}
+
+/// Run `i` of a rigid-block ensemble: μ then β from the run's stream.
+fn rigid_one(
+    case: &MigrationCase,
+    model: &Model<'_>,
+    mc: &MonteCarlo,
+    i: u64,
+    control: &Control,
+    release_along: f64,
+) -> PhysicsResult<RunSummary> {
+    let o = &case.rigid_block;
+    let mut rng = monte_carlo::run_stream(mc.seed, i);
+    let mu = match &mc.friction_coefficient {
+        Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, super::MU_MAX),
+        None => case.face.friction_coefficient,
+    };
+    let beta = match &o.critical_damping_ratio_distribution {
+        Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, 0.999),
+        None => o.critical_damping_ratio,
+    };
+    let r = model.simulate(mu, beta, None, false, Some(control))?;
+    let (kt, kr, _) = model.energy(&r.st);
+    Ok(RunSummary {
+        time: r.st.t,
+        speed: r.st.v.norm(),
+        kinetic_energy: kt + kr,
+        impact_count: r.impacts,
+        runout: model.mean.along(&r.st.c) - release_along,
+        max_bounce_height: r.max_bounce,
+        stop_reason: r.reason,
+        steps: r.steps,
+        along_dip_velocity: r.st.v.dot(&model.mean.dip_dir()),
+        support: r.support,
+        impact_speed: r.support.map_or(0.0, |k| {
+            super::support_impact_speed(&model.mean, &case.supports[k], &r.st.c, &r.st.v)
+        }),
+    })
+}
+
+/// Run `i` of the ensemble `mc` of `case` alone (see [`super::ensemble_run`]), with the step
+/// limit checked for the run's friction.
+pub(crate) fn ensemble_run(
+    case: &MigrationCase,
+    mc: &MonteCarlo,
+    i: u64,
+    control: &Control,
+) -> PhysicsResult<RunSummary> {
+    let pr = super::prepare(case)?;
+    let model = Model::new(case, &pr)?;
+    let est = model.estimated_steps(case, case.face.friction_coefficient);
+    if est > case.rigid_block.max_steps {
+        return Err(PhysicsError::TooManySteps {
+            estimated: est,
+            limit: case.rigid_block.max_steps,
+        });
+    }
+    let release_along = model.mean.along(&model.c0);
+    rigid_one(case, &model, mc, i, control, release_along)
 }

@@ -1,0 +1,1134 @@
+//! `POST /v1/scene`: request, response, validation.
+
+use serde::{Deserialize, Serialize};
+use serde_json::{Value, json};
+use utoipa::ToSchema;
+
+use super::column::{ColumnModelDto, ColumnOutputDto, ColumnRequest, ColumnResponse, GalerkinDto};
+use super::common::{Checker, ColumnDto, ContactDto, LawDto, Meta, PlanStep, RockDto, ShapeKind};
+use super::impact::{ImpactRequest, ImpactResponse, impact_warnings};
+use super::migration::{
+    DistributionDto, FaceDto, LumpedMassDto, MethodDto, MigrationOutputDto, MigrationRequest,
+    MigrationResponse, MonteCarloDto, ReleaseDto, RigidBlockDto, SummaryDto,
+};
+use crate::config::Config;
+use crate::http::error::{ApiError, FieldError, num};
+use crate::physics::migration::Method;
+use crate::physics::scene::{
+    self, Check, DesignLimits, Limit, MethodSummary, Outcomes, Probability, ReleaseZone, SceneCase,
+    SceneDraws, SceneError, SceneReport, Strike, SupportEntry, TABLE1_SHARES,
+};
+
+/// A support along the face: spanning (`across_m` null) or one column at (`along_dip_m`,
+/// `across_m`) in the mean plane.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct SupportDto {
+    /// Along-dip position in the mean plane, m, in [0, face.length_m] (default: the lower end).
+    #[schema(minimum = 0.0, maximum = 10000.0, example = 60.0)]
+    #[serde(deserialize_with = "super::common::some")]
+    pub along_dip_m: Option<f64>,
+    /// Across position y of the column axis, m, in [−1000, 1000] (null: the support spans the
+    /// face).
+    #[schema(default = json!(null), minimum = -1000.0, maximum = 1000.0, example = json!(null))]
+    pub across_m: Option<f64>,
+    /// The support's column (struck at its midpoint).
+    pub column: ColumnDto,
+}
+
+/// Supports in rows, numbered from the lower end as the paper's Table 1 (#1–#62).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct SupportRowsDto {
+    /// Along-dip position of support #1 (the lowest), m.
+    #[schema(default = 118.5, minimum = 0.0, maximum = 10000.0, example = 118.5)]
+    pub lowest_along_dip_m: f64,
+    /// Spacing between supports along the dip, m, in (0, 10000]; support k stands at
+    /// lowest_along_dip_m − (k − 1)·spacing_m.
+    #[schema(
+        default = 1.5,
+        exclusive_minimum = 0.0,
+        maximum = 10000.0,
+        example = 1.5
+    )]
+    pub spacing_m: f64,
+    /// Number of supports, in [1, 10000].
+    #[schema(default = 62, minimum = 1, maximum = 10000, example = 62)]
+    pub count: u32,
+    /// Across positions of each support's columns, m, each in [−1000, 1000] (1 to 16 of them).
+    #[schema(default = json!([0.9]), example = json!([0.9]))]
+    pub across_m: Vec<f64>,
+    /// The columns of every support.
+    pub column: ColumnDto,
+}
+
+impl Default for SupportRowsDto {
+    fn default() -> Self {
+        Self {
+            lowest_along_dip_m: 118.5,
+            spacing_m: 1.5,
+            count: 62,
+            across_m: vec![0.9],
+            column: ColumnDto::default(),
+        }
+    }
+}
+
+/// Named release zones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ReleaseZonesName {
+    /// The paper's Table 1 spalling shares: upper third 23.3 %, middle 58.3 %, lower 18.4 %.
+    Table1,
+}
+
+/// A zone of release points along the dip (uniform inside, chosen with probability ∝ weight).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ReleaseZoneDto {
+    /// Upper edge, m, in [0, face.length_m).
+    #[schema(example = 0.0)]
+    pub from_along_dip_m: f64,
+    /// Lower edge, m, in [from_along_dip_m, face.length_m).
+    #[schema(example = 40.0)]
+    pub to_along_dip_m: f64,
+    /// Relative weight, in [0, 1e9] (at least one > 0).
+    #[schema(example = 23.3)]
+    pub weight: f64,
+}
+
+/// Release zones: `"table1"` or a list of zones.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(untagged)]
+pub enum ReleaseZonesDto {
+    /// A named set of zones.
+    Named(ReleaseZonesName),
+    /// Given zones.
+    Zones(Vec<ReleaseZoneDto>),
+}
+
+/// The design limits; each that is not null is checked for every impact.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct DesignLimitsDto {
+    /// Largest bending-stress utilisation σ/σ_y, in (0, 100] (null: not checked).
+    #[schema(default = 1.0, exclusive_minimum = 0.0, maximum = 100.0, example = 1.0)]
+    pub stress_utilisation: Option<f64>,
+    /// Rated force: largest contact force, N, in (0, 1e12] (null: not checked).
+    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1e12, example = 2e6)]
+    pub max_force_n: Option<f64>,
+    /// Design energy: largest absorbed energy, J, in (0, 1e12] (null: not checked).
+    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1e12, example = 500.0)]
+    pub absorbed_energy_j: Option<f64>,
+    /// Probability of exceedance a support may have, in [0, 1] (ensemble verdict).
+    #[schema(default = 0.0, minimum = 0.0, maximum = 1.0, example = 0.01)]
+    pub acceptable_probability: f64,
+}
+
+impl Default for DesignLimitsDto {
+    fn default() -> Self {
+        Self {
+            stress_utilisation: Some(1.0),
+            max_force_n: None,
+            absorbed_energy_j: None,
+            acceptable_probability: 0.0,
+        }
+    }
+}
+
+/// A scene's seeded Monte Carlo ensemble: `/v1/migration`'s draws plus the scene's own.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct SceneMonteCarloDto {
+    /// Number of runs, in [1, limit] (the server's `max_monte_carlo_runs`).
+    #[schema(default = 200, minimum = 1, maximum = 1000000, example = 200)]
+    pub runs: u64,
+    /// Seed (any u64).
+    #[schema(default = 42, example = 42)]
+    pub seed: u64,
+    /// e_n, drawn at every impact, clipped to [0, 1] (default U[0.2, 0.4]).
+    pub restitution_normal: DistributionDto,
+    /// e_t, drawn at every impact after e_n, clipped to [0, 1] (default U[0.7, 0.9]).
+    pub restitution_tangential: DistributionDto,
+    /// μ, drawn once per run (null: the face's μ).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_coefficient: Option<DistributionDto>,
+    /// β of the contact dashpot (rigid block only; null: the face's β).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critical_damping_ratio: Option<DistributionDto>,
+    /// The rock's side length, m, bounds in [0.01, 5] (scene stream; the paper's study range
+    /// is 0.2–0.3 m). A sphere's radius and a cuboid's edges scale with it.
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub side_length_m: Option<DistributionDto>,
+    /// The rock's density, kg/m³, bounds in [100, 20000] (scene stream; the paper's 2000–3000).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub density_kg_m3: Option<DistributionDto>,
+    /// The release across the face y, m, bounds in [−1000, 1000] (scene stream).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub release_across_m: Option<DistributionDto>,
+}
+
+impl Default for SceneMonteCarloDto {
+    fn default() -> Self {
+        let m = MonteCarloDto::default();
+        Self {
+            runs: m.runs,
+            seed: m.seed,
+            restitution_normal: m.restitution_normal,
+            restitution_tangential: m.restitution_tangential,
+            friction_coefficient: None,
+            critical_damping_ratio: None,
+            side_length_m: None,
+            density_kg_m3: None,
+            release_across_m: None,
+        }
+    }
+}
+
+/// The whole chain along the face: release → migration → impact on the first support reached →
+/// column energy → design checks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct SceneRequest {
+    /// Migration method.
+    #[schema(default = "lumped_mass", example = "lumped_mass")]
+    pub method: MethodDto,
+    /// Gravity g, m/s², in [0.1, 100].
+    #[schema(default = 9.81, minimum = 0.1, maximum = 100.0, example = 9.81)]
+    pub gravity_m_s2: f64,
+    /// The working face.
+    pub face: FaceDto,
+    /// The rock block.
+    pub rock: RockDto,
+    /// The release.
+    pub release: ReleaseDto,
+    /// Lumped-mass options.
+    pub lumped_mass: LumpedMassDto,
+    /// Rigid-block options.
+    pub rigid_block: RigidBlockDto,
+    /// Stop at this time, s, in (0, 1e5] (null: no time limit).
+    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1e5, example = 20.0)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub end_time_s: Option<f64>,
+    /// Monte Carlo ensemble (null: one deterministic run).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub monte_carlo: Option<SceneMonteCarloDto>,
+    /// The contact model of the impacts.
+    pub contact: ContactDto,
+    /// Galerkin modes of the column stage.
+    pub galerkin: GalerkinDto,
+    /// Column model of the column stage.
+    #[schema(default = "decoupled", example = "decoupled")]
+    pub column_model: ColumnModelDto,
+    /// Supports (default: one spanning support at the lower end). Give this or `support_rows`.
+    #[schema(default = json!(null), example = json!([{"along_dip_m": 60.0, "across_m": null}, {"along_dip_m": 100.0, "across_m": 0.9}]))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub supports: Option<Vec<SupportDto>>,
+    /// Supports in rows numbered from the lower end (null: use `supports`).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub support_rows: Option<SupportRowsDto>,
+    /// Strike every support at this speed, m/s, in (0, 1000], instead of migrating (null:
+    /// migrate).
+    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1000.0, example = 5.0)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub impact_velocity_m_s: Option<f64>,
+    /// Release zones of the ensemble: `"table1"` or zones (null: the release as given).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub release_zones: Option<ReleaseZonesDto>,
+    /// Design limits.
+    pub design_limits: DesignLimitsDto,
+    /// Run both migration methods and compare them.
+    #[schema(default = false, example = false)]
+    pub compare_methods: bool,
+    /// Migration outputs (the nominal run's events and trajectory; the per-run CSV).
+    pub migration_output: MigrationOutputDto,
+    /// Column history of each impact (null: none).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub column_output: Option<ColumnOutputDto>,
+}
+
+impl Default for SceneRequest {
+    fn default() -> Self {
+        Self {
+            method: MethodDto::LumpedMass,
+            gravity_m_s2: 9.81,
+            face: FaceDto::default(),
+            rock: RockDto::default(),
+            release: ReleaseDto::default(),
+            lumped_mass: LumpedMassDto::default(),
+            rigid_block: RigidBlockDto::default(),
+            end_time_s: None,
+            monte_carlo: None,
+            contact: ContactDto::default(),
+            galerkin: GalerkinDto::default(),
+            column_model: ColumnModelDto::Decoupled,
+            supports: None,
+            support_rows: None,
+            impact_velocity_m_s: None,
+            release_zones: None,
+            design_limits: DesignLimitsDto::default(),
+            compare_methods: false,
+            migration_output: MigrationOutputDto::default(),
+            column_output: None,
+        }
+    }
+}
+
+/// Renames the pointer prefix `from` to `to` in every field of an error.
+fn rename(e: ApiError, from: &str, to: &str) -> ApiError {
+    if !e.errors().iter().any(|f| f.field.starts_with(from)) {
+        return e;
+    }
+    let errors: Vec<FieldError> = e
+        .errors()
+        .iter()
+        .map(|f| {
+            let mut f = f.clone();
+            if let Some(rest) = f.field.strip_prefix(from)
+                && (rest.is_empty() || rest.starts_with('/'))
+            {
+                f.field = format!("{to}{rest}");
+            }
+            f
+        })
+        .collect();
+    ApiError::from_field_errors(e.code(), errors)
+}
+
+/// What the DTO keeps to build the response and to name fields.
+#[derive(Debug, Clone)]
+pub struct SceneContext {
+    /// The migration request as resolved (echoed in the migration response).
+    pub migration: MigrationRequest,
+    /// Per entry: the JSON Pointer of its support object.
+    pub entry_pointer: Vec<String>,
+    /// Per entry: its column as resolved (for the impact and column echoes).
+    pub entry_column: Vec<ColumnDto>,
+    /// The rock as it enters the impact (a cube).
+    pub impact_rock: RockDto,
+    /// The resolved Galerkin options.
+    pub galerkin: GalerkinDto,
+}
+
+impl SceneRequest {
+    /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
+    pub fn resolve(&mut self, config: &Config) -> Result<(SceneCase, SceneContext), ApiError> {
+        // the migration part, checked by /v1/migration's own rules and pointers
+        let mc = self.monte_carlo.as_ref().map(|m| MonteCarloDto {
+            runs: m.runs,
+            seed: m.seed,
+            restitution_normal: m.restitution_normal,
+            restitution_tangential: m.restitution_tangential,
+            friction_coefficient: m.friction_coefficient,
+            critical_damping_ratio: m.critical_damping_ratio,
+        });
+        let mut mreq = MigrationRequest {
+            method: self.method,
+            gravity_m_s2: self.gravity_m_s2,
+            face: self.face.clone(),
+            rock: self.rock.clone(),
+            release: self.release,
+            lumped_mass: self.lumped_mass,
+            rigid_block: self.rigid_block,
+            end_time_s: self.end_time_s,
+            monte_carlo: mc,
+            output: self.migration_output,
+        };
+        let migration = mreq
+            .resolve(config)
+            .map_err(|e| rename(e, "/output", "/migration_output"))?;
+        self.face = mreq.face.clone();
+        self.rock = mreq.rock.clone();
+        let mut ck = Checker::new();
+        let length = self.face.length_m;
+        // supports
+        let mut entries = Vec::new();
+        let mut pointers = Vec::new();
+        let mut columns = Vec::new();
+        let in_face = |ck: &mut Checker, f: &str, v: f64| {
+            ck.closed(f, v, 0.0, length, "m (within the face, [0, length_m])")
+        };
+        match (&mut self.supports, &mut self.support_rows) {
+            (Some(_), Some(_)) => ck.push(
+                "/support_rows",
+                Value::Null,
+                "give supports or support_rows, not both",
+            ),
+            (None, Some(rows)) => {
+                ck.closed(
+                    "/support_rows/lowest_along_dip_m",
+                    rows.lowest_along_dip_m,
+                    0.0,
+                    length,
+                    "m (within the face)",
+                );
+                ck.open_closed("/support_rows/spacing_m", rows.spacing_m, 0.0, 1e4, "m");
+                ck.count(
+                    "/support_rows/count",
+                    u64::from(rows.count),
+                    1,
+                    10_000,
+                    "supports",
+                );
+                if !(1..=16).contains(&rows.across_m.len()) {
+                    ck.push(
+                        "/support_rows/across_m",
+                        json!(rows.across_m),
+                        "must hold 1 to 16 across positions",
+                    );
+                }
+                for (j, y) in rows.across_m.iter().enumerate() {
+                    ck.closed(
+                        &format!("/support_rows/across_m/{j}"),
+                        *y,
+                        -1000.0,
+                        1000.0,
+                        "m",
+                    );
+                }
+                let column = rows.column.resolve("/support_rows/column", &mut ck);
+                if ck.is_ok() {
+                    let top = rows.lowest_along_dip_m - f64::from(rows.count - 1) * rows.spacing_m;
+                    if top < 0.0 {
+                        ck.push(
+                            "/support_rows/count",
+                            json!(rows.count),
+                            format!(
+                                "support #{} would stand at {top} m, above the face's upper end: \
+                                 every support must lie in [0, length_m]",
+                                rows.count
+                            ),
+                        );
+                    }
+                }
+                if ck.is_ok() {
+                    for k in 1..=rows.count {
+                        let s = rows.lowest_along_dip_m - f64::from(k - 1) * rows.spacing_m;
+                        for (j, y) in rows.across_m.iter().enumerate() {
+                            entries.push(SupportEntry {
+                                support: k,
+                                column_index: j as u32,
+                                along_dip: s,
+                                across: Some(*y),
+                                column: column.clone(),
+                            });
+                            pointers.push("/support_rows".to_string());
+                            columns.push(rows.column.clone());
+                        }
+                    }
+                }
+            }
+            (list, None) => {
+                let list = list.get_or_insert_with(|| vec![SupportDto::default()]);
+                if list.is_empty() || list.len() > 10_000 {
+                    ck.push(
+                        "/supports",
+                        json!(list.len()),
+                        "must hold 1 to 10000 supports",
+                    );
+                }
+                for (i, s) in list.iter_mut().enumerate() {
+                    let at = format!("/supports/{i}");
+                    let a = *s.along_dip_m.get_or_insert(length);
+                    in_face(&mut ck, &format!("{at}/along_dip_m"), a);
+                    if let Some(y) = s.across_m {
+                        ck.closed(&format!("{at}/across_m"), y, -1000.0, 1000.0, "m");
+                    }
+                    let column = s.column.resolve(&format!("{at}/column"), &mut ck);
+                    entries.push(SupportEntry {
+                        support: i as u32 + 1,
+                        column_index: 0,
+                        along_dip: a,
+                        across: s.across_m,
+                        column,
+                    });
+                    pointers.push(at);
+                    columns.push(s.column.clone());
+                }
+            }
+        }
+        // the impact rock: the cube itself, or the cube of equal mass and density
+        let hertz = self.contact.law == LawDto::HertzPoint;
+        let (mass, cube_side) = match scene::rock_extent(&migration.rock) {
+            Ok((_, m)) => (m, scene::impact_rock(&migration.rock, m).side_length),
+            Err(e) => return Err(ApiError::from(e)),
+        };
+        let mut impact_rock = RockDto {
+            shape: ShapeKind::Cube,
+            side_length_m: cube_side,
+            radius_m: None,
+            dimensions_m: None,
+            vertices_m: None,
+            random: None,
+            corner_radius_m: Some(migration.rock.corner_radius.min(cube_side / 2.0)),
+            ..self.rock.clone()
+        };
+        if hertz && self.rock.shape == ShapeKind::Cube {
+            self.rock.clone().resolve("/rock", true, &mut ck);
+        }
+        let _ = mass;
+        if let Some(v) = self.impact_velocity_m_s {
+            ck.open_closed("/impact_velocity_m_s", v, 0.0, 1000.0, "m/s");
+            if self.monte_carlo.is_some() {
+                ck.push(
+                    "/monte_carlo",
+                    Value::Null,
+                    "with impact_velocity_m_s there is no migration to draw an ensemble of",
+                );
+            }
+            if self.compare_methods {
+                ck.push(
+                    "/compare_methods",
+                    json!(true),
+                    "with impact_velocity_m_s there is no migration to compare",
+                );
+            }
+        }
+        // the column stage, checked by /v1/column's rules on a template impact
+        let mut template = ColumnRequest {
+            velocity_m_s: 5.0,
+            rock: impact_rock.clone(),
+            column: ColumnDto::default(),
+            contact: self.contact,
+            model: self.column_model,
+            galerkin: self.galerkin,
+            initial_midpoint_displacement_m: None,
+            end_time_s: None,
+            output: self.column_output.clone(),
+        };
+        let column_case = template.resolve(config).map_err(|e| {
+            let e = rename(e, "/output", "/column_output");
+            rename(e, "/rock", "/rock")
+        });
+        let column_case = match column_case {
+            Ok(c) => c,
+            Err(e) => {
+                // the template's own column is the default: report the request's errors only
+                let errs: Vec<FieldError> = e
+                    .errors()
+                    .iter()
+                    .filter(|f| !f.field.starts_with("/column/") && f.field != "/velocity_m_s")
+                    .cloned()
+                    .collect();
+                for f in errs {
+                    ck.push(f.field, f.value, f.message);
+                }
+                crate::physics::column::ColumnCase::default()
+            }
+        };
+        self.galerkin = template.galerkin;
+        impact_rock = template.rock;
+        // contact lengths: each column at least the side of the cube that strikes it
+        let side_max = self
+            .monte_carlo
+            .as_ref()
+            .and_then(|m| m.side_length_m)
+            .map_or(cube_side, |d| d.max.unwrap_or(cube_side).max(cube_side));
+        for (k, e) in entries.iter().enumerate() {
+            if e.column.length < side_max && (k == 0 || pointers[k] != pointers[k - 1]) {
+                ck.push(
+                    format!("{}/column/length_m", pointers[k]),
+                    num(e.column.length),
+                    format!(
+                        "must be at least the contact length L = {side_max} m of the largest rock \
+                         that can strike it"
+                    ),
+                );
+            }
+        }
+        // release zones
+        let release_zones = match &self.release_zones {
+            None => None,
+            Some(ReleaseZonesDto::Named(ReleaseZonesName::Table1)) => {
+                let third = length / 3.0;
+                Some(
+                    [
+                        (0.0, third, TABLE1_SHARES[0]),
+                        (third, 2.0 * third, TABLE1_SHARES[1]),
+                        (2.0 * third, length, TABLE1_SHARES[2]),
+                    ]
+                    .map(|(from, to, weight)| ReleaseZone { from, to, weight })
+                    .to_vec(),
+                )
+            }
+            Some(ReleaseZonesDto::Zones(z)) => {
+                if z.is_empty() || z.len() > 1000 {
+                    ck.push(
+                        "/release_zones",
+                        json!(z.len()),
+                        "must hold 1 to 1000 zones",
+                    );
+                }
+                for (i, zone) in z.iter().enumerate() {
+                    let at = format!("/release_zones/{i}");
+                    ck.closed_open(
+                        &format!("{at}/from_along_dip_m"),
+                        zone.from_along_dip_m,
+                        0.0,
+                        length,
+                        "m (below length_m)",
+                    );
+                    if ck.closed(
+                        &format!("{at}/to_along_dip_m"),
+                        zone.to_along_dip_m,
+                        0.0,
+                        length,
+                        "m",
+                    ) && zone.to_along_dip_m < zone.from_along_dip_m
+                    {
+                        ck.push(
+                            format!("{at}/to_along_dip_m"),
+                            num(zone.to_along_dip_m),
+                            format!(
+                                "must be at least from_along_dip_m = {}",
+                                zone.from_along_dip_m
+                            ),
+                        );
+                    }
+                    ck.closed(&format!("{at}/weight"), zone.weight, 0.0, 1e9, "");
+                }
+                if !z.is_empty() && z.iter().all(|x| x.weight == 0.0) {
+                    ck.push(
+                        "/release_zones/0/weight",
+                        json!(0.0),
+                        "at least one weight must be > 0",
+                    );
+                }
+                Some(
+                    z.iter()
+                        .map(|x| ReleaseZone {
+                            from: x.from_along_dip_m,
+                            to: x.to_along_dip_m,
+                            weight: x.weight,
+                        })
+                        .collect(),
+                )
+            }
+        };
+        if release_zones.is_some() && self.monte_carlo.is_none() {
+            ck.push(
+                "/release_zones",
+                Value::Null,
+                "release zones are drawn from: they need monte_carlo",
+            );
+        }
+        let draws = match &self.monte_carlo {
+            None => SceneDraws::default(),
+            Some(m) => SceneDraws {
+                side_length: m
+                    .side_length_m
+                    .map(|d| d.resolve("/monte_carlo/side_length_m", 0.01, 5.0, &mut ck)),
+                density: m
+                    .density_kg_m3
+                    .map(|d| d.resolve("/monte_carlo/density_kg_m3", 100.0, 20000.0, &mut ck)),
+                release_across: m
+                    .release_across_m
+                    .map(|d| d.resolve("/monte_carlo/release_across_m", -1000.0, 1000.0, &mut ck)),
+            },
+        };
+        for (f, d) in [
+            ("side_length_m", draws.side_length),
+            ("density_kg_m3", draws.density),
+            ("release_across_m", draws.release_across),
+        ] {
+            if matches!(
+                d,
+                Some(crate::physics::migration::Distribution::Normal { .. })
+            ) {
+                ck.push(
+                    format!("/monte_carlo/{f}/distribution"),
+                    json!("normal"),
+                    "an unbounded normal can leave the field's range: use uniform or truncated_normal",
+                );
+            }
+        }
+        if draws.side_length.is_some()
+            && !matches!(
+                self.rock.shape,
+                ShapeKind::Cube | ShapeKind::Sphere | ShapeKind::Cuboid
+            )
+        {
+            ck.push(
+                "/monte_carlo/side_length_m",
+                Value::Null,
+                "the side length is drawn for a cube, sphere or cuboid rock only",
+            );
+        }
+        let dl = &self.design_limits;
+        if let Some(v) = dl.stress_utilisation {
+            ck.open_closed("/design_limits/stress_utilisation", v, 0.0, 100.0, "");
+        }
+        if let Some(v) = dl.max_force_n {
+            ck.open_closed("/design_limits/max_force_n", v, 0.0, 1e12, "N");
+        }
+        if let Some(v) = dl.absorbed_energy_j {
+            ck.open_closed("/design_limits/absorbed_energy_j", v, 0.0, 1e12, "J");
+        }
+        ck.closed(
+            "/design_limits/acceptable_probability",
+            dl.acceptable_probability,
+            0.0,
+            1.0,
+            "",
+        );
+        ck.finish()?;
+        let limits = DesignLimits {
+            stress_utilisation: dl.stress_utilisation,
+            max_force: dl.max_force_n,
+            absorbed_energy: dl.absorbed_energy_j,
+            acceptable_probability: dl.acceptable_probability,
+        };
+        let case = SceneCase {
+            migration,
+            supports: entries,
+            column: column_case,
+            impact_velocity: self.impact_velocity_m_s,
+            release_zones,
+            draws,
+            limits,
+            compare_methods: self.compare_methods,
+        };
+        let ctx = SceneContext {
+            migration: mreq,
+            entry_pointer: pointers,
+            entry_column: columns,
+            impact_rock,
+            galerkin: self.galerkin,
+        };
+        Ok((case, ctx))
+    }
+}
+
+/// Maps a scene error to the problem naming the field of the request actually sent.
+pub fn scene_error(e: SceneError, ctx: &SceneContext) -> ApiError {
+    let api = ApiError::from(e.error);
+    match e.entry {
+        Some(k) => api.nest(&ctx.entry_pointer[k]),
+        None => rename(api, "/output", "/migration_output"),
+    }
+}
+
+/// One design check of an impact.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct CheckDto {
+    /// `stress_utilisation`, `max_force_n` or `absorbed_energy_j`.
+    pub limit: String,
+    /// The value (omitted past the contact capacity).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value: Option<f64>,
+    /// The allowed value.
+    pub allowed: f64,
+    /// value / allowed (omitted past the contact capacity).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub utilisation: Option<f64>,
+    /// value > allowed, or past the contact capacity.
+    pub exceeded: bool,
+}
+
+fn limit_name(l: Limit) -> &'static str {
+    match l {
+        Limit::StressUtilisation => "stress_utilisation",
+        Limit::MaxForce => "max_force_n",
+        Limit::AbsorbedEnergy => "absorbed_energy_j",
+    }
+}
+
+impl From<&Check> for CheckDto {
+    fn from(c: &Check) -> Self {
+        Self {
+            limit: limit_name(c.limit).into(),
+            value: c.value,
+            allowed: c.allowed,
+            utilisation: c.utilisation,
+            exceeded: c.exceeded,
+        }
+    }
+}
+
+/// An impact on a support entry.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct SceneImpactDto {
+    /// Support number (from 1).
+    pub support: u32,
+    /// Column of that support (from 0).
+    pub column_index: u32,
+    /// Along-dip position, m.
+    pub along_dip_m: f64,
+    /// Across position of the column, m (null: spanning support).
+    pub across_m: Option<f64>,
+    /// The impact speed, m/s.
+    pub impact_velocity_m_s: f64,
+    /// `struck`, `no_impact` (below 1e-6 m/s: all values 0) or `capacity_exceeded`.
+    pub outcome: String,
+    /// Largest speed the contact law takes, m/s (past the capacity only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_velocity_m_s: Option<f64>,
+    /// The `/v1/impact` response for this impact (struck only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub impact: Option<ImpactResponse>,
+    /// The `/v1/column` response for this impact (struck only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub column: Option<ColumnResponse>,
+    /// The design checks.
+    pub checks: Vec<CheckDto>,
+    /// `ok` or `exceeded`.
+    pub verdict: String,
+    /// The nominal run of an ensemble.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub nominal: Option<bool>,
+}
+
+/// Fractions of all runs by how they ended (summing to 1).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, ToSchema)]
+pub struct OutcomesDto {
+    /// Ended at a support.
+    pub support: f64,
+    /// Reached the lower end.
+    pub lower_end: f64,
+    /// Came to rest.
+    pub at_rest: f64,
+    /// Left the floor.
+    pub left_floor: f64,
+    /// Reached the end time.
+    pub end_time: f64,
+}
+
+impl From<&Outcomes> for OutcomesDto {
+    fn from(o: &Outcomes) -> Self {
+        Self {
+            support: o.support,
+            lower_end: o.lower_end,
+            at_rest: o.at_rest,
+            left_floor: o.left_floor,
+            end_time: o.end_time,
+        }
+    }
+}
+
+/// A probability with its Wilson 95 % interval (z = 1.959963984540054).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, ToSchema)]
+pub struct ProbabilityDto {
+    /// Fraction of all runs.
+    pub probability: f64,
+    /// Wilson score interval [lo, hi].
+    pub ci95: [f64; 2],
+}
+
+impl From<&Probability> for ProbabilityDto {
+    fn from(p: &Probability) -> Self {
+        Self {
+            probability: p.probability,
+            ci95: p.ci95,
+        }
+    }
+}
+
+/// Exceedance probabilities per checked limit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, ToSchema, Default)]
+pub struct ExceedanceDto {
+    /// Stress utilisation above its limit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stress_utilisation: Option<ProbabilityDto>,
+    /// Force above the rated force.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_force_n: Option<ProbabilityDto>,
+    /// Absorbed energy above the design energy.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub absorbed_energy_j: Option<ProbabilityDto>,
+}
+
+/// Ensemble statistics of one support entry.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct SupportStatisticsDto {
+    /// Support number (from 1).
+    pub support: u32,
+    /// Column of that support (from 0).
+    pub column_index: u32,
+    /// Along-dip position, m.
+    pub along_dip_m: f64,
+    /// Across position of the column, m (null: spanning support).
+    pub across_m: Option<f64>,
+    /// Fraction of all runs that ended at this entry.
+    pub reached_fraction: f64,
+    /// Fraction of all runs that ended here past the contact capacity.
+    pub capacity_exceeded_fraction: f64,
+    /// Impact speed over the runs that reached it within capacity, m/s (null: none did).
+    pub impact_velocity_m_s: Option<SummaryDto>,
+    /// δmax (coupled: largest contact deformation), m.
+    pub max_deformation_m: Option<SummaryDto>,
+    /// Pmax (coupled: the column's max_force_n), N.
+    pub max_force_n: Option<SummaryDto>,
+    /// Absorbed energy (coupled: column energy after the contact), J.
+    pub absorbed_energy_j: Option<SummaryDto>,
+    /// Bending-stress utilisation σ/σ_y.
+    pub stress_utilisation: Option<SummaryDto>,
+    /// Probability over all runs that a rock strikes this entry past each checked limit.
+    pub exceedance: ExceedanceDto,
+    /// `exceeded` when a probability is above acceptable_probability, else `ok`.
+    pub verdict: String,
+}
+
+/// Ensemble statistics of a scene.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct SceneStatisticsDto {
+    /// Number of runs.
+    pub runs: u64,
+    /// Seed.
+    pub seed: u64,
+    /// How the runs ended.
+    pub outcomes: OutcomesDto,
+    /// Per support entry.
+    pub supports: Vec<SupportStatisticsDto>,
+    /// Probability that a run overloads some support.
+    pub any_exceeded: ProbabilityDto,
+}
+
+/// One entry of one method in a comparison.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct ComparedSupportDto {
+    /// Support number.
+    pub support: u32,
+    /// Column of that support.
+    pub column_index: u32,
+    /// Fraction of runs that ended at this entry.
+    pub reached_fraction: f64,
+    /// Median impact speed, m/s (null: never reached within capacity).
+    pub impact_velocity_median_m_s: Option<f64>,
+    /// Exceedance probability per checked limit.
+    pub exceedance: std::collections::BTreeMap<String, f64>,
+}
+
+/// One method of a comparison.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct MethodComparisonDto {
+    /// `lumped_mass` or `rigid_block`.
+    pub method: String,
+    /// How the runs ended (a single run: 1 for its outcome).
+    pub outcomes: OutcomesDto,
+    /// Per support entry.
+    pub supports: Vec<ComparedSupportDto>,
+}
+
+/// The answer of `POST /v1/scene`.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct SceneResponse {
+    /// Stages `release`, `migration`, `impact`, `column`, `checks`: ran or skipped, and why.
+    pub plan: Vec<PlanStep>,
+    /// The migration response of the (nominal) run (omitted with impact_velocity_m_s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub migration: Option<MigrationResponse>,
+    /// Impacts: every support at impact_velocity_m_s, the single run's, or the nominal run's.
+    pub impacts: Vec<SceneImpactDto>,
+    /// Ensemble statistics (Monte Carlo).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub statistics: Option<SceneStatisticsDto>,
+    /// Both methods side by side (compare_methods).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub comparison: Option<Vec<MethodComparisonDto>>,
+    /// Named warnings.
+    pub warnings: Vec<super::Warning>,
+    /// The fully resolved request.
+    pub inputs: SceneRequest,
+    /// Version of the service and its models.
+    pub model_version: String,
+}
+
+fn plan_of(r: &SceneReport) -> Vec<PlanStep> {
+    r.plan
+        .iter()
+        .map(|s| {
+            if s.ran {
+                PlanStep::ran(s.stage, s.reason.clone())
+            } else {
+                PlanStep::skipped(s.stage, s.reason.clone())
+            }
+        })
+        .collect()
+}
+
+fn impact_dto(
+    case: &SceneCase,
+    ctx: &SceneContext,
+    req: &SceneRequest,
+    o: &scene::ImpactOutcome,
+) -> SceneImpactDto {
+    let e = &case.supports[o.entry];
+    let (outcome, max_velocity, impact, column) = match &o.strike {
+        Strike::NoImpact => ("no_impact", None, None, None),
+        Strike::CapacityExceeded { max_velocity } => {
+            ("capacity_exceeded", *max_velocity, None, None)
+        }
+        Strike::Solved { impact, column, .. } => {
+            let mut rock = ctx.impact_rock.clone();
+            rock.side_length_m = match &o.strike {
+                Strike::Solved { impact_case, .. } => impact_case.rock.side_length,
+                _ => rock.side_length_m,
+            };
+            let ireq = ImpactRequest {
+                velocity_m_s: o.velocity,
+                rock: rock.clone(),
+                column: ctx.entry_column[o.entry].clone(),
+                contact: req.contact,
+                output: Default::default(),
+            };
+            let mut meta = Meta::new(vec![
+                PlanStep::ran(
+                    "impact",
+                    "closed-form maxima on the W₋₁ branch (log laws) or Hertz; duration t_c = (2mv/Pmax)·J(u₀)",
+                ),
+                PlanStep::skipped("curve", "output.curve_points = 0"),
+            ]);
+            meta.warnings = impact_warnings(impact);
+            let creq = ColumnRequest {
+                velocity_m_s: o.velocity,
+                rock,
+                column: ctx.entry_column[o.entry].clone(),
+                contact: req.contact,
+                model: req.column_model,
+                galerkin: ctx.galerkin,
+                initial_midpoint_displacement_m: None,
+                end_time_s: None,
+                output: req.column_output.clone(),
+            };
+            (
+                "struck",
+                None,
+                Some(ImpactResponse::new(impact, None, ireq, meta)),
+                Some(ColumnResponse::new((**column).clone(), creq)),
+            )
+        }
+    };
+    SceneImpactDto {
+        support: e.support,
+        column_index: e.column_index,
+        along_dip_m: e.along_dip,
+        across_m: e.across,
+        impact_velocity_m_s: o.velocity,
+        outcome: outcome.into(),
+        max_velocity_m_s: max_velocity,
+        impact,
+        column,
+        checks: o.checks.iter().map(Into::into).collect(),
+        verdict: if o.exceeded { "exceeded" } else { "ok" }.into(),
+        nominal: o.nominal.then_some(true),
+    }
+}
+
+fn comparison_dto(case: &SceneCase, m: &MethodSummary) -> MethodComparisonDto {
+    MethodComparisonDto {
+        method: match m.method {
+            Method::LumpedMass => "lumped_mass",
+            Method::RigidBlock => "rigid_block",
+        }
+        .into(),
+        outcomes: (&m.outcomes).into(),
+        supports: m
+            .entries
+            .iter()
+            .zip(&case.supports)
+            .map(|((reached, median, ex), e)| ComparedSupportDto {
+                support: e.support,
+                column_index: e.column_index,
+                reached_fraction: *reached,
+                impact_velocity_median_m_s: *median,
+                exceedance: ex
+                    .iter()
+                    .map(|(l, p)| (limit_name(*l).to_string(), *p))
+                    .collect(),
+            })
+            .collect(),
+    }
+}
+
+impl SceneResponse {
+    /// Builds the response from the report, the case and the resolved request.
+    pub fn new(r: SceneReport, case: &SceneCase, ctx: SceneContext, inputs: SceneRequest) -> Self {
+        let plan = plan_of(&r);
+        let mut warnings: Vec<super::Warning> = r
+            .warnings
+            .iter()
+            .map(|w| super::Warning {
+                code: w.code.to_string(),
+                message: w.message.clone(),
+            })
+            .collect();
+        let impacts = r
+            .impacts
+            .iter()
+            .map(|o| impact_dto(case, &ctx, &inputs, o))
+            .collect();
+        let statistics = r.statistics.as_ref().map(|st| SceneStatisticsDto {
+            runs: st.runs,
+            seed: st.seed,
+            outcomes: (&st.outcomes).into(),
+            supports: st
+                .entries
+                .iter()
+                .zip(&case.supports)
+                .map(|(s, e)| {
+                    let mut ex = ExceedanceDto::default();
+                    for (l, p) in &s.exceedance {
+                        let p = Some(p.into());
+                        match l {
+                            Limit::StressUtilisation => ex.stress_utilisation = p,
+                            Limit::MaxForce => ex.max_force_n = p,
+                            Limit::AbsorbedEnergy => ex.absorbed_energy_j = p,
+                        }
+                    }
+                    SupportStatisticsDto {
+                        support: e.support,
+                        column_index: e.column_index,
+                        along_dip_m: e.along_dip,
+                        across_m: e.across,
+                        reached_fraction: s.reached_fraction,
+                        capacity_exceeded_fraction: s.capacity_exceeded_fraction,
+                        impact_velocity_m_s: s.impact_velocity.as_ref().map(Into::into),
+                        max_deformation_m: s.max_deformation.as_ref().map(Into::into),
+                        max_force_n: s.max_force.as_ref().map(Into::into),
+                        absorbed_energy_j: s.absorbed_energy.as_ref().map(Into::into),
+                        stress_utilisation: s.stress_utilisation.as_ref().map(Into::into),
+                        exceedance: ex,
+                        verdict: if s.exceeded { "exceeded" } else { "ok" }.into(),
+                    }
+                })
+                .collect(),
+            any_exceeded: (&st.any_exceeded).into(),
+        });
+        let csv = match (&r.runs, inputs.migration_output.runs_csv) {
+            (Some(runs), true) => Some(scene::runs_csv(case, runs)),
+            _ => None,
+        };
+        let migration = r.migration.clone().map(|m| {
+            let mut resp = MigrationResponse::new(m, ctx.migration.clone());
+            resp.runs_csv = csv;
+            resp
+        });
+        if let Some(m) = &migration {
+            warnings.extend(m.warnings.iter().cloned());
+        }
+        let comparison = r
+            .comparison
+            .as_ref()
+            .map(|c| c.iter().map(|m| comparison_dto(case, m)).collect());
+        let meta = Meta::new(plan);
+        Self {
+            plan: meta.plan,
+            migration,
+            impacts,
+            statistics,
+            comparison,
+            warnings,
+            inputs,
+            model_version: meta.model_version,
+        }
+    }
+}

@@ -1,0 +1,1084 @@
+//! The whole chain along the face (api.md `POST /v1/scene`): release → migration → impact on the
+//! first support reached → column energy → design checks, for one run or a seeded ensemble.
+//!
+//! Every stage calls the function its own endpoint uses — [`migration::run`] and
+//! [`migration::ensemble_run`] (the same streams as `/v1/migration`), [`contact::solve_impact`]
+//! and [`column::solve_column`] — so a stage's numbers are bit-identical to that endpoint's on
+//! the same inputs. Stages the case does not need are skipped and the plan says why.
+//!
+//! Draws only a scene makes (release point from the spalling zones, release across the face,
+//! the rock's side length and density) come from a stream of their own per run, seeded by
+//! (seed, run index, 1), in that order: zone choice and position (when zones are given), across,
+//! side length, density.
+
+use rayon::prelude::*;
+
+use super::column::{self, ColumnCase, ColumnDetail, ColumnModel, ColumnResult};
+use super::contact::{self, ImpactResult};
+use super::control::Control;
+use super::error::PhysicsError;
+use super::material::{Column, ImpactCase, Rock, RockShape};
+use super::migration::shape::BlockShape;
+use super::migration::stats::{self, Summary};
+use super::migration::{
+    self, Distribution, Method, MigrationCase, MigrationResult, MonteCarlo, RunSummary, StopReason,
+    SupportStop, monte_carlo,
+};
+use super::stats_interval::{Z_95, wilson_interval};
+
+/// Impact speed below which a support counts as reached without an impact, m/s.
+pub const NO_IMPACT_SPEED: f64 = 1e-6;
+/// Largest impact speed `/v1/impact` takes, m/s; faster counts as capacity exceeded.
+pub const MAX_IMPACT_SPEED: f64 = 1000.0;
+/// The paper's Table 1 spalling shares of the upper, middle and lower thirds of the face.
+pub const TABLE1_SHARES: [f64; 3] = [0.233, 0.583, 0.184];
+
+/// One entry of the expanded support list: a spanning support or one column of a support.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SupportEntry {
+    /// Support number (from 1).
+    pub support: u32,
+    /// Column of that support (from 0).
+    pub column_index: u32,
+    /// Along-dip position in the mean plane, m.
+    pub along_dip: f64,
+    /// Across position of the column axis, m (None: the support spans the face).
+    pub across: Option<f64>,
+    /// The support's column (struck at its midpoint).
+    pub column: Column,
+}
+
+/// A zone of release points along the dip, drawn with probability ∝ weight, uniform inside.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReleaseZone {
+    /// Upper edge, m.
+    pub from: f64,
+    /// Lower edge, m.
+    pub to: f64,
+    /// Relative weight (≥ 0).
+    pub weight: f64,
+}
+
+/// The design limits checked for every impact; `None` is not checked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DesignLimits {
+    /// Largest bending-stress utilisation σ/σ_y (default 1).
+    pub stress_utilisation: Option<f64>,
+    /// Largest contact force, N.
+    pub max_force: Option<f64>,
+    /// Largest absorbed energy, J.
+    pub absorbed_energy: Option<f64>,
+    /// Probability of exceedance a support may have (ensemble verdict; default 0).
+    pub acceptable_probability: f64,
+}
+
+impl Default for DesignLimits {
+    fn default() -> Self {
+        Self {
+            stress_utilisation: Some(1.0),
+            max_force: None,
+            absorbed_energy: None,
+            acceptable_probability: 0.0,
+        }
+    }
+}
+
+/// A design limit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Limit {
+    /// Bending-stress utilisation σ/σ_y.
+    StressUtilisation,
+    /// Contact force, N.
+    MaxForce,
+    /// Absorbed energy, J.
+    AbsorbedEnergy,
+}
+
+impl DesignLimits {
+    /// The limits that are checked, with their allowed values, in api.md order.
+    pub fn active(&self) -> Vec<(Limit, f64)> {
+        [
+            (Limit::StressUtilisation, self.stress_utilisation),
+            (Limit::MaxForce, self.max_force),
+            (Limit::AbsorbedEnergy, self.absorbed_energy),
+        ]
+        .into_iter()
+        .filter_map(|(l, v)| v.map(|v| (l, v)))
+        .collect()
+    }
+}
+
+/// Scene-only draws of an ensemble (distributions as in `/v1/migration`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SceneDraws {
+    /// Cube side (or the shape's side length), m.
+    pub side_length: Option<Distribution>,
+    /// Rock density, kg/m³.
+    pub density: Option<Distribution>,
+    /// Release across the face y, m.
+    pub release_across: Option<Distribution>,
+}
+
+impl SceneDraws {
+    /// True when a draw changes something between runs.
+    pub fn any(&self) -> bool {
+        self.side_length.is_some() || self.density.is_some() || self.release_across.is_some()
+    }
+}
+
+/// A scene (api.md `POST /v1/scene`), SI units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneCase {
+    /// The migration case (its `supports` are set by the scene; its `monte_carlo` is the
+    /// ensemble's migration part).
+    pub migration: MigrationCase,
+    /// The expanded support entries.
+    pub supports: Vec<SupportEntry>,
+    /// The column stage's template: model, modes, shapes, history; its impact holds the contact
+    /// model (rock, column and speed are set per impact).
+    pub column: ColumnCase,
+    /// Strike every entry at this speed instead of migrating, m/s.
+    pub impact_velocity: Option<f64>,
+    /// Release zones along the dip (ensemble draws), if any.
+    pub release_zones: Option<Vec<ReleaseZone>>,
+    /// Scene-only draws.
+    pub draws: SceneDraws,
+    /// Design limits.
+    pub limits: DesignLimits,
+    /// Run both migration methods and compare.
+    pub compare_methods: bool,
+}
+
+/// The failure of a scene: the stage's error and the support entry it concerns (its fields are
+/// then relative to that entry's support object).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneError {
+    /// Index into [`SceneCase::supports`] when the error concerns one entry.
+    pub entry: Option<usize>,
+    /// The error.
+    pub error: PhysicsError,
+}
+
+impl From<PhysicsError> for SceneError {
+    fn from(error: PhysicsError) -> Self {
+        Self { entry: None, error }
+    }
+}
+
+/// Result of a scene.
+pub type SceneResult<T> = Result<T, SceneError>;
+
+/// One stage of the plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stage {
+    /// `release`, `migration`, `impact`, `column` or `checks`.
+    pub stage: &'static str,
+    /// Ran (true) or skipped.
+    pub ran: bool,
+    /// Why.
+    pub reason: String,
+}
+
+/// One design check of an impact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Check {
+    /// The limit.
+    pub limit: Limit,
+    /// The value (None: past the contact capacity).
+    pub value: Option<f64>,
+    /// The allowed value.
+    pub allowed: f64,
+    /// value / allowed (None with the value).
+    pub utilisation: Option<f64>,
+    /// value > allowed, or the capacity exceeded.
+    pub exceeded: bool,
+}
+
+/// What an impact on an entry gave.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Strike {
+    /// Reached below [`NO_IMPACT_SPEED`]: no impact, all values 0.
+    NoImpact,
+    /// Past `/v1/impact`'s speed range or the contact law's capacity.
+    CapacityExceeded {
+        /// Largest speed the law takes, m/s (None: the speed range itself was passed).
+        max_velocity: Option<f64>,
+    },
+    /// The impact and column stages ran.
+    Solved {
+        /// The impact case (the rock as a cube).
+        impact_case: Box<ImpactCase>,
+        /// The impact.
+        impact: Box<ImpactResult>,
+        /// The column case.
+        column_case: Box<ColumnCase>,
+        /// The column.
+        column: Box<ColumnResult>,
+    },
+}
+
+/// Values an impact gives for the statistics and checks.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StrikeValues {
+    /// δmax (decoupled) or the largest contact deformation (coupled), m.
+    pub max_deformation: f64,
+    /// Pmax (decoupled) or the coupled `max_force_n`, N.
+    pub max_force: f64,
+    /// Absorbed energy (decoupled) or column energy after the contact (coupled), J.
+    pub absorbed_energy: f64,
+    /// Bending-stress utilisation σ/σ_y.
+    pub stress_utilisation: f64,
+}
+
+impl Strike {
+    /// The values of the strike (None past the capacity; zeros without an impact).
+    pub fn values(&self) -> Option<StrikeValues> {
+        match self {
+            Strike::NoImpact => Some(StrikeValues::default()),
+            Strike::CapacityExceeded { .. } => None,
+            Strike::Solved { impact, column, .. } => {
+                let (d, f, e) = match &column.detail {
+                    ColumnDetail::Decoupled(dd) => {
+                        (dd.max_deformation, dd.max_force, dd.absorbed_energy)
+                    }
+                    ColumnDetail::Coupled(c) => (
+                        c.max_contact_deformation,
+                        c.max_force,
+                        c.column_energy_after_contact,
+                    ),
+                };
+                let _ = impact;
+                Some(StrikeValues {
+                    max_deformation: d,
+                    max_force: f,
+                    absorbed_energy: e,
+                    stress_utilisation: column.stress_utilisation,
+                })
+            }
+        }
+    }
+}
+
+/// The checks of a strike against the limits.
+pub fn checks(limits: &DesignLimits, strike: &Strike) -> Vec<Check> {
+    let v = strike.values();
+    limits
+        .active()
+        .into_iter()
+        .map(|(limit, allowed)| {
+            let value = v.map(|v| match limit {
+                Limit::StressUtilisation => v.stress_utilisation,
+                Limit::MaxForce => v.max_force,
+                Limit::AbsorbedEnergy => v.absorbed_energy,
+            });
+            Check {
+                limit,
+                value,
+                allowed,
+                utilisation: value.map(|x| x / allowed),
+                exceeded: value.is_none_or(|x| x > allowed),
+            }
+        })
+        .collect()
+}
+
+/// An impact of a single run (or of `impact_velocity`) with its checks.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImpactOutcome {
+    /// Index into [`SceneCase::supports`].
+    pub entry: usize,
+    /// The impact speed, m/s.
+    pub velocity: f64,
+    /// What the impact gave.
+    pub strike: Strike,
+    /// The checks.
+    pub checks: Vec<Check>,
+    /// Some check exceeded.
+    pub exceeded: bool,
+    /// The nominal run of an ensemble.
+    pub nominal: bool,
+}
+
+/// One run of an ensemble with its strike.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneRun {
+    /// The migration summary (support and impact speed included).
+    pub summary: RunSummary,
+    /// Values of the strike (None: no support reached, or past the capacity).
+    pub values: Option<StrikeValues>,
+    /// Past the capacity at the support reached.
+    pub capacity_exceeded: bool,
+    /// Per active limit (in [`DesignLimits::active`] order), exceeded at the support reached.
+    pub exceeded: Vec<bool>,
+}
+
+/// Fractions of all runs by how they ended (summing to 1).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Outcomes {
+    /// Ended at a support.
+    pub support: f64,
+    /// Reached the lower end.
+    pub lower_end: f64,
+    /// Came to rest.
+    pub at_rest: f64,
+    /// Left the floor.
+    pub left_floor: f64,
+    /// Reached the end time.
+    pub end_time: f64,
+}
+
+/// A probability with its Wilson 95 % interval.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Probability {
+    /// k / n.
+    pub probability: f64,
+    /// Wilson score interval, z = 1.959963984540054.
+    pub ci95: [f64; 2],
+}
+
+fn probability(k: usize, n: usize) -> Probability {
+    Probability {
+        probability: k as f64 / n.max(1) as f64,
+        ci95: wilson_interval(k as f64, n as f64, Z_95).unwrap_or([0.0, 1.0]),
+    }
+}
+
+/// Statistics of one entry over an ensemble.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EntryStatistics {
+    /// Fraction of all runs that ended at this entry.
+    pub reached_fraction: f64,
+    /// Fraction of all runs that ended here past the capacity.
+    pub capacity_exceeded_fraction: f64,
+    /// Impact speed over the runs that reached the entry within capacity, m/s.
+    pub impact_velocity: Option<Summary>,
+    /// δmax, m.
+    pub max_deformation: Option<Summary>,
+    /// Pmax, N.
+    pub max_force: Option<Summary>,
+    /// Absorbed energy, J.
+    pub absorbed_energy: Option<Summary>,
+    /// Stress utilisation.
+    pub stress_utilisation: Option<Summary>,
+    /// Per active limit: the probability over all runs of striking this entry past the limit.
+    pub exceedance: Vec<(Limit, Probability)>,
+    /// Some exceedance probability above the acceptable one.
+    pub exceeded: bool,
+}
+
+/// Ensemble statistics of a scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneStatistics {
+    /// Number of runs.
+    pub runs: u64,
+    /// Seed.
+    pub seed: u64,
+    /// How the runs ended.
+    pub outcomes: Outcomes,
+    /// Per entry.
+    pub entries: Vec<EntryStatistics>,
+    /// Probability that a run overloads some support.
+    pub any_exceeded: Probability,
+}
+
+/// One entry of a method in a comparison: reached fraction, median impact speed (None: never
+/// reached within capacity), exceedance probability per active limit.
+pub type ComparedEntry = (f64, Option<f64>, Vec<(Limit, f64)>);
+
+/// One method's part of a comparison.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MethodSummary {
+    /// The method.
+    pub method: Method,
+    /// How the runs ended (single run: 1 for its outcome).
+    pub outcomes: Outcomes,
+    /// Per entry: reached fraction, median impact speed (None: never reached), exceedance
+    /// probabilities per active limit.
+    pub entries: Vec<ComparedEntry>,
+}
+
+/// A warning of the scene.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SceneWarning {
+    /// Code.
+    pub code: &'static str,
+    /// Explanation.
+    pub message: String,
+}
+
+/// Everything a scene reports.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneReport {
+    /// The plan.
+    pub plan: Vec<Stage>,
+    /// The migration of the nominal run (None with `impact_velocity`).
+    pub migration: Option<MigrationResult>,
+    /// Impacts: per entry with `impact_velocity`, the single run's, or the nominal run's.
+    pub impacts: Vec<ImpactOutcome>,
+    /// Ensemble statistics.
+    pub statistics: Option<SceneStatistics>,
+    /// The ensemble's runs (for the CSV).
+    pub runs: Option<Vec<SceneRun>>,
+    /// Both methods side by side.
+    pub comparison: Option<Vec<MethodSummary>>,
+    /// Warnings of the scene (the migration's are in its result).
+    pub warnings: Vec<SceneWarning>,
+}
+
+/// Bounding radius of a rock (largest distance of a point from its centre of mass), m, and its
+/// mass, kg.
+pub fn rock_extent(rock: &Rock) -> Result<(f64, f64), PhysicsError> {
+    let b = BlockShape::of_rock(rock)?;
+    Ok((b.r_max, b.mass))
+}
+
+/// The rock as it enters the impact: itself when a cube, else the cube of equal mass and density.
+pub fn impact_rock(rock: &Rock, mass: f64) -> Rock {
+    if rock.shape == RockShape::Cube {
+        return rock.clone();
+    }
+    let l = (mass / rock.density).cbrt();
+    Rock {
+        shape: RockShape::Cube,
+        side_length: l,
+        corner_radius: rock.corner_radius.min(l / 2.0),
+        ..rock.clone()
+    }
+}
+
+/// Strikes `entry` at `speed` with `rock` (already a cube): the impact and column stages.
+///
+/// Errors (other than the capacity, which is a result): a column shorter than the contact
+/// length, and the column stage's own (too many steps, cancel, time limit), tagged with the entry.
+pub fn strike(
+    case: &SceneCase,
+    entry: usize,
+    rock: &Rock,
+    speed: f64,
+    control: &Control,
+) -> SceneResult<Strike> {
+    let tag = |error: PhysicsError| SceneError {
+        entry: Some(entry),
+        error,
+    };
+    if speed.is_nan() || speed < NO_IMPACT_SPEED {
+        return Ok(Strike::NoImpact);
+    }
+    if speed > MAX_IMPACT_SPEED {
+        return Ok(Strike::CapacityExceeded { max_velocity: None });
+    }
+    let e = &case.supports[entry];
+    if e.column.length < rock.side_length {
+        return Err(tag(PhysicsError::invalid(
+            "/column/length_m",
+            e.column.length,
+            format!(
+                "must be at least the contact length L = {} m of the rock that strikes it",
+                rock.side_length
+            ),
+        )));
+    }
+    let impact_case = ImpactCase {
+        velocity: speed,
+        rock: rock.clone(),
+        column: e.column.clone(),
+        contact: case.column.impact.contact,
+    };
+    let impact = match contact::solve_impact(&impact_case) {
+        Ok(r) => r,
+        Err(PhysicsError::CapacityExceeded {
+            max_velocity_m_s, ..
+        }) => {
+            return Ok(Strike::CapacityExceeded {
+                max_velocity: Some(max_velocity_m_s),
+            });
+        }
+        Err(err) => return Err(tag(err)),
+    };
+    let column_case = ColumnCase {
+        impact: impact_case.clone(),
+        ..case.column.clone()
+    };
+    match column::solve_column(&column_case, control) {
+        Ok(c) => Ok(Strike::Solved {
+            impact_case: Box::new(impact_case),
+            impact: Box::new(impact),
+            column_case: Box::new(column_case),
+            column: Box::new(c),
+        }),
+        Err(PhysicsError::CapacityExceeded {
+            max_velocity_m_s, ..
+        }) => Ok(Strike::CapacityExceeded {
+            max_velocity: Some(max_velocity_m_s),
+        }),
+        Err(err) => Err(tag(err)),
+    }
+}
+
+fn outcome(
+    case: &SceneCase,
+    entry: usize,
+    velocity: f64,
+    strike: Strike,
+    nominal: bool,
+) -> ImpactOutcome {
+    let checks = checks(&case.limits, &strike);
+    ImpactOutcome {
+        entry,
+        velocity,
+        exceeded: checks.iter().any(|c| c.exceeded),
+        checks,
+        strike,
+        nominal,
+    }
+}
+
+/// The supports as the migration sees them, for a rock of bounding radius `r_rock`.
+pub fn stops(case: &SceneCase, r_rock: f64) -> Vec<SupportStop> {
+    case.supports
+        .iter()
+        .map(|e| SupportStop {
+            along_dip: e.along_dip,
+            across: e.across,
+            reach: e.column.outer_diameter / 2.0 + r_rock,
+        })
+        .collect()
+}
+
+/// The scene-only stream of run `index`: seeded by (seed, run index, 1).
+pub fn scene_stream(seed: u64, index: u64) -> rand_pcg::Pcg64 {
+    // as the run's stream of /v1/migration, (seed, index), with the third word 1 mixed in
+    let mut sm =
+        seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 1u64.wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
+    let hi = monte_carlo::splitmix64(&mut sm) as u128;
+    let lo = monte_carlo::splitmix64(&mut sm) as u128;
+    let stream = monte_carlo::splitmix64(&mut sm) as u128;
+    rand_pcg::Pcg64::new((hi << 64) | lo, stream)
+}
+
+/// The migration case of run `index` with its scene-only draws, and its rock's bounding radius
+/// and mass.
+fn run_case(
+    case: &SceneCase,
+    seed: u64,
+    index: u64,
+) -> Result<(MigrationCase, Rock, f64, f64), PhysicsError> {
+    let mut m = case.migration.clone();
+    m.output.events = false;
+    m.output.trajectory = false;
+    m.output.runs_csv = false;
+    let mut rng = scene_stream(seed, index);
+    if let Some(zones) = &case.release_zones {
+        let total: f64 = zones.iter().map(|z| z.weight).sum();
+        let u = monte_carlo::uniform01(&mut rng) * total;
+        let mut acc = 0.0;
+        let mut pick = zones[zones.len() - 1];
+        for z in zones {
+            acc += z.weight;
+            if u < acc && z.weight > 0.0 {
+                pick = *z;
+                break;
+            }
+        }
+        let w = monte_carlo::uniform01(&mut rng);
+        let s = pick.from + (pick.to - pick.from) * w;
+        // a release is strictly above the lower end
+        m.release.along_dip = s.min(m.face.length * (1.0 - f64::EPSILON));
+    }
+    if let Some(d) = &case.draws.release_across {
+        m.release.across = monte_carlo::sample(d, &mut rng);
+    }
+    if let Some(d) = &case.draws.side_length {
+        let l = monte_carlo::sample(d, &mut rng);
+        scale_rock(&mut m.rock, l);
+    }
+    if let Some(d) = &case.draws.density {
+        m.rock.density = monte_carlo::sample(d, &mut rng);
+    }
+    let (r, mass) = rock_extent(&m.rock)?;
+    m.supports = stops(case, r);
+    let rock = m.rock.clone();
+    Ok((m, rock, r, mass))
+}
+
+/// Sets the rock's side length to `l`, scaling a sphere's radius and a cuboid's edges with it.
+fn scale_rock(rock: &mut Rock, l: f64) {
+    let k = l / rock.side_length;
+    rock.shape = match &rock.shape {
+        RockShape::Sphere { radius } => RockShape::Sphere { radius: radius * k },
+        RockShape::Cuboid { dimensions } => RockShape::Cuboid {
+            dimensions: dimensions.map(|d| d * k),
+        },
+        s => s.clone(),
+    };
+    rock.side_length = l;
+    rock.corner_radius = rock.corner_radius.min(l / 2.0);
+}
+
+/// Solves a scene.
+///
+/// Errors: the migration's (tagged with no entry) and a strike's (tagged with its entry).
+///
+/// # References
+/// api.md `POST /v1/scene`.
+pub fn solve(case: &SceneCase, control: &Control) -> SceneResult<SceneReport> {
+    let mut plan = Vec::new();
+    let mut warnings = Vec::new();
+    let (r_rock, mass) = rock_extent(&case.migration.rock)?;
+    let rock0 = impact_rock(&case.migration.rock, mass);
+    if case.migration.rock.shape != RockShape::Cube {
+        warnings.push(SceneWarning {
+            code: "equivalent_cube",
+            message: format!(
+                "the rock is not a cube: it enters the impact and column stages as the cube of \
+                 equal mass and density, side {} m",
+                rock0.side_length
+            ),
+        });
+    }
+    if let Some(v) = case.impact_velocity {
+        plan.push(stage(
+            false,
+            "release",
+            "impact_velocity_m_s given: no release",
+        ));
+        plan.push(stage(
+            false,
+            "migration",
+            "impact_velocity_m_s given: no migration",
+        ));
+        let mut impacts = Vec::with_capacity(case.supports.len());
+        control.set_total(case.supports.len() as u64);
+        for k in 0..case.supports.len() {
+            control.check()?;
+            let s = strike(case, k, &rock0, v, control)?;
+            impacts.push(outcome(case, k, v, s, false));
+            control.add_done(1);
+        }
+        push_strike_plan(case, &mut plan, impacts.len(), &impacts);
+        return Ok(SceneReport {
+            plan,
+            migration: None,
+            impacts,
+            statistics: None,
+            runs: None,
+            comparison: None,
+            warnings,
+        });
+    }
+    plan.push(stage(
+        true,
+        "release",
+        match (&case.migration.monte_carlo, &case.release_zones) {
+            (Some(_), Some(_)) => "ensemble release points drawn from the release zones",
+            _ => "the release of the request",
+        },
+    ));
+    let mut nominal_case = case.migration.clone();
+    nominal_case.supports = stops(case, r_rock);
+    let mc = nominal_case.monte_carlo.take();
+    let nominal = migration::run(&nominal_case, control)?;
+    plan.push(stage(
+        true,
+        "migration",
+        match (&mc, case.migration.method) {
+            (Some(m), Method::LumpedMass) => format!(
+                "energy tracking method: the nominal run and a seeded ensemble of {} runs, each \
+                 ending at the first support reached",
+                m.runs
+            ),
+            (Some(m), Method::RigidBlock) => format!(
+                "rigid block (DEM): the nominal run and a seeded ensemble of {} runs, each \
+                 ending at the first support reached",
+                m.runs
+            ),
+            (None, Method::LumpedMass) => {
+                "energy tracking method, one run ending at the first support reached".into()
+            }
+            (None, Method::RigidBlock) => {
+                "rigid block (DEM), one run ending at the first support reached".into()
+            }
+        },
+    ));
+    let mut impacts = Vec::new();
+    if let (Some(k), Some(v)) = (nominal.arrival.support, nominal.arrival.impact_speed) {
+        let s = strike(case, k, &rock0, v, control)?;
+        impacts.push(outcome(case, k, v, s, mc.is_some()));
+    }
+    let (statistics, runs) = match &mc {
+        None => (None, None),
+        Some(mc) => {
+            let runs = ensemble(case, mc, control)?;
+            let st = statistics_of(case, mc, &runs);
+            for (k, e) in st.entries.iter().enumerate() {
+                if e.impact_velocity.is_none() {
+                    let s = &case.supports[k];
+                    warnings.push(SceneWarning {
+                        code: "support_never_reached",
+                        message: format!(
+                            "support {} column {} at {} m: no run reached it within the contact \
+                             capacity; its distributions are null",
+                            s.support, s.column_index, s.along_dip
+                        ),
+                    });
+                }
+            }
+            (Some(st), Some(runs))
+        }
+    };
+    let struck = match &runs {
+        Some(r) => r.iter().filter(|r| r.summary.support.is_some()).count(),
+        None => impacts.len(),
+    };
+    push_strike_plan(case, &mut plan, struck, &impacts);
+    let comparison = if case.compare_methods {
+        Some(compare(case, &nominal_case, mc.as_ref(), control)?)
+    } else {
+        None
+    };
+    Ok(SceneReport {
+        plan,
+        migration: Some(nominal),
+        impacts,
+        statistics,
+        runs,
+        comparison,
+        warnings,
+    })
+}
+
+fn stage(ran: bool, stage: &'static str, reason: impl Into<String>) -> Stage {
+    Stage {
+        stage,
+        ran,
+        reason: reason.into(),
+    }
+}
+
+fn push_strike_plan(
+    case: &SceneCase,
+    plan: &mut Vec<Stage>,
+    struck: usize,
+    impacts: &[ImpactOutcome],
+) {
+    let capacity = impacts
+        .iter()
+        .any(|i| matches!(i.strike, Strike::CapacityExceeded { .. }));
+    if struck == 0 {
+        plan.push(stage(false, "impact", "no run reached a support"));
+        plan.push(stage(false, "column", "no run reached a support"));
+        plan.push(stage(false, "checks", "no run reached a support"));
+        return;
+    }
+    plan.push(stage(
+        true,
+        "impact",
+        format!("Hertz contact of /v1/impact for {struck} strike(s) at the first support reached"),
+    ));
+    plan.push(stage(
+        true,
+        "column",
+        match case.column.model {
+            ColumnModel::Decoupled => "decoupled column of /v1/column (closed form)",
+            ColumnModel::Coupled => "coupled column of /v1/column (rock + contact + modes)",
+        }
+        .to_string()
+            + if capacity {
+                "; skipped for impacts past the contact capacity"
+            } else {
+                ""
+            },
+    ));
+    if case.limits.active().is_empty() {
+        plan.push(stage(false, "checks", "every design limit is null"));
+    } else {
+        plan.push(stage(
+            true,
+            "checks",
+            "each design limit that is not null, for every impact",
+        ));
+    }
+}
+
+/// Runs the ensemble: the migration of each run (the `/v1/migration` streams), then its strike.
+fn ensemble(case: &SceneCase, mc: &MonteCarlo, control: &Control) -> SceneResult<Vec<SceneRun>> {
+    const CHUNK: usize = 64;
+    let n = mc.runs as usize;
+    control.set_total(mc.runs);
+    let limits = case.limits.active();
+    let one = |i: u64| -> SceneResult<SceneRun> {
+        let (mut m, rock, _, mass) = run_case(case, mc.seed, i)?;
+        m.monte_carlo = None;
+        let summary = migration::ensemble_run(&m, mc, i, control)?;
+        let Some(k) = summary.support else {
+            return Ok(SceneRun {
+                summary,
+                values: None,
+                capacity_exceeded: false,
+                exceeded: vec![false; limits.len()],
+            });
+        };
+        let rock = impact_rock(&rock, mass);
+        let s = strike(case, k, &rock, summary.impact_speed, control)?;
+        let ch = checks(&case.limits, &s);
+        Ok(SceneRun {
+            summary,
+            values: s.values(),
+            capacity_exceeded: matches!(s, Strike::CapacityExceeded { .. }),
+            exceeded: ch.iter().map(|c| c.exceeded).collect(),
+        })
+    };
+    let mut all: Vec<Option<SceneRun>> = vec![None; n];
+    let chunks: Vec<SceneResult<()>> = all
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .map(|(c, out)| {
+            control.check()?;
+            let start = (c * CHUNK) as u64;
+            for (i, slot) in (start..).zip(out.iter_mut()) {
+                *slot = Some(one(i)?);
+            }
+            control.add_done(out.len() as u64);
+            Ok(())
+        })
+        .collect();
+    for c in chunks {
+        c?;
+    }
+    Ok(all
+        .into_iter()
+        .map(|r| r.expect("every run is filled"))
+        .collect())
+}
+
+/// The outcomes of runs.
+pub fn outcomes_of(runs: &[RunSummary]) -> Outcomes {
+    let n = runs.len().max(1) as f64;
+    let f = |r: StopReason| runs.iter().filter(|s| s.stop_reason == r).count() as f64 / n;
+    Outcomes {
+        support: f(StopReason::Support),
+        lower_end: f(StopReason::LowerEnd),
+        at_rest: f(StopReason::AtRest),
+        left_floor: f(StopReason::LeftFloor),
+        end_time: f(StopReason::EndTime),
+    }
+}
+
+fn statistics_of(case: &SceneCase, mc: &MonteCarlo, runs: &[SceneRun]) -> SceneStatistics {
+    let n = runs.len();
+    let limits = case.limits.active();
+    let summaries: Vec<RunSummary> = runs.iter().map(|r| r.summary).collect();
+    let entries = (0..case.supports.len())
+        .map(|k| {
+            let at: Vec<&SceneRun> = runs
+                .iter()
+                .filter(|r| r.summary.support == Some(k))
+                .collect();
+            let within: Vec<&SceneRun> = at
+                .iter()
+                .copied()
+                .filter(|r| !r.capacity_exceeded)
+                .collect();
+            let col = |f: &dyn Fn(&SceneRun) -> f64| {
+                stats::summarize_owned(within.iter().map(|r| f(r)).collect())
+            };
+            let v = |r: &SceneRun| r.values.unwrap_or_default();
+            let exceedance: Vec<(Limit, Probability)> = limits
+                .iter()
+                .enumerate()
+                .map(|(j, (l, _))| {
+                    (
+                        *l,
+                        probability(at.iter().filter(|r| r.exceeded[j]).count(), n),
+                    )
+                })
+                .collect();
+            EntryStatistics {
+                reached_fraction: at.len() as f64 / n.max(1) as f64,
+                capacity_exceeded_fraction: (at.len() - within.len()) as f64 / n.max(1) as f64,
+                impact_velocity: col(&|r| r.summary.impact_speed),
+                max_deformation: col(&|r| v(r).max_deformation),
+                max_force: col(&|r| v(r).max_force),
+                absorbed_energy: col(&|r| v(r).absorbed_energy),
+                stress_utilisation: col(&|r| v(r).stress_utilisation),
+                exceeded: exceedance
+                    .iter()
+                    .any(|(_, p)| p.probability > case.limits.acceptable_probability),
+                exceedance,
+            }
+        })
+        .collect();
+    SceneStatistics {
+        runs: n as u64,
+        seed: mc.seed,
+        outcomes: outcomes_of(&summaries),
+        entries,
+        any_exceeded: probability(
+            runs.iter()
+                .filter(|r| r.exceeded.iter().any(|&e| e))
+                .count(),
+            n,
+        ),
+    }
+}
+
+/// Both methods on the same case: outcomes, reached fractions, median impact speeds and
+/// exceedance probabilities per entry.
+fn compare(
+    case: &SceneCase,
+    nominal_case: &MigrationCase,
+    mc: Option<&MonteCarlo>,
+    control: &Control,
+) -> SceneResult<Vec<MethodSummary>> {
+    let mut out = Vec::new();
+    for method in [Method::LumpedMass, Method::RigidBlock] {
+        let mut sc = case.clone();
+        sc.migration.method = method;
+        sc.compare_methods = false;
+        match mc {
+            Some(mc) => {
+                let runs = ensemble(&sc, mc, control)?;
+                let st = statistics_of(&sc, mc, &runs);
+                out.push(MethodSummary {
+                    method,
+                    outcomes: st.outcomes,
+                    entries: st
+                        .entries
+                        .iter()
+                        .map(|e| {
+                            (
+                                e.reached_fraction,
+                                e.impact_velocity.as_ref().map(|s| s.p50),
+                                e.exceedance
+                                    .iter()
+                                    .map(|(l, p)| (*l, p.probability))
+                                    .collect(),
+                            )
+                        })
+                        .collect(),
+                });
+            }
+            None => {
+                let mut m = nominal_case.clone();
+                m.method = method;
+                m.output.events = false;
+                m.output.trajectory = false;
+                let r = migration::run(&m, control)?;
+                let a = &r.arrival;
+                let summary = RunSummary {
+                    time: a.time,
+                    speed: a.speed,
+                    kinetic_energy: a.kinetic_energy,
+                    impact_count: r.impact_count,
+                    runout: 0.0,
+                    max_bounce_height: r.max_bounce_height,
+                    stop_reason: a.stop_reason,
+                    steps: 0,
+                    along_dip_velocity: a.along_dip_velocity,
+                    support: a.support,
+                    impact_speed: a.impact_speed.unwrap_or(0.0),
+                };
+                let (_, mass) = rock_extent(&m.rock)?;
+                let rock = impact_rock(&m.rock, mass);
+                let exceeded: Vec<(usize, Vec<(Limit, bool)>)> = match a.support {
+                    Some(k) => {
+                        let s = strike(&sc, k, &rock, summary.impact_speed, control)?;
+                        vec![(
+                            k,
+                            checks(&sc.limits, &s)
+                                .iter()
+                                .map(|c| (c.limit, c.exceeded))
+                                .collect(),
+                        )]
+                    }
+                    None => Vec::new(),
+                };
+                let limits = sc.limits.active();
+                out.push(MethodSummary {
+                    method,
+                    outcomes: outcomes_of(&[summary]),
+                    entries: (0..sc.supports.len())
+                        .map(|k| {
+                            let hit = a.support == Some(k);
+                            let ex = exceeded.iter().find(|(j, _)| *j == k);
+                            (
+                                if hit { 1.0 } else { 0.0 },
+                                hit.then_some(summary.impact_speed),
+                                limits
+                                    .iter()
+                                    .map(|(l, _)| {
+                                        let e = ex.is_some_and(|(_, v)| {
+                                            v.iter().any(|(m, x)| m == l && *x)
+                                        });
+                                        (*l, if e { 1.0 } else { 0.0 })
+                                    })
+                                    .collect(),
+                            )
+                        })
+                        .collect(),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The runs of an ensemble as CSV: `/v1/migration`'s columns, then
+/// `support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded`
+/// (empty when no support was struck); numbers in shortest round-trip form.
+pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
+    let summaries: Vec<RunSummary> = runs.iter().map(|r| r.summary).collect();
+    let base = migration::runs_csv(&summaries);
+    let mut out = String::with_capacity(base.len() * 2);
+    for (i, line) in base.lines().enumerate() {
+        out.push_str(line);
+        if i == 0 {
+            out.push_str(",support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded\n");
+            continue;
+        }
+        let r = &runs[i - 1];
+        match r.summary.support {
+            Some(k) => {
+                let e = &case.supports[k];
+                out.push_str(&format!(
+                    ",{},{},{}",
+                    e.support, e.column_index, r.summary.impact_speed
+                ));
+                match r.values {
+                    Some(v) => out.push_str(&format!(
+                        ",{},{},{},false\n",
+                        v.max_force, v.absorbed_energy, v.stress_utilisation
+                    )),
+                    None => out.push_str(",,,,true\n"),
+                }
+            }
+            None => out.push_str(",,,,,,,\n"),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wilson_interval_of_zero_has_an_upper_bound() {
+        let p = probability(0, 200);
+        assert_eq!(p.probability, 0.0);
+        assert_eq!(p.ci95[0], 0.0);
+        assert!(p.ci95[1] > 0.0 && p.ci95[1] < 0.02);
+    }
+
+    #[test]
+    fn equivalent_cube_keeps_mass_and_density() {
+        let rock = Rock {
+            shape: RockShape::Sphere { radius: 0.2 },
+            ..Rock::default()
+        };
+        let (_, m) = rock_extent(&rock).unwrap();
+        let c = impact_rock(&rock, m);
+        assert!((c.mass() - rock.mass()).abs() <= 1e-12 * rock.mass());
+        assert_eq!(c.density, rock.density);
+    }
+}
