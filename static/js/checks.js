@@ -97,11 +97,11 @@ export function renderChecks(el, checks, prefix = '') {
     h('thead', {}, h('tr', {}, h('th', {}, 'Check'), h('th', { class: 'num' }, 'Value'),
       h('th', { class: 'num' }, 'Limit'), h('th', { class: 'num' }, 'Ratio'), h('th', {}, 'Verdict'))),
     h('tbody', {}, checks.map((c) => {
-      const ratio = c.ratio ?? (c.allowed ? c.value / c.allowed : null);
+      const ratio = 'ratio' in c ? c.ratio : (c.allowed && typeof c.value === 'number' ? c.value / c.allowed : null);
       return h('tr', { class: `verdict-${c.verdict}`, dataset: { check: prefix + c.key, verdict: c.verdict } },
         h('th', { scope: 'row' }, c.label),
-        h('td', { class: 'num' }, `${fmt(c.value, 5)} ${c.unit}`),
-        h('td', { class: 'num' }, c.allowed === null || c.allowed === undefined ? '—' : `${fmt(c.allowed, 5)} ${c.unit}`),
+        h('td', { class: 'num' }, c.value === null ? '—' : `${fmt(c.value, 5)} ${c.unit}`.trim()),
+        h('td', { class: 'num' }, c.allowed === null || c.allowed === undefined ? '—' : `${fmt(c.allowed, 5)} ${c.unit}`.trim()),
         h('td', { class: 'num' }, ratio === null ? '—' : `${fmt(ratio * 100, 4)} %`),
         h('td', {}, h('span', { class: `badge ${c.verdict}` }, VERDICT_WORDS[c.verdict]), h('span', { class: 'why' }, c.note)));
     }))));

@@ -4,6 +4,7 @@
 // the contact are the Migration and Impact tabs' case; this form adds the
 // supports, the release zones, the ensemble and the design limits.
 
+import { columnChecks, impactChecks, renderChecks } from './checks.js';
 import { buildForm, merge } from './form.js';
 import { csvButton, fmt, h, showWarnings } from './format.js';
 import { initPanel } from './panel.js';
@@ -89,6 +90,7 @@ const DISTRIBUTIONS = [
   ['absorbed_energy_j', 'Column energy', 'J', 1],
   ['stress_utilisation', 'Stress utilisation', '%', 100],
 ];
+const LIMIT_WORDS = { stress_utilisation: 'stress utilisation σ/σy', max_force_n: 'rated force (N)', absorbed_energy_j: 'design energy (J)' };
 const STAT_COLUMNS = ['mean', 'std', 'min', 'p05', 'p50', 'p95', 'p99', 'max'];
 const OUTCOMES = [['support', 'struck a support'], ['lower_end', 'reached the lower end'], ['at_rest', 'came to rest'],
   ['left_floor', 'left the floor'], ['end_time', 'still moving at the end time']];
@@ -257,11 +259,41 @@ export function initScene() {
         const a = data.migration?.arrival;
         summary.append(h('p', { class: 'answer' }, 'The rock reached no support', a ? ` (it ${a.stop_reason === 'at_rest' ? 'came to rest' : a.stop_reason.replace(/_/g, ' ')} at ${fmt(a.along_dip_m, 4)} m along the dip).` : '.'));
       }
-      for (const imp of impacts) {
-        summary.append(h('p', { class: 'answer' }, `Support ${label(imp)} struck at ${fmt(imp.impact_velocity_m_s, 4)} m/s: `, verdictBadge(imp.verdict),
-          ' ', sendButton(imp.impact_velocity_m_s)));
-      }
+      for (const imp of impacts) appendImpact(imp);
     }
+    if (st) for (const imp of data.impacts ?? []) appendImpact(imp);
+  }
+
+  /** One impact in words, its server checks and the page's validity checks of its impact and column. */
+  function appendImpact(imp) {
+    const nominal = imp.nominal ? 'Nominal run (no random draws): ' : '';
+    let words;
+    if (imp.outcome === 'capacity_exceeded') {
+      words = `support ${label(imp)} struck at ${fmt(imp.impact_velocity_m_s, 4)} m/s, past the contact law's capacity` +
+        `${imp.max_velocity_m_s ? ` (it takes at most ${fmt(imp.max_velocity_m_s, 4)} m/s)` : ''}: counted as exceeding every limit. `;
+    } else if (imp.outcome === 'no_impact') {
+      words = `support ${label(imp)} reached at under 1e-6 m/s: no impact. `;
+    } else {
+      words = `support ${label(imp)} struck at ${fmt(imp.impact_velocity_m_s, 4)} m/s: `;
+    }
+    summary.append(h('p', { class: 'answer' }, nominal, words, verdictBadge(imp.verdict), ' ', sendButton(imp.impact_velocity_m_s)));
+    const checks = [
+      ...(imp.checks ?? []).map((c) => ({
+        key: `design.${c.limit}`,
+        label: `Design limit: ${LIMIT_WORDS[c.limit] ?? c.limit}`,
+        value: c.value ?? null,
+        allowed: c.allowed,
+        ratio: c.utilisation ?? null,
+        unit: '',
+        verdict: c.exceeded ? 'exceeded' : 'ok',
+        note: c.value === undefined ? 'past the contact law\'s capacity' : '',
+      })),
+      ...(imp.impact ? impactChecks(imp.impact) : []),
+      ...(imp.column ? columnChecks(imp.column).filter((c) => c.key !== 'stress_utilisation') : []),
+    ];
+    const box = h('div', { class: 'table-scroll' });
+    renderChecks(box, checks, `impact${imp.support}.`);
+    summary.append(box);
   }
 
   function sendButton(speed) {
