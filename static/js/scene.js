@@ -145,16 +145,19 @@ export function initScene() {
         method: m.method, face: m.face, rock: m.rock, release: m.release, lumped_mass: m.lumped_mass,
       }, { rock: imp.request.rock, column: imp.request.column, contact: imp.request.contact });
       request.galerkin = { ...(col.request.galerkin ?? {}) };
-      request.column = { ...request.column, ...(col.request.column ?? {}) };
+      // The struck column belongs to the supports (api.md): every support gets the Impact and Column tabs' column.
+      const column = { ...request.column, ...(col.request.column ?? {}) };
+      delete request.column;
       migrationForm.floor?.apply(request, mig.local);
       const own2 = structuredClone(own.request);
       if (own.local.supports === 'rows') {
         const rows = own2.support_rows ?? {};
         rows.across_m = [own.local.across];
+        rows.column = column;
         own2.support_rows = rows;
       } else {
         delete own2.support_rows;
-        request.supports = [{ along_dip_m: m.face?.length_m ?? 120, across_m: null }];
+        request.supports = [{ along_dip_m: m.face?.length_m ?? 120, across_m: null, column }];
       }
       Object.assign(request, own2);
       if (request.column_model === 'decoupled') delete request.galerkin.modes;

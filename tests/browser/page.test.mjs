@@ -720,10 +720,10 @@ async function sceneSection(page) {
     const response = await submit(page, '#scene-form', '/v1/scene');
     const body = JSON.parse((await request).postData());
     assert(response.status() === 200, `POST /v1/scene answered ${response.status()}`);
-    assert(body.support_rows?.count === 62 && body.release_zones === 'table1' && body.monte_carlo?.runs === 100 && body.design_limits?.stress_utilisation === 1,
+    assert(body.support_rows?.count === 62 && body.support_rows.column?.yield_stress_pa === 345e6 && body.release_zones === 'table1' && body.monte_carlo?.runs === 100 && body.design_limits?.stress_utilisation === 1,
       `request: ${JSON.stringify(body).slice(0, 300)}`);
     for (const key of Object.keys(body)) {
-      assert(['face', 'rock', 'release', 'method', 'gravity_m_s2', 'lumped_mass', 'rigid_block', 'monte_carlo', 'contact', 'galerkin', 'column', 'column_model',
+      assert(['face', 'rock', 'release', 'method', 'gravity_m_s2', 'end_time_s', 'lumped_mass', 'rigid_block', 'monte_carlo', 'contact', 'galerkin', 'column_model',
         'supports', 'support_rows', 'impact_velocity_m_s', 'release_zones', 'design_limits', 'compare_methods', 'migration_output', 'column_output'].includes(key), `unknown field ${key}`);
     }
     await page.locator('#scene-table tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
