@@ -98,11 +98,25 @@ export function showWarnings(el, warnings, heading = 'Warnings') {
   el.hidden = list.length === 0;
   el.replaceChildren();
   if (!list.length) return;
-  el.append(
-    h('strong', {}, heading),
-    h('ul', {}, list.map((w) => h('li', { class: VALIDITY.test(w.code) ? 'validity' : '', dataset: { code: w.code } },
-      humanMessage(w.message), ' ', h('code', {}, w.code)))),
-  );
+  // Many warnings of one code (a support no run reached, one per support) become one line
+  // with the rest folded under it.
+  const groups = new Map();
+  for (const w of list) {
+    if (!groups.has(w.code)) groups.set(w.code, []);
+    groups.get(w.code).push(w);
+  }
+  const items = [];
+  for (const [code, ws] of groups) {
+    const cls = VALIDITY.test(code) ? 'validity' : '';
+    if (ws.length <= 3) {
+      for (const w of ws) items.push(h('li', { class: cls, dataset: { code } }, humanMessage(w.message), ' ', h('code', {}, code)));
+    } else {
+      items.push(h('li', { class: cls, dataset: { code, count: String(ws.length) } },
+        humanMessage(ws[0].message), ` — and ${ws.length - 1} more like it `, h('code', {}, code),
+        h('details', {}, h('summary', {}, `all ${ws.length}`), h('ul', {}, ws.slice(1).map((w) => h('li', {}, humanMessage(w.message)))))));
+    }
+  }
+  el.append(h('strong', {}, heading), h('ul', {}, items));
 }
 
 /** Server text with exponent notation ("2.335413e0") shown as people write numbers. */

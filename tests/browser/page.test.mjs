@@ -729,10 +729,15 @@ async function sceneSection(page) {
     await page.locator('#scene-table tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
     await page.locator('#scene-support-plot canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
     assert(await page.locator('#scene-table tbody tr').count() === 62, `${await page.locator('#scene-table tbody tr').count()} support rows`);
-    const answer = await response.json();
+    // Asked with progress: NDJSON lines, the last one the result (a fixture answers plain JSON).
+    const text = await response.text();
+    const lines = text.trim().split('\n').map((l) => JSON.parse(l));
+    const answer = lines.find((l) => l.result)?.result ?? lines[lines.length - 1];
     const worst = answer.statistics.supports.filter((x) => x.verdict === 'exceeded').length;
     assert(await page.locator('#scene-table tbody tr.verdict-exceeded').count() === worst, 'exceeded rows differ from the answer');
     assert(/never reached/.test(await page.locator('#scene-table').textContent()), 'an unreached support is not said so');
+    const warned = await page.locator('#scene-warnings > ul > li').count();
+    assert(warned <= 6, `${warned} warning lines: repeated warnings are not folded`);
     assert(await page.locator('#scene-dist-table tbody tr').count() === 5, 'no distributions for the chosen support');
     const csv = await downloaded(page, page.locator('#panel-scene .card:has(#scene-table) .export-bar [data-csv]'));
     assert(csv.bytes.toString('utf8').startsWith('Support,Column,Along the dip'), `per-support CSV: ${csv.bytes.toString('utf8').slice(0, 60)}`);
