@@ -6,12 +6,13 @@ use sha2::{Digest, Sha256};
 use utoipa::ToSchema;
 
 use super::common::{Checker, Meta, PlanStep, RockDto, Warning, some};
+use super::floor::{self as formats, Sorted};
 use crate::config::Config;
 use crate::http::error::{ApiError, num};
 use crate::physics::migration::{
     self, ContactModel, ContourLine, Distribution, EventKind, Face, FloorSpec, LumpedMassOptions,
-    Method, MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase, Release,
-    RigidBlockOptions, StopReason, Summary,
+    MapFrame, Method, MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase,
+    Release, RigidBlockOptions, StopReason, Summary,
 };
 
 /// Migration method.
@@ -50,9 +51,22 @@ pub struct ContourDto {
     pub points_m: Vec<[f64; 2]>,
 }
 
+/// Placement of a floor given in map coordinates (easting, northing) on the face.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MapDto {
+    /// Azimuth of the face's down-dip x axis, degrees clockwise from north, in [0, 360); y is x
+    /// turned 90° anticlockwise seen from above.
+    #[schema(minimum = 0.0, maximum = 360.0, example = 135.0)]
+    pub dip_direction_deg: f64,
+    /// Map coordinates [E, N] of the face's origin (`along_dip_m` = 0), m, each in [−1e8, 1e8].
+    #[schema(example = json!([500000.0, 4200000.0]))]
+    pub origin_m: [f64; 2],
+}
+
 /// The floor of the face. In `inputs` a grid or contour floor is echoed as
-/// `{"kind", "sha256"}`: the SHA-256 of the floor object re-serialized as compact JSON with its
-/// fields in schema order.
+/// `{"kind", "sha256", "map"}`: the SHA-256 of the `esri_ascii` text as sent, or of the floor
+/// object re-serialized as compact JSON with its object keys sorted (defaults filled in).
 #[derive(Debug, Clone, PartialEq, Deserialize, ToSchema, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct FloorDto {
@@ -71,50 +85,109 @@ pub struct FloorDto {
     #[serde(deserialize_with = "some")]
     #[schema(example = json!([[0.0, -1.0, -2.0], [0.0, -1.0, -2.0]]))]
     pub heights_m: Option<Vec<Vec<f64>>>,
+    /// A grid as the text of an ESRI ASCII file (`ncols …`), instead of `origin_m`, `spacing_m`
+    /// and `heights_m`: square cells, heights at the cells' centres, the first data row the
+    /// northernmost, one row per line, NODATA cells are holes in the floor.
+    #[serde(deserialize_with = "some")]
+    #[schema(
+        example = "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value -9999\n0 -1 -2\n0 -1 -2\n"
+    )]
+    pub esri_ascii: Option<String>,
     /// Contour polylines with elevations.
     #[serde(deserialize_with = "some")]
     #[schema(example = json!([{"elevation_m": 0.0, "points_m": [[0.0, -5.0], [0.0, 5.0]]}, {"elevation_m": -10.0, "points_m": [[10.0, -5.0], [10.0, 5.0]]}]))]
     pub contours: Option<Vec<ContourDto>>,
+    /// Contours as a GeoJSON FeatureCollection of LineString / MultiLineString features in
+    /// projected metres, instead of `contours`.
+    #[serde(deserialize_with = "some")]
+    #[schema(schema_with = geojson_schema)]
+    pub geojson: Option<Value>,
+    /// Property of a GeoJSON feature holding its elevation, m (default "elevation"; without
+    /// it, the third coordinate).
+    #[serde(deserialize_with = "some")]
+    #[schema(default = "elevation", example = "elevation")]
+    pub elevation_property: Option<String>,
     /// Largest spacing of resampled contour points, m, in [0.01, 100] (default 1).
     #[serde(deserialize_with = "some")]
     #[schema(default = 1.0, minimum = 0.01, maximum = 100.0, example = 1.0)]
     pub resolution_m: Option<f64>,
+    /// Map coordinates: the grid or contours are given in (E, N) and placed on the face by a
+    /// rigid transform.
+    #[serde(deserialize_with = "some")]
+    pub map: Option<MapDto>,
     /// SHA-256 of the floor as received (set when resolved; echoed in `inputs`).
     #[serde(skip)]
     #[schema(ignore)]
     pub sha256: Option<String>,
+    /// Whether GeoJSON contours without `map` lie within ±180 × ±90 (set when resolved).
+    #[serde(skip)]
+    #[schema(ignore)]
+    pub geographic: bool,
 }
 
+/// Schema of the `geojson` field: a GeoJSON object (RFC 7946), with an example.
+#[allow(deprecated)] // `example`, as the derived schemas have it (not `examples`)
+fn geojson_schema() -> utoipa::openapi::schema::Object {
+    utoipa::openapi::schema::ObjectBuilder::new()
+        .schema_type(utoipa::openapi::schema::Type::Object)
+        .description(Some(
+            "Contours as a GeoJSON FeatureCollection of LineString / MultiLineString features \
+             in projected metres, instead of `contours`.",
+        ))
+        .example(Some(json!({"type": "FeatureCollection", "features": [
+            {"type": "Feature", "properties": {"elevation": 0.0},
+             "geometry": {"type": "LineString", "coordinates": [[0.0, -5.0], [0.0, 5.0]]}},
+            {"type": "Feature", "properties": {"elevation": -10.0},
+             "geometry": {"type": "LineString", "coordinates": [[10.0, -5.0], [10.0, 5.0]]}}]})))
+        .build()
+}
+
+/// The floor object with its fields in sorted order, for the hash.
 #[derive(Serialize)]
 struct FloorFull<'a> {
-    kind: FloorKind,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    origin_m: &'a Option<[f64; 2]>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    spacing_m: &'a Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    heights_m: &'a Option<Vec<Vec<f64>>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     contours: &'a Option<Vec<ContourDto>>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    elevation_property: &'a Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    geojson: Option<Sorted<'a>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    heights_m: &'a Option<Vec<Vec<f64>>>,
+    kind: FloorKind,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    map: &'a Option<MapDto>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    origin_m: &'a Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     resolution_m: &'a Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    spacing_m: &'a Option<f64>,
+}
+
+fn hex_sha256(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 impl FloorDto {
     fn digest(&self) -> String {
+        if let Some(t) = &self.esri_ascii {
+            return hex_sha256(t.as_bytes());
+        }
         let full = FloorFull {
-            kind: self.kind,
-            origin_m: &self.origin_m,
-            spacing_m: &self.spacing_m,
-            heights_m: &self.heights_m,
             contours: &self.contours,
+            elevation_property: &self.elevation_property,
+            geojson: self.geojson.as_ref().map(Sorted),
+            heights_m: &self.heights_m,
+            kind: self.kind,
+            map: &self.map,
+            origin_m: &self.origin_m,
             resolution_m: &self.resolution_m,
+            spacing_m: &self.spacing_m,
         };
-        let bytes = serde_json::to_vec(&full).unwrap_or_default();
-        Sha256::digest(&bytes)
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect()
+        hex_sha256(&serde_json::to_vec(&full).unwrap_or_default())
     }
 }
 
@@ -126,6 +199,9 @@ impl Serialize for FloorDto {
         if self.kind != FloorKind::Plane {
             let d = self.sha256.clone().unwrap_or_else(|| self.digest());
             m.serialize_entry("sha256", &d)?;
+            if let Some(map) = &self.map {
+                m.serialize_entry("map", map)?;
+            }
         }
         m.end()
     }
@@ -556,7 +632,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
     // the value sent is echoed (a grid's heights as [rows, columns], contours as their count)
     let stray = |ck: &mut Checker, name: &str, sent: Option<Value>, kind: &str| {
         if let Some(v) = sent {
-            ck.push(p(name), v, format!("not a field of a {kind} floor"));
+            ck.push(p(name), v, format!("not a field of {kind}"));
         }
     };
     let origin_v = f.origin_m.map(|o| json!(o));
@@ -567,21 +643,167 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
         .map(|h| json!([h.len(), h.first().map_or(0, Vec::len)]));
     let contours_v = f.contours.as_ref().map(|c| json!(c.len()));
     let resolution_v = f.resolution_m.map(num);
+    let esri_v = f
+        .esri_ascii
+        .as_ref()
+        .map(|t| json!(format!("{} characters", t.len())));
+    let geojson_v = f.geojson.as_ref().map(|_| json!("a GeoJSON object"));
+    let property_v = f.elevation_property.as_ref().map(|s| json!(s));
+    let map_v = f.map.map(|m| json!(m));
+    // map coordinates: checked first, the floor's own ranges are checked relative to them
+    let map = f.map.map(|m| {
+        for (i, o) in m.origin_m.iter().enumerate() {
+            ck.closed(&p(&format!("map/origin_m/{i}")), *o, -1e8, 1e8, "m");
+        }
+        ck.closed_open(
+            &p("map/dip_direction_deg"),
+            m.dip_direction_deg,
+            0.0,
+            360.0,
+            "° (clockwise from north)",
+        );
+        MapFrame {
+            origin: m.origin_m,
+            dip_direction_deg: m.dip_direction_deg,
+        }
+    });
+    let shift = map.map_or([0.0, 0.0], |m| m.origin);
+    let rotated = map.is_some_and(|m| m.dip_direction_deg != 90.0);
+    let wrap = |spec: FloorSpec| match map {
+        Some(map) => FloorSpec::Mapped {
+            floor: Box::new(spec),
+            map,
+        },
+        None => spec,
+    };
     match f.kind {
         FloorKind::Plane => {
-            stray(ck, "origin_m", origin_v, "plane");
-            stray(ck, "spacing_m", spacing_v, "plane");
-            stray(ck, "heights_m", heights_v, "plane");
-            stray(ck, "contours", contours_v, "plane");
-            stray(ck, "resolution_m", resolution_v, "plane");
+            for (name, v) in [
+                ("origin_m", origin_v),
+                ("spacing_m", spacing_v),
+                ("heights_m", heights_v),
+                ("esri_ascii", esri_v),
+                ("contours", contours_v),
+                ("geojson", geojson_v),
+                ("elevation_property", property_v),
+                ("resolution_m", resolution_v),
+                ("map", map_v),
+            ] {
+                stray(ck, name, v, "a plane floor");
+            }
             FloorSpec::Plane
         }
         FloorKind::Grid => {
-            stray(ck, "contours", contours_v, "grid");
-            stray(ck, "resolution_m", resolution_v, "grid");
+            for (name, v) in [
+                ("contours", contours_v),
+                ("geojson", geojson_v),
+                ("elevation_property", property_v),
+                ("resolution_m", resolution_v),
+            ] {
+                stray(ck, name, v, "a grid floor");
+            }
+            // a rotated grid becomes a mesh: its nodes, triangles and buckets besides the grid
+            let bytes = |rows: usize, cols: usize| {
+                migration::grid_bytes(rows, cols)
+                    + if rotated {
+                        rows as f64 * cols as f64 * migration::CONTOUR_BYTES_PER_POINT
+                    } else {
+                        0.0
+                    }
+            };
+            if let Some(text) = &f.esri_ascii {
+                for (name, v) in [
+                    ("origin_m", origin_v),
+                    ("spacing_m", spacing_v),
+                    ("heights_m", heights_v),
+                ] {
+                    stray(ck, name, v, "an ESRI ASCII grid (its header gives them)");
+                }
+                f.sha256 = Some(f.digest());
+                let field = p("esri_ascii");
+                let line_v = |line: usize| {
+                    let l = text.lines().nth(line.saturating_sub(1)).unwrap_or("");
+                    json!(l.chars().take(80).collect::<String>())
+                };
+                let header = match formats::esri_header(text) {
+                    Ok(h) => h,
+                    Err(e) => {
+                        ck.push(field, line_v(e.line), e.message);
+                        return FloorSpec::Plane;
+                    }
+                };
+                let origin = [header.x_center, header.y_center];
+                for (i, o) in origin.iter().enumerate() {
+                    let rel = o - shift[i];
+                    if !(-1e6..=1e6).contains(&rel) {
+                        ck.push(
+                            field.clone(),
+                            num(*o),
+                            format!(
+                                "the grid's first cell centre {} = {o} m{} must lie in [−1e6, 1e6] m",
+                                ["x", "y"][i],
+                                if map.is_some() {
+                                    " minus map.origin_m"
+                                } else {
+                                    " (give map.origin_m for map coordinates)"
+                                }
+                            ),
+                        );
+                        return FloorSpec::Plane;
+                    }
+                }
+                // the work and memory are estimated from the header, before the data are read
+                let (rows, cols) = (header.nrows, header.ncols);
+                let need = bytes(rows, cols);
+                if need > max_floor_bytes as f64 {
+                    check_floor_memory(
+                        ck,
+                        field,
+                        json!([rows, cols]),
+                        &format!("an ESRI ASCII grid of {rows} × {cols} cells"),
+                        need,
+                        max_floor_bytes,
+                    );
+                    return FloorSpec::Plane;
+                }
+                let heights = match formats::esri_heights(text, &header, 1e6) {
+                    Ok((z, nodata)) => {
+                        if nodata == rows * cols {
+                            ck.push(field, json!(nodata), "every cell is NODATA");
+                            return FloorSpec::Plane;
+                        }
+                        z
+                    }
+                    Err(e) => {
+                        ck.push(field, line_v(e.line), e.message);
+                        return FloorSpec::Plane;
+                    }
+                };
+                return wrap(FloorSpec::Grid {
+                    origin,
+                    spacing: header.cellsize,
+                    heights,
+                });
+            }
             let origin = *f.origin_m.get_or_insert([0.0, 0.0]);
             for (i, o) in origin.iter().enumerate() {
-                ck.closed(&p(&format!("origin_m/{i}")), *o, -1e6, 1e6, "m");
+                if map.is_some() {
+                    let rel = o - shift[i];
+                    if !(-1e6..=1e6).contains(&rel) {
+                        ck.push(
+                            p(&format!("origin_m/{i}")),
+                            num(*o),
+                            "must lie within 1e6 m of map.origin_m",
+                        );
+                    }
+                } else if !(-1e6..=1e6).contains(o) {
+                    ck.push(
+                        p(&format!("origin_m/{i}")),
+                        num(*o),
+                        "must be in [−1e6, 1e6] m (give map.origin_m for map coordinates such \
+                         as UTM)",
+                    );
+                }
             }
             let spacing = match f.spacing_m {
                 Some(d) => {
@@ -631,56 +853,123 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                     p("heights_m"),
                     json!([rows, cols]),
                     &format!("a grid of {rows} × {cols} heights"),
-                    migration::grid_bytes(rows, cols),
+                    bytes(rows, cols),
                     max_floor_bytes,
                 );
             }
-            FloorSpec::Grid {
+            wrap(FloorSpec::Grid {
                 origin,
                 spacing,
                 heights,
-            }
+            })
         }
         FloorKind::Contours => {
-            stray(ck, "origin_m", origin_v, "contour");
-            stray(ck, "spacing_m", spacing_v, "contour");
-            stray(ck, "heights_m", heights_v, "contour");
+            for (name, v) in [
+                ("origin_m", origin_v),
+                ("spacing_m", spacing_v),
+                ("heights_m", heights_v),
+                ("esri_ascii", esri_v),
+            ] {
+                stray(ck, name, v, "a contour floor");
+            }
             let resolution = *f.resolution_m.get_or_insert(1.0);
             ck.closed(&p("resolution_m"), resolution, 0.01, 100.0, "m");
-            f.sha256 = Some(f.digest());
-            let lines = f.contours.take().unwrap_or_default();
+            // the lines with pointers to each one's points and elevation
+            let (lines, paths): (Vec<ContourDto>, Vec<(String, String)>) =
+                if let Some(g) = &f.geojson {
+                    stray(
+                        ck,
+                        "contours",
+                        contours_v,
+                        "GeoJSON contours (give one or the other)",
+                    );
+                    let prop = f
+                        .elevation_property
+                        .get_or_insert_with(|| "elevation".into())
+                        .clone();
+                    f.sha256 = Some(f.digest());
+                    let gp = p("geojson");
+                    match formats::geojson_lines(g, &prop) {
+                        Ok(ls) => {
+                            f.geographic = map.is_none()
+                                && ls.iter().all(|l| {
+                                    l.points
+                                        .iter()
+                                        .all(|q| q[0].abs() <= 180.0 && q[1].abs() <= 90.0)
+                                });
+                            ls.into_iter()
+                                .map(|l| {
+                                    (
+                                        ContourDto {
+                                            elevation_m: l.elevation,
+                                            points_m: l.points,
+                                        },
+                                        (
+                                            format!("{gp}{}", l.points_pointer),
+                                            format!("{gp}{}", l.elevation_pointer),
+                                        ),
+                                    )
+                                })
+                                .unzip()
+                        }
+                        Err(e) => {
+                            ck.push(format!("{gp}{}", e.pointer), e.value, e.message);
+                            return FloorSpec::Plane;
+                        }
+                    }
+                } else {
+                    stray(
+                        ck,
+                        "elevation_property",
+                        property_v,
+                        "contours given as contours (it names a GeoJSON property)",
+                    );
+                    f.sha256 = Some(f.digest());
+                    let lines = f.contours.take().unwrap_or_default();
+                    let paths = (0..lines.len())
+                        .map(|i| {
+                            (
+                                p(&format!("contours/{i}/points_m")),
+                                p(&format!("contours/{i}/elevation_m")),
+                            )
+                        })
+                        .collect();
+                    (lines, paths)
+                };
+            if f.geojson.is_some() {
+                // the lines hold their own copy: the GeoJSON is not needed any more
+                f.geojson = Some(Value::Null);
+            }
             if lines.is_empty() {
                 ck.push(
-                    p("contours"),
+                    if f.geojson.is_some() {
+                        p("geojson/features")
+                    } else {
+                        p("contours")
+                    },
                     Value::Null,
                     "a contour floor needs at least one contour line",
                 );
             }
             let mut total = 0usize;
             for (i, c) in lines.iter().enumerate() {
-                ck.closed(
-                    &p(&format!("contours/{i}/elevation_m")),
-                    c.elevation_m,
-                    -1e6,
-                    1e6,
-                    "m",
-                );
+                let (pts, elev) = &paths[i];
+                ck.closed(elev, c.elevation_m, -1e6, 1e6, "m");
                 if c.points_m.is_empty() {
-                    ck.push(
-                        p(&format!("contours/{i}/points_m")),
-                        json!(0),
-                        "needs at least one point",
-                    );
+                    ck.push(pts.clone(), json!(0), "needs at least one point");
                 }
-                if let Some(j) = c
-                    .points_m
-                    .iter()
-                    .position(|q| q[0].abs() > 1e6 || q[1].abs() > 1e6)
-                {
+                if let Some(j) = c.points_m.iter().position(|q| {
+                    !((q[0] - shift[0]).abs() <= 1e6 && (q[1] - shift[1]).abs() <= 1e6)
+                }) {
                     ck.push(
-                        p(&format!("contours/{i}/points_m/{j}")),
+                        format!("{pts}/{j}"),
                         json!(c.points_m[j]),
-                        "coordinates must lie in [−1e6, 1e6] m",
+                        if map.is_some() {
+                            "coordinates must lie within 1e6 m of map.origin_m"
+                        } else {
+                            "coordinates must lie in [−1e6, 1e6] m (give map.origin_m for map \
+                             coordinates)"
+                        },
                     );
                 }
                 total += c.points_m.len();
@@ -702,11 +991,12 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                     match seen.get(&key) {
                         Some(&(k, z)) if z != c.elevation_m => {
                             ck.push(
-                                p(&format!("contours/{i}/points_m/{j}")),
+                                format!("{}/{j}", paths[i].0),
                                 json!(q),
                                 format!(
-                                    "this point also lies on contour {k} at elevation {z} m: one \
-                                     point cannot have two elevations"
+                                    "this point also lies on the line at {} (elevation {z} m): \
+                                     one point cannot have two elevations",
+                                    paths[k].0
                                 ),
                             );
                             dup = true;
@@ -733,14 +1023,14 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                     "meets"
                 };
                 ck.push(
-                    p(&format!("contours/{i}/points_m/{k}")),
+                    format!("{}/{k}", paths[i].0),
                     json!(lines[i].points_m[k]),
                     format!(
-                        "the segment from this point to points_m/{} {what} the segment \
-                             contours/{i2}/points_m/{k2}–{} (elevation {} m) near [{}, {}]: \
-                             contours must not cross (touching at a point at the same elevation \
-                             is allowed)",
+                        "the segment from this point to point {} {what} the segment {}/{k2}–{} \
+                         (elevation {} m) near [{}, {}]: contours must not cross (touching at a \
+                         point at the same elevation is allowed)",
                         k + 1,
+                        paths[i2].0,
                         k2 + 1,
                         lines[i2].elevation_m,
                         x.at[0],
@@ -770,10 +1060,10 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                     max_floor_bytes,
                 );
             }
-            FloorSpec::Contours {
+            wrap(FloorSpec::Contours {
                 contours,
                 resolution,
-            }
+            })
         }
     }
 }
@@ -1315,6 +1605,14 @@ impl MigrationResponse {
             .iter()
             .map(|w| Warning::new(w.code, w.message.clone()))
             .collect();
+        if inputs.face.floor.geographic {
+            meta.warnings.push(Warning::new(
+                "geographic_coordinates",
+                "every coordinate of the GeoJSON contours lies within ±180 × ±90: they look like \
+                 longitude/latitude (RFC 7946), which are not metres; the floor was taken in \
+                 metres as sent. Project it (e.g. to UTM) and give map.origin_m",
+            ));
+        }
         let a = &r.arrival;
         Self {
             method: if rigid {

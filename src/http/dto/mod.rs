@@ -4,6 +4,7 @@
 pub mod batch;
 pub mod column;
 pub mod common;
+pub mod floor;
 pub mod impact;
 pub mod migration;
 pub mod scene;

@@ -27,7 +27,8 @@ pub use rigid_block::{
 };
 pub use stats::{Histogram, Summary};
 pub use terrain::{
-    CONTOUR_BYTES_PER_POINT, ContourLine, GRID_BYTES_PER_POINT, contour_points, grid_bytes,
+    CONTOUR_BYTES_PER_POINT, ContourLine, GRID_BYTES_PER_POINT, MapFrame, contour_points,
+    grid_bytes,
 };
 
 use self::lumped_mass::{Recording, RunOut, Setup, simulate};
@@ -52,7 +53,8 @@ pub enum FloorSpec {
     /// The plane z = −x tan θ (from `dip_deg` and `length_m`).
     #[default]
     Plane,
-    /// Height grid: `heights[i][j]` is z at (x₀ + j d, y₀ + i d), m.
+    /// Height grid: `heights[i][j]` is z at (x₀ + j d, y₀ + i d), m; NaN marks a node without
+    /// data (the facets touching it are removed: a hole).
     Grid {
         /// [x₀, y₀], m (default [0, 0]).
         origin: [f64; 2],
@@ -67,6 +69,13 @@ pub enum FloorSpec {
         contours: Vec<ContourLine>,
         /// Largest spacing of resampled points, m (default 1).
         resolution: f64,
+    },
+    /// A grid or contour floor given in map coordinates, placed on the face by a rigid transform.
+    Mapped {
+        /// The floor in map coordinates (a grid or contours).
+        floor: Box<FloorSpec>,
+        /// Where the face's origin is and where its down-dip axis points.
+        map: MapFrame,
     },
 }
 
@@ -677,6 +686,24 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
             contours,
             resolution,
         } => Floor::contours(dip, contours, *resolution)?,
+        FloorSpec::Mapped { floor, map } => match &**floor {
+            FloorSpec::Grid {
+                origin,
+                spacing,
+                heights,
+            } => Floor::grid_in_map(dip, *origin, *spacing, heights, map)?,
+            FloorSpec::Contours {
+                contours,
+                resolution,
+            } => Floor::contours_in_map(dip, contours, *resolution, map)?,
+            _ => {
+                return Err(PhysicsError::invalid(
+                    "/face/floor/map",
+                    0.0,
+                    "map coordinates apply to grid and contour floors",
+                ));
+            }
+        },
     };
     let rel = &case.release;
     let mean = floor.mean;
@@ -704,7 +731,7 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
                 PhysicsError::invalid(
                     "/release/along_dip_m",
                     rel.along_dip,
-                    "the release point is not on the floor at this across_m",
+                    "the release point is not on the floor at this across_m (outside it or over a hole)",
                 )
             };
             // the part of the line y = across that lies over the floor (a contour set's hull
@@ -727,20 +754,44 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
                 // above the floor's upper edge at this across_m: start on that edge
                 hi = lo;
             }
-            for _ in 0..200 {
-                let mid = 0.5 * (lo + hi);
-                if hi == lo {
-                    break;
+            // bisection for along = along_dip; None when it meets a point off the floor
+            let bisect = |mut lo: f64, mut hi: f64| -> Option<(f64, f64)> {
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if hi == lo || mid <= lo || mid >= hi {
+                        break;
+                    }
+                    match along_at(mid) {
+                        Some(a) if a < rel.along_dip => lo = mid,
+                        Some(_) => hi = mid,
+                        None => return None,
+                    }
                 }
-                if mid <= lo || mid >= hi {
-                    break;
+                Some((lo, hi))
+            };
+            (lo, hi) = match bisect(lo, hi) {
+                Some(b) => b,
+                None => {
+                    // a hole lies on the line: bisect between the last sample on the floor
+                    // before along_dip and the first after it
+                    let mut a = None;
+                    let mut b = None;
+                    for k in first..=last {
+                        match along_at(xs(k)) {
+                            Some(s) if s < rel.along_dip => a = Some(k),
+                            Some(_) => {
+                                b = Some(k);
+                                break;
+                            }
+                            None => {}
+                        }
+                    }
+                    let (Some(a), Some(b)) = (a, b) else {
+                        return Err(off());
+                    };
+                    bisect(xs(a), xs(b)).ok_or_else(off)?
                 }
-                match along_at(mid) {
-                    Some(a) if a < rel.along_dip => lo = mid,
-                    Some(_) => hi = mid,
-                    None => return Err(off()),
-                }
-            }
+            };
             let x = if along_at(hi).is_some_and(|a| a == rel.along_dip) {
                 hi
             } else {

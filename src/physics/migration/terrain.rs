@@ -331,6 +331,8 @@ pub(crate) struct GridFloor {
     z: Vec<f64>,
     /// The facets' planes, precomputed unless there are more than [`MAX_TABLED_FACETS`].
     planes: Vec<FacetPlane>,
+    /// Facets removed because a corner had no data (empty: none removed).
+    holes: Vec<bool>,
 }
 
 /// Triangulated contour set with a bucket grid for point and line queries.
@@ -345,6 +347,8 @@ pub(crate) struct MeshFloor {
     bbox: [f64; 4],
     /// The facets' planes, precomputed unless there are more than [`MAX_TABLED_FACETS`].
     planes: Vec<FacetPlane>,
+    /// Facets removed because a corner had no data (empty: none removed).
+    holes: Vec<bool>,
 }
 
 const NONE: u32 = u32::MAX;
@@ -512,6 +516,212 @@ impl MeshFloor {
     }
 }
 
+impl MeshFloor {
+    /// A mesh from its vertices, counter-clockwise triangles, their neighbours across edge k
+    /// (corner k to k + 1; [`NONE`] on the boundary) and removed facets (empty: none), with the
+    /// bucket grid for point and line queries.
+    fn new(xyz: Vec<[f64; 3]>, tris: Vec<[u32; 3]>, nbr: Vec<[u32; 3]>, holes: Vec<bool>) -> Self {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in &xyz {
+            for a in 0..2 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
+        let mut d = ((w * h) / tris.len() as f64).sqrt() * 1.5;
+        if d.is_nan() || d <= 0.0 {
+            d = w.max(h);
+        }
+        d = d.max(w.max(h) / 4096.0);
+        let ncx = ((w / d).ceil() as usize).max(1);
+        let ncy = ((h / d).ceil() as usize).max(1);
+        let cells = CellGrid {
+            x0: lo[0],
+            y0: lo[1],
+            d,
+            ncx,
+            ncy,
+        };
+        let mut counts = vec![0u32; ncx * ncy + 1];
+        let range = |t: &[u32; 3]| {
+            let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for &k in t {
+                for q in 0..2 {
+                    a[q] = a[q].min(xyz[k as usize][q]);
+                    b[q] = b[q].max(xyz[k as usize][q]);
+                }
+            }
+            let c = |v: f64, o: f64, n: usize| (((v - o) / d).floor().max(0.0) as usize).min(n - 1);
+            (
+                c(a[0], lo[0], ncx),
+                c(b[0], lo[0], ncx),
+                c(a[1], lo[1], ncy),
+                c(b[1], lo[1], ncy),
+            )
+        };
+        for t in &tris {
+            let (i0, i1, j0, j1) = range(t);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    counts[j * ncx + i + 1] += 1;
+                }
+            }
+        }
+        for k in 1..counts.len() {
+            counts[k] += counts[k - 1];
+        }
+        let mut fill = counts.clone();
+        let mut items = vec![0u32; counts[ncx * ncy] as usize];
+        for (id, t) in tris.iter().enumerate() {
+            let (i0, i1, j0, j1) = range(t);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let b = j * ncx + i;
+                    items[fill[b] as usize] = id as u32;
+                    fill[b] += 1;
+                }
+            }
+        }
+        let mut mesh = MeshFloor {
+            xyz,
+            tris,
+            nbr,
+            cells,
+            bucket_start: counts,
+            bucket_items: items,
+            bbox: [lo[0], hi[0], lo[1], hi[1]],
+            planes: Vec::new(),
+            holes,
+        };
+        if mesh.tris.len() <= MAX_TABLED_FACETS {
+            mesh.planes = (0..mesh.tris.len() as Facet)
+                .map(|f| {
+                    let (c, z) = mesh.corners(f);
+                    plane_of(&c, &z)
+                })
+                .collect();
+        }
+        mesh
+    }
+}
+
+/// Placement of a floor given in map coordinates (easting E, northing N, m) on the face: the
+/// face's origin is at `origin` and its x axis (down the dip) points at azimuth
+/// `dip_direction_deg` (clockwise from north); y is x turned 90° anticlockwise seen from above.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MapFrame {
+    /// Map coordinates [E, N] of the face's origin, m.
+    pub origin: [f64; 2],
+    /// Azimuth of the face's down-dip x axis, degrees clockwise from north, in [0, 360).
+    pub dip_direction_deg: f64,
+}
+
+impl MapFrame {
+    /// Face coordinates [x, y] (m) of the map point [E, N] (m).
+    pub fn to_face(&self, p: [f64; 2]) -> [f64; 2] {
+        let (de, dn) = (p[0] - self.origin[0], p[1] - self.origin[1]);
+        if self.dip_direction_deg == 90.0 {
+            return [de, dn];
+        }
+        let (s, c) = self.dip_direction_deg.to_radians().sin_cos();
+        [de * s + dn * c, dn * s - de * c]
+    }
+}
+
+/// Fills the NaN nodes of a `nx`-wide grid in layers outward from the nodes with data, each with
+/// the mean of its neighbours (4-connected) filled in earlier layers; false when no node has data.
+fn fill_holes(z: &mut [f64], nx: usize, ny: usize) -> bool {
+    if z.iter().all(|h| h.is_nan()) {
+        return false;
+    }
+    let nbrs = |k: usize| {
+        let (i, j) = (k / nx, k % nx);
+        let mut out = [usize::MAX; 4];
+        if i > 0 {
+            out[0] = k - nx;
+        }
+        if i + 1 < ny {
+            out[1] = k + nx;
+        }
+        if j > 0 {
+            out[2] = k - 1;
+        }
+        if j + 1 < nx {
+            out[3] = k + 1;
+        }
+        out
+    };
+    let mut layer: Vec<usize> = (0..z.len())
+        .filter(|&k| z[k].is_nan() && nbrs(k).iter().any(|&n| n != usize::MAX && !z[n].is_nan()))
+        .collect();
+    let mut queued = vec![false; z.len()];
+    for &k in &layer {
+        queued[k] = true;
+    }
+    let mut values = Vec::new();
+    while !layer.is_empty() {
+        values.clear();
+        for &k in &layer {
+            let (sum, n) = nbrs(k)
+                .iter()
+                .filter(|&&n| n != usize::MAX && !z[n].is_nan())
+                .fold((0.0, 0.0), |(s, c), &n| (s + z[n], c + 1.0));
+            values.push(sum / n);
+        }
+        for (&k, &v) in layer.iter().zip(&values) {
+            z[k] = v;
+        }
+        let mut next = Vec::new();
+        for &k in &layer {
+            for n in nbrs(k) {
+                if n != usize::MAX && z[n].is_nan() && !queued[n] {
+                    queued[n] = true;
+                    next.push(n);
+                }
+            }
+        }
+        layer = next;
+    }
+    true
+}
+
+impl GridFloor {
+    /// The same triangles (ids, corners, neighbours, holes) as a mesh, its nodes moved from map
+    /// coordinates relative to the map origin into the face frame.
+    fn to_mesh(&self, map: &MapFrame) -> MeshFloor {
+        let ny = self.cells.ncy + 1;
+        let rel = MapFrame {
+            origin: [0.0, 0.0],
+            dip_direction_deg: map.dip_direction_deg,
+        };
+        let mut xyz = Vec::with_capacity(self.nx * ny);
+        for i in 0..ny {
+            for j in 0..self.nx {
+                let p = rel.to_face([
+                    self.cells.x0 + j as f64 * self.cells.d,
+                    self.cells.y0 + i as f64 * self.cells.d,
+                ]);
+                xyz.push([p[0], p[1], self.z[i * self.nx + j]]);
+            }
+        }
+        let n_facets = 2 * self.cells.ncx * self.cells.ncy;
+        let mut tris = Vec::with_capacity(n_facets);
+        let mut nbr = Vec::with_capacity(n_facets);
+        for f in 0..n_facets as Facet {
+            let (i, j) = self.cell_of(f);
+            let id = |di: usize, dj: usize| ((i + di) * self.nx + j + dj) as u32;
+            tris.push(if f & 1 == 0 {
+                [id(0, 0), id(0, 1), id(1, 1)]
+            } else {
+                [id(0, 0), id(1, 1), id(1, 0)]
+            });
+            nbr.push([0, 1, 2].map(|k| self.neighbor_at(f, i, j, k).unwrap_or(NONE)));
+        }
+        MeshFloor::new(xyz, tris, nbr, self.holes.clone())
+    }
+}
+
 /// A contour line: an elevation and a polyline in plan.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContourLine {
@@ -610,7 +820,7 @@ impl Floor {
                 ));
             }
             for (j, &h) in row.iter().enumerate() {
-                if !h.is_finite() {
+                if h.is_infinite() {
                     return Err(PhysicsError::invalid(
                         format!("/face/floor/heights_m/{i}/{j}"),
                         0.0,
@@ -620,7 +830,30 @@ impl Floor {
             }
             z.extend_from_slice(row);
         }
-        let z_ref = heights.iter().map(|r| r[0]).sum::<f64>() / ny as f64;
+        // NaN marks a node without data: the facets touching it are removed
+        let missing: Vec<bool> = z.iter().map(|h| h.is_nan()).collect();
+        let any_missing = missing.iter().any(|&m| m);
+        let z_ref = if any_missing {
+            let (sum, n) = heights
+                .iter()
+                .map(|r| r[0])
+                .filter(|h| !h.is_nan())
+                .fold((0.0, 0usize), |(s, n), h| (s + h, n + 1));
+            if !fill_holes(&mut z, nx, ny) {
+                return Err(PhysicsError::invalid(
+                    "/face/floor",
+                    0.0,
+                    "every node of the grid is without data",
+                ));
+            }
+            if n > 0 {
+                sum / n as f64
+            } else {
+                (0..ny).map(|i| z[i * nx]).sum::<f64>() / ny as f64
+            }
+        } else {
+            heights.iter().map(|r| r[0]).sum::<f64>() / ny as f64
+        };
         let (sin, cos) = dip.sin_cos();
         let mut grid = GridFloor {
             cells: CellGrid {
@@ -633,10 +866,26 @@ impl Floor {
             nx,
             z,
             planes: Vec::new(),
+            holes: Vec::new(),
         };
         let n_facets = 2 * (nx - 1) * (ny - 1);
         if n_facets <= MAX_TABLED_FACETS {
             grid.planes = (0..n_facets as Facet).map(|f| grid.plane_of(f)).collect();
+        }
+        if any_missing {
+            let node = |i: usize, j: usize| missing[i * nx + j];
+            grid.holes = (0..n_facets as Facet)
+                .map(|f| {
+                    let (i, j) = grid.cell_of(f);
+                    node(i, j)
+                        || node(i + 1, j + 1)
+                        || if f & 1 == 0 {
+                            node(i, j + 1)
+                        } else {
+                            node(i + 1, j)
+                        }
+                })
+                .collect();
         }
         Ok(Floor {
             kind: FloorKind::Grid(grid),
@@ -647,6 +896,66 @@ impl Floor {
                 sin,
             },
         })
+    }
+
+    /// A grid given in map coordinates (origin (E₀, N₀) of the grid, spacing, heights with NaN
+    /// for nodes without data) placed in the face frame of `map`: a rigid transform of its nodes.
+    /// A dip direction of exactly 90° (east) keeps it a grid; any other turns it into a
+    /// triangle mesh with the same triangles. The mean plane passes through the floor's height
+    /// at the map origin, where `along_dip` is 0.
+    pub(crate) fn grid_in_map(
+        dip: f64,
+        origin: [f64; 2],
+        spacing: f64,
+        heights: &[Vec<f64>],
+        map: &MapFrame,
+    ) -> PhysicsResult<Self> {
+        let rel = [origin[0] - map.origin[0], origin[1] - map.origin[1]];
+        let mut floor = Floor::grid(dip, rel, spacing, heights)?;
+        if map.dip_direction_deg != 90.0 {
+            let FloorKind::Grid(g) = &floor.kind else {
+                unreachable!("Floor::grid builds a grid")
+            };
+            floor.kind = FloorKind::Mesh(g.to_mesh(map));
+        }
+        floor.place_mean_at_origin()?;
+        Ok(floor)
+    }
+
+    /// Contours given in map coordinates placed in the face frame of `map` (a rigid transform
+    /// of their points, then [`Floor::contours`]); the mean plane passes through the floor's
+    /// height at the map origin.
+    pub(crate) fn contours_in_map(
+        dip: f64,
+        lines: &[ContourLine],
+        resolution: f64,
+        map: &MapFrame,
+    ) -> PhysicsResult<Self> {
+        let moved: Vec<ContourLine> = lines
+            .iter()
+            .map(|l| ContourLine {
+                elevation: l.elevation,
+                points: l.points.iter().map(|p| map.to_face(*p)).collect(),
+            })
+            .collect();
+        let mut floor = Floor::contours(dip, &moved, resolution)?;
+        floor.place_mean_at_origin()?;
+        Ok(floor)
+    }
+
+    /// Puts `along_dip` = 0 at (0, 0), the mean plane through the floor's height there.
+    fn place_mean_at_origin(&mut self) -> PhysicsResult<()> {
+        let z = self.height_at(0.0, 0.0).ok_or_else(|| {
+            PhysicsError::invalid(
+                "/face/floor/map/origin_m",
+                0.0,
+                "the map origin is not on the floor (outside it or over a hole): along_dip_m = 0 \
+                 is measured from the floor's height there",
+            )
+        })?;
+        self.mean.x0 = 0.0;
+        self.mean.z_ref = z;
+        Ok(())
     }
 
     /// Contours resampled at most `resolution` apart and Delaunay-triangulated; the mean plane
@@ -737,89 +1046,9 @@ impl Floor {
                 "the contours do not span a surface (need at least 3 points not on one line)",
             ));
         }
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in &xyz {
-            for a in 0..2 {
-                lo[a] = lo[a].min(p[a]);
-                hi[a] = hi[a].max(p[a]);
-            }
-        }
-        let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
-        let mut d = ((w * h) / tris.len() as f64).sqrt() * 1.5;
-        if d.is_nan() || d <= 0.0 {
-            d = w.max(h);
-        }
-        d = d.max(w.max(h) / 4096.0);
-        let ncx = ((w / d).ceil() as usize).max(1);
-        let ncy = ((h / d).ceil() as usize).max(1);
-        let cells = CellGrid {
-            x0: lo[0],
-            y0: lo[1],
-            d,
-            ncx,
-            ncy,
-        };
-        let mut counts = vec![0u32; ncx * ncy + 1];
-        let range = |t: &[u32; 3]| {
-            let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-            for &k in t {
-                for q in 0..2 {
-                    a[q] = a[q].min(xyz[k as usize][q]);
-                    b[q] = b[q].max(xyz[k as usize][q]);
-                }
-            }
-            let c = |v: f64, o: f64, n: usize| (((v - o) / d).floor().max(0.0) as usize).min(n - 1);
-            (
-                c(a[0], lo[0], ncx),
-                c(b[0], lo[0], ncx),
-                c(a[1], lo[1], ncy),
-                c(b[1], lo[1], ncy),
-            )
-        };
-        for t in &tris {
-            let (i0, i1, j0, j1) = range(t);
-            for j in j0..=j1 {
-                for i in i0..=i1 {
-                    counts[j * ncx + i + 1] += 1;
-                }
-            }
-        }
-        for k in 1..counts.len() {
-            counts[k] += counts[k - 1];
-        }
-        let mut fill = counts.clone();
-        let mut items = vec![0u32; counts[ncx * ncy] as usize];
-        for (id, t) in tris.iter().enumerate() {
-            let (i0, i1, j0, j1) = range(t);
-            for j in j0..=j1 {
-                for i in i0..=i1 {
-                    let b = j * ncx + i;
-                    items[fill[b] as usize] = id as u32;
-                    fill[b] += 1;
-                }
-            }
-        }
         let (sin, cos) = dip.sin_cos();
-        let mut mesh = MeshFloor {
-            xyz,
-            tris,
-            nbr,
-            cells,
-            bucket_start: counts,
-            bucket_items: items,
-            bbox: [lo[0], hi[0], lo[1], hi[1]],
-            planes: Vec::new(),
-        };
-        if mesh.tris.len() <= MAX_TABLED_FACETS {
-            mesh.planes = (0..mesh.tris.len() as Facet)
-                .map(|f| {
-                    let (c, z) = mesh.corners(f);
-                    plane_of(&c, &z)
-                })
-                .collect();
-        }
         Ok(Floor {
-            kind: FloorKind::Mesh(mesh),
+            kind: FloorKind::Mesh(MeshFloor::new(xyz, tris, nbr, Vec::new())),
             mean: MeanPlane {
                 x0: x_min,
                 z_ref: z_at_min,
@@ -880,8 +1109,25 @@ impl Floor {
             .map(|f| self.facet_plane(f).z(x, y))
     }
 
-    /// The facet under (x, y), preferring the one the direction (dx, dy) moves into.
+    /// Whether facet f was removed (a corner without data): not part of the floor.
+    #[inline]
+    pub(crate) fn is_hole(&self, f: Facet) -> bool {
+        let holes = match &self.kind {
+            FloorKind::Plane(_) => return false,
+            FloorKind::Grid(g) => &g.holes,
+            FloorKind::Mesh(m) => &m.holes,
+        };
+        holes.get(f as usize).copied().unwrap_or(false)
+    }
+
+    /// The facet under (x, y), preferring the one the direction (dx, dy) moves into; None off
+    /// the floor or over a hole.
     pub(crate) fn locate(&self, x: f64, y: f64, dx: f64, dy: f64) -> Option<Facet> {
+        self.locate_any(x, y, dx, dy).filter(|&f| !self.is_hole(f))
+    }
+
+    /// The facet (hole or not) under (x, y), preferring the one (dx, dy) moves into.
+    fn locate_any(&self, x: f64, y: f64, dx: f64, dy: f64) -> Option<Facet> {
         match &self.kind {
             FloorKind::Plane(_) => Some(0),
             FloorKind::Grid(g) => {
@@ -928,6 +1174,9 @@ impl Floor {
     }
 
     /// First strike of the parabola p + v t + ½ (0, 0, −g) t² on the floor within t ≤ t_max.
+    /// A strike on a hole's facet (its height filled in from the data around it) is a landing
+    /// in the hole: the rock leaves the floor there ([`FlightEnd::Leaves`]); a flight passing
+    /// over a hole above that surface goes on.
     pub(crate) fn flight(
         &self,
         p: &Vector3<f64>,
@@ -935,6 +1184,13 @@ impl Floor {
         g: f64,
         t_max: f64,
     ) -> FlightEnd {
+        match self.flight_any(p, v, g, t_max) {
+            FlightEnd::Hit { t, facet } if self.is_hole(facet) => FlightEnd::Leaves { t },
+            e => e,
+        }
+    }
+
+    fn flight_any(&self, p: &Vector3<f64>, v: &Vector3<f64>, g: f64, t_max: f64) -> FlightEnd {
         let root = |pl: &FacetPlane| -> Option<f64> {
             let b = pl.height_rate(v);
             let r = descent_root(pl.height(p), b, g)?;
@@ -1049,6 +1305,8 @@ impl Floor {
                 }
                 FloorKind::Plane(_) => None,
             };
+            // a removed facet across the edge is no floor
+            let next = next.filter(|&n| !self.is_hole(n));
             (t, next, [corners[k], corners[(k + 1) % 3]])
         })
     }
@@ -1127,6 +1385,9 @@ impl Floor {
                     for j in j0..=j1 {
                         for half in 0..2 {
                             let f = g.facet(j, i, half);
+                            if g.holes.get(f as usize).copied().unwrap_or(false) {
+                                continue;
+                            }
                             let (cs, zs) = g.corners_at(f, i, j);
                             let id = |di: usize, dj: usize| ((i + di) * g.nx + j + dj) as u32;
                             let ids = if half == 0 {
@@ -1155,6 +1416,9 @@ impl Floor {
                 for i in i0..=i1 {
                     for j in j0..=j1 {
                         for &f in m.bucket(j, i) {
+                            if m.holes.get(f as usize).copied().unwrap_or(false) {
+                                continue;
+                            }
                             let t = m.tris[f as usize];
                             out.push(FloorTriangle {
                                 facet: f,
