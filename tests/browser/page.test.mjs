@@ -527,11 +527,18 @@ async function floorSection(page) {
   const served = probe.status !== 422 || probe.json.type?.endsWith('/invalid_input') && !/unknown field/.test(JSON.stringify(probe.json));
   if (!served) skip('floors (server)', 'the server does not accept esri_ascii / geojson floors yet; the upload, drawing and request are checked, the answer is a worded refusal');
 
-  for (const [file, kind, key] of [['plane45.asc', 'grid', 'esri_ascii'], ['plane45.geojson', 'contours', 'geojson']]) {
-    await check(`floors: uploading ${file} draws it and sends it as a ${kind} floor`, async () => {
+  // The 45° plane z = −x as a 5 m grid in the file's frame, and as contours in map
+  // coordinates (UTM-like, dip direction east): both must give the plane floor's arrival.
+  for (const [file, kind, key, map] of [['plane45.asc', 'grid', 'esri_ascii', null], ['plane45.geojson', 'contours', 'geojson', ['500000', '4200000', '90']]]) {
+    await check(`floors: uploading ${file} draws it, sends it as a ${kind} floor${map ? ' in map coordinates' : ''} and arrives as on the plane`, async () => {
       await open(page, '#migration');
       await page.locator('#floor-kind').selectOption('upload');
       await page.locator('#floor-file').setInputFiles(path.join(fixtures, file));
+      if (map) {
+        await page.locator('#floor-map-e').fill(map[0]);
+        await page.locator('#floor-map-n').fill(map[1]);
+        await page.locator('#floor-map-a').fill(map[2]);
+      }
       await page.locator('#floor-canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
       const painted = await page.evaluate(() => {
         const c = document.getElementById('floor-canvas');
@@ -548,7 +555,8 @@ async function floorSection(page) {
       assert(body.face.floor.kind === kind && body.face.floor[key], `floor sent: ${JSON.stringify(body.face.floor).slice(0, 120)}`);
       if (served) {
         assert(response.status() === 200, `POST /v1/migration answered ${response.status()}: ${(await response.text()).slice(0, 300)}`);
-        await page.locator('[data-out="arrival.speed_m_s"]').waitFor({ state: 'visible', timeout: WAIT_MS });
+        assertClose(await shown(page, 'arrival.speed_m_s'), EXPECTED.arrivalSpeed, 1e-3, `arrival speed on ${file} (m/s)`);
+        if (map) assert(body.face.floor.map?.dip_direction_deg === 90 && body.face.floor.map.origin_m[0] === 500000, 'map not sent');
       } else {
         await page.locator('#migration-status.error').waitFor({ state: 'visible', timeout: WAIT_MS });
         const text = await page.locator('#migration-status ul').textContent();
