@@ -53,7 +53,10 @@ export function initFloor(form) {
     loaded = null;
     canvas.hidden = true;
     if (!f) return sync();
-    const text = await f.text();
+    // No computing with a half-read file: the button waits for the file.
+    const submit = form.querySelector('button[type="submit"]');
+    submit.disabled = true;
+    const text = await f.text().finally(() => { submit.disabled = false; });
     try {
       loaded = /\.(geo)?json$/i.test(f.name) || text.trim().startsWith('{') ? readGeojson(f.name, text, elevation.value.trim()) : readAsc(f.name, text);
       info.textContent = `${f.name}: ${loaded.summary}. An uploaded floor cannot travel in a link: whoever opens the link must upload the same file.`;
