@@ -3,10 +3,11 @@
 // side by side, with the midpoint wave (Figure 11) and the energy history.
 
 import { postJson } from './api.js';
-import { buildForm, clearErrors, markLocalErrors, merge, readForm } from './form.js';
+import { columnChecks, renderChecks } from './checks.js';
+import { buildForm, merge, showUsed } from './form.js';
 import { fmt, h, pick, showWarnings } from './format.js';
+import { initPanel } from './panel.js';
 import { COLORS, destroy, joinSeries, linePlot, plotMessage } from './plot.js';
-import { hideStatus, showBusy, showInfo, showProblem } from './status.js';
 
 const COLUMN_GROUPS = [
   {
@@ -14,7 +15,8 @@ const COLUMN_GROUPS = [
     fields: [
       {
         local: 'models', label: 'Run', kind: 'select', value: 'both',
-        options: [['both', 'both models'], ['decoupled', 'decoupled (paper)'], ['coupled', 'coupled']],
+        options: [['both', 'both, side by side'], ['coupled', 'coupled (recommended)'], ['decoupled', 'decoupled (paper)']],
+        hint: '<b>coupled</b>: rock, contact and column integrated together (conserves energy); <b>decoupled</b>: the paper\'s method (the rigid-column approach as initial displacement; overstates the energy)',
       },
     ],
   },
@@ -25,18 +27,19 @@ const COLUMN_GROUPS = [
       { pointer: '/galerkin/modes', label: 'Modes (coupled)', kind: 'integer', value: 3, hint: 'the decoupled method uses mode 1' },
       {
         pointer: '/galerkin/mode_shapes', label: 'Mode shapes', kind: 'select', value: 'exact',
-        options: [['exact', 'exact'], ['paper', 'paper (λ = 4.73)'], ['approx', 'approx']],
+        options: [['exact', 'exact (recommended)'], ['paper', 'paper (printed)'], ['approx', 'approx (λ = 3π/2)']],
         hint: '<code>paper</code> and <code>approx</code>: decoupled only',
       },
-      { pointer: '/galerkin/rotary_inertia', label: 'Rotary inertia', kind: 'checkbox', value: true },
+      { pointer: '/galerkin/rotary_inertia', label: 'Rotary inertia', kind: 'checkbox', value: true, hint: 'include the sections\' rotation (J₀ = ρ<sub>s</sub>I)' },
     ],
   },
   {
     legend: 'Damping',
     fields: [
       {
-        local: 'damping', label: 'Given as', kind: 'select', value: 'coefficient',
-        options: [['coefficient', 'coefficient c'], ['ratio', 'ratio ζ₁ of mode 1']],
+        local: 'damping', label: 'Given as', kind: 'select', value: 'ratio',
+        options: [['ratio', 'ratio ζ₁ (recommended)'], ['coefficient', 'coefficient c (paper)']],
+        hint: 'the paper\'s c = 1 N·s/m² barely damps at all (decay in minutes)',
       },
       { pointer: '/column/damping_coefficient_n_s_m2', label: 'Coefficient <i>c</i>', unit: 'N·s/m²', value: 1, hint: 'the paper\'s value is 1' },
       { pointer: '/column/damping_ratio', label: 'Damping ratio <i>ζ</i>₁', unit: '', value: 0.02 },
@@ -96,11 +99,11 @@ export function initColumn() {
   const empty = document.getElementById('column-empty');
   const wavePlot = document.getElementById('column-wave-plot');
   const plotsBox = document.getElementById('column-plots');
-  const resultsBox = form.closest('[data-panel]').querySelector('.results');
   const energyPlots = {
     decoupled: document.getElementById('column-energy-decoupled'),
     coupled: document.getElementById('column-energy-coupled'),
   };
+  const checksBox = document.getElementById('column-checks');
   buildForm(form, COLUMN_GROUPS);
 
   // Only one of c and ζ₁ is sent (giving both is 422).
@@ -114,52 +117,44 @@ export function initColumn() {
   form.addEventListener('reset', () => setTimeout(syncDamping));
   syncDamping();
 
-  form.addEventListener('submit', async (event) => {
-    event.preventDefault();
-    clearErrors(form, impactForm);
-    const caseRead = readForm(impactForm);
-    const own = readForm(form);
-    const bad = [...caseRead.errors, ...own.errors];
-    if (bad.length) {
-      markLocalErrors(bad);
-      showInfo(status, 'Some inputs are not numbers; nothing was sent.');
-      return;
-    }
-    const base = merge(caseRead.request, own.request);
-    const models = own.local.models === 'both' ? MODELS : [own.local.models];
-    const notes = [];
-    const requests = models.map((model) => requestFor(model, base, models.length > 1, notes));
-
-    showBusy(status, `Computing ${models.join(' and ')}…`);
-    const answers = await Promise.all(requests.map((r) => postJson('v1/column', r)));
-    const results = {};
-    const problems = [];
-    models.forEach((model, i) => {
-      if (answers[i].ok) results[model] = answers[i].data;
-      else problems.push([model, answers[i].problem]);
-    });
-
-    resultsBox.classList.toggle('stale', problems.length === models.length);
-    if (problems.length) {
-      const [model, problem] = problems[0];
-      showProblem(status, problem, {
-        forms: [form, impactForm],
-        endpoint: 'POST /v1/column',
-        label: models.length > 1 && problem.status !== 404 ? `${model} model` : '',
-      });
-    } else if (notes.length) {
-      showInfo(status, notes.join(' '));
-    } else {
-      hideStatus(status);
-    }
-    render(results);
+  const panel = initPanel({
+    name: 'column',
+    form,
+    forms: [form, impactForm],
+    endpoint: 'v1/column',
+    status,
+    build: ([own, caseRead]) => {
+      const base = merge(caseRead.request, own.request);
+      delete base.output;
+      if (own.request.output) base.output = own.request.output;
+      const models = own.local.models === 'both' ? MODELS : [own.local.models];
+      const notes = [];
+      const requests = models.map((model) => requestFor(model, base, models.length > 1, notes));
+      return { models, requests, notes };
+    },
+    busy: ({ models }) => `Computing ${models.join(' and ')}…`,
+    send: async ({ models, requests, notes }, { signal }) => {
+      const answers = await Promise.all(requests.map((r) => postJson('v1/column', r, { signal })));
+      const failed = answers.findIndex((a) => !a.ok);
+      if (failed >= 0) {
+        const { problem } = answers[failed];
+        return { ok: false, problem, label: models.length > 1 && problem.status !== 404 ? `${models[failed]} model` : '' };
+      }
+      const results = {};
+      models.forEach((m, i) => { results[m] = answers[i].data; });
+      return { ok: true, data: results, note: notes.join(' ') };
+    },
+    render: (results) => render(results),
+    clear: () => render({}),
   });
 
   function render(results) {
+    showUsed(form, null);
     const shown = MODELS.filter((m) => results[m]);
     plotsBox.hidden = !shown.length;
     if (!shown.length) {
       empty.hidden = false;
+      checksBox.replaceChildren();
       table.tHead.replaceChildren();
       table.tBodies[0].replaceChildren();
       showWarnings(warnings, []);
@@ -169,6 +164,14 @@ export function initColumn() {
     }
     empty.hidden = true;
     renderTable(results, shown);
+    checksBox.replaceChildren(...shown.map((m) => {
+      const box = h('div', { class: 'model-checks' }, h('h4', {}, m === 'decoupled' ? 'decoupled (paper)' : 'coupled'));
+      const inner = h('div', {});
+      renderChecks(inner, columnChecks(results[m]), `${m}.`);
+      box.append(inner);
+      return box;
+    }));
+    showUsed(form, results[shown[0]].inputs);
     showWarnings(warnings, mergeWarnings(results, shown));
     renderWave(results, shown);
     for (const model of MODELS) {
@@ -227,6 +230,7 @@ export function initColumn() {
       y: { label: 'midpoint displacement (mm)' },
       series: named.map((m, i) => ({ label: m, values: joined[i + 1], color: COLORS[MODELS.indexOf(m)] })),
     });
+    wavePlot.csv = () => historyRows(results, named);
   }
 
   function renderEnergy(el, data, model) {
@@ -248,10 +252,26 @@ export function initColumn() {
       series: series.map(([label, values], i) => ({ label, values, color: COLORS[(i + 2) % COLORS.length] })),
       height: 240,
     });
+    el.csv = () => historyRows({ [model]: data }, [model]);
   }
+
+  return panel;
 }
 
 /** One entry per distinct warning, naming the models that gave it. */
+/** Every history column of every model, one row per sample (long format). */
+function historyRows(results, shown) {
+  const keys = new Set();
+  for (const m of shown) for (const k of Object.keys(results[m].history)) keys.add(k);
+  const cols = ['time_s', ...[...keys].filter((k) => k !== 'time_s')];
+  const rows = [['model', ...cols]];
+  for (const m of shown) {
+    const hist = results[m].history;
+    hist.time_s.forEach((_, i) => rows.push([m, ...cols.map((k) => hist[k]?.[i] ?? '')]));
+  }
+  return rows;
+}
+
 function mergeWarnings(results, shown) {
   const merged = new Map();
   for (const model of shown) {

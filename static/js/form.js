@@ -3,7 +3,7 @@
 // from the unit shown to SI (mm → -3, GPa → 9). Reading a form builds the
 // request; a problem's `errors[].field` pointers lead back to the inputs.
 
-import { h } from './format.js';
+import { fmt, h, humanMessage } from './format.js';
 
 let nextId = 0;
 
@@ -55,14 +55,17 @@ function buildField(field) {
   } else if (kind === 'checkbox') {
     control = h('input', { id, type: 'checkbox', dataset: data, checked: Boolean(field.value) });
   } else {
+    // Text, not type=number: the page reads and judges every character itself,
+    // so letters, "1e400" or an empty box are field errors, never a silent default.
     control = h('input', {
       id,
-      type: 'number',
-      step: kind === 'integer' ? '1' : 'any',
+      type: 'text',
       inputmode: kind === 'integer' ? 'numeric' : 'decimal',
+      autocomplete: 'off',
+      spellcheck: 'false',
       value: field.value ?? undefined,
       placeholder: field.placeholder,
-      dataset: data,
+      dataset: field.placeholder ? { ...data, optional: 'true' } : data,
     });
   }
 
@@ -74,15 +77,17 @@ function buildField(field) {
     wrapper.append(label, h('div', { class: 'control' }, control, h('span', { class: 'unit', html: field.unit ?? '' })));
   }
   if (field.hint) wrapper.append(h('p', { class: 'hint', html: field.hint }));
+  if (field.placeholder) wrapper.append(h('p', { class: 'used', hidden: true, dataset: { usedFor: field.pointer ?? '' } }));
   wrapper.append(h('p', { class: 'field-error', hidden: true, role: 'alert' }));
   return wrapper;
 }
 
 /**
  * Reads the enabled controls of a form into a request object (SI units).
- * Empty number inputs are left out, so the server's default applies.
- * Returns `{request, local, errors}`; `errors` lists inputs that hold
- * something that is not a number (nothing is sent then).
+ * Every shown number field is sent; only a field with a visible "auto"
+ * placeholder may stay empty (the server then computes it and the page shows
+ * the value used). Returns `{request, local, errors}`; `errors` lists inputs
+ * that cannot be read (nothing is sent then).
  */
 export function readForm(form) {
   const request = {};
@@ -95,12 +100,13 @@ export function readForm(form) {
     if (kind === 'checkbox') value = el.checked;
     else if (kind === 'select') value = el.value;
     else {
-      if (el.validity.badInput) {
-        errors.push({ el, message: 'not a number' });
+      const parsed = parseNumber(el.value, Number(el.dataset.exp ?? 0), unitOf(el));
+      if (parsed.empty && el.dataset.optional) continue;
+      if (parsed.error) {
+        errors.push({ el, message: parsed.error });
         continue;
       }
-      if (el.value.trim() === '') continue;
-      value = toSi(el.value, Number(el.dataset.exp ?? 0));
+      value = parsed.value;
       if (kind === 'integer' && !Number.isInteger(value)) {
         errors.push({ el, message: 'must be a whole number' });
         continue;
@@ -110,6 +116,31 @@ export function readForm(form) {
     else setPointer(request, el.dataset.pointer, value);
   }
   return { request, local, errors };
+}
+
+/** The unit shown beside an input ('' when none). */
+export function unitOf(el) {
+  return el.closest('.field')?.querySelector('.unit')?.textContent.trim() ?? '';
+}
+
+/**
+ * Reads decimal text typed in a display unit: `{value}` in SI, or `{error}`
+ * saying what is wrong in words (empty, not a number, too large for a
+ * double, too small). `empty` is set for an empty box.
+ */
+export function parseNumber(text, exp = 0, unit = '') {
+  const t = String(text ?? '').trim().replace(/\u2212/g, '-');
+  const u = unit ? ` ${unit}` : '';
+  if (t === '') return { empty: true, error: `required: enter a value${unit ? ` in ${unit}` : ''}` };
+  if (/^[+-]?\d+,\d+$/.test(t)) return { error: `not a number: "${t}" (use a point as the decimal mark: ${t.replace(',', '.')}${u})` };
+  const m = /^([+-]?(?:\d+\.?\d*|\.\d+))(?:e([+-]?\d+))?$/i.exec(t);
+  if (!m) return { error: `not a number: "${t}"` };
+  const written = Number(t);
+  if (!Number.isFinite(written)) return { error: `out of range: ${t} is too large to compute with` };
+  if (written !== 0 && Number(m[1]) !== 0 && Math.abs(written) < 1e-300) return { error: `out of range: ${t} is too small to compute with` };
+  const value = toSi(t, exp);
+  if (!Number.isFinite(value)) return { error: `out of range: ${t}${u} is too large to compute with` };
+  return { value };
 }
 
 /**
@@ -168,8 +199,8 @@ export function locate(pointer, forms) {
   for (let n = keys.length; n > 1; n--) {
     const prefix = keys.slice(0, n).join('/');
     for (const form of forms) {
-      const input = form.querySelector(`[data-pointer="${CSS.escape(prefix)}"]`);
-      if (input) return { form, input, target: input.closest('.field') };
+      const input = form.querySelector(`[data-pointer="${CSS.escape(prefix)}"], [data-target="${CSS.escape(prefix)}"]`);
+      if (input) return { form, input, target: input.closest('.field, td, th') ?? input.parentElement };
       const group = form.querySelector(`[data-group="${CSS.escape(prefix)}"]`);
       if (group) return { form, input: null, target: group };
     }
@@ -184,14 +215,19 @@ export function locate(pointer, forms) {
 export function markErrors(errors, forms) {
   const unmatched = [];
   for (const error of errors ?? []) {
-    const message = error.message ?? 'invalid';
+    const rawMessage = error.message ?? 'invalid';
     const found = error.field ? locate(error.field, forms) : null;
     if (!found) {
       unmatched.push(error);
       continue;
     }
     const { input, target } = found;
-    const p = target.querySelector(input ? '.field-error' : '.group-error');
+    let p = target.querySelector(input ? '.field-error' : '.group-error');
+    if (!p) {
+      p = h('p', { class: 'field-error', role: 'alert' });
+      target.append(p);
+    }
+    const message = input ? localise(rawMessage, input) : humanMessage(rawMessage);
     p.textContent = p.textContent ? `${p.textContent}; ${message}` : message;
     p.hidden = false;
     target.classList.add('invalid');
@@ -212,4 +248,94 @@ export function markLocalErrors(errors) {
     field.classList.add('invalid');
     el.setAttribute('aria-invalid', 'true');
   }
+}
+
+const SI_OF = { mm: 'm', ms: 's', GPa: 'Pa', MPa: 'Pa', kJ: 'J', kN: 'N' };
+
+/**
+ * A server message ("must be in [0.01, 5] m") in the unit of the field it is
+ * shown beside ("must be in [10, 5000] mm"); numbers in plain notation.
+ */
+export function localise(message, input) {
+  const unit = unitOf(input);
+  const exp = Number(input.dataset.exp ?? 0);
+  const si = SI_OF[unit];
+  let text = String(message);
+  if (si && exp) {
+    const num = '(-?\\d+(?:\\.\\d+)?(?:e[+-]?\\d+)?)';
+    const conv = (v) => fmt(Number(v) / 10 ** exp, 6);
+    const range = new RegExp(`([\\[(])\\s*${num}\\s*,\\s*${num}\\s*([\\])])\\s*${si}(?![a-zA-Z/])`, 'g');
+    text = text.replace(range, (_, open, a, b, close) => `${open}${conv(a)}, ${conv(b)}${close} ${unit}`);
+    const single = new RegExp(`${num}\\s*${si}(?![a-zA-Z/²³])`, 'g');
+    text = text.replace(single, (_, a) => `${conv(a)} ${unit}`);
+  }
+  return humanMessage(text);
+}
+
+/** The text of every control of a form, keyed by pointer / local / toggle name (for links). */
+export function formState(form) {
+  const state = {};
+  for (const el of form.querySelectorAll('[data-pointer], [data-local], legend input[type="checkbox"]')) {
+    const key = el.dataset.pointer ?? (el.dataset.local ? `local:${el.dataset.local}` : `toggle:${el.name}`);
+    state[key] = el.type === 'checkbox' ? el.checked : el.value;
+  }
+  return state;
+}
+
+/** Puts a formState back into a form (unknown keys are ignored). */
+export function applyState(form, state) {
+  for (const el of form.querySelectorAll('[data-pointer], [data-local], legend input[type="checkbox"]')) {
+    const key = el.dataset.pointer ?? (el.dataset.local ? `local:${el.dataset.local}` : `toggle:${el.name}`);
+    if (!(key in state)) continue;
+    if (el.type === 'checkbox') el.checked = Boolean(state[key]);
+    else el.value = state[key];
+    el.dispatchEvent(new Event('change', { bubbles: true }));
+  }
+}
+
+/**
+ * Sets a form's values (and the values its Defaults button restores) from SI
+ * values keyed by JSON Pointer.
+ */
+export function setDefaults(form, values) {
+  for (const [pointer, value] of Object.entries(values)) {
+    const el = form.querySelector(`[data-pointer="${CSS.escape(pointer)}"]`);
+    if (!el || value === undefined || value === null) continue;
+    if (el.type === 'checkbox') {
+      el.checked = Boolean(value);
+      el.defaultChecked = Boolean(value);
+    } else if (el.tagName === 'SELECT') {
+      for (const o of el.options) o.defaultSelected = o.value === String(value);
+      el.value = String(value);
+    } else {
+      const text = typeof value === 'number' ? fromSi(value, Number(el.dataset.exp ?? 0)) : String(value);
+      el.value = text;
+      el.defaultValue = text;
+    }
+    el.dispatchEvent(new Event('change', { bubbles: true }));
+  }
+}
+
+/** SI → display text, exactly (shifts the decimal exponent of the shortest form). */
+export function fromSi(value, exp) {
+  if (!exp) return String(value);
+  const [m, e] = value.toExponential().split('e');
+  const shifted = Number(`${m}e${Number(e) - exp}`);
+  return String(shifted);
+}
+
+/** Shows, under each "auto" field, the value the server used (from the answer's `inputs`). */
+export function showUsed(form, inputs) {
+  for (const p of form.querySelectorAll('.used')) {
+    const el = p.closest('.field').querySelector('[data-pointer]');
+    const blank = el && el.value.trim() === '' && !el.disabled;
+    const value = blank && inputs ? pickPointer(inputs, el.dataset.pointer) : undefined;
+    p.hidden = typeof value !== 'number';
+    if (!p.hidden) p.textContent = `used: ${fmt(value / 10 ** Number(el.dataset.exp ?? 0), 6)} ${unitOf(el)}`.trim();
+  }
+}
+
+/** The value at a JSON Pointer, or undefined. */
+export function pickPointer(obj, pointer) {
+  return pointer.split('/').slice(1).reduce((o, k) => (o === null || o === undefined ? undefined : o[k]), obj);
 }

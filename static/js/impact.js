@@ -1,14 +1,14 @@
 // Impact tab: POST /v1/impact, Hertz contact of a rock on the column.
 
-import { postJson } from './api.js';
-import { buildForm, clearErrors, markLocalErrors, readForm } from './form.js';
+import { impactChecks, renderChecks } from './checks.js';
+import { buildForm, showUsed } from './form.js';
 import { fillTable, fmt, showWarnings } from './format.js';
-import { linePlot, plotMessage } from './plot.js';
-import { hideStatus, showBusy, showInfo, showProblem } from './status.js';
+import { initPanel } from './panel.js';
+import { destroy, linePlot, plotMessage } from './plot.js';
 
 const CURVE_POINTS = 200;
 
-/** Defaults are api.md's: the paper's base case. */
+/** Defaults: the paper's base case with the recommended settings; GET /v1/presets overrides them. */
 export const IMPACT_GROUPS = [
   {
     legend: 'Impact',
@@ -26,7 +26,7 @@ export const IMPACT_GROUPS = [
       { pointer: '/rock/poisson_ratio', label: 'Poisson ratio <i>ν</i>', unit: '', value: 0.28 },
       {
         pointer: '/rock/corner_radius_m', label: 'Corner radius <i>r</i><sub>c</sub>', unit: 'mm', exp: -3,
-        placeholder: 'auto', hint: 'default min(20 mm, <i>L</i>/2); used by <code>hertz_point</code> only',
+        placeholder: 'auto', hint: 'empty: min(20 mm, <i>L</i>/2); used by <code>hertz_point</code> only',
       },
     ],
   },
@@ -40,8 +40,8 @@ export const IMPACT_GROUPS = [
       { pointer: '/column/elastic_modulus_pa', label: 'Steel modulus <i>E</i><sub>s</sub>', unit: 'GPa', exp: 9, value: 208 },
       { pointer: '/column/poisson_ratio', label: 'Poisson ratio <i>ν</i><sub>s</sub>', unit: '', value: 0.3 },
       { pointer: '/column/density_kg_m3', label: 'Density <i>ρ</i><sub>s</sub>', unit: 'kg/m³', value: 7850 },
-      { pointer: '/column/yield_stress_pa', label: 'Yield stress', unit: 'MPa', exp: 6, value: 345 },
-      { pointer: '/column/contact_radius_m', label: 'Contact radius <i>R</i>', unit: 'mm', exp: -3, placeholder: 'D₁/2' },
+      { pointer: '/column/yield_stress_pa', label: 'Yield stress <i>σ</i><sub>y</sub>', unit: 'MPa', exp: 6, value: 345, hint: 'the limit of the stress and contact-pressure checks' },
+      { pointer: '/column/contact_radius_m', label: 'Contact radius <i>R</i>', unit: 'mm', exp: -3, placeholder: 'auto', hint: 'empty: half the outer diameter' },
     ],
   },
   {
@@ -49,15 +49,19 @@ export const IMPACT_GROUPS = [
     pointer: '/contact',
     fields: [
       {
-        pointer: '/contact/law', label: 'Contact law', kind: 'select', value: 'paper',
-        options: [['paper', 'paper (Eq. 4)'], ['johnson', 'johnson'], ['hertz_point', 'hertz_point']],
-        hint: 'line contact of the edge, or Hertz point contact of a rounded corner',
+        pointer: '/contact/law', label: 'Contact law', kind: 'select', value: 'johnson',
+        options: [['johnson', 'johnson (recommended)'], ['paper', 'paper (Eq. 4)'], ['hertz_point', 'hertz_point (corner)']],
+        hint: '<b>johnson</b>: a face or edge of the cube strikes the column (line contact, corrected law); <b>paper</b>: reproduces the paper\'s numbers; <b>hertz_point</b>: a corner strikes (point contact)',
       },
       {
-        pointer: '/contact/effective_modulus', label: 'Effective modulus <i>E</i>*', kind: 'select', value: 'paper',
-        options: [['paper', 'paper (rock only)'], ['two_body', 'two_body']],
+        pointer: '/contact/effective_modulus', label: 'Effective modulus <i>E</i>*', kind: 'select', value: 'two_body',
+        options: [['two_body', 'two_body (recommended)'], ['paper', 'paper (rock only)']],
+        hint: 'two_body counts the steel\'s own deformation; the paper neglects it',
       },
-      { pointer: '/contact/hertz_exact', label: 'Exact elliptical Hertz <i>κ</i>', kind: 'checkbox', value: true },
+      {
+        pointer: '/contact/hertz_exact', label: 'Exact elliptical Hertz <i>κ</i>', kind: 'checkbox', value: true,
+        hint: 'hertz_point only: elliptical contact, else the equivalent radius',
+      },
     ],
   },
 ];
@@ -81,9 +85,9 @@ const ROWS = [
   { key: 'contact_semi_axes_m', label: 'Contact semi-axes', symbol: '<i>a</i>, <i>b</i>', unit: 'mm', scale: 1e3, sig: 5 },
   { key: 'max_contact_pressure_pa', label: 'Max contact pressure', symbol: '<i>p</i>₀', unit: 'MPa', scale: 1e-6, sig: 5 },
   { key: 'contact_duration_s', label: 'Contact duration (rigid column)', symbol: '<i>t</i><sub>c</sub>', unit: 'ms', scale: 1e3, sig: 6 },
-  { key: 'energy_capacity_j', label: 'Energy capacity', symbol: '<i>E</i><sub>cap</sub>', unit: 'J', sig: 6 },
-  { key: 'deformation_capacity_m', label: 'Approach at capacity', symbol: '<i>δ</i><sub>cap</sub>', unit: 'mm', scale: 1e3, sig: 6 },
-  { key: 'force_capacity_n', label: 'Force at capacity', symbol: '<i>P</i><sub>cap</sub>', sig: 6, ...kN },
+  { key: 'energy_capacity_j', label: 'Contact-law capacity (limit of the law, not of the column)', symbol: '<i>E</i><sub>cap</sub>', unit: 'J', sig: 6 },
+  { key: 'deformation_capacity_m', label: 'Approach at the law\'s capacity', symbol: '<i>δ</i><sub>cap</sub>', unit: 'mm', scale: 1e3, sig: 6 },
+  { key: 'force_capacity_n', label: 'Force at the law\'s capacity', symbol: '<i>P</i><sub>cap</sub>', sig: 6, ...kN },
 ];
 for (const row of ROWS) row.label = htmlLabel(row.label);
 
@@ -101,36 +105,35 @@ export function initImpact() {
   const empty = document.getElementById('impact-empty');
   const plotEl = document.getElementById('impact-plot');
   const capacity = document.getElementById('impact-capacity');
-  const results = form.closest('[data-panel]').querySelector('.results');
+  const checks = document.getElementById('impact-checks');
   buildForm(form, IMPACT_GROUPS);
 
-  form.addEventListener('submit', async (event) => {
-    event.preventDefault();
-    clearErrors(form);
-    const { request, errors } = readForm(form);
-    if (errors.length) {
-      markLocalErrors(errors);
-      showInfo(status, 'Some inputs are not numbers; nothing was sent.');
-      return;
-    }
-    request.output = { curve_points: CURVE_POINTS };
-
-    showBusy(status, 'Computing…');
-    const answer = await postJson('v1/impact', request);
-    if (!answer.ok) {
-      showProblem(status, answer.problem, { forms: [form], endpoint: 'POST /v1/impact' });
-      results.classList.add('stale');
-      return;
-    }
-    hideStatus(status);
-    results.classList.remove('stale');
-    render(answer.data);
+  const panel = initPanel({
+    name: 'impact',
+    form,
+    endpoint: 'v1/impact',
+    status,
+    build: ([own]) => ({ ...own.request, output: { curve_points: CURVE_POINTS } }),
+    render,
+    clear,
   });
+
+  function clear() {
+    empty.hidden = false;
+    tbody.replaceChildren();
+    checks.replaceChildren();
+    capacity.replaceChildren();
+    showWarnings(warnings, []);
+    destroy(plotEl);
+    showUsed(form, null);
+  }
 
   function render(data) {
     empty.hidden = true;
     fillTable(tbody, ROWS, data);
+    renderChecks(checks, impactChecks(data));
     showWarnings(warnings, data.warnings);
+    showUsed(form, data.inputs);
     renderCapacity(data);
     renderCurve(data);
   }
@@ -138,17 +141,15 @@ export function initImpact() {
   function renderCapacity(data) {
     capacity.replaceChildren();
     if (data.energy_capacity_j !== undefined) {
-      const share = data.kinetic_energy_j / data.energy_capacity_j;
       capacity.innerHTML =
-        `Capacity of the <code>${data.law}</code> law: it stores at most ` +
-        `<strong>${fmt(data.energy_capacity_j, 6)} J</strong>, reached at ` +
-        `<i>δ</i><sub>cap</sub> = ${fmt(data.deformation_capacity_m * 1e3, 5)} mm and ` +
-        `<i>P</i><sub>cap</sub> = ${fmt(data.force_capacity_n * 1e-6, 5)} MN. ` +
-        `This impact uses ${fmt(share * 100, 3)} % of it.`;
+        `<b>Limit of the contact law, not of the column.</b> The <code>${data.law}</code> law has no solution ` +
+        `beyond <i>E</i><sub>cap</sub> = ${fmt(data.energy_capacity_j, 4)} J (reached at an approach of ` +
+        `${fmt(data.deformation_capacity_m * 1e3, 4)} mm, far outside the law's validity). Being below it says ` +
+        'nothing about whether the column survives: see the checks above.';
     } else {
       capacity.innerHTML =
-        `The <code>${data.law ?? 'hertz_point'}</code> law has no capacity: ` +
-        'its force grows without bound with the approach, so any energy can be stored.';
+        `The <code>${data.law ?? 'hertz_point'}</code> law has no capacity: its force grows without bound with ` +
+        'the approach. That is a property of the law, not of the column: see the checks above.';
     }
   }
 
@@ -178,5 +179,8 @@ export function initImpact() {
         },
       ],
     });
+    plotEl.csv = () => [['approach_m', 'force_n'], ...curve.deformation_m.map((d, i) => [d, curve.force_n[i]])];
   }
+
+  return panel;
 }

@@ -2,13 +2,11 @@
 // rigid block (DEM): one trajectory, or a seeded Monte Carlo ensemble streamed
 // with progress.
 
-import { postJson } from './api.js';
-import { buildForm, clearErrors, markLocalErrors, readForm } from './form.js';
-import { fillTable, fmt, h, showWarnings } from './format.js';
+import { initFloor } from './floor.js';
+import { buildForm } from './form.js';
+import { csvButton, fillTable, fmt, h, showWarnings } from './format.js';
+import { initPanel } from './panel.js';
 import { destroy, linePlot, plotMessage } from './plot.js';
-import { bringIntoView, hideStatus, showBusy, showInfo, showProblem } from './status.js';
-
-const PROGRESS_AFTER_MS = 1000;
 
 const MIGRATION_GROUPS = [
   {
@@ -28,17 +26,20 @@ const MIGRATION_GROUPS = [
     fields: [
       {
         pointer: '/method', label: 'Method', kind: 'select', value: 'lumped_mass',
-        options: [['lumped_mass', 'lumped mass (energy tracking)'], ['rigid_block', 'rigid block (DEM)']],
+        options: [['lumped_mass', 'lumped mass'], ['rigid_block', 'rigid block (DEM)']],
+        hint: '<b>lumped mass</b>: a point with restitution and friction, fast (closed-form flights); <b>rigid block</b>: the cube tumbles and its corners strike (as PFC3D in the paper), slower',
       },
       {
         pointer: '/rock/shape', label: 'Shape', kind: 'select', value: 'cube',
         options: [['cube', 'cube'], ['sphere', 'sphere (r = L/2)']],
+        hint: 'the shape sets the mass and, for the rigid block, how it tumbles',
       },
       { pointer: '/rock/side_length_m', label: 'Cube side <i>L</i>', unit: 'mm', exp: -3, value: 300 },
       { pointer: '/rock/density_kg_m3', label: 'Density <i>ρ</i>', unit: 'kg/m³', value: 2500 },
       {
         pointer: '/lumped_mass/motion', label: 'Ground motion', kind: 'select', value: 'slide',
         options: [['slide', 'slide'], ['roll', 'roll (sphere, no slip)']],
+        hint: 'lumped mass: <b>slide</b> with friction μ, or <b>roll</b> as a sphere without slip (needs μ ≥ (2/7) tan θ)',
       },
     ],
   },
@@ -56,7 +57,7 @@ const MIGRATION_GROUPS = [
     legend: 'Monte Carlo ensemble',
     pointer: '/monte_carlo',
     toggle: { name: 'monte_carlo', checked: false },
-    note: 'Restitution drawn uniformly at every impact.',
+    note: 'Restitution drawn uniformly at every impact (lumped mass). The outcome table shows the nominal run; the ensemble is in the percentiles.',
     fields: [
       { pointer: '/monte_carlo/runs', label: 'Runs', kind: 'integer', value: 200 },
       { pointer: '/monte_carlo/seed', label: 'Seed', kind: 'integer', value: 42 },
@@ -92,25 +93,26 @@ const ROWS = [
   { key: 'arrival.speed_m_s', label: 'Speed', symbol: '<i>v</i>', unit: 'm/s', sig: 6 },
   { key: 'arrival.time_s', label: 'Time (with the fall)', symbol: '<i>t</i>', unit: 's', sig: 6 },
   { key: 'arrival.kinetic_energy_j', label: 'Kinetic energy', symbol: 'KE', unit: 'kJ', scale: 1e-3, sig: 5 },
-  { key: 'arrival.along_dip_velocity_m_s', label: 'Down-dip velocity', symbol: '<i>v</i><sub>s</sub>', unit: 'm/s', sig: 5 },
-  { key: 'arrival.normal_velocity_m_s', label: 'Normal velocity', symbol: '<i>v</i><sub>n</sub>', unit: 'm/s', sig: 5 },
-  { key: 'arrival.angular_speed_rad_s', label: 'Rotation speed', symbol: '<i>ω</i>', unit: 'rad/s', sig: 5 },
-  { key: 'arrival.phase', label: 'Motion at the end', symbol: '' },
-  { key: 'arrival.stop_reason', label: 'Stop reason', symbol: '' },
+  { key: 'arrival.along_dip_velocity_m_s', label: 'Down-dip velocity', symbol: '<i>v</i><sub>s</sub>', unit: 'm/s', sig: 5, noise: (d) => d.arrival.speed_m_s },
+  { key: 'arrival.normal_velocity_m_s', label: 'Normal velocity', symbol: '<i>v</i><sub>n</sub>', unit: 'm/s', sig: 5, noise: (d) => d.arrival.speed_m_s },
+  { key: 'arrival.angular_speed_rad_s', label: 'Rotation speed', symbol: '<i>ω</i>', unit: 'rad/s', sig: 5, noise: (d) => d.arrival.speed_m_s / (d.inputs?.rock?.side_length_m ?? 1) },
+  { key: 'arrival.stop_reason', label: 'Outcome', symbol: '', words: (_, d) => outcomeWords(d) },
+  { key: 'arrival.phase', label: 'Motion at the end', symbol: '', words: (p) => PHASE_WORDS[p] ?? p },
   { key: 'arrival.along_dip_m', label: 'Final position along the dip', symbol: '<i>s</i>', unit: 'm', sig: 5 },
   { key: 'impact_count', label: 'Impacts', symbol: '' },
   { key: 'slide_start_along_dip_m', label: 'Ground phase starts at', symbol: '<i>s</i>', unit: 'm', sig: 6 },
   { key: 'max_bounce_height_m', label: 'Highest bounce', symbol: '<i>h</i><sub>max</sub>', unit: 'm', sig: 5 },
   { key: 'energy.total_start_j', label: 'Energy at the start', symbol: '<i>E</i>₀', unit: 'kJ', scale: 1e-3, sig: 6 },
-  { key: 'energy.impacts_j', label: 'Lost in impacts', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
-  { key: 'energy.friction_j', label: 'Lost to friction', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
-  { key: 'energy.transition_j', label: 'Lost at the flight–ground transition', symbol: '', unit: 'J', sig: 4 },
-  { key: 'energy.damping_j', label: 'Lost to contact damping (rigid block)', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
-  { key: 'energy.residual_j', label: 'Energy residual', symbol: '', unit: 'J', sig: 3 },
+  { noise: (d) => d.energy.total_start_j, key: 'energy.impacts_j', label: 'Lost in impacts', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
+  { noise: (d) => d.energy.total_start_j, key: 'energy.friction_j', label: 'Lost to friction', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
+  { noise: (d) => d.energy.total_start_j, key: 'energy.transition_j', label: 'Lost at the flight–ground transition', symbol: '', unit: 'J', sig: 4 },
+  { noise: (d) => d.energy.total_start_j, key: 'energy.damping_j', label: 'Lost to contact damping (rigid block)', symbol: '', unit: 'kJ', scale: 1e-3, sig: 6 },
+  { noise: (d) => d.energy.total_start_j, key: 'energy.residual_j', label: 'Energy residual', symbol: '', unit: 'J', sig: 3 },
 ];
 
 const STATS = [
   ['speed_m_s', 'Arrival speed', 'm/s', 1],
+  ['along_dip_velocity_m_s', 'Down-dip velocity at arrival', 'm/s', 1],
   ['kinetic_energy_j', 'Arrival kinetic energy', 'kJ', 1e-3],
   ['time_s', 'Arrival time', 's', 1],
   ['impact_count', 'Impacts', '', 1],
@@ -141,6 +143,14 @@ export function initMigration() {
     energy: document.getElementById('migration-energy-plot'),
   };
   buildForm(form, MIGRATION_GROUPS);
+  const floor = initFloor(form);
+  form.floor = floor;
+  const sideNote = document.getElementById('migration-side-note');
+  let runsCsv = null;
+  percentilesCard.append(csvButton('migration_runs.csv', () => {
+    if (!runsCsv) return [['no per-run table: run an ensemble']];
+    return runsCsv.trim().split('\n').map((line) => line.split(','));
+  }, 'CSV: every run'));
 
   const mcBox = form.querySelector('input[name="monte_carlo"]');
   const frictionBox = form.querySelector('input[name="friction_spread"]');
@@ -154,81 +164,86 @@ export function initMigration() {
   form.addEventListener('reset', () => setTimeout(syncFriction));
   syncFriction();
 
-  let running = null;
-  document.getElementById('migration-cancel').addEventListener('click', () => running?.abort());
+  // Rolling without slip needs μ ≥ (2/7) tan θ (physics.md §C): choosing "roll"
+  // raises a smaller μ to the least allowed value and says so, instead of a 422.
+  const motion = form.querySelector('[data-pointer="/lumped_mass/motion"]');
+  const mu = form.querySelector('[data-pointer="/face/friction_coefficient"]');
+  const dip = form.querySelector('[data-pointer="/face/dip_deg"]');
+  const rollNote = h('p', { class: 'hint roll-note', hidden: true });
+  motion.closest('.field').append(rollNote);
+  const syncRoll = (raise) => {
+    const theta = Number(dip.value) * Math.PI / 180;
+    const least = (2 / 7) * Math.tan(theta);
+    rollNote.hidden = motion.value !== 'roll' || !Number.isFinite(least);
+    if (rollNote.hidden) return;
+    const needed = Math.ceil(least * 1000) / 1000;
+    const now = Number(mu.value);
+    if (raise && !(now >= least)) {
+      mu.value = String(needed);
+      rollNote.textContent = `Rolling without slip needs μ ≥ (2/7) tan θ = ${fmt(least, 4)} at θ = ${dip.value}°: μ was raised from ${now} to ${needed}.`;
+    } else if (!(now >= least)) {
+      rollNote.textContent = `Rolling without slip needs μ ≥ (2/7) tan θ = ${fmt(least, 4)} at θ = ${dip.value}°: raise μ to at least ${needed}, or choose "slide".`;
+    } else {
+      rollNote.textContent = `Rolling without slip: μ = ${now} ≥ (2/7) tan θ = ${fmt(least, 4)}.`;
+    }
+  };
+  motion.addEventListener('change', () => syncRoll(true));
+  for (const el of [mu, dip]) el.addEventListener('input', () => syncRoll(false));
+  form.addEventListener('reset', () => setTimeout(() => syncRoll(false)));
 
-  form.addEventListener('submit', async (event) => {
-    event.preventDefault();
-    running?.abort();
-    clearErrors(form);
-    const { request, errors } = readForm(form);
-    if (errors.length) {
-      markLocalErrors(errors);
-      showInfo(status, 'Some inputs are not numbers; nothing was sent.');
-      return;
-    }
-    request.method ??= 'lumped_mass';
-    const rigid = request.method === 'rigid_block';
-    const mc = request.monte_carlo;
-    if (mc && rigid) {
-      // the rigid block has no restitution: its ensemble varies friction only here
-      delete mc.restitution_normal;
-      delete mc.restitution_tangential;
-    }
-    if (mc) {
-      for (const key of ['restitution_normal', 'restitution_tangential']) {
-        if (mc[key]) mc[key] = { distribution: 'uniform', ...mc[key] };
+  const panel = initPanel({
+    name: 'migration',
+    form,
+    endpoint: 'v1/migration',
+    status,
+    progress,
+    unit: 'runs',
+    build: ([own]) => {
+      const request = own.request;
+      floor.apply(request, own.local);
+      const rigid = request.method === 'rigid_block';
+      const mc = request.monte_carlo;
+      if (mc && rigid) {
+        // the rigid block has no restitution: its ensemble varies friction only here
+        delete mc.restitution_normal;
+        delete mc.restitution_tangential;
       }
-      if (mc.friction_coefficient) mc.friction_coefficient = { distribution: 'truncated_normal', ...mc.friction_coefficient };
-    }
-
-    const controller = new AbortController();
-    running = controller;
-    showBusy(status, mc ? `Running ${mc.runs ?? 200} runs…` : 'Computing…');
-    const timer = mc ? setTimeout(() => {
-      progress.hidden = false;
-      bringIntoView(progress);
-    }, PROGRESS_AFTER_MS) : null;
-    progressBar.value = 0;
-    progressText.textContent = '';
-
-    let answer;
-    try {
-      answer = await postJson('v1/migration', request, {
-        signal: controller.signal,
-        onProgress: mc ? ({ done, total }) => {
-          progressBar.max = total || 1;
-          progressBar.value = done;
-          progressText.textContent = `${done} / ${total} runs`;
-        } : undefined,
-      });
-    } catch (err) {
-      if (err.name !== 'AbortError') throw err;
-      if (running === controller) showInfo(status, 'Cancelled.');
-      return;
-    } finally {
-      clearTimeout(timer);
-      if (running === controller) {
-        progress.hidden = true;
-        running = null;
+      if (mc) {
+        for (const key of ['restitution_normal', 'restitution_tangential']) {
+          if (mc[key]) mc[key] = { distribution: 'uniform', ...mc[key] };
+        }
+        if (mc.friction_coefficient) mc.friction_coefficient = { distribution: 'truncated_normal', ...mc.friction_coefficient };
+        request.output = { ...request.output, runs_csv: true };
       }
-    }
-    if (!answer.ok) {
-      showProblem(status, answer.problem, { forms: [form], endpoint: 'POST /v1/migration' });
-      results.classList.add('stale');
-      return;
-    }
-    hideStatus(status);
-    results.classList.remove('stale');
-    render(answer.data);
+      return request;
+    },
+    stream: (request) => Boolean(request.monte_carlo),
+    busy: (request) => (request.monte_carlo ? `Running ${request.monte_carlo.runs} runs…` : 'Computing…'),
+    render,
+    clear: () => {
+      empty.hidden = false;
+      tbody.replaceChildren();
+      tableTitle.textContent = 'Outcome of the run';
+      showWarnings(warnings, []);
+      renderStatistics(null);
+      renderTrajectory(null);
+    },
   });
+
+  const tableTitle = document.getElementById('migration-table-title');
 
   function render(data) {
     empty.hidden = true;
+    tableTitle.textContent = data.statistics
+      ? 'Nominal run (the request without random draws), not the ensemble'
+      : 'Outcome of the run';
+    document.getElementById('migration-table').dataset.nominal = String(Boolean(data.statistics));
     fillTable(tbody, ROWS.map((r) => ({ ...r, label: span(r.label) })), data);
     showWarnings(warnings, data.warnings);
+    runsCsv = data.runs_csv ?? null;
     renderStatistics(data.statistics);
-    renderTrajectory(data.trajectory);
+    renderTrajectory(data.trajectory, data);
+    floor.showPath(data);
   }
 
   function renderStatistics(stats) {
@@ -236,6 +251,9 @@ export function initMigration() {
     percentilesCard.hidden = !stats;
     if (!stats) {
       destroy(histogram);
+      percentiles.tHead.replaceChildren();
+      percentiles.tBodies[0].replaceChildren();
+      runsCsv = null;
       return;
     }
     const hist = stats.speed_m_s?.histogram;
@@ -254,7 +272,7 @@ export function initMigration() {
       plotMessage(histogram, 'No run reached the lower end.');
     }
 
-    statsCaption.textContent = `${stats.runs} runs, seed ${stats.seed}; ` +
+    statsCaption.textContent = `Monte Carlo ensemble: ${stats.runs} runs, seed ${stats.seed}; ` +
       `${fmt(stats.reached_fraction * 100, 4)} % reached the lower end. ` +
       'Speed, energy and time over the runs that reached it; the rest over all runs.';
     percentiles.tHead.replaceChildren(h('tr', {},
@@ -266,20 +284,28 @@ export function initMigration() {
     for (const [key, label, unit, scale] of STATS) {
       const s = stats[key];
       if (!s) continue;
+      // A spread below 1e-12 of the values themselves is rounding noise (a run-out of exactly the face length).
+      const noise = Math.max(Math.abs(s.mean ?? 0), Math.abs(s.max ?? 0), Math.abs(s.min ?? 0)) * scale;
       body.append(h('tr', {},
         h('th', { scope: 'row' }, label),
         STAT_COLUMNS.map((c) => h('td', { class: 'num', dataset: { out: `statistics.${key}.${c}` } },
-          fmt(s[c] === null || s[c] === undefined ? s[c] : s[c] * scale, 5))),
+          fmt(s[c] === null || s[c] === undefined ? s[c] : s[c] * scale, 5, noise))),
         h('td', { class: 'unit' }, unit)));
     }
   }
 
-  function renderTrajectory(tr) {
+  function renderTrajectory(tr, data) {
     trajectoryBox.hidden = !tr;
     if (!tr) {
       Object.values(plots).forEach(destroy);
       return;
     }
+    const s0 = tr.along_dip_m[0];
+    sideNote.textContent = s0 < 0
+      ? `The rock is lifted vertically ${fmt(data.inputs?.release?.drop_height_m ?? 0, 4)} m above its release point; ` +
+        `measured in the floor's plane, the foot of that point lies ${fmt(-s0, 3)} m up-dip of it, so the path starts at ${fmt(s0, 3)} m. ` +
+        'Drag across a plot to zoom in; double-click to zoom out.'
+      : 'Drag across a plot to zoom in; double-click to zoom out.';
     const s = tr.along_dip_m;
     const sRange = range(s);
     linePlot(plots.side, {
@@ -291,8 +317,8 @@ export function initMigration() {
     const xs = tr.position_m.map((p) => p[0]);
     const ys = tr.position_m.map((p) => p[1]);
     linePlot(plots.plan, {
-      x: { label: 'x, down the dip (m)', values: xs, range: range(xs) },
-      y: { label: 'y, across the face (m)', range: range(ys, 1) },
+      x: { label: 'x, horizontal in the dip direction (m)', values: xs, range: range(xs) },
+      y: { label: 'y: across the face (m)', range: range(ys, 1) },
       series: [{ label: 'path', values: ys }],
     });
 
@@ -309,7 +335,44 @@ export function initMigration() {
       y2: { label: 'energy (kJ)' },
       series: energySeries,
     });
+    const trajectoryCsv = () => trajectoryRows(tr);
+    for (const el of Object.values(plots)) el.csv = trajectoryCsv;
   }
+
+  return panel;
+}
+
+const PHASE_WORDS = { flight: 'in flight', slide: 'sliding', roll: 'rolling', stopped: 'at rest' };
+
+/** What happened to the rock, in words ("came to rest at 16.6 m along the dip"). */
+export function outcomeWords(data) {
+  const a = data.arrival;
+  const at = `${fmt(a.along_dip_m, 4)} m along the dip`;
+  switch (a.stop_reason) {
+    case 'lower_end': return `reached the lower end of the face (${at}) at ${fmt(a.speed_m_s, 4)} m/s`;
+    case 'at_rest': return `came to rest at ${at}`;
+    case 'end_time': return `still moving at the end time, at ${at}`;
+    case 'left_floor': return `left the floor at ${at}`;
+    case 'support': return `struck a support at ${at}`;
+    default: return `${a.stop_reason} at ${at}`;
+  }
+}
+
+/** The trajectory as CSV rows (vectors split into components). */
+function trajectoryRows(tr) {
+  const keys = Object.keys(tr).filter((k) => Array.isArray(tr[k]));
+  const head = [];
+  for (const k of keys) {
+    const first = tr[k][0];
+    if (Array.isArray(first)) {
+      const names = first.length === 4 ? ['w', 'x', 'y', 'z'] : ['x', 'y', 'z'];
+      first.forEach((_, i) => head.push(`${k}_${names[i] ?? i}`));
+    } else head.push(k);
+  }
+  const rows = [head];
+  const n = tr.time_s.length;
+  for (let i = 0; i < n; i++) rows.push(keys.flatMap((k) => (Array.isArray(tr[k][i]) ? tr[k][i] : [tr[k][i]])));
+  return rows;
 }
 
 /** [min, max] of an array, widened by `pad` when flat. */

@@ -19,13 +19,16 @@ const resizer = new ResizeObserver((entries) => {
  * - `x`: {label, values, range?}
  * - `series`: [{label, values, color?, axis?: 'y'|'y2', points?, width?, dash?, bars?}]
  * - `y`, `y2`: {label, range?}; y2 only when a series uses it.
+ * - `vlines`: [{x, color}] vertical marks across the plot (supports on a face).
  * The x values must be ascending (uPlot's own rule) unless `x.range` is given.
  */
-export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true }) {
+export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true, vlines = [] }) {
   destroy(el);
   const axisStyle = { stroke: '#3b4350', grid: { stroke: '#e3e7ed', width: 1 }, ticks: { stroke: '#c9d0da', width: 1 } };
+  // Drag-to-zoom: the selection is turned into a zoom range here (uPlot's own
+  // zoom would be undone by a fixed x range); double-click returns to the full range.
   const scales = {
-    x: { time: false, ...(x.range ? { range: () => x.range } : {}) },
+    x: { time: false, range: (u, min, max) => u?.zoom ?? x.range ?? padFlat(min, max) },
     y: y.range ? { range: () => y.range } : {},
   };
   const axes = [
@@ -38,12 +41,39 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true 
   }
 
   const opts = {
-    width: Math.max(el.clientWidth, 320),
+    width: Math.max(el.clientWidth, 240),
     height,
     scales,
     axes,
     legend: { show: legend },
-    cursor: { drag: { x: true, y: false } },
+    cursor: { drag: { x: true, y: false, setScale: false } },
+    hooks: {
+      draw: [(u) => {
+        if (!vlines.length) return;
+        const { ctx } = u;
+        ctx.save();
+        ctx.lineWidth = Math.max(1, devicePixelRatio);
+        for (const mark of vlines) {
+          const px = u.valToPos(mark.x, 'x', true);
+          if (px < u.bbox.left || px > u.bbox.left + u.bbox.width) continue;
+          ctx.strokeStyle = mark.color ?? '#555e6b';
+          ctx.beginPath();
+          ctx.moveTo(px, u.bbox.top);
+          ctx.lineTo(px, u.bbox.top + u.bbox.height);
+          ctx.stroke();
+        }
+        ctx.restore();
+      }],
+      setSelect: [(u) => {
+        if (u.select.width > 4) {
+          const min = u.posToVal(u.select.left, 'x');
+          const max = u.posToVal(u.select.left + u.select.width, 'x');
+          u.zoom = [min, max];
+          u.setScale('x', { min, max });
+        }
+        u.setSelect({ left: 0, top: 0, width: 0, height: 0 }, false);
+      }],
+    },
     series: [
       { label: x.label },
       ...series.map((s, i) => {
@@ -66,6 +96,9 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true 
   };
   const data = [x.values, ...series.map((s) => s.values)];
   const u = new uPlot(opts, data, el);
+  u.root.addEventListener('dblclick', () => { u.zoom = null; }, true);
+  el.uplot = u;
+  el.title = el.title || 'Drag across to zoom in; double-click to zoom out';
   plots.set(el, u);
   resizer.observe(el);
   return u;
@@ -83,7 +116,48 @@ export function destroy(el) {
     old.destroy();
     plots.delete(el);
   }
+  el.uplot = null;
+  el.csv = null;
   el.replaceChildren();
+}
+
+function padFlat(min, max) {
+  if (min === null || max === null) return [0, 1];
+  if (max > min) return [min, max];
+  const pad = Math.max(Math.abs(min) * 1e-3, 1e-3);
+  return [min - pad, max + pad];
+}
+
+/**
+ * The plot in `el` as a PNG (a Blob): its title, the canvas uPlot drew (axes
+ * and labels included) and the series names with their colours.
+ */
+export function plotPng(el, title) {
+  const u = plots.get(el);
+  if (!u) return Promise.resolve(null);
+  const src = u.ctx.canvas;
+  const ratio = src.width / u.width;
+  const names = u.series.slice(1).filter((s) => s.show !== false && s.label).map((s) => [s.label, typeof s.stroke === 'function' ? s.stroke(u, 1) : s.stroke]);
+  const lineH = 20 * ratio;
+  const out = document.createElement('canvas');
+  out.width = src.width;
+  out.height = src.height + lineH * (1.5 + names.length);
+  const ctx = out.getContext('2d');
+  ctx.fillStyle = '#fff';
+  ctx.fillRect(0, 0, out.width, out.height);
+  ctx.fillStyle = '#1c2430';
+  ctx.font = `600 ${14 * ratio}px system-ui, sans-serif`;
+  ctx.fillText(title, 8 * ratio, 15 * ratio);
+  ctx.drawImage(src, 0, lineH * 1.2);
+  ctx.font = `${12 * ratio}px system-ui, sans-serif`;
+  names.forEach(([label, color], i) => {
+    const y = src.height + lineH * (1.6 + i);
+    ctx.fillStyle = color || '#1c2430';
+    ctx.fillRect(8 * ratio, y - 9 * ratio, 16 * ratio, 4 * ratio);
+    ctx.fillStyle = '#1c2430';
+    ctx.fillText(label, 30 * ratio, y);
+  });
+  return new Promise((resolve) => out.toBlob(resolve, 'image/png'));
 }
 
 /** Puts a short message where a plot would be. */

@@ -2,10 +2,10 @@
 // shows the zone shares, P1 = P(A|B), P2 = P(A|C) with Wilson 95 % intervals,
 // and a bar chart by zone. Percentages whose denominator is 0 arrive as null.
 
-import { postJson } from './api.js';
+import { parseNumber } from './form.js';
 import { fmt, h, showWarnings } from './format.js';
-import { linePlot, plotMessage } from './plot.js';
-import { hideStatus, showBusy, showProblem } from './status.js';
+import { initPanel } from './panel.js';
+import { destroy, linePlot, plotMessage } from './plot.js';
 
 const TABLE1 = [
   { name: 'lower', spalling: 118, high_resistance: 8, low_resistance: 22, spalling_and_high: 5, spalling_and_low: 4.5 },
@@ -36,19 +36,27 @@ function countsTable(el, zones) {
     h('input', { type: 'text', value: z.name, 'data-zone': i, 'data-field': 'name', 'aria-label': `zone ${i} name`, size: 8 }))));
   const rows = COUNTS.map(([key, label]) => h('tr', {}, h('th', { scope: 'row' }, label),
     ...zones.map((z, i) => h('td', {}, h('input', {
-      type: 'number', step: 'any', min: 0, value: z[key], 'data-zone': i, 'data-field': key,
-      'aria-label': `${label}, zone ${z.name}`, id: `spalling-zones-${i}-${key}`,
+      type: 'text', inputmode: 'decimal', size: 7, value: z[key], 'data-zone': i, 'data-field': key,
+      'aria-label': `${label}, zone ${z.name}`, id: `spalling-zones-${i}-${key}`, 'data-target': `/zones/${i}/${key}`,
     })))));
   el.replaceChildren(h('thead', {}, head), h('tbody', {}, ...rows));
 }
 
 function readZones(el) {
   const zones = [];
+  const fieldErrors = [];
   for (const input of el.querySelectorAll('input[data-zone]')) {
     const i = Number(input.dataset.zone);
     zones[i] ??= {};
-    zones[i][input.dataset.field] = input.dataset.field === 'name' ? input.value : Number(input.value);
+    if (input.dataset.field === 'name') {
+      zones[i].name = input.value;
+      continue;
+    }
+    const parsed = parseNumber(input.value);
+    if (parsed.error) fieldErrors.push({ field: `/zones/${i}/${input.dataset.field}`, message: parsed.error });
+    zones[i][input.dataset.field] = parsed.value;
   }
+  if (fieldErrors.length) throw { fieldErrors };
   return zones;
 }
 
@@ -87,29 +95,30 @@ export function initSpalling() {
   const warnings = document.getElementById('spalling-warnings');
   const output = document.getElementById('spalling-table');
   const plot = document.getElementById('spalling-plot');
-  if (!form) return;
+  if (!form) return null;
   countsTable(input, TABLE1);
   form.addEventListener('reset', (event) => {
     event.preventDefault();
     countsTable(input, TABLE1);
   });
-  form.addEventListener('submit', async (event) => {
-    event.preventDefault();
-    showBusy(status, 'Computing the zone statistics…');
-    const r = await postJson('v1/spalling', { zones: readZones(input) });
-    if (!r.ok) {
-      showProblem(status, r.problem, { endpoint: 'POST /v1/spalling', label: 'Spalling' });
-      for (const e of r.problem.errors ?? []) {
-        const field = document.getElementById(`spalling${e.field.replaceAll('/', '-')}`);
-        if (field) field.setAttribute('aria-invalid', 'true');
-      }
-      return;
-    }
-    for (const el of input.querySelectorAll('[aria-invalid]')) el.removeAttribute('aria-invalid');
-    hideStatus(status);
-    showWarnings(warnings, r.data.warnings);
-    resultTable(output, r.data);
-    document.getElementById('spalling-empty').hidden = true;
-    barChart(plot, r.data);
+  return initPanel({
+    name: 'spalling',
+    form,
+    endpoint: 'v1/spalling',
+    status,
+    build: () => ({ zones: readZones(input) }),
+    busy: () => 'Computing the zone statistics…',
+    render: (data) => {
+      showWarnings(warnings, data.warnings);
+      resultTable(output, data);
+      document.getElementById('spalling-empty').hidden = true;
+      barChart(plot, data);
+    },
+    clear: () => {
+      showWarnings(warnings, []);
+      output.replaceChildren();
+      document.getElementById('spalling-empty').hidden = false;
+      destroy(plot);
+    },
   });
 }

@@ -1,8 +1,8 @@
 // The status line above each result: busy, done, or a problem (RFC 9457)
 // summarised, with its field errors marked next to the inputs.
 
-import { fmt, h } from './format.js';
-import { clearErrors, locate, markErrors } from './form.js';
+import { fmt, h, humanMessage } from './format.js';
+import { clearErrors, locate, localise, markErrors, unitOf } from './form.js';
 
 export function showBusy(el, text) {
   el.hidden = false;
@@ -29,9 +29,11 @@ export function hideStatus(el) {
 }
 
 /**
- * Shows a problem: a summary line in `el` and each `errors[]` entry next to
- * the field its JSON Pointer names (searched in `forms`, in order).
- * `endpoint` (e.g. "POST /v1/column") words a 404 as a missing endpoint.
+ * Shows a problem in words: a summary line in `el` (no JSON Pointers, no HTTP
+ * codes: those go under "Technical details"), each `errors[]` entry next to
+ * the field its pointer names (searched in `forms`, in order) in that field's
+ * unit, and a suggestion. `endpoint` (e.g. "POST /v1/column") words a 404 as
+ * a missing endpoint.
  */
 export function showProblem(el, problem, { forms = [], endpoint = '', label = '' } = {}) {
   clearErrors(...forms);
@@ -40,47 +42,85 @@ export function showProblem(el, problem, { forms = [], endpoint = '', label = ''
   el.className = 'status error';
   el.replaceChildren();
   el.dataset.problem = problemCode(problem);
+  el.dataset.status = String(problem.status ?? '');
   bringIntoView(el);
 
-  const status = problem.status ? `${problem.status} ` : '';
+  const code = problemCode(problem);
   const head = h('p', { class: 'summary' });
   if (label) head.append(h('strong', {}, `${label}: `));
+  const suggestion = h('p', { class: 'suggestion' });
+  const errors = problem.errors ?? [];
 
   if (problem.status === 404 && endpoint) {
-    head.append(h('strong', {}, `${status}${problem.title || 'Not Found'}. `),
-      `This server does not offer ${endpoint} yet; the other calculations work without it.`);
-    el.append(head);
+    head.append(h('strong', {}, 'Not available. '),
+      `This server does not offer ${endpoint.replace(/^POST /, '')} yet; the other calculations work without it.`);
+  } else if (code === 'capacity_exceeded') {
+    const law = forms.map((f) => f.querySelector('[data-pointer="/contact/law"]')).find(Boolean)?.value;
+    head.append(h('strong', {}, 'The impact carries more energy than the contact law can store. '),
+      humanMessage(problem.detail ?? ''), '.');
+    if (problem.max_velocity_m_s !== undefined) {
+      el.append(head, h('p', { class: 'extra', dataset: { out: 'max_velocity_m_s' } },
+        `Largest impact velocity this contact law can take with these inputs: ${fmt(problem.max_velocity_m_s, 5)} m/s.`));
+    } else {
+      el.append(head);
+    }
+    suggestion.append('Lower the marked velocity below that value, or choose a larger, stiffer rock; ',
+      law === 'hertz_point' ? '' : 'the hertz_point law has no such limit. ',
+      'This is a limit of the contact law (beyond it the law has no solution), not a statement about the column.');
+    el.append(suggestion);
+    appendList(el, errors, unmatched, forms);
+    appendDetails(el, problem);
     return;
+  } else if (problem.status === 0) {
+    head.append(h('strong', {}, 'No answer from the server. '), 'Check that it is running and reachable, then compute again.');
+  } else if (problem.status === 503) {
+    head.append(h('strong', {}, 'The server is busy. '), 'All its solver slots are taken; compute again in a few seconds.');
+  } else if (problem.status === 504) {
+    head.append(h('strong', {}, 'The computation took too long and was stopped. '),
+      'Ask for fewer runs, a shorter time or fewer samples.');
+  } else if (errors.length) {
+    const n = errors.length;
+    head.append(h('strong', {}, `${n === 1 ? 'One input needs' : `${n} inputs need`} attention; nothing was computed. `));
+    suggestion.append('Correct the marked field', n > 1 ? 's' : '', ' (the valid range is given beside each) and compute again.');
+  } else {
+    head.append(h('strong', {}, `${problem.title || 'Error'}. `), humanMessage(problem.detail ?? ''));
   }
-
-  head.append(h('strong', {}, `${status}${problem.title || 'Error'}`));
-  if (problem.detail) head.append(' — ', problem.detail);
-  const count = (problem.errors ?? []).length;
-  if (count) head.append(` (${count} field${count > 1 ? 's' : ''} marked in the form)`);
   el.append(head);
-
   if (problem.max_velocity_m_s !== undefined) {
     el.append(h('p', { class: 'extra', dataset: { out: 'max_velocity_m_s' } },
-      `Largest impact velocity this contact law can store: ${fmt(problem.max_velocity_m_s, 5)} m/s.`));
+      `Largest impact velocity this contact law can take: ${fmt(problem.max_velocity_m_s, 5)} m/s.`));
   }
-  for (const [key, value] of Object.entries(problem)) {
-    if (['type', 'title', 'status', 'detail', 'errors', 'instance', 'max_velocity_m_s'].includes(key)) continue;
-    if (typeof value === 'number' || typeof value === 'string') {
-      el.append(h('p', { class: 'extra' }, `${key}: ${typeof value === 'number' ? fmt(value, 5) : value}`));
-    }
-  }
+  appendList(el, errors, unmatched, forms);
+  if (suggestion.childNodes.length) el.append(suggestion);
+  appendDetails(el, problem);
+}
 
-  const items = (problem.errors ?? []).map((e) => {
+function appendList(el, errors, unmatched, forms) {
+  const items = errors.map((e) => {
     const found = e.field ? locate(e.field, forms) : null;
     const where = found?.target.querySelector('label, legend')?.textContent?.trim();
-    const value = e.value === undefined ? '' : ` (got ${JSON.stringify(e.value)})`;
-    return h('li', { class: unmatched.includes(e) ? 'unmatched' : '' },
-      h('code', {}, e.field ?? '(request)'), where ? ` ${where}` : '', `: ${e.message ?? 'invalid'}${value}`);
+    const message = found?.input ? localise(e.message ?? 'invalid', found.input) : humanMessage(e.message ?? 'invalid');
+    const entered = found?.input && found.input.type === 'text' && found.input.value.trim()
+      ? ` (entered: ${found.input.value.trim()}${unitOf(found.input) ? ` ${unitOf(found.input)}` : ''})` : '';
+    const name = where || (e.field ? fieldWords(e.field) : 'the request');
+    return h('li', { class: unmatched.includes(e) ? 'unmatched' : '' }, h('strong', {}, name), `: ${message}${entered}`);
   });
   if (items.length) el.append(h('ul', {}, items));
+}
+
+function appendDetails(el, problem) {
+  const details = h('details', { class: 'technical' }, h('summary', {}, 'Technical details'),
+    h('p', {}, `HTTP ${problem.status ?? '—'}, ${problem.type ?? ''}`),
+    ...(problem.errors ?? []).map((e) => h('p', {}, h('code', {}, e.field ?? ''), ` ${e.message ?? ''}`)));
   if (problem.type && problem.type.startsWith('/problems/')) {
-    el.append(h('p', { class: 'extra' }, h('a', { href: problem.type.slice(1), target: '_blank' }, 'About this problem')));
+    details.append(h('p', {}, h('a', { href: problem.type.slice(1), target: '_blank' }, 'About this problem')));
   }
+  el.append(details);
+}
+
+/** "/monte_carlo/runs" → "monte carlo › runs" for a field the form does not show. */
+function fieldWords(pointer) {
+  return pointer.split('/').filter(Boolean).map((k) => k.replace(/_/g, ' ')).join(' › ');
 }
 
 function problemCode(problem) {

@@ -3,10 +3,10 @@
 // pair grids, the Figure 21 chart, sensitivity and ordering tables beside the
 // paper's, and a CSV of every table.
 
-import { postJson } from './api.js';
+import { parseNumber } from './form.js';
 import { fmt, h, showWarnings } from './format.js';
+import { initPanel } from './panel.js';
 import { destroy, linePlot } from './plot.js';
-import { hideStatus, showBusy, showProblem } from './status.js';
 
 const PAPER = [
   ['velocity_m_s', 4, 6],
@@ -19,9 +19,9 @@ function paramRows(el, rows) {
   el.replaceChildren(
     h('thead', {}, h('tr', {}, h('th', {}, 'parameter (dotted path)'), h('th', {}, 'min'), h('th', {}, 'max'), h('th', {}, 'use'))),
     h('tbody', {}, ...rows.map(([name, min, max], i) => h('tr', {},
-      h('td', {}, h('input', { type: 'text', value: name, 'data-param': i, 'data-field': 'name', size: 24, id: `study-parameters-${i}-name` })),
-      h('td', {}, h('input', { type: 'number', step: 'any', value: min, 'data-param': i, 'data-field': 'min', id: `study-parameters-${i}-min` })),
-      h('td', {}, h('input', { type: 'number', step: 'any', value: max, 'data-param': i, 'data-field': 'max', id: `study-parameters-${i}-max` })),
+      h('td', {}, h('input', { type: 'text', value: name, 'data-param': i, 'data-field': 'name', size: 24, id: `study-parameters-${i}-name`, 'data-target': `/parameters/${i}/name`, 'aria-label': `parameter ${i + 1}` })),
+      h('td', {}, h('input', { type: 'text', inputmode: 'decimal', value: min, 'data-param': i, 'data-field': 'min', id: `study-parameters-${i}-min`, 'data-target': `/parameters/${i}/min`, 'aria-label': `${name} min`, size: 10 })),
+      h('td', {}, h('input', { type: 'text', inputmode: 'decimal', value: max, 'data-param': i, 'data-field': 'max', id: `study-parameters-${i}-max`, 'data-target': `/parameters/${i}/max`, 'aria-label': `${name} max`, size: 10 })),
       h('td', {}, h('input', { type: 'checkbox', checked: true, 'data-param': i, 'data-field': 'use', 'aria-label': `use ${name}` })),
     ))),
   );
@@ -29,16 +29,34 @@ function paramRows(el, rows) {
 
 function readRequest(form, table) {
   const rows = [];
+  const fieldErrors = [];
   for (const input of table.querySelectorAll('input[data-param]')) {
     const i = Number(input.dataset.param);
     rows[i] ??= {};
     const f = input.dataset.field;
-    rows[i][f] = f === 'use' ? input.checked : f === 'name' ? input.value.trim() : Number(input.value);
+    if (f === 'use') rows[i][f] = input.checked;
+    else if (f === 'name') rows[i][f] = input.value.trim();
+    else {
+      const parsed = parseNumber(input.value);
+      if (parsed.error) fieldErrors.push({ field: input.dataset.target, message: parsed.error });
+      rows[i][f] = parsed.value;
+    }
   }
-  const parameters = rows.filter((r) => r.use).map(({ name, min, max }) => ({ name, min, max }));
+  const points = parseNumber(form.elements.points.value);
+  if (points.error || !Number.isInteger(points.value)) {
+    fieldErrors.push({ field: '/points', message: points.error ?? 'must be a whole number' });
+  }
+  if (fieldErrors.length) throw { fieldErrors };
+  // Only the ticked parameters are sent; the request names them by position in that list.
+  const used = rows.map((r, i) => [r, i]).filter(([r]) => r.use);
+  for (const input of table.querySelectorAll('input[data-param]')) {
+    const k = used.findIndex(([, i]) => i === Number(input.dataset.param));
+    input.dataset.target = k < 0 ? '' : `/parameters/${k}/${input.dataset.field}`;
+  }
+  const parameters = used.map(([{ name, min, max }]) => ({ name, min, max }));
   const get = (name) => form.elements[name].value;
   const base = { model: get('model'), contact: { law: get('law'), effective_modulus: get('effective_modulus') } };
-  return { base, parameters, points: Number(get('points')), grid: get('grid') };
+  return { base, parameters, points: points.value, grid: get('grid') };
 }
 
 /** CSV text of a table of rows (arrays of cells). */
@@ -57,9 +75,9 @@ function csvLink(rows, name) {
 function tableOf(rows, name, { numeric = true } = {}) {
   const [head, ...body] = rows;
   return h('div', { class: 'table-block' },
-    h('table', { class: 'results-table' },
+    h('div', { class: 'table-scroll' }, h('table', { class: 'results-table' },
       h('thead', {}, h('tr', {}, ...head.map((c) => h('th', {}, c)))),
-      h('tbody', {}, ...body.map((r) => h('tr', {}, ...r.map((c, j) => (j === 0 ? h('th', { scope: 'row' }, c) : h('td', {}, numeric && typeof c === 'number' ? fmt(c, 5) : c ?? '—'))))))),
+      h('tbody', {}, ...body.map((r) => h('tr', {}, ...r.map((c, j) => (j === 0 ? h('th', { scope: 'row' }, c) : h('td', {}, numeric && typeof c === 'number' ? fmt(c, 5) : c ?? '—')))))))),
     csvLink(rows, name));
 }
 
@@ -152,11 +170,10 @@ function render(data, els) {
 
 export function initStudy() {
   const form = document.getElementById('study-form');
-  if (!form) return;
+  if (!form) return null;
   const table = document.getElementById('study-parameters');
   const status = document.getElementById('study-status');
   const warnings = document.getElementById('study-warnings');
-  const progress = document.getElementById('study-progress');
   const els = {
     curves: document.getElementById('study-curves'),
     fig21: document.getElementById('study-fig21'),
@@ -165,47 +182,34 @@ export function initStudy() {
     paper: document.getElementById('study-paper'),
     grids: document.getElementById('study-grids'),
   };
+  form.elements.points.dataset.target = '/points';
+  form.elements.points.type = 'text';
+  form.elements.points.inputMode = 'numeric';
   paramRows(table, PAPER);
-  let controller = null;
-  document.getElementById('study-cancel').addEventListener('click', () => controller?.abort());
   form.addEventListener('reset', () => setTimeout(() => paramRows(table, PAPER)));
-  form.addEventListener('submit', async (event) => {
-    event.preventDefault();
-    controller?.abort();
-    controller = new AbortController();
-    showBusy(status, 'Running the study…');
-    const bar = progress.querySelector('progress');
-    const text = progress.querySelector('.progress-text');
-    let r;
-    try {
-      r = await postJson('v1/study', readRequest(form, table), {
-        signal: controller.signal,
-        onProgress: ({ done, total }) => {
-          progress.hidden = false;
-          bar.max = Math.max(total, 1);
-          bar.value = done;
-          text.textContent = `${done} of ${total} points`;
-        },
-      });
-    } catch (err) {
-      progress.hidden = true;
-      if (err.name === 'AbortError') {
-        showBusy(status, 'Cancelled.');
-        status.className = 'status info';
-        return;
-      }
-      throw err;
-    }
-    progress.hidden = true;
-    if (!r.ok) {
-      showProblem(status, r.problem, { endpoint: 'POST /v1/study', label: 'Study' });
-      return;
-    }
-    hideStatus(status);
-    showWarnings(warnings, r.data.warnings);
-    document.getElementById('study-empty').hidden = true;
-    document.getElementById('study-results').hidden = false;
-    for (const el of [els.fig21]) destroy(el);
-    render(r.data, els);
+  return initPanel({
+    name: 'study',
+    form,
+    endpoint: 'v1/study',
+    status,
+    progress: document.getElementById('study-progress'),
+    unit: 'points',
+    build: () => readRequest(form, table),
+    stream: () => true,
+    busy: () => 'Running the study…',
+    render: (data) => {
+      showWarnings(warnings, data.warnings);
+      document.getElementById('study-empty').hidden = true;
+      document.getElementById('study-results').hidden = false;
+      destroy(els.fig21);
+      render(data, els);
+    },
+    clear: () => {
+      showWarnings(warnings, []);
+      document.getElementById('study-empty').hidden = false;
+      document.getElementById('study-results').hidden = true;
+      destroy(els.fig21);
+      for (const el of [els.curves, els.fig21Table, els.sensitivity, els.paper, els.grids]) el.replaceChildren();
+    },
   });
 }

@@ -1,0 +1,499 @@
+// Scene tab: POST /v1/scene (api.md), the engineer's question in one request:
+// release → migration → impact on the first support reached → column →
+// checks, for one run or a seeded Monte Carlo ensemble. The rock, the face and
+// the contact are the Migration and Impact tabs' case; this form adds the
+// supports, the release zones, the ensemble and the design limits.
+
+import { columnChecks, impactChecks, renderChecks } from './checks.js';
+import { buildForm, merge } from './form.js';
+import { csvButton, fmt, h, showWarnings } from './format.js';
+import { initPanel } from './panel.js';
+import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
+
+const SCENE_GROUPS = [
+  {
+    legend: 'Supports',
+    fields: [
+      {
+        local: 'supports', label: 'Supports', kind: 'select', value: 'rows',
+        options: [['rows', 'rows (Table 1 numbering)'], ['lower_end', 'one at the lower end']],
+        hint: 'rows: support k stands at the lowest position − (k − 1) × spacing',
+      },
+      { pointer: '/support_rows/lowest_along_dip_m', label: 'Lowest support along the dip', unit: 'm', value: 118.5 },
+      { pointer: '/support_rows/spacing_m', label: 'Spacing', unit: 'm', value: 1.5 },
+      { pointer: '/support_rows/count', label: 'Number of supports', kind: 'integer', value: 62 },
+      {
+        local: 'across', label: 'Column position across the face', unit: 'm', value: 0.9,
+        hint: 'one column of each support stands there (api.md default 0.9 m); a rock can pass beside it',
+      },
+    ],
+  },
+  {
+    legend: 'Impact',
+    fields: [
+      {
+        pointer: '/column_model', label: 'Column model', kind: 'select', value: 'coupled',
+        options: [['coupled', 'coupled (recommended)'], ['decoupled', 'decoupled (the paper)']],
+        hint: 'coupled conserves energy; decoupled overstates the column energy',
+      },
+      {
+        pointer: '/impact_velocity_m_s', label: 'Impact velocity (skip migration)', unit: 'm/s', placeholder: 'migrate',
+        hint: 'given: every support is struck at this speed and no migration runs',
+      },
+    ],
+  },
+  {
+    legend: 'Release',
+    fields: [
+      {
+        local: 'release_zones', label: 'Release points', kind: 'select', value: 'table1',
+        options: [['table1', 'Table 1 spalling zones'], ['release', 'Migration tab\'s point']],
+        hint: 'Table 1: upper third 23.3 %, middle 58.3 %, lower 18.4 % (Monte Carlo only)',
+      },
+    ],
+  },
+  {
+    legend: 'Monte Carlo ensemble',
+    pointer: '/monte_carlo',
+    toggle: { name: 'scene_monte_carlo', checked: true },
+    note: 'Restitution at every impact; release points from the zones; the rock\'s size and density drawn in the paper\'s study ranges.',
+    fields: [
+      { pointer: '/monte_carlo/runs', label: 'Runs', kind: 'integer', value: 200 },
+      { pointer: '/monte_carlo/seed', label: 'Seed', kind: 'integer', value: 42 },
+      { pointer: '/monte_carlo/release_across_m/min', label: 'Release across the face, from', unit: 'm', value: 0 },
+      {
+        pointer: '/monte_carlo/release_across_m/max', label: 'to', unit: 'm', value: 1.8,
+        hint: 'uniform; where along the strike the rock leaves the wall (an assumed range: set your face\'s)',
+      },
+      { local: 'vary_rock', label: 'Vary size 0.2–0.3 m and density 2000–3000 kg/m³', kind: 'checkbox', value: false },
+    ],
+  },
+  {
+    legend: 'Design limits',
+    pointer: '/design_limits',
+    fields: [
+      { pointer: '/design_limits/stress_utilisation', label: 'Stress utilisation σ/σy', unit: '', value: 1 },
+      { pointer: '/design_limits/max_force_n', label: 'Rated force', unit: 'kN', exp: 3, placeholder: 'none' },
+      { pointer: '/design_limits/absorbed_energy_j', label: 'Design energy', unit: 'J', placeholder: 'none' },
+      {
+        pointer: '/design_limits/acceptable_probability', label: 'Acceptable probability', unit: '', value: 0.01,
+        hint: 'a support whose exceedance probability is above this is marked exceeded',
+      },
+    ],
+  },
+];
+
+const DISTRIBUTIONS = [
+  ['impact_velocity_m_s', 'Impact speed', 'm/s', 1],
+  ['max_deformation_m', 'Max approach δmax', 'mm', 1e3],
+  ['max_force_n', 'Max force Pmax', 'kN', 1e-3],
+  ['absorbed_energy_j', 'Column energy', 'J', 1],
+  ['stress_utilisation', 'Stress utilisation', '%', 100],
+];
+const LIMIT_WORDS = { stress_utilisation: 'stress utilisation σ/σy', max_force_n: 'rated force (N)', absorbed_energy_j: 'design energy (J)' };
+const STAT_COLUMNS = ['mean', 'std', 'min', 'p05', 'p50', 'p95', 'p99', 'max'];
+const OUTCOMES = [['support', 'struck a support'], ['lower_end', 'reached the lower end'], ['at_rest', 'came to rest'],
+  ['left_floor', 'left the floor'], ['end_time', 'still moving at the end time']];
+
+export function initScene() {
+  const form = document.getElementById('scene-form');
+  const status = document.getElementById('scene-status');
+  const warnings = document.getElementById('scene-warnings');
+  const empty = document.getElementById('scene-empty');
+  const box = document.getElementById('scene-results');
+  const summary = document.getElementById('scene-summary');
+  const table = document.getElementById('scene-table');
+  const distSelect = document.getElementById('scene-dist-support');
+  const distTable = document.getElementById('scene-dist-table');
+  const distPlot = document.getElementById('scene-dist-plot');
+  const planList = document.getElementById('scene-plan');
+  const plots = {
+    side: document.getElementById('scene-side-plot'),
+    plan: document.getElementById('scene-plan-plot'),
+    support: document.getElementById('scene-support-plot'),
+  };
+  const impactForm = document.getElementById('impact-form');
+  const columnForm = document.getElementById('column-form');
+  const migrationForm = document.getElementById('migration-form');
+  buildForm(form, SCENE_GROUPS);
+
+  const rowFields = ['/support_rows/lowest_along_dip_m', '/support_rows/spacing_m', '/support_rows/count']
+    .map((p) => form.querySelector(`[data-pointer="${p}"]`));
+  const across = form.querySelector('[data-local="across"]');
+  const kind = form.querySelector('[data-local="supports"]');
+  const syncSupports = () => {
+    for (const el of [...rowFields, across]) el.disabled = kind.value !== 'rows';
+  };
+  kind.addEventListener('change', syncSupports);
+  form.addEventListener('reset', () => setTimeout(syncSupports));
+  syncSupports();
+
+  let last = null;
+  let runsCsv = null;
+
+  const panel = initPanel({
+    name: 'scene',
+    form,
+    forms: [form, migrationForm, impactForm, columnForm],
+    endpoint: 'v1/scene',
+    status,
+    progress: document.getElementById('scene-progress'),
+    unit: 'runs',
+    build: ([own, mig, imp, col]) => {
+      const m = mig.request;
+      const request = merge({
+        method: m.method, face: m.face, rock: m.rock, release: m.release, lumped_mass: m.lumped_mass,
+      }, { rock: imp.request.rock, column: imp.request.column, contact: imp.request.contact });
+      request.galerkin = { ...(col.request.galerkin ?? {}) };
+      // The struck column belongs to the supports (api.md): every support gets the Impact and Column tabs' column.
+      const column = { ...request.column, ...(col.request.column ?? {}) };
+      delete request.column;
+      migrationForm.floor?.apply(request, mig.local);
+      const own2 = structuredClone(own.request);
+      if (own.local.supports === 'rows') {
+        const rows = own2.support_rows ?? {};
+        rows.across_m = [own.local.across];
+        rows.column = column;
+        own2.support_rows = rows;
+      } else {
+        delete own2.support_rows;
+        request.supports = [{ along_dip_m: m.face?.length_m ?? 120, across_m: null, column }];
+      }
+      Object.assign(request, own2);
+      if (request.column_model === 'decoupled') delete request.galerkin.modes;
+      else if (request.galerkin.mode_shapes && request.galerkin.mode_shapes !== 'exact') delete request.galerkin.mode_shapes;
+      if (request.monte_carlo) {
+        if (own.local.release_zones === 'table1') request.release_zones = 'table1';
+        if (request.monte_carlo.release_across_m) request.monte_carlo.release_across_m = { distribution: 'uniform', ...request.monte_carlo.release_across_m };
+        if (own.local.vary_rock) {
+          request.monte_carlo.side_length_m = { distribution: 'uniform', min: 0.2, max: 0.3 };
+          request.monte_carlo.density_kg_m3 = { distribution: 'uniform', min: 2000, max: 3000 };
+        }
+        request.migration_output = { runs_csv: true };
+      } else {
+        request.migration_output = { trajectory: true, sample_interval_s: 0.01 };
+      }
+      return request;
+    },
+    stream: (request) => Boolean(request.monte_carlo),
+    busy: (request) => (request.monte_carlo ? `Running ${request.monte_carlo.runs} runs along the face…` : 'Computing the scene…'),
+    render,
+    clear,
+  });
+
+  distSelect.addEventListener('change', () => last && renderDistributions(last));
+  document.getElementById('scene-table').closest('.card').append(
+    csvButton('scene_runs.csv', () => (runsCsv ? runsCsv.trim().split('\n').map((l) => l.split(',')) : [['no per-run table: run an ensemble']]), 'CSV: every run'));
+
+  function clear() {
+    last = null;
+    runsCsv = null;
+    empty.hidden = false;
+    box.hidden = true;
+    summary.replaceChildren();
+    table.replaceChildren();
+    distTable.replaceChildren();
+    planList.replaceChildren();
+    showWarnings(warnings, []);
+    Object.values(plots).forEach(destroy);
+  }
+
+  function render(data) {
+    last = data;
+    runsCsv = data.runs_csv ?? data.migration?.runs_csv ?? null;
+    empty.hidden = true;
+    box.hidden = false;
+    showWarnings(warnings, data.warnings);
+    planList.replaceChildren(...(data.plan ?? []).map((p) =>
+      h('li', { class: `plan-${p.status}` }, h('strong', {}, p.stage), ` ${p.status === 'ran' ? 'ran' : 'skipped'}: ${p.reason ?? ''}`)));
+    const entries = supportEntries(data);
+    renderSummary(data, entries);
+    renderTable(data, entries);
+    renderSupportChart(entries);
+    renderFace(data, entries);
+    distSelect.replaceChildren(...entries.map((e, i) => h('option', { value: String(i) }, label(e))));
+    const worst = entries.reduce((b, e, i) => ((e.risk ?? -1) > (entries[b]?.risk ?? -1) ? i : b), 0);
+    distSelect.value = String(worst);
+    renderDistributions(data);
+  }
+
+  /** One row per support entry, from the ensemble statistics or the single run's impacts. */
+  function supportEntries(data) {
+    if (data.statistics?.supports) {
+      return data.statistics.supports.map((s) => {
+        const probs = Object.values(s.exceedance ?? {}).map((x) => x.probability);
+        return { ...s, risk: probs.length ? Math.max(...probs) : 0 };
+      });
+    }
+    return (data.impacts ?? []).map((imp) => {
+      const worst = Math.max(0, ...(imp.checks ?? []).map((c) => c.utilisation ?? 0));
+      return { ...imp, risk: worst, single: true };
+    });
+  }
+
+  function label(e) {
+    return `#${e.support}${e.column_index ? `.${e.column_index}` : ''} at ${fmt(e.along_dip_m, 4)} m`;
+  }
+
+  function verdictBadge(v) {
+    return h('span', { class: `badge ${v === 'exceeded' ? 'exceeded' : v === 'ok' ? 'ok' : 'invalid'}` },
+      v === 'exceeded' ? 'EXCEEDED' : v === 'ok' ? 'OK' : String(v ?? '—'));
+  }
+
+  function renderSummary(data, entries) {
+    summary.replaceChildren();
+    const st = data.statistics;
+    if (st) {
+      const any = st.any_exceeded;
+      summary.append(h('p', { class: 'answer' },
+        any ? h('span', {}, 'Probability that a released rock overloads some support: ',
+          h('strong', { dataset: { out: 'statistics.any_exceeded.probability' } }, `${fmt(any.probability * 100, 3)} %`),
+          ` (95 % interval ${fmt(any.ci95[0] * 100, 3)}–${fmt(any.ci95[1] * 100, 3)} %), over ${st.runs} runs, seed ${st.seed}. `) : '',
+        `${entries.filter((e) => e.verdict === 'exceeded').length} of ${entries.length} support entries exceed the acceptable probability.`));
+      if (st.outcomes) {
+        summary.append(h('div', { class: 'table-scroll' }, h('table', { class: 'results-table' },
+          h('thead', {}, h('tr', {}, h('th', {}, 'Outcome of the runs'), h('th', { class: 'num' }, 'share'))),
+          h('tbody', {}, OUTCOMES.filter(([k]) => st.outcomes[k] !== undefined).map(([k, words]) =>
+            h('tr', {}, h('th', { scope: 'row' }, words), h('td', { class: 'num', dataset: { out: `statistics.outcomes.${k}` } }, `${fmt(st.outcomes[k] * 100, 4)} %`)))))));
+      }
+    } else {
+      const impacts = data.impacts ?? [];
+      if (!impacts.length) {
+        const a = data.migration?.arrival;
+        summary.append(h('p', { class: 'answer' }, 'The rock reached no support', a ? ` (it ${a.stop_reason === 'at_rest' ? 'came to rest' : a.stop_reason.replace(/_/g, ' ')} at ${fmt(a.along_dip_m, 4)} m along the dip).` : '.'));
+      }
+      for (const imp of impacts) appendImpact(imp);
+    }
+    if (st) for (const imp of data.impacts ?? []) appendImpact(imp);
+  }
+
+  /** One impact in words, its server checks and the page's validity checks of its impact and column. */
+  function appendImpact(imp) {
+    const nominal = imp.nominal ? 'Nominal run (no random draws): ' : '';
+    let words;
+    if (imp.outcome === 'capacity_exceeded') {
+      words = `support ${label(imp)} struck at ${fmt(imp.impact_velocity_m_s, 4)} m/s, past the contact law's capacity` +
+        `${imp.max_velocity_m_s ? ` (it takes at most ${fmt(imp.max_velocity_m_s, 4)} m/s)` : ''}: counted as exceeding every limit. `;
+    } else if (imp.outcome === 'no_impact') {
+      words = `support ${label(imp)} reached at under 1e-6 m/s: no impact. `;
+    } else {
+      words = `support ${label(imp)} struck at ${fmt(imp.impact_velocity_m_s, 4)} m/s: `;
+    }
+    summary.append(h('p', { class: 'answer' }, nominal, words, verdictBadge(imp.verdict), ' ', sendButton(imp.impact_velocity_m_s)));
+    const checks = [
+      ...(imp.checks ?? []).map((c) => ({
+        key: `design.${c.limit}`,
+        label: `Design limit: ${LIMIT_WORDS[c.limit] ?? c.limit}`,
+        value: c.value ?? null,
+        allowed: c.allowed,
+        ratio: c.utilisation ?? null,
+        unit: '',
+        verdict: c.exceeded ? 'exceeded' : 'ok',
+        note: c.value === undefined ? 'past the contact law\'s capacity' : '',
+      })),
+      ...(imp.impact ? impactChecks(imp.impact) : []),
+      ...(imp.column ? columnChecks(imp.column).filter((c) => c.key !== 'stress_utilisation') : []),
+    ];
+    const box = h('div', { class: 'table-scroll' });
+    renderChecks(box, checks, `impact${imp.support}.`);
+    summary.append(box);
+  }
+
+  function sendButton(speed) {
+    const b = h('button', { type: 'button', class: 'chip send', disabled: typeof speed !== 'number' || speed <= 0 },
+      'Send to Impact and Column');
+    b.addEventListener('click', () => sendImpact(speed));
+    return b;
+  }
+
+  /** One click: the support's impact speed into the Impact tab (the Column tab uses its case). */
+  function sendImpact(speed) {
+    const v = impactForm.querySelector('[data-pointer="/velocity_m_s"]');
+    v.value = String(Number(speed.toPrecision(6)));
+    v.dispatchEvent(new Event('change', { bubbles: true }));
+    document.getElementById('tab-impact').click();
+    impactForm.requestSubmit();
+  }
+
+  function renderTable(data, entries) {
+    const ensemble = Boolean(data.statistics);
+    const limits = ensemble
+      ? [...new Set(entries.flatMap((e) => Object.keys(e.exceedance ?? {})))]
+      : [...new Set(entries.flatMap((e) => (e.checks ?? []).map((c) => c.limit)))];
+    const head = ensemble
+      ? ['Support', 'Column', 'Along the dip (m)', 'Across (m)', 'Reached (%)', 'Capacity exceeded (%)', 'Median impact speed (m/s)', 'p95 stress utilisation (%)',
+        ...limits.map((l) => `P(${l} exceeded) (%) [95 % CI]`), 'Verdict', '']
+      : ['Support', 'Column', 'Along the dip (m)', 'Across (m)', 'Impact speed (m/s)',
+        ...limits.map((l) => `${l}: value / allowed`), 'Verdict', ''];
+    table.replaceChildren(
+      h('thead', {}, h('tr', {}, head.map((c) => h('th', {}, c)))),
+      h('tbody', {}, entries.map((e, i) => {
+        const common = [h('th', { scope: 'row' }, `#${e.support}`), h('td', { class: 'num' }, String(e.column_index ?? 0)),
+          h('td', { class: 'num' }, fmt(e.along_dip_m, 5)), h('td', { class: 'num' }, e.across_m === null || e.across_m === undefined ? 'spans' : fmt(e.across_m, 4))];
+        if (ensemble) {
+          const speed = e.impact_velocity_m_s?.p50;
+          return h('tr', { class: `verdict-${e.verdict}`, dataset: { support: String(i) } }, common,
+            h('td', { class: 'num' }, fmt(e.reached_fraction * 100, 4)),
+            h('td', { class: 'num' }, fmt((e.capacity_exceeded_fraction ?? 0) * 100, 4)),
+            h('td', { class: 'num' }, e.impact_velocity_m_s ? fmt(speed, 4) : 'never reached'),
+            h('td', { class: 'num' }, e.stress_utilisation ? fmt(e.stress_utilisation.p95 * 100, 4) : '—'),
+            limits.map((l) => {
+              const x = e.exceedance?.[l];
+              return h('td', { class: 'num' }, x ? `${fmt(x.probability * 100, 3)} [${fmt(x.ci95[0] * 100, 2)}–${fmt(x.ci95[1] * 100, 2)}]` : '—');
+            }),
+            h('td', {}, verdictBadge(e.verdict)),
+            h('td', {}, e.impact_velocity_m_s ? sendButton(speed) : ''));
+        }
+        return h('tr', { class: `verdict-${e.verdict}`, dataset: { support: String(i) } }, common,
+          h('td', { class: 'num' }, fmt(e.impact_velocity_m_s, 5)),
+          limits.map((l) => {
+            const c = (e.checks ?? []).find((x) => x.limit === l);
+            return h('td', { class: 'num' }, c ? `${fmt(c.value, 4)} / ${fmt(c.allowed, 4)}` : '—');
+          }),
+          h('td', {}, verdictBadge(e.verdict)),
+          h('td', {}, sendButton(e.impact_velocity_m_s)));
+      })),
+    );
+  }
+
+  function renderSupportChart(entries) {
+    if (!entries.length) {
+      plotMessage(plots.support, 'No support entries.');
+      return;
+    }
+    const sorted = [...entries].sort((a, b) => a.along_dip_m - b.along_dip_m);
+    const xs = sorted.map((e) => e.along_dip_m);
+    if (entries[0].single) {
+      linePlot(plots.support, {
+        x: { label: 'along the dip (m)', values: xs, range: [Math.min(...xs) - 1, Math.max(...xs) + 1] },
+        y: { label: 'largest utilisation (%)', range: [0, Math.max(110, ...sorted.map((e) => e.risk * 110))] },
+        series: [
+          { label: 'within the limits', values: sorted.map((e) => (e.verdict === 'exceeded' ? null : e.risk * 100)), bars: true, color: '#2a8f4f' },
+          { label: 'exceeded', values: sorted.map((e) => (e.verdict === 'exceeded' ? e.risk * 100 : null)), bars: true, color: '#c8423b' },
+        ],
+        height: 240,
+      });
+      return;
+    }
+    linePlot(plots.support, {
+      x: { label: 'support position along the dip (m)', values: xs },
+      y: { label: 'fraction of runs (%)', range: [0, 100] },
+      series: [
+        { label: 'reached', values: sorted.map((e) => e.reached_fraction * 100), color: '#1d5fa8', points: true, pointSize: 4 },
+        { label: 'exceedance, within the acceptable probability', values: sorted.map((e) => (e.verdict === 'exceeded' ? null : e.risk * 100)), bars: true, color: '#2a8f4f' },
+        { label: 'exceedance, above the acceptable probability', values: sorted.map((e) => (e.verdict === 'exceeded' ? e.risk * 100 : null)), bars: true, color: '#c8423b' },
+      ],
+      height: 260,
+    });
+  }
+
+  /** Side view (a vertical section along the dip) and plan view, supports as vertical marks coloured by verdict. */
+  function renderFace(data, entries) {
+    const length = data.inputs?.face?.length_m ?? 120;
+    const dip = (data.inputs?.face?.dip_deg ?? 45) * Math.PI / 180;
+    const tr = data.migration?.trajectory;
+    const marks = entries.map((e) => ({
+      x: e.along_dip_m,
+      color: e.verdict === 'exceeded' ? '#c8423b' : (e.single || e.reached_fraction > 0) ? '#2a8f4f' : '#aab2bd',
+    }));
+    const zones = data.inputs?.release_zones === 'table1'
+      ? [[0, length / 3], [length / 3, 2 * length / 3], [2 * length / 3, length]]
+      : Array.isArray(data.inputs?.release_zones) ? data.inputs.release_zones.map((z) => [z.from_along_dip_m, z.to_along_dip_m]) : [];
+    const elevation = (s) => -s * Math.sin(dip);
+    const floor = [[0, length], [elevation(0), elevation(length)]];
+    const tables = [floor];
+    if (zones.length) {
+      const xs = [];
+      const ys = [];
+      for (const [a, b] of zones) {
+        xs.push(a + 1e-9 * length, b - 1e-9 * length, (a + b) / 2 + 1e-7 * length);
+        ys.push(elevation(a), elevation(b), null);
+      }
+      tables.push(dedupe(xs, ys));
+    }
+    // The rock's height above the floor, measured along the normal, raises it by h / cos θ vertically.
+    if (tr) tables.push(dedupe(tr.along_dip_m, tr.along_dip_m.map((s, i) => elevation(s) + tr.height_m[i] / Math.cos(dip))));
+    const joined = joinSeries(tables);
+    const series = [{ label: 'floor (plane of the face)', values: joined[1], color: '#555e6b' }];
+    let k = 2;
+    if (zones.length) series.push({ label: 'release zones (Table 1 thirds)', values: joined[k++], color: '#d88a1c', width: 7 });
+    if (tr) series.push({ label: 'nominal run', values: joined[k++], color: '#1d5fa8' });
+    linePlot(plots.side, {
+      x: { label: 'along the dip (m); supports as vertical lines', values: joined[0] },
+      y: { label: 'elevation (m)' },
+      series,
+      vlines: marks,
+      height: 240,
+    });
+    if (tr) plots.side.csv = () => [['along_dip_m', 'height_m'], ...tr.along_dip_m.map((s, i) => [s, tr.height_m[i]])];
+
+    // Plan: along the dip against across the face; columns as points, spanning supports as lines.
+    const cols = entries.filter((e) => e.across_m !== null && e.across_m !== undefined);
+    const planTables = [[[0, length], [0, 0]]];
+    if (cols.length) planTables.push(dedupe(cols.map((e) => e.along_dip_m), cols.map((e) => e.across_m)));
+    if (tr) planTables.push(dedupe(tr.along_dip_m, tr.position_m.map((p) => p[1])));
+    const pj = joinSeries(planTables);
+    const planSeries = [{ label: 'face centre line', values: pj[1], color: '#555e6b', dash: [4, 4] }];
+    let q = 2;
+    if (cols.length) planSeries.push({ label: 'support columns', values: pj[q++], points: 'only', color: '#c8423b', pointSize: 6 });
+    if (tr) planSeries.push({ label: 'nominal run', values: pj[q++], color: '#1d5fa8' });
+    linePlot(plots.plan, {
+      x: { label: 'along the dip (m)', values: pj[0] },
+      y: { label: 'across the face (m)', range: [-2, 2] },
+      series: planSeries,
+      vlines: marks.filter((m, i) => entries[i].across_m === null || entries[i].across_m === undefined),
+      height: 240,
+    });
+  }
+
+  function renderDistributions(data) {
+    const entries = supportEntries(data);
+    const e = entries[Number(distSelect.value)];
+    distTable.replaceChildren();
+    destroy(distPlot);
+    if (!e) return;
+    const hist = e.impact_velocity_m_s?.histogram;
+    if (hist?.counts?.length) {
+      const centres = hist.counts.map((_, i) => (hist.edges[i] + hist.edges[i + 1]) / 2);
+      const lo = hist.edges[0];
+      const hi = hist.edges[hist.edges.length - 1];
+      const pad = hi > lo ? 0 : Math.max(Math.abs(lo) * 1e-3, 1e-3);
+      linePlot(distPlot, {
+        x: { label: `impact speed at ${label(e)} (m/s)`, values: centres, range: [lo - pad, hi + pad] },
+        y: { label: 'runs', range: [0, Math.max(...hist.counts) * 1.1 || 1] },
+        series: [{ label: 'runs', values: hist.counts, bars: true }],
+        height: 200,
+      });
+      distPlot.csv = () => [['edge_low_m_s', 'edge_high_m_s', 'runs'], ...hist.counts.map((c, i) => [hist.edges[i], hist.edges[i + 1], c])];
+    }
+    if (e.single) {
+      distTable.append(h('tbody', {}, h('tr', {}, h('td', {}, 'A single run has no distributions: switch on the Monte Carlo ensemble.'))));
+      return;
+    }
+    distTable.append(
+      h('thead', {}, h('tr', {}, h('th', {}, label(e)), STAT_COLUMNS.map((c) => h('th', { class: 'num' }, c)), h('th', {}, 'unit'))),
+      h('tbody', {}, DISTRIBUTIONS.map(([key, words, unit, scale]) => {
+        const s = e[key];
+        if (!s) return h('tr', {}, h('th', { scope: 'row' }, words), h('td', { colspan: STAT_COLUMNS.length + 1 }, 'never reached within capacity: no distribution'));
+        return h('tr', {}, h('th', { scope: 'row' }, words),
+          STAT_COLUMNS.map((c) => h('td', { class: 'num' }, fmt(s[c] === null || s[c] === undefined ? s[c] : s[c] * scale, 4,
+            Math.max(Math.abs(s.mean ?? 0), Math.abs(s.max ?? 0)) * scale))),
+          h('td', { class: 'unit' }, unit));
+      })),
+    );
+  }
+
+  return panel;
+}
+
+/** Sorted by x with repeated x values dropped (uPlot.join needs strictly ascending x). */
+function dedupe(xs, ys) {
+  const pairs = xs.map((x, i) => [x, ys[i]]).sort((a, b) => a[0] - b[0]);
+  const out = [[], []];
+  for (const [x, y] of pairs) {
+    if (out[0].length && x === out[0][out[0].length - 1]) continue;
+    out[0].push(x);
+    out[1].push(y);
+  }
+  return out;
+}
