@@ -532,14 +532,18 @@ fn projected_run(
 /// Independent check of the event-driven lumped mass on a few hundred random smooth grids
 /// (slopes 20–50°, waves of 0–5 cm, 0.25–0.75 m cells): a rock released at rest on the floor,
 /// plastic contact (e_n = 0, e_t = 1) and friction μ below tan θ, followed for 1.5 s. The
-/// final position agrees with the projection method at Δt = 2e-5 s to 2 cm (the projection
-/// method's first-order error on a path of a few metres; measured: at most 4.0e-3 m over the
-/// default 200 cases, printed with --nocapture).
+/// final position along the dip (the runout) agrees with the projection method at
+/// Δt = 2e-5 s to 2 cm (the projection method's first-order error on a path of a few metres);
+/// across the dip to 20 cm: a rock running down a shallow valley is held on its crease line by
+/// the event-driven method, while the projection method zigzags across it, and the two drift
+/// apart sideways (6.6 cm in one of 4000 cases). Measured over the default 200 cases: 1.9e-3 m
+/// along, 4.0e-3 m across (printed with --nocapture).
 /// More cases: `GANGUE_FLOOR_CASES` (this check runs a fifth of it, at least 40).
 #[test]
 fn smooth_grids_agree_with_a_small_step_projection_method() {
     let n = (cases(1000) / 5).max(40);
     let mut worst = (0.0f64, 0u64);
+    let mut worst_across = 0.0f64;
     for case in 0..n as u64 {
         let mut s = 0x5eed_f100_u64 ^ case.wrapping_mul(0x9e37_79b9_7f4a_7c15);
         let dip = 20.0 + 30.0 * unit(&mut s);
@@ -584,14 +588,49 @@ fn smooth_grids_agree_with_a_small_step_projection_method() {
         // from the release point the service placed on the floor (the first sample, t = 0)
         let start = r.trajectory.as_ref().expect("asked for").position[0];
         let p = projected_run(origin, d, &heights, start[0], start[1], mu, 9.81, 1.5, 2e-5);
-        let err = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+        // along the dip (the runout) and across it
+        let (sn, cs) = dip.to_radians().sin_cos();
+        let along = ((p[0] - q[0]) * cs - (p[2] - q[2]) * sn).abs();
+        let across = (p[1] - q[1]).abs();
         assert!(
-            err < 0.02,
-            "case {case}: dip {dip}, d {d}, amp {amp}, μ {mu}: event-driven {q:?}, projection {p:?} ({err} m apart)"
+            along < 0.02 && across < 0.2,
+            "case {case}: dip {dip}, d {d}, amp {amp}, μ {mu}: event-driven {q:?}, projection \
+             {p:?} ({along} m apart along the dip, {across} m across)"
         );
-        if err > worst.0 {
-            worst = (err, case);
+        if along > worst.0 {
+            worst = (along, case);
         }
+        worst_across = worst_across.max(across);
     }
-    println!("largest difference {:.3e} m (case {})", worst.0, worst.1);
+    println!(
+        "largest difference along the dip {:.3e} m (case {}), across {worst_across:.3e} m",
+        worst.0, worst.1
+    );
+}
+
+/// A rock rolling into a concave node of a rough 18 × 8 grid, swinging between a facet and a
+/// crease there until nudged off the node with no speed left, stays on the floor: at rest in
+/// the node (was: launched into a flight from rest exactly on a facet, whose start, a graze at
+/// t = 0, was not a strike, so it fell 13.5 m through the floor; found by the 20 000-case run
+/// with PROPTEST_RNG_SEED=20261122).
+#[test]
+fn a_rock_nudged_off_a_node_at_rest_does_not_fall_through_the_floor() {
+    let c = rough_case(
+        2499528249842481548,
+        18.66999298320181,
+        0.7003853790151796,
+        5.328270718167857,
+        18,
+        8,
+        0.0,
+        0.7732247833696538,
+        0.4367901826651895,
+        0.0,
+        0.5232505854617602,
+        -0.3185275933848306,
+        0.0,
+        0.5,
+        true,
+    );
+    assert_above_the_floor(&c);
 }

@@ -1194,27 +1194,40 @@ impl Floor {
         // rounding of the start point's height against a facet's plane (a few ulps of its
         // coordinates), far below the invariant's 1e-9 tolerance
         let h_round = 1e-12 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()));
-        let root = |pl: &FacetPlane| -> Option<f64> {
+        let root = |pl: &FacetPlane| -> Option<(f64, bool)> {
             let h0 = pl.height(p);
             let b = pl.height_rate(v);
             let r = descent_root(h0, b, g)?;
             // a strike: the height decreases through zero (not a graze at the start)
             let slope = b - g * r;
+            // A start on the plane (to rounding) not moving away from it is a strike now, if the
+            // motion goes on over the facet (checked a little ahead, see `ahead`): a rock at rest
+            // on a facet grazes it at t = 0 (h = −g t²/2), and a start a rounding error below
+            // the plane, sinking further, has its root h0/|b| in the past, which is long for a
+            // slow rock (a rock bounced off a node at 6 mm/s into a steeper facet 9e-16 m below
+            // the node's height had its root 3.6e-12 s back: refused as past, it fell through).
             if slope >= -1e-12 * (1.0 + b.abs()) {
-                return None;
+                return (h0.abs() <= h_round && b <= 1e-12).then_some((0.0, true));
             }
-            // A start a rounding error below the plane, sinking further below it, is a strike
-            // now: its root lies h0/|b| in the past, which is long for a slow rock (a rock
-            // bounced off a node at 6 mm/s into a steeper facet 9e-16 m below the node's height
-            // had its root 3.6e-12 s back, was refused as past, and fell through the floor).
             if r < -1e-12 && h0 >= -h_round {
-                return Some(0.0);
+                return Some((0.0, true));
             }
-            Some(r)
+            Some((r, false))
+        };
+        // where a strike at the start is tested against a facet: a step of 1e-6 of a cell
+        // along the horizontal motion (on the start point itself when there is none), so that a
+        // rock leaving a facet across its edge does not strike it again
+        let ahead = |d: f64| -> (f64, f64) {
+            let hv = v.x.hypot(v.y);
+            if hv > 0.0 {
+                (p.x + 1e-6 * d * v.x / hv, p.y + 1e-6 * d * v.y / hv)
+            } else {
+                (p.x, p.y)
+            }
         };
         match &self.kind {
             FloorKind::Plane(pl) => match root(pl) {
-                Some(t) if t <= t_max => FlightEnd::Hit { t, facet: 0 },
+                Some((t, _)) if t <= t_max => FlightEnd::Hit { t, facet: 0 },
                 _ => FlightEnd::Clear,
             },
             // In each cell of the walk, the candidates are its facets and those of the cells
@@ -1234,13 +1247,18 @@ impl Floor {
                         for half in 0..2 {
                             let f = gr.facet(ni, nj, half);
                             let pl = gr.plane(f);
-                            if let Some(r) = root(&pl)
+                            if let Some((r, now)) = root(&pl)
                                 && r >= -1e-12
                                 && r <= t1 + 1e-12 * (1.0 + t1)
                                 && best.is_none_or(|b| r < b.0)
                             {
                                 let (c, _) = gr.corners_at(f, nj, ni);
-                                if inside_tri(&c, p.x + v.x * r, p.y + v.y * r, tol) {
+                                let (qx, qy) = if now {
+                                    ahead(gr.cells.d)
+                                } else {
+                                    (p.x + v.x * r, p.y + v.y * r)
+                                };
+                                if inside_tri(&c, qx, qy, tol) {
                                     best = Some((r.max(0.0), f));
                                 }
                             }
@@ -1259,13 +1277,19 @@ impl Floor {
                     for &(ni, nj) in &cells[..n] {
                         for &f in m.bucket(ni, nj) {
                             let pl = m.plane(f);
-                            if let Some(r) = root(&pl)
+                            if let Some((r, now)) = root(&pl)
                                 && r >= -1e-12
                                 && r <= t1 + 1e-12 * (1.0 + t1)
                                 && best.is_none_or(|b| r < b.0)
-                                && inside_tri(&m.corners(f).0, p.x + v.x * r, p.y + v.y * r, tol)
                             {
-                                best = Some((r.max(0.0), f));
+                                let (qx, qy) = if now {
+                                    ahead(m.cells.d)
+                                } else {
+                                    (p.x + v.x * r, p.y + v.y * r)
+                                };
+                                if inside_tri(&m.corners(f).0, qx, qy, tol) {
+                                    best = Some((r.max(0.0), f));
+                                }
                             }
                         }
                     }
@@ -1533,6 +1557,27 @@ mod tests {
             f.flight(&p, &v, 9.81, 1.0),
             FlightEnd::Hit { .. }
         ));
+    }
+
+    #[test]
+    fn a_rock_at_rest_on_a_facet_strikes_it_at_once_and_one_leaving_it_does_not() {
+        // a convex grid: z = −x up to x = 1, then z = 1 − 2x
+        let h = vec![vec![0.0, -1.0, -3.0]; 3];
+        let f = Floor::grid(0.7, [0.0, 0.0], 1.0, &h).unwrap();
+        // at rest exactly on the floor (a graze at t = 0): a strike now, not a fall through it
+        let p = Vector3::new(0.4, 0.3, -0.4);
+        match f.flight(&p, &Vector3::zeros(), 9.81, 1.0) {
+            FlightEnd::Hit { t, .. } => assert_eq!(t, 0.0),
+            e => panic!("{e:?}"),
+        }
+        // taking off at the convex edge x = 1 along the upper facet: no strike on it at t = 0,
+        // the landing is on the steeper facet beyond
+        let p = Vector3::new(1.0, 0.3, -1.0);
+        let v = Vector3::new(1.0, 0.0, -1.0);
+        match f.flight(&p, &v, 9.81, 10.0) {
+            FlightEnd::Hit { t, .. } => assert!(t > 0.05, "{t}"),
+            e => panic!("{e:?}"),
+        }
     }
 
     #[test]
