@@ -579,3 +579,37 @@ async fn a_scene_streams_progress_and_one_result() {
             .all(|l| l.get("progress").is_some())
     );
 }
+
+#[tokio::test]
+async fn a_rock_released_within_reach_of_a_column_is_flagged_not_reported_as_a_normal_strike() {
+    let app = common::app();
+    // the release (along 5 m, across 0) lies 0.1 m from the column's axis, well inside its reach
+    // (0.125 + √3·0.3/2 ≈ 0.385 m): the rock starts against the support, reached at t = 0 with
+    // no impact; the answer must say so instead of presenting a 0 m/s strike as a result
+    let body = json!({
+        "face": {"dip_deg": 40, "length_m": 50},
+        "release": {"drop_height_m": 0, "along_dip_m": 5},
+        "supports": [{"along_dip_m": 5.1, "across_m": 0.0}],
+    });
+    let b = ok(&post(&app, "/v1/scene", &body).await);
+    assert_eq!(b["migration"]["arrival"]["stop_reason"], "support");
+    assert_eq!(b["migration"]["arrival"]["time_s"], 0.0);
+    let w = b["warnings"].as_array().unwrap();
+    assert!(
+        w.iter().any(|w| w["code"] == "released_within_reach"),
+        "{w:?}"
+    );
+    // released out of reach: no such warning
+    let body = json!({
+        "face": {"dip_deg": 40, "length_m": 50},
+        "release": {"drop_height_m": 0, "along_dip_m": 5},
+        "supports": [{"along_dip_m": 8, "across_m": 0.0}],
+    });
+    let b = ok(&post(&app, "/v1/scene", &body).await);
+    assert_eq!(b["migration"]["arrival"]["stop_reason"], "support");
+    let w = b["warnings"].as_array().unwrap();
+    assert!(
+        !w.iter().any(|w| w["code"] == "released_within_reach"),
+        "{w:?}"
+    );
+}

@@ -53,6 +53,14 @@ fn base_object(schema: &str) -> Value {
     }
 }
 
+/// A 45° planar grid descending towards +x (east), 9 × 5 nodes 1 m apart, in map coordinates
+/// with the face's origin at (E, N) = (0, 0).
+fn map_grid() -> Value {
+    let row: Vec<f64> = (0..9).map(|j| -f64::from(j)).collect();
+    json!({"kind": "grid", "origin_m": [0, -2], "spacing_m": 1, "heights_m": vec![row; 5],
+           "map": {"origin_m": [0, 0], "dip_direction_deg": 90}})
+}
+
 /// Values of a field whose extreme would be expensive to compute in full: (pointer, replaced
 /// value). Marked "cost-limited" in the output; the refusal just outside is still sent.
 const COST_LIMITED: &[(&str, &str, f64)] = &[
@@ -108,8 +116,24 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             // Rolling without slip needs μ ≥ (2/7) tan θ.
             json!({"lumped_mass": {"motion": "roll"}, "face": {"friction_coefficient": 0.5}}),
         ),
+        (
+            "/v1/migration",
+            "/face/floor/map/",
+            json!({"face": {"length_m": 6, "floor": map_grid()}}),
+        ),
+        (
+            "/v1/scene",
+            "/face/floor/map/",
+            json!({"face": {"length_m": 6, "floor": map_grid()}}),
+        ),
     ];
-    let mut out = vec![json!({})];
+    // `map` exists only on grid and contour floors: its fields are varied on a grid in map
+    // coordinates, never on the default plane
+    let mut out = if pointer.starts_with("/face/floor/map/") {
+        vec![]
+    } else {
+        vec![json!({})]
+    };
     out.extend(
         table
             .iter()

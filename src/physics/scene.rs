@@ -732,6 +732,26 @@ pub fn solve(case: &SceneCase, control: &Control) -> SceneResult<SceneReport> {
             (Some(st), Some(runs))
         }
     };
+    // a release within a support's reach starts against it: reached at t = 0, no impact
+    let at_start = match &runs {
+        Some(r) => r
+            .iter()
+            .filter(|r| r.summary.support.is_some() && r.summary.time == 0.0)
+            .count(),
+        None => usize::from(nominal.arrival.support.is_some() && nominal.arrival.time == 0.0),
+    };
+    if at_start > 0 {
+        let n = runs.as_ref().map_or(1, Vec::len);
+        warnings.push(SceneWarning {
+            code: "released_within_reach",
+            message: format!(
+                "{at_start} of {n} runs start within a support's reach (a column's outer radius \
+                 plus the rock's bounding radius, or at a spanning support): the rock starts \
+                 against the support and counts as reaching it with no impact (speed 0); move \
+                 the release or its zones off the supports"
+            ),
+        });
+    }
     let struck = match &runs {
         Some(r) => r.iter().filter(|r| r.summary.support.is_some()).count(),
         None => impacts.len(),
