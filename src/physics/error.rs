@@ -73,3 +73,36 @@ impl fmt::Display for PhysicsError {
 }
 
 impl std::error::Error for PhysicsError {}
+
+/// `x` with `digits` significant digits for a message a person reads: plain decimals for
+/// 1e-4 ≤ |x| < 1e7 (0.05454154, 2.335413), scientific notation beyond (1.234568e-9).
+pub fn significant(x: f64, digits: usize) -> String {
+    let digits = digits.max(1);
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let e = x.abs().log10().floor();
+    if (-4.0..7.0).contains(&e) {
+        let decimals = (digits as f64 - 1.0 - e).max(0.0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        let p = digits - 1;
+        format!("{x:.p$e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::significant;
+
+    #[test]
+    fn messages_show_plain_decimals_in_the_everyday_range() {
+        assert_eq!(significant(0.05454154012, 7), "0.05454154");
+        assert_eq!(significant(2.3354127, 7), "2.335413");
+        assert_eq!(significant(995_000.0, 3), "995000");
+        assert_eq!(significant(-12.5, 3), "-12.5");
+        assert_eq!(significant(1.2345678e-9, 7), "1.234568e-9");
+        assert_eq!(significant(3.0e12, 2), "3.0e12");
+        assert_eq!(significant(0.0, 7), "0");
+    }
+}

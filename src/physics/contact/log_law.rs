@@ -146,15 +146,15 @@ fn solve_log_dd(case: &ImpactCase, e_star: DoubleDouble) -> PhysicsResult<LogSol
             max_velocity_m_s: v / g.sqrt(),
             message: format!(
                 "the impact energy exceeds the capacity of the {} contact law (G = {g:.6} > 1): \
-                 the law stores at most {:.6e} J; the largest impact speed it can take with \
-                 these inputs is {:.6e} m/s",
+                 the law stores at most {} J; the largest impact speed it can take with \
+                 these inputs is {} m/s",
                 if case.contact.law == ContactLaw::Paper {
                     "paper"
                 } else {
                     "johnson"
                 },
-                p_cap * p_cap / (4.0 * k),
-                v / g.sqrt()
+                crate::physics::error::significant(p_cap * p_cap / (4.0 * k), 7),
+                crate::physics::error::significant(v / g.sqrt(), 7)
             ),
         });
     }
