@@ -864,10 +864,12 @@ fn ensemble(case: &SceneCase, mc: &MonteCarlo, control: &Control) -> SceneResult
     const CHUNK: usize = 64;
     let n = mc.runs as usize;
     let limits = case.limits.active();
+    // the floor depends on the face only, which no draw changes: built once for every run
+    let floor = migration::build_floor(&case.migration)?;
     let one = |i: u64| -> SceneResult<SceneRun> {
         let (mut m, rock, _, mass) = run_case(case, mc.seed, i)?;
         m.monte_carlo = None;
-        let summary = migration::ensemble_run(&m, mc, i, control)?;
+        let summary = migration::ensemble_run(&m, &floor, mc, i, control)?;
         let Some(k) = summary.support else {
             return Ok(SceneRun {
                 summary,

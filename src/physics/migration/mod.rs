@@ -16,6 +16,8 @@ pub mod shape;
 pub mod stats;
 mod terrain;
 
+use std::sync::Arc;
+
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -659,7 +661,7 @@ pub fn runs_csv(runs: &[RunSummary]) -> String {
 
 /// Everything a run needs that does not change between Monte Carlo runs.
 struct Prepared {
-    floor: Floor,
+    floor: Arc<Floor>,
     mass: f64,
     g: f64,
     p0: Vector3<f64>,
@@ -673,9 +675,17 @@ struct Prepared {
 }
 
 fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
+    prepare_on(case, build_floor(case)?)
+}
+
+/// The floor of `case.face`, built once: it depends on the face only, so the runs of an
+/// ensemble whose release or rock vary share it (see [`ensemble_run_on`]).
+///
+/// Errors: those of building the floor (memory, crossing contours, map origin off the floor).
+pub(crate) fn build_floor(case: &MigrationCase) -> PhysicsResult<Arc<Floor>> {
     let face = &case.face;
     let dip = face.dip_deg.to_radians();
-    let floor = match &face.floor {
+    Ok(Arc::new(match &face.floor {
         FloorSpec::Plane => Floor::plane(dip),
         FloorSpec::Grid {
             origin,
@@ -704,7 +714,12 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
                 ));
             }
         },
-    };
+    }))
+}
+
+/// [`prepare`] on a floor built by [`build_floor`] from the same face.
+fn prepare_on(case: &MigrationCase, floor: Arc<Floor>) -> PhysicsResult<Prepared> {
+    let face = &case.face;
     let rel = &case.release;
     let mean = floor.mean;
     let y = rel.across;
@@ -1257,19 +1272,21 @@ fn lumped_one(
 
 /// Run `index` of the ensemble `mc` of `case`, alone: the summary `/v1/migration`'s ensemble of
 /// the same case gives for that run (same streams). A caller may change the release, the rock or
-/// the supports between runs (api.md `POST /v1/scene`); the floor is rebuilt for each call.
+/// the supports between runs (api.md `POST /v1/scene`), never the face: `floor` is
+/// [`build_floor`] of the case's face, built once for all runs.
 ///
 /// Errors: as [`run`].
-pub fn ensemble_run(
+pub(crate) fn ensemble_run(
     case: &MigrationCase,
+    floor: &Arc<Floor>,
     mc: &MonteCarlo,
     index: u64,
     control: &Control,
 ) -> PhysicsResult<RunSummary> {
     if case.method == Method::RigidBlock {
-        return rigid_block::ensemble_run(case, mc, index, control);
+        return rigid_block::ensemble_run(case, floor, mc, index, control);
     }
-    let pr = prepare(case)?;
+    let pr = prepare_on(case, Arc::clone(floor))?;
     let su = setup(case, &pr);
     lumped_one(case, &pr, &su, mc, index, control)
 }

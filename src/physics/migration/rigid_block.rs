@@ -1646,11 +1646,12 @@ fn rigid_one(
 /// limit checked for the run's friction.
 pub(crate) fn ensemble_run(
     case: &MigrationCase,
+    floor: &std::sync::Arc<super::terrain::Floor>,
     mc: &MonteCarlo,
     i: u64,
     control: &Control,
 ) -> PhysicsResult<RunSummary> {
-    let pr = super::prepare(case)?;
+    let pr = super::prepare_on(case, std::sync::Arc::clone(floor))?;
     let model = Model::new(case, &pr)?;
     let est = model.estimated_steps(case, case.face.friction_coefficient);
     if est > case.rigid_block.max_steps {
