@@ -2,7 +2,7 @@
 //! first support reached → column energy → design checks, for one run or a seeded ensemble.
 //!
 //! Every stage calls the function its own endpoint uses — [`migration::run`] and
-//! [`migration::ensemble_run`] (the same streams as `/v1/migration`), [`contact::solve_impact`]
+//! `migration::ensemble_run` (the same streams as `/v1/migration`), [`contact::solve_impact`]
 //! and [`column::solve_column`] — so a stage's numbers are bit-identical to that endpoint's on
 //! the same inputs. Stages the case does not need are skipped and the plan says why.
 //!

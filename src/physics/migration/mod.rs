@@ -679,7 +679,7 @@ fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
 }
 
 /// The floor of `case.face`, built once: it depends on the face only, so the runs of an
-/// ensemble whose release or rock vary share it (see [`ensemble_run_on`]).
+/// ensemble whose release or rock vary share it (see [`ensemble_run`]).
 ///
 /// Errors: those of building the floor (memory, crossing contours, map origin off the floor).
 pub(crate) fn build_floor(case: &MigrationCase) -> PhysicsResult<Arc<Floor>> {
