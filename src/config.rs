@@ -126,6 +126,8 @@ pub enum Command {
 pub enum Kind {
     /// `POST /v1/migration` (items: Monte Carlo runs).
     Migration,
+    /// `POST /v1/scene` (items: Monte Carlo runs).
+    Scene,
     /// `POST /v1/study` (items: study points after the base).
     Study,
     /// `POST /v1/batch` (items: batch items).
@@ -137,6 +139,7 @@ impl Kind {
     pub fn name(self) -> &'static str {
         match self {
             Kind::Migration => "migration",
+            Kind::Scene => "scene",
             Kind::Study => "study",
             Kind::Batch => "batch",
         }
@@ -144,7 +147,7 @@ impl Kind {
 
     /// The kind of a route name.
     pub fn from_name(s: &str) -> Option<Self> {
-        [Kind::Migration, Kind::Study, Kind::Batch]
+        [Kind::Migration, Kind::Scene, Kind::Study, Kind::Batch]
             .into_iter()
             .find(|k| k.name() == s)
     }

@@ -313,3 +313,166 @@ fn shard_index_from_a_scheduler_with_an_offset() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A scene ensemble over a few supports: columns across the face that some runs pass by, a
+/// spanning support lower down, friction and the release across the face drawn, so that some
+/// runs reach no support (they stop or pass the columns) and the others end at one of several.
+fn scene_request(runs: u64) -> Value {
+    json!({
+        "face": {"dip_deg": 35.0, "length_m": 40.0, "friction_coefficient": 0.45},
+        "release": {"drop_height_m": 1.0},
+        "supports": [
+            {"along_dip_m": 10.0, "across_m": 0.0},
+            {"along_dip_m": 18.0, "across_m": 0.8},
+            {"along_dip_m": 26.0, "across_m": 30.0},
+            {"along_dip_m": 34.0}
+        ],
+        "monte_carlo": {"runs": runs, "seed": 11,
+            "friction_coefficient": {"distribution": "normal", "mean": 0.6, "std": 0.2},
+            "release_across_m": {"distribution": "uniform", "min": -1.5, "max": 1.5},
+            "side_length_m": {"distribution": "uniform", "min": 0.15, "max": 0.3}},
+        "design_limits": {"stress_utilisation": 1.5, "max_force_n": 800000.0},
+        "migration_output": {"runs_csv": true}
+    })
+}
+
+#[tokio::test]
+async fn scene_ensemble_shards_merge_to_the_http_answer() {
+    let body = scene_request(61);
+    // the ensemble must exercise every kind of run: no support, several supports reached, one
+    // support never reached (null distributions), exceedances
+    let v: Value = serde_json::from_slice(&http_body("/v1/scene", &body).await).unwrap();
+    let st = &v["statistics"];
+    let reached = st["outcomes"]["support"].as_f64().unwrap();
+    assert!(
+        reached > 0.05 && reached < 0.95,
+        "support fraction {reached}"
+    );
+    let hit: Vec<f64> = st["supports"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["reached_fraction"].as_f64().unwrap())
+        .collect();
+    assert!(hit.iter().filter(|&&f| f > 0.0).count() >= 2, "{hit:?}");
+    assert!(hit.contains(&0.0), "a support nobody reaches: {hit:?}");
+    let ex = st["any_exceeded"]["probability"].as_f64().unwrap();
+    assert!(ex > 0.0 && ex < reached, "exceedance {ex}");
+    assert!(v["migration"]["runs_csv"].as_str().unwrap().lines().count() == 62);
+    same_bytes_for_any_split("scene", "scene", &body).await;
+}
+
+#[tokio::test]
+async fn scene_comparison_of_methods_shards_merge_to_the_http_answer() {
+    let body = json!({
+        "face": {"length_m": 15},
+        "release": {"drop_height_m": 0.5},
+        "supports": [{"along_dip_m": 8, "across_m": 0.3}, {"along_dip_m": 15}],
+        "monte_carlo": {"runs": 6, "seed": 1,
+            "release_across_m": {"distribution": "uniform", "min": -1.0, "max": 1.0}},
+        "contact": {"law": "hertz_point"},
+        "compare_methods": true,
+    });
+    let v: Value = serde_json::from_slice(&http_body("/v1/scene", &body).await).unwrap();
+    assert_eq!(v["comparison"].as_array().unwrap().len(), 2);
+    same_bytes_for_any_split("scene-compare", "scene", &body).await;
+}
+
+/// Scenes without an ensemble have no items: part 0 holds the whole answer, the other parts
+/// are empty.
+#[tokio::test]
+async fn scenes_without_an_ensemble_shards_merge_to_the_http_answer() {
+    let column = json!({"outer_diameter_m": 0.3, "inner_diameter_m": 0.27, "length_m": 1.5});
+    let given_speed = json!({
+        "impact_velocity_m_s": 6.5,
+        "column_model": "coupled",
+        "supports": [{"along_dip_m": 60, "column": column}, {"along_dip_m": 100}],
+    });
+    same_bytes_for_any_split("scene-speed", "scene", &given_speed).await;
+    let single = json!({"face": {"length_m": 20}, "supports": [{"along_dip_m": 12}]});
+    same_bytes_for_any_split("scene-single", "scene", &single).await;
+}
+
+/// The merge runs no solver for the nominal run and its strikes: part 0 stores them. Under a
+/// time limit that has passed before it starts, the nominal run fails (computing part 0 is
+/// refused), while the merge of the parts computed without a limit gives the service's answer.
+#[tokio::test]
+async fn the_merge_does_not_run_the_nominal_scene_again() {
+    let mut body = scene_request(9);
+    body["column_model"] = json!("coupled");
+    body["release"] = json!({"drop_height_m": 1.0, "along_dip_m": 5.0});
+    let want = http_body("/v1/scene", &body).await;
+    let v: Value = serde_json::from_slice(&want).unwrap();
+    assert!(
+        v["impacts"][0]["column"].is_object(),
+        "the nominal run strikes a coupled column: {}",
+        v["impacts"]
+    );
+    let dir = scratch("scene-nominal");
+    let req = write_request(&dir, &body);
+    let parts: Vec<PathBuf> = (0..3).map(|i| compute(&dir, &req, "scene", i, 3)).collect();
+    let expired = ["--time-limit-s", "1e-9"];
+    let mut args = vec!["merge"];
+    args.extend(expired);
+    let names: Vec<String> = parts.iter().map(|p| p.display().to_string()).collect();
+    args.extend(names.iter().map(String::as_str));
+    let o = run(&args);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(o.stdout, want);
+    let out = dir.join("again");
+    let o = run(&[
+        "compute",
+        "--request",
+        req.to_str().unwrap(),
+        "--kind",
+        "scene",
+        "--shard",
+        "0/3",
+        "--time-limit-s",
+        "1e-9",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !o.status.success(),
+        "part 0 under an expired limit must fail"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_scene_part_with_a_migration_part_is_refused() {
+    let dir = scratch("scene-mixed");
+    let req = write_request(&dir, &scene_request(6));
+    let scene0 = compute(&dir, &req, "scene", 0, 2);
+    let mdir = scratch("scene-mixed-m");
+    let m = three_parts(&mdir, &migration_request());
+    let o = merge(&[scene0, m[1].clone()]);
+    assert!(!o.status.success());
+    assert!(o.stdout.is_empty());
+    assert!(
+        text(&o).contains("parts of different kinds of request"),
+        "{}",
+        text(&o)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_dir_all(&mdir).unwrap();
+}
+
+/// Two runs in three shards: shard 0 has no run but carries the nominal run; without it the runs
+/// still tile 0..2, and the merge refuses for the nominal part.
+#[test]
+fn a_scene_without_part_zero_is_refused() {
+    let dir = scratch("scene-no-zero");
+    let req = write_request(&dir, &scene_request(2));
+    let p: Vec<PathBuf> = (0..3).map(|i| compute(&dir, &req, "scene", i, 3)).collect();
+    let o = merge(&p[1..]);
+    assert!(!o.status.success());
+    assert!(
+        text(&o).contains("part 0 (shard 0 of 3) is missing"),
+        "{}",
+        text(&o)
+    );
+    assert!(merge(&p).status.success());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -2,25 +2,33 @@
 //! indices ⌊I·N/K⌋ … ⌊(I+1)·N/K⌋ − 1 into a part file, `gangue merge` turns the parts into the
 //! bytes `POST` of the same request answers (README "Beyond one machine").
 //!
-//! Items: the Monte Carlo runs of a migration (N = runs), the points of a study after its base
-//! (N = points − 1, in the order the response lists them: curves, grids, energy proportions,
-//! central-difference points), the items of a batch. What is not an item (the nominal run of a
-//! migration, a study's base point) is computed by the merge from the request the parts carry:
-//! one run or one column solution.
+//! Items: the Monte Carlo runs of a migration or a scene (N = runs), the points of a study after
+//! its base (N = points − 1, in the order the response lists them: curves, grids, energy
+//! proportions, central-difference points), the items of a batch. What is not an item is
+//! computed once, by shard 0, and stored in its part: a scene's nominal run with its strikes
+//! (the migration response and the impacts as the answer serializes them, the plan's first
+//! stages, the scene's own warnings; for a scene without an ensemble, the whole answer) and a
+//! study's base point. The merge runs no solver for them. A migration's nominal run (one run) is
+//! still computed by the merge from the request the parts carry.
 //!
-//! Part file (format version 1): one JSON header line ([`Header`]: kind, build id, SHA-256 of the
+//! Part file (format version 3): one JSON header line ([`Header`]: kind, build id, SHA-256 of the
 //! resolved inputs, the request, the item range, section sizes), then a little-endian binary
-//! body: a migration's run records (81 bytes each) followed by its seven statistics columns, each
-//! sorted by `f64::total_cmp`; a study's point outputs (f64 each); a batch's answer lines, each
-//! preceded by its length (u64). A part is written to a temporary name in the same directory and
-//! renamed, so a shard run twice leaves one whole part.
+//! body of sections: a migration's run records (81 bytes each) followed by its seven statistics
+//! columns, each sorted by `f64::total_cmp`; a scene's run records (114 bytes each: the
+//! migration record, the strike's four values, a flag byte) followed by five columns per support
+//! entry (the runs that struck it within capacity, sorted), repeated for the other method with
+//! `compare_methods`, then the stored nominal part (JSON, empty but in part 0); a study's point
+//! outputs (each a length, u64, then f64 values) and then its base point (part 0 only); a
+//! batch's answer lines, each preceded by its length (u64). A part is written to a temporary name
+//! in the same directory and renamed, so a shard run twice leaves one whole part.
 //!
 //! The merge checks that the parts come from one request and one build and that their ranges
 //! tile 0..N exactly (no index missing, none twice), then feeds the records to the same response
-//! builder as the service ([`migration::attach_ensemble`], [`study::StudyPlan::finish`]): sums
-//! stream the records in index order (run order, the summation order of the contract) and order
-//! statistics come from a k-way merge of the per-part sorted columns, so the merge holds O(parts)
-//! records, not O(runs) (a `runs_csv` answer is itself O(runs)).
+//! builder as the service ([`migration::attach_ensemble`], [`scene::ensemble_report`],
+//! [`study::StudyPlan::finish`]): sums stream the records in index order (run order, the
+//! summation order of the contract) and order statistics come from a k-way merge of the per-part
+//! sorted columns, so the merge holds O(parts) records, not O(runs) (a `runs_csv` answer is
+//! itself O(runs)).
 
 use std::collections::BinaryHeap;
 use std::fs::File;
@@ -36,21 +44,28 @@ use sha2::{Digest, Sha256};
 use crate::config::{ComputeArgs, Config, Kind, MergeArgs};
 use crate::http::dto::batch::{json_items, ndjson_items};
 use crate::http::dto::migration::{MigrationRequest, MigrationResponse};
+use crate::http::dto::scene::{SceneContext, SceneHead, SceneRequest, scene_error};
 use crate::http::error::ApiError;
 use crate::http::json::{from_value, parse_json};
 use crate::http::routes::{batch, study};
 use crate::http::runner::to_json_bytes;
 use crate::physics::Control;
 use crate::physics::migration::{
-    self, MigrationCase, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason, run_columns,
+    self, MigrationCase, MonteCarlo, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason,
+    run_columns,
+};
+use crate::physics::scene::{
+    self, ENTRY_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun, StrikeValues, entry_columns,
 };
 
 /// Name of the part file format.
 pub const FORMAT: &str = "gangue-part";
 /// Version of the part file format.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 /// Bytes of one migration run record.
 const RUN_RECORD_BYTES: u64 = 81;
+/// Bytes of one scene run record: the migration record, four strike values, a flag byte.
+const SCENE_RECORD_BYTES: u64 = RUN_RECORD_BYTES + 33;
 
 /// Header line of a part file.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -59,7 +74,7 @@ pub struct Header {
     pub format: String,
     /// [`FORMAT_VERSION`].
     pub version: u32,
-    /// Request kind: migration, study or batch.
+    /// Request kind: migration, scene, study or batch.
     pub kind: String,
     /// Build id of the binary that computed the part ([`build_id`]).
     pub build: String,
@@ -77,7 +92,7 @@ pub struct Header {
     pub start: u64,
     /// One past the last global item index of the part.
     pub end: u64,
-    /// Sizes of the body's sections in bytes: records, then (migration) the sorted columns.
+    /// Sizes of the body's sections in bytes (see the module's documentation).
     pub sections: Vec<u64>,
 }
 
@@ -224,6 +239,11 @@ enum Prepared {
         case: Box<MigrationCase>,
         req: Box<MigrationRequest>,
     },
+    Scene {
+        case: Box<SceneCase>,
+        ctx: Box<SceneContext>,
+        req: Box<SceneRequest>,
+    },
     Study(Box<study::StudyPlan>),
     Batch(Vec<Result<Value, ApiError>>),
 }
@@ -245,6 +265,21 @@ fn resolve(kind: Kind, request: &[u8], config: &Config) -> Result<Resolved, Fail
                 items: case.monte_carlo.map_or(0, |mc| mc.runs),
                 prepared: Prepared::Migration {
                     case: Box::new(case),
+                    req: Box::new(req),
+                },
+                hash,
+            })
+        }
+        Kind::Scene => {
+            let v = parse_json(request)?;
+            let mut req: SceneRequest = from_value(&v)?;
+            let (case, ctx) = req.resolve(config)?;
+            let hash = inputs_hash(kind, &serde_json::to_vec(&req).map_err(ApiError::internal)?);
+            Ok(Resolved {
+                items: scene_ensemble(&case).map_or(0, |mc| mc.runs),
+                prepared: Prepared::Scene {
+                    case: Box::new(case),
+                    ctx: Box::new(ctx),
                     req: Box::new(req),
                 },
                 hash,
@@ -295,6 +330,14 @@ fn resolve(kind: Kind, request: &[u8], config: &Config) -> Result<Resolved, Fail
     }
 }
 
+/// The ensemble of a scene, if it has one (not with `impact_velocity`).
+fn scene_ensemble(case: &SceneCase) -> Option<MonteCarlo> {
+    case.impact_velocity
+        .is_none()
+        .then_some(case.migration.monte_carlo)
+        .flatten()
+}
+
 fn control(limit: Option<f64>) -> Control {
     Control::with_deadline(limit.map(|s| Instant::now() + Duration::from_secs_f64(s)))
 }
@@ -330,18 +373,65 @@ pub fn compute(args: &ComputeArgs) -> Result<PathBuf, Failure> {
                 sections.push((body.len() - before) as u64);
             }
         }
+        Prepared::Scene { case, ctx, req } => {
+            let ctl = control(args.time_limit_s);
+            let fail = |e: SceneError| Failure::from(scene_error(e, ctx));
+            // part 0: what is not an item, computed first (a refused request fails here)
+            let head = if i == 0 {
+                let (report, mc) = scene::solve_nominal(case, &ctl).map_err(fail)?;
+                Some(SceneHead::new(&report, mc.is_some(), case, ctx, req)?)
+            } else {
+                None
+            };
+            if let Some(mc) = scene_ensemble(case) {
+                let (runs, other) =
+                    scene::ensemble_part(case, &mc, range.clone(), &ctl).map_err(fail)?;
+                for stream in std::iter::once(&runs).chain(other.as_ref()) {
+                    let before = body.len();
+                    stream.iter().for_each(|r| encode_scene_run(r, &mut body));
+                    sections.push((body.len() - before) as u64);
+                    let mut columns = vec![vec![Vec::new(); ENTRY_COLUMNS]; case.supports.len()];
+                    for (k, x) in stream.iter().filter_map(entry_columns) {
+                        for (c, x) in columns[k].iter_mut().zip(x) {
+                            c.push(x);
+                        }
+                    }
+                    for mut v in columns.into_iter().flatten() {
+                        v.sort_unstable_by(f64::total_cmp);
+                        let before = body.len();
+                        v.iter()
+                            .for_each(|x| body.extend_from_slice(&x.to_le_bytes()));
+                        sections.push((body.len() - before) as u64);
+                    }
+                }
+            }
+            let before = body.len();
+            if let Some(h) = &head {
+                serde_json::to_writer(&mut body, h).map_err(|e| format!("storing part 0: {e}"))?;
+            }
+            sections.push((body.len() - before) as u64);
+        }
         Prepared::Study(plan) => {
             let ctl = control(args.time_limit_s);
             let out: Vec<Vec<f64>> = (range.start..range.end)
                 .into_par_iter()
                 .map(|g| plan.eval(config, g as usize + 1, &ctl))
                 .collect::<Result<_, _>>()?;
-            for v in &out {
+            let values = |v: &[f64], body: &mut Vec<u8>| {
                 body.extend_from_slice(&(v.len() as u64).to_le_bytes());
                 v.iter()
                     .for_each(|x| body.extend_from_slice(&x.to_le_bytes()));
+            };
+            for v in &out {
+                values(v, &mut body);
             }
             sections.push(body.len() as u64);
+            // part 0: the base point, not an item
+            let before = body.len();
+            if i == 0 {
+                values(&plan.eval(config, 0, &ctl)?, &mut body);
+            }
+            sections.push((body.len() - before) as u64);
         }
         Prepared::Batch(items) => {
             // each item has a time limit of its own (api.md), here none unless asked for
@@ -472,6 +562,69 @@ fn decode_run(b: &[u8; RUN_RECORD_BYTES as usize]) -> Result<RunSummary, String>
             4 => StopReason::Support,
             x => return Err(format!("unknown stop reason code {x}")),
         },
+    })
+}
+
+fn encode_scene_run(r: &SceneRun, out: &mut Vec<u8>) {
+    // every field, so that a new one fails to compile here
+    let SceneRun {
+        summary,
+        values,
+        capacity_exceeded,
+        exceeded,
+    } = r;
+    encode_run(summary, out);
+    let StrikeValues {
+        max_deformation,
+        max_force,
+        absorbed_energy,
+        stress_utilisation,
+    } = values.unwrap_or_default();
+    for x in [
+        max_deformation,
+        max_force,
+        absorbed_energy,
+        stress_utilisation,
+    ] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    // bit 0: values present, bit 1: past the capacity, bits 2…: exceeded per active limit (≤ 3)
+    debug_assert!(exceeded.len() <= 6);
+    let mut flags = u8::from(values.is_some()) | (u8::from(*capacity_exceeded) << 1);
+    for (j, &e) in exceeded.iter().enumerate() {
+        flags |= u8::from(e) << (2 + j);
+    }
+    out.push(flags);
+}
+
+fn decode_scene_run(
+    b: &[u8; SCENE_RECORD_BYTES as usize],
+    limits: usize,
+) -> Result<SceneRun, String> {
+    let summary = decode_run(
+        b[..RUN_RECORD_BYTES as usize]
+            .try_into()
+            .expect("a run record"),
+    )?;
+    let at = RUN_RECORD_BYTES as usize;
+    let f =
+        |k: usize| f64::from_le_bytes(b[at + 8 * k..at + 8 * k + 8].try_into().expect("8 bytes"));
+    let flags = b[at + 32];
+    if flags >> (2 + limits) != 0 {
+        return Err(format!(
+            "scene record flags {flags:#04x} do not fit {limits} limits"
+        ));
+    }
+    Ok(SceneRun {
+        summary,
+        values: (flags & 1 != 0).then(|| StrikeValues {
+            max_deformation: f(0),
+            max_force: f(1),
+            absorbed_energy: f(2),
+            stress_utilisation: f(3),
+        }),
+        capacity_exceeded: flags & 2 != 0,
+        exceeded: (0..limits).map(|j| flags & (4 << j) != 0).collect(),
     })
 }
 
@@ -627,17 +780,99 @@ fn check_parts(parts: &mut [Part]) -> Result<(), Failure> {
     Ok(())
 }
 
+/// A reader of part `p`'s body from byte `offset` on.
+fn reader(p: &Part, offset: u64) -> Result<BufReader<File>, String> {
+    let mut f = File::open(&p.path).map_err(|e| format!("{}: {e}", p.path.display()))?;
+    f.seek(SeekFrom::Start(p.body_offset + offset))
+        .map_err(|e| format!("{}: {e}", p.path.display()))?;
+    Ok(BufReader::with_capacity(1 << 16, f))
+}
+
+/// Byte offset of section `k` in part `p`'s body.
+fn section_offset(p: &Part, k: usize) -> u64 {
+    p.header.sections[..k].iter().sum()
+}
+
+/// The whole section `k` of part `p` (a small one: a stored nominal part, a study's base).
+fn read_section(p: &Part, k: usize) -> Result<Vec<u8>, String> {
+    let mut b = vec![0u8; p.header.sections[k] as usize];
+    reader(p, section_offset(p, k))?
+        .read_exact(&mut b)
+        .map_err(|e| format!("{}: {e}", p.path.display()))?;
+    Ok(b)
+}
+
+/// Checks that every part has `n` sections, the first of `record` bytes per item when given.
+fn check_sections(parts: &[Part], n: usize, record: Option<u64>) -> Result<(), String> {
+    for p in parts {
+        let h = &p.header;
+        let records_ok =
+            record.is_none_or(|b| h.sections.first() == Some(&((h.end - h.start) * b)));
+        if h.sections.len() != n || !records_ok {
+            return Err(format!(
+                "{}: the part's sections do not fit its request (damaged, or written by another \
+                 build)",
+                p.path.display()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The part of shard 0, which carries what is not an item (`what`).
+fn part_zero<'a>(parts: &'a [Part], what: &str) -> Result<&'a Part, String> {
+    parts.iter().find(|p| p.header.shard == 0).ok_or_else(|| {
+        format!(
+            "part 0 (shard 0 of {}) is missing: it carries {what}; compute shard 0 too",
+            parts[0].header.shards
+        )
+    })
+}
+
+/// The values at the 0-based `ranks` (ascending) of the column made of section `section` of
+/// every part (each sorted by `f64::total_cmp`): one reader per part, merged through a heap, so
+/// O(parts) memory.
+fn merged_order_values(parts: &[Part], section: usize, ranks: &[u64]) -> Result<Vec<f64>, String> {
+    let mut readers = Vec::with_capacity(parts.len());
+    let mut left = Vec::with_capacity(parts.len());
+    let mut heap = BinaryHeap::with_capacity(parts.len());
+    let read = |r: &mut BufReader<File>, p: &Part| -> Result<f64, String> {
+        let mut b = [0u8; 8];
+        r.read_exact(&mut b)
+            .map_err(|e| format!("{}: {e}", p.path.display()))?;
+        Ok(f64::from_le_bytes(b))
+    };
+    for (k, p) in parts.iter().enumerate() {
+        let mut r = reader(p, section_offset(p, section))?;
+        let count = p.header.sections[section] / 8;
+        if count > 0 {
+            heap.push(Next(read(&mut r, p)?, k));
+        }
+        readers.push(r);
+        left.push(count.saturating_sub(1));
+    }
+    let mut out = Vec::with_capacity(ranks.len());
+    let mut want = ranks.iter().peekable();
+    let mut rank = 0u64;
+    while let Some(&&w) = want.peek() {
+        let Next(x, k) = heap
+            .pop()
+            .ok_or_else(|| format!("section {section} has fewer than {} values", w + 1))?;
+        while want.peek() == Some(&&rank) {
+            out.push(x);
+            want.next();
+        }
+        rank += 1;
+        if left[k] > 0 {
+            left[k] -= 1;
+            heap.push(Next(read(&mut readers[k], &parts[k])?, k));
+        }
+    }
+    Ok(out)
+}
+
 /// The run records of a migration's parts (sorted by start, tiling 0..N).
 struct PartRuns<'a>(&'a [Part]);
-
-impl PartRuns<'_> {
-    fn reader(&self, p: &Part, offset: u64) -> Result<BufReader<File>, String> {
-        let mut f = File::open(&p.path).map_err(|e| format!("{}: {e}", p.path.display()))?;
-        f.seek(SeekFrom::Start(p.body_offset + offset))
-            .map_err(|e| format!("{}: {e}", p.path.display()))?;
-        Ok(BufReader::with_capacity(1 << 16, f))
-    }
-}
 
 /// A key ordered by `f64::total_cmp`, smallest first in a max-heap.
 struct Next(f64, usize);
@@ -669,7 +904,7 @@ impl RunRecords for PartRuns<'_> {
     fn for_each_run(&self, f: &mut dyn FnMut(&RunSummary)) -> Result<(), String> {
         let mut buf = [0u8; RUN_RECORD_BYTES as usize];
         for p in self.0 {
-            let mut r = self.reader(p, 0)?;
+            let mut r = reader(p, 0)?;
             for _ in p.header.start..p.header.end {
                 r.read_exact(&mut buf)
                     .map_err(|e| format!("{}: {e}", p.path.display()))?;
@@ -680,45 +915,45 @@ impl RunRecords for PartRuns<'_> {
     }
 
     fn order_values(&self, col: usize, ranks: &[u64]) -> Result<Vec<f64>, String> {
-        // one reader per part on its sorted column, merged through a heap: O(parts) memory
-        let mut readers = Vec::with_capacity(self.0.len());
-        let mut left = Vec::with_capacity(self.0.len());
-        let mut heap = BinaryHeap::with_capacity(self.0.len());
-        let read = |r: &mut BufReader<File>, p: &Part| -> Result<f64, String> {
-            let mut b = [0u8; 8];
-            r.read_exact(&mut b)
-                .map_err(|e| format!("{}: {e}", p.path.display()))?;
-            Ok(f64::from_le_bytes(b))
-        };
-        for (k, p) in self.0.iter().enumerate() {
-            let s = &p.header.sections;
-            let offset: u64 = s[..=col].iter().sum();
-            let mut r = self.reader(p, offset)?;
-            let count = s[col + 1] / 8;
-            if count > 0 {
-                heap.push(Next(read(&mut r, p)?, k));
-            }
-            readers.push(r);
-            left.push(count.saturating_sub(1));
-        }
-        let mut out = Vec::with_capacity(ranks.len());
-        let mut want = ranks.iter().peekable();
-        let mut rank = 0u64;
-        while let Some(&&w) = want.peek() {
-            let Next(x, k) = heap
-                .pop()
-                .ok_or_else(|| format!("column {col} has fewer than {} values", w + 1))?;
-            while want.peek() == Some(&&rank) {
-                out.push(x);
-                want.next();
-            }
-            rank += 1;
-            if left[k] > 0 {
-                left[k] -= 1;
-                heap.push(Next(read(&mut readers[k], &self.0[k])?, k));
+        merged_order_values(self.0, col + 1, ranks)
+    }
+}
+
+/// The run records of one method of a scene's parts (sorted by start, tiling 0..N): its records
+/// in section `first`, then five sorted columns per support entry.
+struct SceneRuns<'a> {
+    parts: &'a [Part],
+    first: usize,
+    limits: usize,
+}
+
+impl SceneRecords for SceneRuns<'_> {
+    type Error = String;
+
+    fn runs(&self) -> u64 {
+        self.parts.first().map_or(0, |p| p.header.items)
+    }
+
+    fn for_each_run(&self, f: &mut dyn FnMut(&SceneRun)) -> Result<(), String> {
+        let mut buf = [0u8; SCENE_RECORD_BYTES as usize];
+        for p in self.parts {
+            let mut r = reader(p, section_offset(p, self.first))?;
+            for _ in p.header.start..p.header.end {
+                r.read_exact(&mut buf)
+                    .map_err(|e| format!("{}: {e}", p.path.display()))?;
+                f(&decode_scene_run(&buf, self.limits)
+                    .map_err(|e| format!("{}: {e}", p.path.display()))?);
             }
         }
-        Ok(out)
+        Ok(())
+    }
+
+    fn order_values(&self, entry: usize, col: usize, ranks: &[u64]) -> Result<Vec<f64>, String> {
+        merged_order_values(
+            self.parts,
+            self.first + 1 + entry * ENTRY_COLUMNS + col,
+            ranks,
+        )
     }
 }
 
@@ -760,11 +995,75 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
             }
             to_json_bytes(&MigrationResponse::new(res, *req))?
         }
+        Prepared::Scene { case, req, .. } => {
+            let ensemble = scene_ensemble(&case);
+            let per = 1 + case.supports.len() * ENTRY_COLUMNS;
+            let streams = match ensemble {
+                Some(_) => 1 + usize::from(case.compare_methods),
+                None => 0,
+            };
+            check_sections(
+                &parts,
+                streams * per + 1,
+                ensemble.map(|_| SCENE_RECORD_BYTES),
+            )?;
+            let p0 = part_zero(&parts, "the nominal run and its impacts")?;
+            let head: SceneHead = serde_json::from_slice(&read_section(p0, streams * per)?)
+                .map_err(|e| {
+                    format!(
+                        "{}: the stored nominal part is damaged: {e}",
+                        p0.path.display()
+                    )
+                })?;
+            let tail = match ensemble {
+                Some(mc) => {
+                    let limits = case.limits.active().len();
+                    let main = SceneRuns {
+                        parts: &parts,
+                        first: 0,
+                        limits,
+                    };
+                    let other = case.compare_methods.then_some(SceneRuns {
+                        parts: &parts,
+                        first: per,
+                        limits,
+                    });
+                    Some(scene::ensemble_report(
+                        &case,
+                        &mc,
+                        head.nominal_capacity,
+                        &main,
+                        other.as_ref(),
+                        req.migration_output.runs_csv,
+                    )?)
+                }
+                None => None,
+            };
+            head.finish(tail, &case, *req)?
+        }
         Prepared::Study(plan) => {
+            check_sections(&parts, 2, None)?;
             let mut results = Vec::with_capacity(plan.points() as usize);
-            results.push(plan.eval(config, 0, &ctl)?);
+            let p0 = part_zero(&parts, "the study's base point")?;
+            let base = read_section(p0, 1)?;
+            let (len, values) = base.split_at_checked(8).ok_or_else(|| {
+                format!("{}: the stored base point is damaged", p0.path.display())
+            })?;
+            let len = u64::from_le_bytes(len.try_into().expect("8 bytes"));
+            if values.len() as u64 != len * 8 {
+                return Err(Failure::from(format!(
+                    "{}: the stored base point is damaged",
+                    p0.path.display()
+                )));
+            }
+            results.push(
+                values
+                    .chunks_exact(8)
+                    .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+                    .collect(),
+            );
             for p in &parts {
-                let mut r = PartRuns(&parts).reader(p, 0)?;
+                let mut r = reader(p, 0)?;
                 for _ in p.header.start..p.header.end {
                     let len = read_u64(&mut r, p)?;
                     let mut v = Vec::with_capacity(len.min(1 << 16) as usize);
@@ -779,7 +1078,7 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
         Prepared::Batch(_) => {
             // the answer lines, streamed in index order
             for p in &parts {
-                let mut r = PartRuns(&parts).reader(p, 0)?;
+                let mut r = reader(p, 0)?;
                 for _ in p.header.start..p.header.end {
                     let len = read_u64(&mut r, p)?;
                     let mut l = vec![0u8; len as usize];
@@ -845,6 +1144,67 @@ mod tests {
         let back = decode_run(b.as_slice().try_into().unwrap()).unwrap();
         assert_eq!(back.speed.to_bits(), r.speed.to_bits());
         assert_eq!(back, r);
+    }
+
+    #[test]
+    fn scene_run_records_round_trip() {
+        let summary = RunSummary {
+            time: 0.0,
+            speed: 4.5,
+            kinetic_energy: 12.0,
+            impact_count: 2,
+            runout: 7.25,
+            max_bounce_height: 0.125,
+            stop_reason: StopReason::Support,
+            steps: 99,
+            along_dip_velocity: 4.0,
+            support: Some(2),
+            impact_speed: 3.75,
+        };
+        let runs = [
+            SceneRun {
+                summary,
+                values: Some(StrikeValues {
+                    max_deformation: 1e-3,
+                    max_force: -0.0,
+                    absorbed_energy: 5e-324,
+                    stress_utilisation: 1.5,
+                }),
+                capacity_exceeded: false,
+                exceeded: vec![true, false, true],
+            },
+            SceneRun {
+                summary,
+                values: None,
+                capacity_exceeded: true,
+                exceeded: vec![true, true, true],
+            },
+            SceneRun {
+                summary: RunSummary {
+                    support: None,
+                    stop_reason: StopReason::AtRest,
+                    ..summary
+                },
+                values: None,
+                capacity_exceeded: false,
+                exceeded: vec![false, false, false],
+            },
+        ];
+        for r in &runs {
+            let mut b = Vec::new();
+            encode_scene_run(r, &mut b);
+            assert_eq!(b.len() as u64, SCENE_RECORD_BYTES);
+            let back = decode_scene_run(b.as_slice().try_into().unwrap(), 3).unwrap();
+            assert_eq!(&back, r);
+            if let (Some(a), Some(b)) = (back.values, r.values) {
+                assert_eq!(a.max_force.to_bits(), b.max_force.to_bits());
+            }
+            // a record of more limits than the request has is refused
+            assert!(
+                decode_scene_run(b.as_slice().try_into().unwrap(), 1).is_err()
+                    || r.exceeded[1..].iter().all(|e| !e)
+            );
+        }
     }
 
     fn args(shard: Option<&str>, shards: Option<u64>, offset: u64) -> ComputeArgs {

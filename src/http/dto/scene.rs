@@ -13,10 +13,11 @@ use super::migration::{
 };
 use crate::config::Config;
 use crate::http::error::{ApiError, FieldError, num};
+use crate::http::runner::to_json_bytes;
 use crate::physics::migration::Method;
 use crate::physics::scene::{
     self, Check, DesignLimits, Limit, MethodSummary, Outcomes, Probability, ReleaseZone, SceneCase,
-    SceneDraws, SceneError, SceneReport, Strike, SupportEntry, TABLE1_SHARES,
+    SceneDraws, SceneError, SceneReport, SceneStatistics, Strike, SupportEntry, TABLE1_SHARES,
 };
 
 /// A support along the face: spanning (`across_m` null) or one column at (`along_dip_m`,
@@ -925,9 +926,11 @@ pub struct SceneResponse {
     pub plan: Vec<PlanStep>,
     /// The migration response of the (nominal) run (omitted with impact_velocity_m_s).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub migration: Option<MigrationResponse>,
+    #[schema(value_type = Option<MigrationResponse>)]
+    pub migration: Option<Piece<MigrationResponse>>,
     /// Impacts: every support at impact_velocity_m_s, the single run's, or the nominal run's.
-    pub impacts: Vec<SceneImpactDto>,
+    #[schema(value_type = Vec<SceneImpactDto>)]
+    pub impacts: Piece<Vec<SceneImpactDto>>,
     /// Ensemble statistics (Monte Carlo).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub statistics: Option<SceneStatisticsDto>,
@@ -942,9 +945,8 @@ pub struct SceneResponse {
     pub model_version: String,
 }
 
-fn plan_of(r: &SceneReport) -> Vec<PlanStep> {
-    r.plan
-        .iter()
+fn plan_of(plan: &[scene::Stage]) -> Vec<PlanStep> {
+    plan.iter()
         .map(|s| {
             if s.ran {
                 PlanStep::ran(s.stage, s.reason.clone())
@@ -953,6 +955,103 @@ fn plan_of(r: &SceneReport) -> Vec<PlanStep> {
             }
         })
         .collect()
+}
+
+fn warnings_of(w: &[scene::SceneWarning]) -> Vec<super::Warning> {
+    w.iter()
+        .map(|w| super::Warning {
+            code: w.code.to_string(),
+            message: w.message.clone(),
+        })
+        .collect()
+}
+
+/// A piece of the answer: built here, or serialized earlier by the same code (the part 0 of a
+/// sharded computation stores the pieces its ensemble does not change) and written back
+/// verbatim in place of a placeholder ([`Piece::Stored`]'s index) by [`SceneHead::finish`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum Piece<T> {
+    /// Built in this process.
+    Built(T),
+    /// The stored piece of this index (serialized as its placeholder).
+    Stored(usize),
+}
+
+impl<T: Serialize> Serialize for Piece<T> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Piece::Built(t) => t.serialize(s),
+            Piece::Stored(i) => s.serialize_str(&placeholder(&format!("piece-{i}"))),
+        }
+    }
+}
+
+/// A placeholder for bytes written in its place: a string with control characters, which the
+/// service never writes (should a request echo one, [`splice`] refuses rather than guess).
+fn placeholder(name: &str) -> String {
+    format!("\u{1}gangue-{name}\u{1}")
+}
+
+/// Replaces the one serialized `placeholder(name)` (a JSON string) in `json` by `with`.
+fn splice(json: &[u8], name: &str, with: &[u8]) -> Result<Vec<u8>, ApiError> {
+    let mark = serde_json::to_vec(&placeholder(name)).map_err(ApiError::internal)?;
+    let at: Vec<usize> = json
+        .windows(mark.len())
+        .enumerate()
+        .filter(|(_, w)| *w == mark.as_slice())
+        .map(|(i, _)| i)
+        .collect();
+    let [at] = at[..] else {
+        return Err(ApiError::internal(format!(
+            "the placeholder of {name} occurs {} times in the answer, not once",
+            at.len()
+        )));
+    };
+    let mut out = Vec::with_capacity(json.len() + with.len());
+    out.extend_from_slice(&json[..at]);
+    out.extend_from_slice(with);
+    out.extend_from_slice(&json[at + mark.len()..]);
+    Ok(out)
+}
+
+fn statistics_dto(st: &SceneStatistics, case: &SceneCase) -> SceneStatisticsDto {
+    SceneStatisticsDto {
+        runs: st.runs,
+        seed: st.seed,
+        outcomes: (&st.outcomes).into(),
+        supports: st
+            .entries
+            .iter()
+            .zip(&case.supports)
+            .map(|(s, e)| {
+                let mut ex = ExceedanceDto::default();
+                for (l, p) in &s.exceedance {
+                    let p = Some(p.into());
+                    match l {
+                        Limit::StressUtilisation => ex.stress_utilisation = p,
+                        Limit::MaxForce => ex.max_force_n = p,
+                        Limit::AbsorbedEnergy => ex.absorbed_energy_j = p,
+                    }
+                }
+                SupportStatisticsDto {
+                    support: e.support,
+                    column_index: e.column_index,
+                    along_dip_m: e.along_dip,
+                    across_m: e.across,
+                    reached_fraction: s.reached_fraction,
+                    capacity_exceeded_fraction: s.capacity_exceeded_fraction,
+                    impact_velocity_m_s: s.impact_velocity.as_ref().map(Into::into),
+                    max_deformation_m: s.max_deformation.as_ref().map(Into::into),
+                    max_force_n: s.max_force.as_ref().map(Into::into),
+                    absorbed_energy_j: s.absorbed_energy.as_ref().map(Into::into),
+                    stress_utilisation: s.stress_utilisation.as_ref().map(Into::into),
+                    exceedance: ex,
+                    verdict: if s.exceeded { "exceeded" } else { "ok" }.into(),
+                }
+            })
+            .collect(),
+        any_exceeded: (&st.any_exceeded).into(),
+    }
 }
 
 fn impact_dto(
@@ -1060,57 +1159,14 @@ fn comparison_dto(case: &SceneCase, m: &MethodSummary) -> MethodComparisonDto {
 impl SceneResponse {
     /// Builds the response from the report, the case and the resolved request.
     pub fn new(r: SceneReport, case: &SceneCase, ctx: SceneContext, inputs: SceneRequest) -> Self {
-        let plan = plan_of(&r);
-        let mut warnings: Vec<super::Warning> = r
-            .warnings
-            .iter()
-            .map(|w| super::Warning {
-                code: w.code.to_string(),
-                message: w.message.clone(),
-            })
-            .collect();
+        let plan = plan_of(&r.plan);
+        let mut warnings = warnings_of(&r.warnings);
         let impacts = r
             .impacts
             .iter()
             .map(|o| impact_dto(case, &ctx, &inputs, o))
             .collect();
-        let statistics = r.statistics.as_ref().map(|st| SceneStatisticsDto {
-            runs: st.runs,
-            seed: st.seed,
-            outcomes: (&st.outcomes).into(),
-            supports: st
-                .entries
-                .iter()
-                .zip(&case.supports)
-                .map(|(s, e)| {
-                    let mut ex = ExceedanceDto::default();
-                    for (l, p) in &s.exceedance {
-                        let p = Some(p.into());
-                        match l {
-                            Limit::StressUtilisation => ex.stress_utilisation = p,
-                            Limit::MaxForce => ex.max_force_n = p,
-                            Limit::AbsorbedEnergy => ex.absorbed_energy_j = p,
-                        }
-                    }
-                    SupportStatisticsDto {
-                        support: e.support,
-                        column_index: e.column_index,
-                        along_dip_m: e.along_dip,
-                        across_m: e.across,
-                        reached_fraction: s.reached_fraction,
-                        capacity_exceeded_fraction: s.capacity_exceeded_fraction,
-                        impact_velocity_m_s: s.impact_velocity.as_ref().map(Into::into),
-                        max_deformation_m: s.max_deformation.as_ref().map(Into::into),
-                        max_force_n: s.max_force.as_ref().map(Into::into),
-                        absorbed_energy_j: s.absorbed_energy.as_ref().map(Into::into),
-                        stress_utilisation: s.stress_utilisation.as_ref().map(Into::into),
-                        exceedance: ex,
-                        verdict: if s.exceeded { "exceeded" } else { "ok" }.into(),
-                    }
-                })
-                .collect(),
-            any_exceeded: (&st.any_exceeded).into(),
-        });
+        let statistics = r.statistics.as_ref().map(|st| statistics_dto(st, case));
         let csv = match (&r.runs, inputs.migration_output.runs_csv) {
             (Some(runs), true) => Some(scene::runs_csv(case, runs)),
             _ => None,
@@ -1130,13 +1186,160 @@ impl SceneResponse {
         let meta = Meta::new(plan);
         Self {
             plan: meta.plan,
-            migration,
-            impacts,
+            migration: migration.map(Piece::Built),
+            impacts: Piece::Built(impacts),
             statistics,
             comparison,
             warnings,
             inputs,
             model_version: meta.model_version,
         }
+    }
+}
+
+/// The part of a scene's answer its ensemble does not change (from
+/// [`scene::solve_nominal`]), as the part 0 of a sharded computation stores it: the plan's
+/// release and migration stages, the scene's own warnings, and the migration response of the
+/// nominal run and the impacts serialized by the code that serializes them in the answer (the
+/// nominal run and its strikes are not computed again); for a scene without an ensemble, the
+/// whole answer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SceneHead {
+    /// The whole answer (a scene without an ensemble), UTF-8 JSON.
+    complete: Option<String>,
+    /// Plan stages: stage, ran, reason.
+    plan: Vec<(String, bool, String)>,
+    /// The scene's own warnings: code, message.
+    warnings: Vec<(String, String)>,
+    /// The migration response of the nominal run (its runs_csv a placeholder when asked for).
+    migration: Option<String>,
+    /// Its warnings (listed after the scene's in the answer).
+    migration_warnings: Vec<(String, String)>,
+    /// The impacts.
+    impacts: String,
+    /// The nominal impact went past the contact capacity.
+    pub nominal_capacity: bool,
+}
+
+impl SceneHead {
+    /// The head of `r` (from [`scene::solve_nominal`]; `ensemble`: an ensemble follows).
+    ///
+    /// Errors: a non-finite number in a piece (as the service's answer would).
+    pub fn new(
+        r: &SceneReport,
+        ensemble: bool,
+        case: &SceneCase,
+        ctx: &SceneContext,
+        inputs: &SceneRequest,
+    ) -> Result<Self, ApiError> {
+        let text = |b: Vec<u8>| String::from_utf8(b).map_err(ApiError::internal);
+        let mut head = Self {
+            complete: None,
+            plan: r
+                .plan
+                .iter()
+                .map(|s| (s.stage.to_string(), s.ran, s.reason.clone()))
+                .collect(),
+            warnings: r
+                .warnings
+                .iter()
+                .map(|w| (w.code.to_string(), w.message.clone()))
+                .collect(),
+            migration: None,
+            migration_warnings: Vec::new(),
+            impacts: String::new(),
+            nominal_capacity: scene::nominal_capacity(r),
+        };
+        if !ensemble {
+            let resp = SceneResponse::new(r.clone(), case, ctx.clone(), inputs.clone());
+            head.complete = Some(text(to_json_bytes(&resp)?)?);
+            return Ok(head);
+        }
+        if let Some(m) = &r.migration {
+            let mut resp = MigrationResponse::new(m.clone(), ctx.migration.clone());
+            if inputs.migration_output.runs_csv {
+                resp.runs_csv = Some(placeholder("runs-csv"));
+            }
+            head.migration_warnings = resp
+                .warnings
+                .iter()
+                .map(|w| (w.code.clone(), w.message.clone()))
+                .collect();
+            head.migration = Some(text(to_json_bytes(&resp)?)?);
+        }
+        let impacts: Vec<SceneImpactDto> = r
+            .impacts
+            .iter()
+            .map(|o| impact_dto(case, ctx, inputs, o))
+            .collect();
+        head.impacts = text(to_json_bytes(&impacts)?)?;
+        Ok(head)
+    }
+
+    /// The answer's bytes: the stored pieces with the ensemble's `tail` (None: the head is the
+    /// whole answer).
+    ///
+    /// Errors: a head that does not fit the tail; a non-finite number in the tail.
+    pub fn finish(
+        self,
+        tail: Option<scene::EnsembleReport>,
+        case: &SceneCase,
+        inputs: SceneRequest,
+    ) -> Result<Vec<u8>, ApiError> {
+        let tail = match (tail, self.complete) {
+            (None, Some(c)) => return Ok(c.into_bytes()),
+            (Some(t), None) => t,
+            _ => {
+                return Err(ApiError::internal(
+                    "the stored nominal part does not fit the ensemble",
+                ));
+            }
+        };
+        let mut plan: Vec<PlanStep> = self
+            .plan
+            .iter()
+            .map(|(stage, ran, reason)| {
+                if *ran {
+                    PlanStep::ran(stage, reason.clone())
+                } else {
+                    PlanStep::skipped(stage, reason.clone())
+                }
+            })
+            .collect();
+        plan.extend(plan_of(&tail.plan));
+        let warning = |(code, message): &(String, String)| super::Warning {
+            code: code.clone(),
+            message: message.clone(),
+        };
+        let mut warnings: Vec<super::Warning> = self.warnings.iter().map(warning).collect();
+        warnings.extend(warnings_of(&tail.warnings));
+        warnings.extend(self.migration_warnings.iter().map(warning));
+        let meta = Meta::new(plan);
+        let resp = SceneResponse {
+            plan: meta.plan,
+            migration: self.migration.as_ref().map(|_| Piece::Stored(0)),
+            impacts: Piece::Stored(1),
+            statistics: Some(statistics_dto(&tail.statistics, case)),
+            comparison: tail
+                .comparison
+                .as_ref()
+                .map(|c| c.iter().map(|m| comparison_dto(case, m)).collect()),
+            warnings,
+            inputs,
+            model_version: meta.model_version,
+        };
+        let mut bytes = to_json_bytes(&resp)?;
+        if let Some(m) = self.migration {
+            let m = match (&tail.runs, resp.inputs.migration_output.runs_csv) {
+                (Some(runs), true) => {
+                    let csv = serde_json::to_vec(&scene::runs_csv(case, runs))
+                        .map_err(ApiError::internal)?;
+                    splice(m.as_bytes(), "runs-csv", &csv)?
+                }
+                _ => m.into_bytes(),
+            };
+            bytes = splice(&bytes, "piece-0", &m)?;
+        }
+        splice(&bytes, "piece-1", self.impacts.as_bytes())
     }
 }
