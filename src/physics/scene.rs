@@ -10,6 +10,12 @@
 //! the rock's side length and density) come from a stream of their own per run, seeded by
 //! (seed, run index, 1), in that order: zone choice and position (when zones are given), across,
 //! side length, density.
+//!
+//! A scene is solved in two parts: [`solve_nominal`] (the nominal run and its strikes, or the
+//! whole report without an ensemble), then the runs of an index range ([`ensemble_part`]) and
+//! [`ensemble_report`] over their records ([`SceneRecords`]: in memory, or read from the parts
+//! of a sharded computation). The statistics sum in run order, the summation order of the
+//! contract, so any split of the runs gives the same bits.
 
 use rayon::prelude::*;
 
