@@ -21,6 +21,13 @@ pub struct Config {
     #[arg(long, env = "GANGUE_SOLVER_THREADS")]
     pub solver_threads: Option<usize>,
 
+    /// Niceness of the solver threads, 0–19 (default 0, the normal priority): above 0 the
+    /// computations run below the threads that accept connections and answer `/healthz` (Linux:
+    /// `setpriority` per solver thread; elsewhere ignored). Only for a host or container of its
+    /// own: niceness also ranks the solvers below every other process (BENCHMARKS.md).
+    #[arg(long, env = "GANGUE_SOLVER_NICE", default_value_t = 0)]
+    pub solver_nice: i32,
+
     /// Computations (solver slots) at once; more queue for a slot (default 2 × cores, at least 4).
     #[arg(long, env = "GANGUE_MAX_CONCURRENT")]
     pub max_concurrent: Option<usize>,
@@ -263,6 +270,12 @@ impl Config {
             if !(v.is_finite() && v > 0.0 && v <= max) {
                 return Err(format!("{flag} must be in (0, {max}], got {v}"));
             }
+        }
+        if !(0..=19).contains(&self.solver_nice) {
+            return Err(format!(
+                "--solver-nice must be in [0, 19], got {}",
+                self.solver_nice
+            ));
         }
         if self.max_body_bytes < 1024 {
             return Err("--max-body-bytes must be at least 1024".into());

@@ -1,5 +1,13 @@
 //! `AppJson<T>`: the JSON body extractor. Malformed JSON, wrong types, unknown fields, a body that
 //! is too large and a wrong media type all become problem+json, each naming the field.
+//!
+//! A body is parsed without a generic JSON tree, in two passes over the bytes: the first checks
+//! the syntax and refuses repeated keys (keeping only the keys of the objects open at the moment),
+//! the second deserializes straight into the request type through `Strict`, which refuses an
+//! array where an object belongs and surplus array items at every depth. Only when the second pass
+//! fails is the one value it failed at read again from the bytes, for `errors[].value`. So a body
+//! takes its own bytes plus the request type it becomes, not a `Value` per number (a grid floor's
+//! heights are 8 bytes each, not a tree node of 32 bytes or more).
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -10,6 +18,7 @@ use axum::http::{StatusCode, header};
 use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 use http_body_util::BodyExt;
+use serde::Deserialize;
 use serde::de::{self, DeserializeOwned, IntoDeserializer, Unexpected, Visitor};
 use serde_json::Value;
 use tokio::sync::Semaphore;
@@ -31,8 +40,7 @@ impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for AppJson<T> {
             ));
         }
         let bytes = read_body(req, state).await?;
-        let value = parse_json(&bytes)?;
-        from_value(&value).map(AppJson)
+        parse_body(&bytes).map(AppJson)
     }
 }
 
@@ -220,6 +228,239 @@ pub fn parse_json(bytes: &[u8]) -> Result<Value, ApiError> {
     }
 }
 
+/// Parses a JSON body straight into `T` (module documentation): 400 `malformed_json` for bad
+/// syntax, 422 naming a repeated key, then 422 `invalid_type`/`unknown_field`/`invalid_input`
+/// naming the JSON Pointer of the field, with the value sent there, exactly as
+/// [`parse_json`] followed by [`from_value`] would answer.
+pub fn parse_body<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, ApiError> {
+    check_json(bytes)?;
+    let mut de = serde_json::Deserializer::from_slice(bytes);
+    match serde_path_to_error::deserialize(Strict(&mut de)) {
+        Ok(v) => Ok(v),
+        Err(err) => Err(field_problem(&err, |pointer| {
+            value_at(bytes, pointer).unwrap_or(Value::Null)
+        })),
+    }
+}
+
+/// Checks that `bytes` are one JSON value and that no object repeats a key, building nothing:
+/// the same answers as [`parse_json`] without its tree.
+pub fn check_json(bytes: &[u8]) -> Result<(), ApiError> {
+    let dup = std::cell::RefCell::new(None);
+    let mut de = serde_json::Deserializer::from_slice(bytes);
+    let checked = de::DeserializeSeed::deserialize(
+        CheckOnly {
+            path: &Path::Root,
+            dup: &dup,
+        },
+        &mut de,
+    )
+    .and_then(|()| de.end());
+    checked.map_err(|e| parse_problem(e, dup.into_inner()))
+}
+
+/// The problem for a failed first pass: the repeated key when one was found, else bad syntax.
+fn parse_problem(e: serde_json::Error, dup: Option<(String, Value)>) -> ApiError {
+    match dup {
+        Some((field, value)) => ApiError::from_field_errors(
+            "invalid_input",
+            vec![FieldError {
+                message: "this key appears more than once in its object; send it once".into(),
+                field,
+                value,
+            }],
+        ),
+        None => ApiError::new("malformed_json", format!("the body is not valid JSON: {e}")),
+    }
+}
+
+/// Walks a JSON document like [`NoDuplicates`] but keeps nothing except, per open object, its
+/// keys; a repeated key's value is read (as a tree) only to report it.
+struct CheckOnly<'a> {
+    path: &'a Path<'a>,
+    dup: &'a std::cell::RefCell<Option<(String, Value)>>,
+}
+
+impl<'de> de::DeserializeSeed<'de> for CheckOnly<'_> {
+    type Value = ();
+
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for CheckOnly<'_> {
+    type Value = ();
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("any JSON value")
+    }
+
+    fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_u64<E>(self, _: u64) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_str<E>(self, _: &str) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_unit<E>(self) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_none<E>(self) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_some<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+
+    fn visit_seq<A: de::SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        let mut i = 0usize;
+        loop {
+            let path = Path::Index(self.path, i);
+            let seed = CheckOnly {
+                path: &path,
+                dup: self.dup,
+            };
+            match seq.next_element_seed(seed)? {
+                Some(()) => i += 1,
+                None => return Ok(()),
+            }
+        }
+    }
+
+    fn visit_map<A: de::MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let mut seen = std::collections::HashSet::new();
+        while let Some(key) = map.next_key::<String>()? {
+            let path = Path::Key(self.path, &key);
+            if seen.contains(&key) {
+                // Read the repeated value as NoDuplicates does (a repeat inside it is named first).
+                let value = map.next_value_seed(NoDuplicates {
+                    path: &path,
+                    dup: self.dup,
+                })?;
+                let pointer = path.pointer();
+                *self.dup.borrow_mut() = Some((pointer.clone(), value));
+                return Err(de::Error::custom(format_args!(
+                    "duplicate key at {pointer}"
+                )));
+            }
+            map.next_value_seed(CheckOnly {
+                path: &path,
+                dup: self.dup,
+            })?;
+            seen.insert(key);
+        }
+        Ok(())
+    }
+}
+
+/// The value at JSON Pointer `pointer` of the document `bytes` (already checked), read without
+/// building the rest of the document; `None` when nothing is there.
+fn value_at(bytes: &[u8], pointer: &str) -> Option<Value> {
+    let segments: Vec<String> = if pointer.is_empty() {
+        Vec::new()
+    } else {
+        pointer
+            .strip_prefix('/')?
+            .split('/')
+            .map(|s| s.replace("~1", "/").replace("~0", "~"))
+            .collect()
+    };
+    let mut de = serde_json::Deserializer::from_slice(bytes);
+    de::DeserializeSeed::deserialize(Pick(&segments), &mut de).ok()?
+}
+
+/// Reads the value at a path of object keys and array indexes (as strings), skipping the rest.
+struct Pick<'a>(&'a [String]);
+
+impl<'de> de::DeserializeSeed<'de> for Pick<'_> {
+    type Value = Option<Value>;
+
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Option<Value>, D::Error> {
+        if self.0.is_empty() {
+            return Value::deserialize(d).map(Some);
+        }
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for Pick<'_> {
+    type Value = Option<Value>;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("any JSON value")
+    }
+
+    fn visit_bool<E>(self, _: bool) -> Result<Option<Value>, E> {
+        Ok(None)
+    }
+
+    fn visit_i64<E>(self, _: i64) -> Result<Option<Value>, E> {
+        Ok(None)
+    }
+
+    fn visit_u64<E>(self, _: u64) -> Result<Option<Value>, E> {
+        Ok(None)
+    }
+
+    fn visit_f64<E>(self, _: f64) -> Result<Option<Value>, E> {
+        Ok(None)
+    }
+
+    fn visit_str<E>(self, _: &str) -> Result<Option<Value>, E> {
+        Ok(None)
+    }
+
+    fn visit_unit<E>(self) -> Result<Option<Value>, E> {
+        Ok(None)
+    }
+
+    fn visit_seq<A: de::SeqAccess<'de>>(self, mut seq: A) -> Result<Option<Value>, A::Error> {
+        let want = self.0[0].parse::<usize>().ok();
+        let mut found = None;
+        let mut i = 0usize;
+        loop {
+            if found.is_none() && want == Some(i) {
+                match seq.next_element_seed(Pick(&self.0[1..]))? {
+                    Some(v) => found = v,
+                    None => break,
+                }
+            } else if seq.next_element::<de::IgnoredAny>()?.is_none() {
+                break;
+            }
+            i += 1;
+        }
+        Ok(found)
+    }
+
+    fn visit_map<A: de::MapAccess<'de>>(self, mut map: A) -> Result<Option<Value>, A::Error> {
+        let mut found = None;
+        while let Some(key) = map.next_key::<String>()? {
+            if found.is_none() && key == self.0[0] {
+                found = map.next_value_seed(Pick(&self.0[1..]))?;
+            } else {
+                map.next_value::<de::IgnoredAny>()?;
+            }
+        }
+        Ok(found)
+    }
+}
+
 /// Where a value sits in the document, rendered as a JSON Pointer only when a duplicate is found
 /// (so that parsing a large floor allocates no path strings).
 enum Path<'a> {
@@ -337,36 +578,56 @@ impl<'de> Visitor<'de> for NoDuplicates<'_> {
 /// Deserializes a parsed JSON value strictly: every object in the schema must be a JSON object,
 /// unknown fields and wrong types are problems naming the JSON Pointer of the field.
 pub fn from_value<T: DeserializeOwned>(value: &Value) -> Result<T, ApiError> {
-    serde_path_to_error::deserialize(Strict(value)).map_err(|err| {
-        let msg = err.inner().to_string();
-        let mut pointer = path_to_pointer(err.path());
-        let code = if msg.starts_with("unknown field") {
-            // The path ends at the object holding the unknown key; point at the key itself.
-            if let Some(name) = msg.split('`').nth(1)
-                && !pointer.ends_with(&format!("/{}", escape(name)))
-            {
-                pointer = format!("{pointer}/{}", escape(name));
-            }
-            "unknown_field"
-        } else if msg.starts_with("invalid type") || msg.starts_with("invalid length") {
-            "invalid_type"
-        } else {
-            "invalid_input"
-        };
-        let value_at = value.pointer(&pointer).cloned().unwrap_or(Value::Null);
-        ApiError::from_field_errors(
-            code,
-            vec![FieldError {
-                field: if pointer.is_empty() {
-                    "/".into()
-                } else {
-                    pointer
-                },
-                value: value_at,
-                message: msg,
-            }],
-        )
+    serde_path_to_error::deserialize(StrictValue(value)).map_err(|err| {
+        field_problem(&err, |pointer| {
+            value.pointer(pointer).cloned().unwrap_or(Value::Null)
+        })
     })
+}
+
+/// The 422 problem of a failed strict deserialization: the JSON Pointer of the field (of the key
+/// itself for an unknown field), the code and serde's message, with the value sent there
+/// (`value_at` reads it for a pointer).
+fn field_problem(
+    err: &serde_path_to_error::Error<serde_json::Error>,
+    value_at: impl FnOnce(&str) -> Value,
+) -> ApiError {
+    let inner = err.inner();
+    let mut msg = inner.to_string();
+    // A streaming parse appends the position; the pointer says where, the position is noise.
+    if inner.line() > 0 {
+        let suffix = format!(" at line {} column {}", inner.line(), inner.column());
+        if let Some(stripped) = msg.strip_suffix(&suffix) {
+            msg = stripped.to_owned();
+        }
+    }
+    let mut pointer = path_to_pointer(err.path());
+    let code = if msg.starts_with("unknown field") {
+        // The path ends at the object holding the unknown key; point at the key itself.
+        if let Some(name) = msg.split('`').nth(1)
+            && !pointer.ends_with(&format!("/{}", escape(name)))
+        {
+            pointer = format!("{pointer}/{}", escape(name));
+        }
+        "unknown_field"
+    } else if msg.starts_with("invalid type") || msg.starts_with("invalid length") {
+        "invalid_type"
+    } else {
+        "invalid_input"
+    };
+    let value = value_at(&pointer);
+    ApiError::from_field_errors(
+        code,
+        vec![FieldError {
+            field: if pointer.is_empty() {
+                "/".into()
+            } else {
+                pointer
+            },
+            value,
+            message: msg,
+        }],
+    )
 }
 
 fn escape(seg: &str) -> String {
@@ -409,9 +670,9 @@ fn unexpected(v: &Value) -> Unexpected<'_> {
 
 /// A deserializer over a borrowed [`Value`] that, unlike serde_json's, refuses an array where a
 /// struct is expected (serde's derived structs accept sequences) and applies that at every depth.
-struct Strict<'a>(&'a Value);
+struct StrictValue<'a>(&'a Value);
 
-impl<'de> de::Deserializer<'de> for Strict<'_> {
+impl<'de> de::Deserializer<'de> for StrictValue<'_> {
     type Error = serde_json::Error;
 
     fn deserialize_any<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, Self::Error> {
@@ -503,7 +764,7 @@ impl<'de> de::SeqAccess<'de> for SeqAccess<'_> {
     ) -> Result<Option<T::Value>, Self::Error> {
         self.0
             .next()
-            .map(|v| seed.deserialize(Strict(v)))
+            .map(|v| seed.deserialize(StrictValue(v)))
             .transpose()
     }
 
@@ -541,11 +802,294 @@ impl<'de> de::MapAccess<'de> for MapAccess<'_> {
             .value
             .take()
             .ok_or_else(|| <serde_json::Error as de::Error>::custom("value without a key"))?;
-        seed.deserialize(Strict(v))
+        seed.deserialize(StrictValue(v))
     }
 
     fn size_hint(&self) -> Option<usize> {
         Some(self.iter.len())
+    }
+}
+
+/// A wrapper around any JSON deserializer (here serde_json's streaming one) that answers like
+/// [`StrictValue`] over a tree: an object is required where a struct or map is expected, an enum
+/// is a string, and an array longer than its type is refused ("invalid length N, expected fewer
+/// elements"), at every depth.
+struct Strict<D>(D);
+
+/// Forwards `deserialize_*` methods to the inner deserializer with the visitor wrapped.
+macro_rules! strict_forward {
+    ($($method:ident)*) => {
+        $(
+            fn $method<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, Self::Error> {
+                self.0.$method(Wrap { v: visitor, object: false })
+            }
+        )*
+    };
+}
+
+impl<'de, D: de::Deserializer<'de>> de::Deserializer<'de> for Strict<D> {
+    type Error = D::Error;
+
+    strict_forward! {
+        deserialize_any deserialize_bool deserialize_i8 deserialize_i16 deserialize_i32
+        deserialize_i64 deserialize_i128 deserialize_u8 deserialize_u16 deserialize_u32
+        deserialize_u64 deserialize_u128 deserialize_f32 deserialize_f64 deserialize_char
+        deserialize_str deserialize_string deserialize_bytes deserialize_byte_buf
+        deserialize_option deserialize_unit deserialize_seq deserialize_identifier
+    }
+
+    fn deserialize_ignored_any<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, D::Error> {
+        self.0.deserialize_ignored_any(visitor)
+    }
+
+    fn deserialize_unit_struct<V: Visitor<'de>>(
+        self,
+        name: &'static str,
+        visitor: V,
+    ) -> Result<V::Value, D::Error> {
+        self.0.deserialize_unit_struct(
+            name,
+            Wrap {
+                v: visitor,
+                object: false,
+            },
+        )
+    }
+
+    fn deserialize_newtype_struct<V: Visitor<'de>>(
+        self,
+        name: &'static str,
+        visitor: V,
+    ) -> Result<V::Value, D::Error> {
+        self.0.deserialize_newtype_struct(
+            name,
+            Wrap {
+                v: visitor,
+                object: false,
+            },
+        )
+    }
+
+    fn deserialize_tuple<V: Visitor<'de>>(
+        self,
+        len: usize,
+        visitor: V,
+    ) -> Result<V::Value, D::Error> {
+        self.0.deserialize_tuple(
+            len,
+            Wrap {
+                v: visitor,
+                object: false,
+            },
+        )
+    }
+
+    fn deserialize_tuple_struct<V: Visitor<'de>>(
+        self,
+        name: &'static str,
+        len: usize,
+        visitor: V,
+    ) -> Result<V::Value, D::Error> {
+        self.0.deserialize_tuple_struct(
+            name,
+            len,
+            Wrap {
+                v: visitor,
+                object: false,
+            },
+        )
+    }
+
+    fn deserialize_map<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, D::Error> {
+        self.0.deserialize_map(Wrap {
+            v: visitor,
+            object: true,
+        })
+    }
+
+    fn deserialize_struct<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        _fields: &'static [&'static str],
+        visitor: V,
+    ) -> Result<V::Value, D::Error> {
+        self.deserialize_map(visitor)
+    }
+
+    fn deserialize_enum<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        _variants: &'static [&'static str],
+        visitor: V,
+    ) -> Result<V::Value, D::Error> {
+        self.0.deserialize_any(EnumFromString(visitor))
+    }
+
+    fn is_human_readable(&self) -> bool {
+        self.0.is_human_readable()
+    }
+}
+
+/// A visitor whose nested values go through [`Strict`]; `object` makes it expect a JSON object
+/// (its message then says so).
+struct Wrap<V> {
+    v: V,
+    object: bool,
+}
+
+/// Forwards `visit_*` methods of plain values to the inner visitor.
+macro_rules! wrap_forward {
+    ($($method:ident: $ty:ty)*) => {
+        $(
+            fn $method<E: de::Error>(self, x: $ty) -> Result<Self::Value, E> {
+                self.v.$method(x)
+            }
+        )*
+    };
+}
+
+impl<'de, V: Visitor<'de>> Visitor<'de> for Wrap<V> {
+    type Value = V::Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.object {
+            f.write_str("a JSON object")
+        } else {
+            self.v.expecting(f)
+        }
+    }
+
+    wrap_forward! {
+        visit_bool: bool visit_i8: i8 visit_i16: i16 visit_i32: i32 visit_i64: i64
+        visit_i128: i128 visit_u8: u8 visit_u16: u16 visit_u32: u32 visit_u64: u64
+        visit_u128: u128 visit_f32: f32 visit_f64: f64 visit_char: char visit_str: &str
+        visit_borrowed_str: &'de str visit_string: String visit_bytes: &[u8]
+        visit_borrowed_bytes: &'de [u8] visit_byte_buf: Vec<u8>
+    }
+
+    fn visit_none<E: de::Error>(self) -> Result<V::Value, E> {
+        self.v.visit_none()
+    }
+
+    fn visit_unit<E: de::Error>(self) -> Result<V::Value, E> {
+        self.v.visit_unit()
+    }
+
+    fn visit_some<D: de::Deserializer<'de>>(self, d: D) -> Result<V::Value, D::Error> {
+        self.v.visit_some(Strict(d))
+    }
+
+    fn visit_newtype_struct<D: de::Deserializer<'de>>(self, d: D) -> Result<V::Value, D::Error> {
+        self.v.visit_newtype_struct(Strict(d))
+    }
+
+    fn visit_seq<A: de::SeqAccess<'de>>(self, seq: A) -> Result<V::Value, A::Error> {
+        let mut wrapped = StrictSeq { seq, taken: 0 };
+        let out = self.v.visit_seq(&mut wrapped)?;
+        let mut extra = 0usize;
+        while wrapped.seq.next_element::<de::IgnoredAny>()?.is_some() {
+            extra += 1;
+        }
+        if extra > 0 {
+            return Err(de::Error::invalid_length(
+                wrapped.taken + extra,
+                &"fewer elements",
+            ));
+        }
+        Ok(out)
+    }
+
+    fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<V::Value, A::Error> {
+        self.v.visit_map(StrictMap(map))
+    }
+
+    fn visit_enum<A: de::EnumAccess<'de>>(self, data: A) -> Result<V::Value, A::Error> {
+        self.v.visit_enum(data)
+    }
+}
+
+/// The elements of a sequence, each through [`Strict`], counted.
+struct StrictSeq<A> {
+    seq: A,
+    taken: usize,
+}
+
+impl<'de, A: de::SeqAccess<'de>> de::SeqAccess<'de> for StrictSeq<A> {
+    type Error = A::Error;
+
+    fn next_element_seed<T: de::DeserializeSeed<'de>>(
+        &mut self,
+        seed: T,
+    ) -> Result<Option<T::Value>, A::Error> {
+        let out = self.seq.next_element_seed(StrictSeed(seed))?;
+        if out.is_some() {
+            self.taken += 1;
+        }
+        Ok(out)
+    }
+
+    fn size_hint(&self) -> Option<usize> {
+        self.seq.size_hint()
+    }
+}
+
+/// The values of a map, each through [`Strict`] (keys as they are).
+struct StrictMap<A>(A);
+
+impl<'de, A: de::MapAccess<'de>> de::MapAccess<'de> for StrictMap<A> {
+    type Error = A::Error;
+
+    fn next_key_seed<K: de::DeserializeSeed<'de>>(
+        &mut self,
+        seed: K,
+    ) -> Result<Option<K::Value>, A::Error> {
+        self.0.next_key_seed(seed)
+    }
+
+    fn next_value_seed<T: de::DeserializeSeed<'de>>(
+        &mut self,
+        seed: T,
+    ) -> Result<T::Value, A::Error> {
+        self.0.next_value_seed(StrictSeed(seed))
+    }
+
+    fn size_hint(&self) -> Option<usize> {
+        self.0.size_hint()
+    }
+}
+
+/// A seed deserialized through [`Strict`].
+struct StrictSeed<T>(T);
+
+impl<'de, T: de::DeserializeSeed<'de>> de::DeserializeSeed<'de> for StrictSeed<T> {
+    type Value = T::Value;
+
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<T::Value, D::Error> {
+        self.0.deserialize(Strict(d))
+    }
+}
+
+/// An enum from a JSON string only (as [`StrictValue`]): anything else is "invalid type …,
+/// expected a string".
+struct EnumFromString<V>(V);
+
+impl<'de, V: Visitor<'de>> Visitor<'de> for EnumFromString<V> {
+    type Value = V::Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a string")
+    }
+
+    fn visit_str<E: de::Error>(self, s: &str) -> Result<V::Value, E> {
+        self.0.visit_enum(s.into_deserializer())
+    }
+
+    fn visit_borrowed_str<E: de::Error>(self, s: &'de str) -> Result<V::Value, E> {
+        self.visit_str(s)
+    }
+
+    fn visit_string<E: de::Error>(self, s: String) -> Result<V::Value, E> {
+        self.visit_str(&s)
     }
 }
 
@@ -621,6 +1165,111 @@ mod tests {
         let text = br#"{"a": {"k": 1}, "b": {"k": [1.5, -2, 1e300, null, true, "s"]}}"#;
         let v = parse_json(text).unwrap();
         assert_eq!(v, serde_json::from_slice::<Value>(text).unwrap());
+    }
+
+    #[derive(Debug, Deserialize, PartialEq)]
+    #[serde(deny_unknown_fields)]
+    enum Kind {
+        #[serde(rename = "one")]
+        One,
+        #[serde(rename = "two")]
+        Two,
+    }
+
+    #[derive(Debug, Deserialize, PartialEq, Default)]
+    #[serde(deny_unknown_fields, default)]
+    struct Wide {
+        inner: Inner,
+        list: Vec<f64>,
+        opt: Option<f64>,
+        three: Option<[f64; 3]>,
+        rows: Vec<Vec<f64>>,
+        kind: Option<Kind>,
+        n: u32,
+        name: String,
+        flag: bool,
+        any: Option<Value>,
+        items: Vec<Inner>,
+    }
+
+    /// The streaming parse answers exactly what the tree parse did (code, pointer, message and
+    /// value), for good bodies and for every kind of refusal, at several depths.
+    #[test]
+    fn streaming_parse_answers_like_the_tree_parse() {
+        let bodies: &[&str] = &[
+            r#"{}"#,
+            r#"{"inner": {"a": 2}, "opt": null, "list": [1, 2.5, -3e-300]}"#,
+            r#"[]"#,
+            r#"null"#,
+            r#"3"#,
+            r#"{"inner": [1.0]}"#,
+            r#"{"inner": null}"#,
+            r#"{"inner": {"b": 1}}"#,
+            r#"{"inner": {"a": "x"}}"#,
+            r#"{"inner": {"a": null}}"#,
+            r#"{"list": [1, "x"]}"#,
+            r#"{"list": {"a": 1}}"#,
+            r#"{"three": [1, 2, 3]}"#,
+            r#"{"three": [1, 2]}"#,
+            r#"{"three": [1, 2, 3, 4, 5]}"#,
+            r#"{"three": null}"#,
+            r#"{"rows": [[1, 2], [3, "4"]]}"#,
+            r#"{"rows": [[1, 2], 3]}"#,
+            r#"{"kind": "one"}"#,
+            r#"{"kind": "three"}"#,
+            r#"{"kind": {"one": null}}"#,
+            r#"{"kind": 1}"#,
+            r#"{"n": -1}"#,
+            r#"{"n": 1.5}"#,
+            r#"{"n": 5000000000}"#,
+            r#"{"n": 1e3}"#,
+            r#"{"name": 1}"#,
+            r#"{"name": "é\u00e9\n"}"#,
+            r#"{"flag": "true"}"#,
+            r#"{"any": {"x": [1, {"y": null}]}}"#,
+            r#"{"items": [{"a": 1}, {"a": 2, "c": [1]}]}"#,
+            r#"{"items": [{"a": 1}, [2]]}"#,
+            r#"{"items/x~y": 1}"#,
+            r#"{"a": 1, "a": 2}"#,
+            r#"{"inner": {"a": 1, "a": {"k": 1, "k": 2}}}"#,
+            r#"{"inner": {"a": 1}"#,
+            r#"{"list": [1, 2,]}"#,
+            r#"{"list": [1e400]}"#,
+            r#"{"name": "x"} trailing"#,
+            "",
+        ];
+        for body in bodies {
+            let tree = parse_json(body.as_bytes()).and_then(|v| from_value::<Wide>(&v));
+            let stream = parse_body::<Wide>(body.as_bytes());
+            match (tree, stream) {
+                (Ok(a), Ok(b)) => assert_eq!(a, b, "{body}"),
+                (Err(a), Err(b)) => {
+                    let (mut pa, mut pb) = (a.to_problem(), b.to_problem());
+                    if a.code() == "malformed_json" {
+                        // serde_json's syntax message is the same; only ensure both are 400.
+                        pa["detail"] = Value::Null;
+                        pb["detail"] = Value::Null;
+                    }
+                    assert_eq!(pa, pb, "{body}");
+                }
+                (a, b) => panic!("{body}: tree {a:?}, streaming {b:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn value_at_reads_one_value_of_the_document() {
+        let doc = br#"{"a": [1, {"b/c": [true, "x"]}], "d~e": null, "f": 2}"#;
+        assert_eq!(value_at(doc, "/a/1/b~1c/1"), Some(json!("x")));
+        assert_eq!(value_at(doc, "/a/0"), Some(json!(1)));
+        assert_eq!(value_at(doc, "/d~0e"), Some(Value::Null));
+        assert_eq!(value_at(doc, "/f"), Some(json!(2)));
+        assert_eq!(value_at(doc, "/a/2"), None);
+        assert_eq!(value_at(doc, "/zz"), None);
+        assert_eq!(
+            value_at(doc, ""),
+            Some(serde_json::from_slice::<Value>(doc).unwrap())
+        );
     }
 
     #[test]

@@ -132,9 +132,11 @@ impl std::fmt::Debug for AppState {
 impl AppState {
     /// Builds the state: `max_concurrent` permits and a rayon pool of `solver_threads` threads.
     pub fn new(config: Config) -> Self {
+        let nice = config.solver_nice;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(config.solver_threads())
             .thread_name(|i| format!("gangue-solver-{i}"))
+            .start_handler(move |_| lower_priority(nice))
             .build()
             .expect("the solver thread pool can be built");
         Self {
@@ -155,6 +157,23 @@ impl AppState {
     /// The solver slots and their queue.
     pub fn admission(&self) -> &Admission {
         &self.admission
+    }
+}
+
+/// Lowers the calling thread's scheduling priority to niceness `nice` (Linux: `setpriority` on
+/// the thread id, which affects that thread only). Solver threads run below the async workers so
+/// that `/healthz` and admission answer promptly while every core computes. A failure (a
+/// sandbox refusing it) only loses that preference, so it is logged, not fatal.
+fn lower_priority(nice: i32) {
+    if nice <= 0 {
+        return;
+    }
+    #[cfg(target_os = "linux")]
+    {
+        let tid = rustix::thread::gettid();
+        if let Err(e) = rustix::process::setpriority_process(Some(tid), nice) {
+            tracing::warn!(error = %e, nice, "could not lower the solver thread's priority");
+        }
     }
 }
 
