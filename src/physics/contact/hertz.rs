@@ -243,7 +243,7 @@ pub(super) fn hertz_root_newton(target: f64) -> Option<(f64, f64, CompleteEllipt
     let (x0, slope) = hertz_logit_fit(target)?;
     let (lr, m0, m10, p) = hertz_log_ratio(x0);
     let dx = -(lr - target) * slope;
-    if !(dx.abs() <= 1e-9) {
+    if dx.is_nan() || dx.abs() > 1e-9 {
         return None;
     }
     // dm/dx = m m₁; dK/dx = K m (1 − s)/2 (from dK/dm = (E − m₁K)/(2 m m₁), E = K(1 − m s));
