@@ -1,5 +1,6 @@
 //! Column benchmarks: the decoupled closed-form history (10⁴ samples) and the coupled impact's
-//! run time against its error over integrator tolerances 1e-4 … 1e-12 (3 modes, base case).
+//! run time against its error over integrator tolerances 1e-4 … 1e-12 (3 modes, base case);
+//! the coupled impact with 10 and 50 modes and with the largest damping (group `coupled_stiff`).
 
 use std::f64::consts::{E, PI};
 use std::hint::black_box;
@@ -11,7 +12,7 @@ use gangue::physics::column::{
     ColumnCase, ColumnDetail, ColumnModel, HistoryRequest, solve_column_with_impact,
 };
 use gangue::physics::contact::{ImpactDetail, ImpactResult, LineImpact};
-use gangue::physics::material::{ContactLaw, ModulusConvention};
+use gangue::physics::material::{ContactLaw, Damping, ModulusConvention};
 
 /// The base-case rigid impact (paper law, paper E*; physics.md §A.8).
 fn base_impact() -> ImpactResult {
@@ -70,6 +71,25 @@ fn benches(c: &mut Criterion) {
             b.iter(|| solve_column_with_impact(black_box(&case), &imp, &ctl).unwrap())
         });
     }
+    // Many modes and heavy damping (issue 14): few samples, each run is long.
+    let mut g = c.benchmark_group("coupled_stiff");
+    g.sample_size(10);
+    for n in [10, 50] {
+        let case = ColumnCase {
+            modes: Some(n),
+            ..coupled_case(1e-6)
+        };
+        g.bench_function(format!("modes_{n}_tol_1e-6"), |b| {
+            b.iter(|| solve_column_with_impact(black_box(&case), &imp, &ctl).unwrap())
+        });
+    }
+    // c = 1e9 N·s/m² (the largest accepted): answered or refused, the time until either.
+    let mut damped = coupled_case(1e-6);
+    damped.impact.column.damping = Damping::Coefficient(1e9);
+    g.bench_function("damping_1e9_tol_1e-6", |b| {
+        b.iter(|| solve_column_with_impact(black_box(&damped), &imp, &ctl).is_ok())
+    });
+    g.finish();
 }
 
 /// CPU time of this thread so far, s (Linux `/proc/thread-self/stat`, 100 ticks/s); `None`

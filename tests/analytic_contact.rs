@@ -568,7 +568,10 @@ fn hertz_exact_kappa_over_the_ratio_range() {
         (2.5, 0.01),
         (2.5, 0.001),
     ]
-    .to_vec();
+    .into_iter()
+    // and 24 ratios spread over every piece of the fitted starting value (ln ratio −27.6 … 7.8)
+    .chain((0..24).map(|i| (1e-12 * 2.5e15f64.powf((i as f64 + 0.37) / 24.0), 1.0)))
+    .collect();
     let out = common_oracle::run(&json!({ "hertz": pairs }));
     for ((rc, r), row) in pairs.iter().zip(out["hertz"].as_array().unwrap()) {
         let m_ref = common_oracle::num(&row[0]);

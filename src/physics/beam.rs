@@ -405,6 +405,21 @@ pub enum Regime {
     Overdamped,
 }
 
+/// The five arrays [`FreeVibration::extend_uniform`] appends to.
+#[derive(Debug)]
+pub struct UniformColumns<'a> {
+    /// Times, s.
+    pub time: &'a mut Vec<f64>,
+    /// The scaled modal displacement (the midpoint deflection for a scale φ(½)), m.
+    pub displacement: &'a mut Vec<f64>,
+    /// Kinetic energy ½Mẇ², J.
+    pub kinetic: &'a mut Vec<f64>,
+    /// Strain energy ½Kw², J.
+    pub strain: &'a mut Vec<f64>,
+    /// Dissipated energy ∫₀ᵗ Cẇ² dτ, J.
+    pub dissipated: &'a mut Vec<f64>,
+}
+
 /// State and energies of a single-mode free vibration at one time.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ModalSample {
@@ -618,6 +633,116 @@ impl FreeVibration {
                     strain: half_k * w * w,
                     dissipated,
                 });
+            }
+            b = end;
+        }
+    }
+
+    /// Appends the samples of [`FreeVibration::sample_uniform`] straight to the five arrays of
+    /// `out`: the times (s), `scale`·w (with `scale` = φ(½), the midpoint deflection, m), and
+    /// the kinetic, strain and dissipated energies (J). Block by block (64 samples), each array
+    /// is filled by a loop of its own over the block's kernels, without per-sample capacity
+    /// checks; the values are bit-identical to those of [`FreeVibration::for_each_uniform`].
+    ///
+    /// # Special cases
+    /// n = 0 appends nothing; n = 1 appends t = 0 only.
+    ///
+    /// # References
+    /// physics.md §B.5.
+    pub fn extend_uniform(&self, duration: f64, n: usize, scale: f64, out: UniformColumns<'_>) {
+        const BLOCK: usize = 64;
+        let UniformColumns {
+            time,
+            displacement,
+            kinetic,
+            strain,
+            dissipated,
+        } = out;
+        for v in [
+            &mut *time,
+            &mut *displacement,
+            &mut *kinetic,
+            &mut *strain,
+            &mut *dissipated,
+        ] {
+            v.reserve(n);
+        }
+        if n <= 1 {
+            self.for_each_uniform(duration, n, |s| {
+                time.push(s.time);
+                displacement.push(scale * s.displacement);
+                kinetic.push(s.kinetic);
+                strain.push(s.strain);
+                dissipated.push(s.dissipated);
+            });
+            return;
+        }
+        let dt = duration / (n - 1) as f64;
+        let q2 = self.omega_n * self.omega_n * (1.0 - self.zeta) * (1.0 + self.zeta);
+        let s = self.sigma;
+        let wn2 = self.omega_n * self.omega_n;
+        let dis_factor = if self.damping == 0.0 || s == 0.0 {
+            0.0
+        } else {
+            self.damping * self.w0 * self.w0 * wn2 / (4.0 * s)
+        };
+        let (half_m, half_k, w0) = (0.5 * self.mass, 0.5 * self.stiffness, self.w0);
+        let len = BLOCK.min(n);
+        let mut kc = [0.0; BLOCK];
+        let mut ks = [0.0; BLOCK];
+        let mut ka = [0.0; BLOCK];
+        for j in 0..len {
+            let tau = j as f64 * dt;
+            (kc[j], ks[j]) = self.kernels(tau);
+            ka[j] = -(-2.0 * s * tau).exp_m1();
+        }
+        let mut ec = [0.0; BLOCK];
+        let mut es = [0.0; BLOCK];
+        let mut mm = [0.0; BLOCK];
+        let mut b = 0;
+        while b < n {
+            let tb = b as f64 * dt;
+            let (ecb, esb) = self.kernels(tb);
+            let mb = -(-2.0 * s * tb).exp_m1();
+            let end = (b + BLOCK).min(n);
+            let len = end - b;
+            let (ec, es, mm) = (&mut ec[..len], &mut es[..len], &mut mm[..len]);
+            for ((((c, e), m), (&kcj, &ksj)), &kaj) in ec
+                .iter_mut()
+                .zip(es.iter_mut())
+                .zip(mm.iter_mut())
+                .zip(kc.iter().zip(&ks))
+                .zip(&ka)
+            {
+                *c = ecb * kcj - q2 * esb * ksj;
+                *e = esb * kcj + ecb * ksj;
+                *m = mb + (1.0 - mb) * kaj;
+            }
+            if end == n {
+                // The last sample exactly at `duration`, from the direct formulas.
+                (ec[len - 1], es[len - 1]) = self.kernels(duration);
+                mm[len - 1] = -(-2.0 * s * duration).exp_m1();
+            }
+            time.extend((b..end).map(|k| k as f64 * dt));
+            if end == n {
+                time[n - 1] = duration;
+            }
+            let ecs = ec.iter().zip(es.iter());
+            displacement.extend(ecs.clone().map(|(&c, &e)| scale * (w0 * (c + s * e))));
+            kinetic.extend(es.iter().map(|&e| {
+                let wd = -w0 * wn2 * e;
+                half_m * wd * wd
+            }));
+            strain.extend(ecs.clone().map(|(&c, &e)| {
+                let w = w0 * (c + s * e);
+                half_k * w * w
+            }));
+            if dis_factor == 0.0 {
+                dissipated.extend(std::iter::repeat_n(0.0, len));
+            } else {
+                dissipated.extend(ecs.zip(mm.iter()).map(|((&c, &e), &m)| {
+                    dis_factor * (m - 2.0 * s * e * c - 2.0 * s * s * e * e)
+                }));
             }
             b = end;
         }
@@ -1001,6 +1126,48 @@ mod tests {
                 assert!((s.kinetic - e.kinetic).abs() < 1e-11 * u0, "ζ={z}");
                 assert!((s.strain - e.strain).abs() < 1e-11 * u0);
                 assert!((s.dissipated - e.dissipated).abs() < 1e-11 * u0, "ζ={z}");
+            }
+        }
+    }
+
+    /// The array form of the uniform history equals the per-sample one bit for bit, in every
+    /// regime and for sample counts around the block length.
+    #[test]
+    fn extend_uniform_is_bit_identical_to_for_each_uniform() {
+        let (m, k) = (61.85689848982988f64, 1947065540.6183121f64);
+        let cc = 2.0 * (k * m).sqrt();
+        for z in [0.0, 1.9e-6, 0.7, 1.0, 3.0, 1e6] {
+            let fv = FreeVibration::new(m, z * cc, k, 1e-3);
+            for n in [0, 1, 2, 63, 64, 65, 129, 10_001] {
+                let scale = 1.581_138_830_084_19;
+                let mut cols: [Vec<f64>; 5] = Default::default();
+                let [t, w, kin, str_, dis] = &mut cols;
+                fv.extend_uniform(
+                    0.6,
+                    n,
+                    scale,
+                    UniformColumns {
+                        time: t,
+                        displacement: w,
+                        kinetic: kin,
+                        strain: str_,
+                        dissipated: dis,
+                    },
+                );
+                let mut i = 0;
+                fv.for_each_uniform(0.6, n, |s| {
+                    assert_eq!(cols[0][i].to_bits(), s.time.to_bits(), "ζ={z} n={n} i={i}");
+                    assert_eq!(cols[1][i].to_bits(), (scale * s.displacement).to_bits());
+                    assert_eq!(
+                        cols[2][i].to_bits(),
+                        s.kinetic.to_bits(),
+                        "ζ={z} n={n} i={i}"
+                    );
+                    assert_eq!(cols[3][i].to_bits(), s.strain.to_bits());
+                    assert_eq!(cols[4][i].to_bits(), s.dissipated.to_bits(), "ζ={z} n={n}");
+                    i += 1;
+                });
+                assert!(cols.iter().all(|c| c.len() == n), "ζ={z} n={n}");
             }
         }
     }

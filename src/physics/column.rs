@@ -1,7 +1,9 @@
 //! Column dynamics after an impact (api.md `POST /v1/column`): the paper's decoupled single-mode
 //! free vibration, or the coupled rock–contact–beam model (physics.md §B).
 
-use super::beam::{FirstMode, Galerkin, ModalSample, ModeIntegrals, ModeShapes, SingleMode};
+use super::beam::{
+    FirstMode, Galerkin, ModalSample, ModeIntegrals, ModeShapes, SingleMode, UniformColumns,
+};
 use super::contact::{ForceLaw, ImpactDetail, ImpactResult, force_law, solve_impact};
 use super::control::Control;
 use super::coupled::{CoupledInput, solve_coupled};
@@ -615,16 +617,27 @@ fn decoupled(
             dissipated_energy: Vec::with_capacity(n),
             rock: None,
         };
-        let mut push = |s: ModalSample| {
-            h.time.push(s.time);
-            h.midpoint_displacement.push(phi * s.displacement);
-            h.kinetic_energy.push(s.kinetic);
-            h.strain_energy.push(s.strain);
-            h.dissipated_energy.push(s.dissipated);
-        };
         match grid {
-            Grid::Uniform(d, n) => fv.for_each_uniform(d, n, push),
-            Grid::Times(t) => t.iter().for_each(|&t| push(fv.sample(t))),
+            Grid::Uniform(d, n) => fv.extend_uniform(
+                d,
+                n,
+                phi,
+                UniformColumns {
+                    time: &mut h.time,
+                    displacement: &mut h.midpoint_displacement,
+                    kinetic: &mut h.kinetic_energy,
+                    strain: &mut h.strain_energy,
+                    dissipated: &mut h.dissipated_energy,
+                },
+            ),
+            Grid::Times(t) => t.iter().for_each(|&t| {
+                let s: ModalSample = fv.sample(t);
+                h.time.push(s.time);
+                h.midpoint_displacement.push(phi * s.displacement);
+                h.kinetic_energy.push(s.kinetic);
+                h.strain_energy.push(s.strain);
+                h.dissipated_energy.push(s.dissipated);
+            }),
         }
         h
     });

@@ -318,7 +318,7 @@ pub fn solve_impact(case: &ImpactCase) -> PhysicsResult<ImpactResult> {
 #[cfg(test)]
 #[allow(clippy::field_reassign_with_default)] // cases read as "the default, except …"
 mod tests {
-    use super::hertz::{hertz_log_ratio, hertz_logit_guess, hertz_root_secant};
+    use super::hertz::{hertz_log_ratio, hertz_logit_guess, hertz_root_newton};
     use super::*;
     use crate::physics::material::ContactModel;
     use crate::physics::numeric::roots::brent;
@@ -571,29 +571,31 @@ mod tests {
         assert!(line_duration_factor(-1e-300).is_nan() && line_duration_factor(f64::NAN).is_nan());
     }
 
-    /// The fitted starting value of the Hertz root is within 3e-6 of the root, and the secant
-    /// iteration from it agrees with Brent.
+    /// The fitted starting value of the Hertz root is within 5e-12 of the root over the whole
+    /// fitted range ln(r_c/R) ∈ [−40, 8], and the Newton step from it (with K, E, s, t carried to
+    /// first order) agrees with Brent's root on a wide bracket and the AGM evaluated there.
     #[test]
-    fn hertz_guess_lies_in_the_first_bracket() {
-        for i in 0..=2000 {
-            let target = -12.0 + 20.0 * i as f64 / 2000.0;
-            let h = hertz_geometry(1.0, target.exp(), 1.0, true);
-            let m = h.eccentricity_squared;
-            let x = (m / (h.axis_ratio * h.axis_ratio)).ln();
+    fn hertz_newton_from_the_fit_matches_brent() {
+        for i in 0..=4800 {
+            let target = -40.0 + 48.0 * i as f64 / 4800.0;
             let guess = hertz_logit_guess(target).unwrap();
-            assert!(
-                (guess - x).abs() < 3e-6,
-                "ln(rc/R) = {target}: {guess} vs {x}"
-            );
-            // The secant iteration converges from it, to Brent's root on a wide bracket.
-            let (m_secant, m1_secant, _) = hertz_root_secant(target, guess).unwrap();
             let g = |x: f64| hertz_log_ratio(x).0 - target;
             let (lo, hi) = (guess - 0.5, guess + 0.5);
             let x_brent = brent(g, lo, hi, g(lo), g(hi));
-            let (_, m_brent, m1_brent, _) = hertz_log_ratio(x_brent);
-            assert!(rel(m_secant, m_brent) < 1e-14, "{target}: m");
-            assert!(rel(m1_secant, m1_brent) < 1e-14, "{target}: 1 − m");
+            assert!(
+                (guess - x_brent).abs() < 5e-12,
+                "ln(rc/R) = {target}: {guess} vs {x_brent}"
+            );
+            let (m, m1, p) = hertz_root_newton(target).unwrap();
+            let (_, m_b, m1_b, pb) = hertz_log_ratio(x_brent);
+            assert!(rel(m, m_b) < 1e-14, "{target}: m");
+            assert!(rel(m1, m1_b) < 1e-14, "{target}: 1 − m");
+            assert!(rel(p.k, pb.k) < 1e-14, "{target}: K");
+            assert!(rel(p.s, pb.s) < 1e-14, "{target}: s");
+            assert!(rel(p.e, pb.e) < 1e-14, "{target}: E");
+            assert!((p.t - pb.t).abs() < 1e-14, "{target}: t");
         }
-        assert!(hertz_logit_guess(-12.5).is_none() && hertz_logit_guess(8.5).is_none());
+        assert!(hertz_logit_guess(-40.5).is_none() && hertz_logit_guess(8.5).is_none());
+        assert!(hertz_root_newton(8.5).is_none());
     }
 }
