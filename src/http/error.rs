@@ -5,7 +5,8 @@ use axum::response::{IntoResponse, Response};
 use serde::Serialize;
 use serde_json::{Map, Value, json};
 
-use crate::physics::PhysicsError;
+use crate::http::dto::param::request_pointer;
+use crate::physics::{Param, PhysicsError};
 
 /// Media type of problem responses.
 pub const PROBLEM_JSON: &str = "application/problem+json";
@@ -322,13 +323,23 @@ pub fn num(v: f64) -> Value {
 }
 
 impl From<PhysicsError> for ApiError {
+    /// The problem for a physics error of a standalone request (`/v1/impact`, `/v1/column`,
+    /// `/v1/migration`; a batch item nests it).
     fn from(e: PhysicsError) -> Self {
+        ApiError::from_physics(e, request_pointer)
+    }
+}
+
+impl ApiError {
+    /// The problem for a physics error, naming a parameter at fault by `pointer(param)`: the JSON
+    /// Pointer of that parameter in the request actually sent.
+    pub fn from_physics(e: PhysicsError, pointer: impl Fn(Param) -> String) -> Self {
         match e {
             PhysicsError::InvalidInput {
-                field,
+                param,
                 value,
                 message,
-            } => ApiError::invalid(field, num(value), message),
+            } => ApiError::invalid(pointer(param), num(value), message),
             PhysicsError::CapacityExceeded {
                 energy_parameter,
                 max_velocity_m_s,

@@ -622,7 +622,7 @@ mod tests {
     async fn physics_errors_pass_through() {
         let s = state(60.0, 2);
         let r = run_solver(&s, |_c: &Control| -> Result<u8, ApiError> {
-            Err(PhysicsError::invalid("/x", 1.0, "bad").into())
+            Err(PhysicsError::invalid(crate::physics::Param::RockDensity, 1.0, "bad").into())
         })
         .await;
         assert_eq!(r.unwrap_err().code(), "invalid_input");

@@ -8,7 +8,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use nalgebra::DMatrix;
 
-use super::error::{PhysicsError, PhysicsResult};
+use super::error::{Param, PhysicsError, PhysicsResult};
 use super::material::{Column, Damping, Section};
 use super::numeric::quadrature::gauss_legendre;
 
@@ -276,7 +276,7 @@ fn modal_mass_stiffness(
 /// from the mode-1 damping ratio with the **exact** mode 1 (rotary inertia as configured).
 ///
 /// # Errors
-/// `InvalidInput` at `/column/damping_coefficient_n_s_m2` or `/column/damping_ratio` for a
+/// `InvalidInput` at [`Param::ColumnDampingCoefficient`] or [`Param::ColumnDampingRatio`] for a
 /// negative or non-finite value.
 ///
 /// # References
@@ -286,7 +286,7 @@ pub fn damping_coefficient(column: &Column, rotary_inertia: bool) -> PhysicsResu
         Damping::Coefficient(c) => {
             if !(c >= 0.0 && c.is_finite()) {
                 return Err(PhysicsError::invalid(
-                    "/column/damping_coefficient_n_s_m2",
+                    Param::ColumnDampingCoefficient,
                     c,
                     "the damping coefficient must lie in [0, 1e9] N·s/m²",
                 ));
@@ -296,7 +296,7 @@ pub fn damping_coefficient(column: &Column, rotary_inertia: bool) -> PhysicsResu
         Damping::Ratio(z) => {
             if !(z >= 0.0 && z.is_finite()) {
                 return Err(PhysicsError::invalid(
-                    "/column/damping_ratio",
+                    Param::ColumnDampingRatio,
                     z,
                     "the damping ratio must lie in [0, 10]",
                 ));
@@ -731,7 +731,7 @@ impl Galerkin {
     /// c (N·s/m²) and rotary inertia on or off.
     ///
     /// # Errors
-    /// `InvalidInput` at `/galerkin/modes` for n outside [1, 50].
+    /// `InvalidInput` at [`Param::GalerkinModes`] for n outside [1, 50].
     ///
     /// # References
     /// physics.md §B.4.
@@ -743,7 +743,7 @@ impl Galerkin {
     ) -> PhysicsResult<Self> {
         if n == 0 || n > MAX_MODES {
             return Err(PhysicsError::invalid(
-                "/galerkin/modes",
+                Param::GalerkinModes,
                 n as f64,
                 "the number of modes must lie in [1, 50]",
             ));

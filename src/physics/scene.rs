@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use super::column::{self, ColumnCase, ColumnDetail, ColumnModel, ColumnResult};
 use super::contact::{self, ImpactResult};
 use super::control::Control;
-use super::error::PhysicsError;
+use super::error::{Param, PhysicsError};
 use super::material::{Column, ImpactCase, Rock, RockShape};
 use super::migration::shape::BlockShape;
 use super::migration::stats::{self, Summary};
@@ -471,7 +471,7 @@ pub fn strike(
     let e = &case.supports[entry];
     if e.column.length < rock.side_length {
         return Err(tag(PhysicsError::invalid(
-            "/column/length_m",
+            Param::ColumnLength,
             e.column.length,
             format!(
                 "must be at least the contact length L = {} m of the rock that strikes it",
@@ -1085,41 +1085,6 @@ fn compare(
         }
     }
     Ok(out)
-}
-
-/// The runs of an ensemble as CSV: `/v1/migration`'s columns, then
-/// `support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded`
-/// (empty when no support was struck); numbers in shortest round-trip form.
-pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
-    let summaries: Vec<RunSummary> = runs.iter().map(|r| r.summary).collect();
-    let base = migration::runs_csv(&summaries);
-    let mut out = String::with_capacity(base.len() * 2);
-    for (i, line) in base.lines().enumerate() {
-        out.push_str(line);
-        if i == 0 {
-            out.push_str(",support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded\n");
-            continue;
-        }
-        let r = &runs[i - 1];
-        match r.summary.support {
-            Some(k) => {
-                let e = &case.supports[k];
-                out.push_str(&format!(
-                    ",{},{},{}",
-                    e.support, e.column_index, r.summary.impact_speed
-                ));
-                match r.values {
-                    Some(v) => out.push_str(&format!(
-                        ",{},{},{},false\n",
-                        v.max_force, v.absorbed_energy, v.stress_utilisation
-                    )),
-                    None => out.push_str(",,,,true\n"),
-                }
-            }
-            None => out.push_str(",,,,,,,\n"),
-        }
-    }
-    out
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@ use crate::http::error::{ApiError, num};
 use crate::physics::migration::{
     self, ContactModel, ContourLine, Distribution, EventKind, Face, FloorSpec, LumpedMassOptions,
     MapFrame, Method, MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase,
-    Release, RigidBlockOptions, StopReason, Summary,
+    Release, RigidBlockOptions, RunSummary, StopReason, Summary,
 };
 
 /// Migration method.
@@ -1570,8 +1570,37 @@ fn rigid_plan(mc: bool, trajectory: bool) -> Vec<PlanStep> {
     ]
 }
 
-fn stop_name(s: StopReason) -> &'static str {
-    migration::stop_reason_name(s)
+/// The api.md name of a stop reason.
+pub fn stop_name(s: StopReason) -> &'static str {
+    match s {
+        StopReason::LowerEnd => "lower_end",
+        StopReason::AtRest => "at_rest",
+        StopReason::EndTime => "end_time",
+        StopReason::LeftFloor => "left_floor",
+        StopReason::Support => "support",
+    }
+}
+
+/// CSV of per-run summaries with api.md's header; numbers in shortest round-trip form, runs
+/// numbered from 0 (the run index of the random stream).
+pub fn runs_csv(runs: &[RunSummary]) -> String {
+    let mut s = String::from(
+        "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s\n",
+    );
+    for (i, r) in runs.iter().enumerate() {
+        s.push_str(&format!(
+            "{i},{},{},{},{},{},{},{},{}\n",
+            r.time,
+            r.speed,
+            r.kinetic_energy,
+            r.impact_count,
+            r.runout,
+            r.max_bounce_height,
+            stop_name(r.stop_reason),
+            r.along_dip_velocity
+        ));
+    }
+    s
 }
 
 impl MigrationResponse {
@@ -1688,7 +1717,7 @@ impl MigrationResponse {
                 runout_m: (&s.runout).into(),
                 max_bounce_height_m: (&s.max_bounce_height).into(),
             }),
-            runs_csv: r.runs_csv,
+            runs_csv: r.runs.as_deref().map(runs_csv),
             rigid_block: r.rigid_block.map(|b| RigidBlockOutDto {
                 time_step_s: b.time_step,
                 critical_time_step_s: b.critical_time_step,

@@ -11,12 +11,13 @@ use super::migration::{
     DistributionDto, FaceDto, LumpedMassDto, MethodDto, MigrationOutputDto, MigrationRequest,
     MigrationResponse, MonteCarloDto, ReleaseDto, RigidBlockDto, SummaryDto,
 };
+use super::param::scene_pointer;
 use crate::config::Config;
 use crate::http::error::{ApiError, FieldError, num};
-use crate::physics::migration::Method;
+use crate::physics::migration::{Method, RunSummary};
 use crate::physics::scene::{
     self, Check, DesignLimits, Limit, MethodSummary, Outcomes, Probability, ReleaseZone, SceneCase,
-    SceneDraws, SceneError, SceneReport, Strike, SupportEntry, TABLE1_SHARES,
+    SceneDraws, SceneError, SceneReport, SceneRun, Strike, SupportEntry, TABLE1_SHARES,
 };
 
 /// A support along the face: spanning (`across_m` null) or one column at (`along_dip_m`,
@@ -710,11 +711,11 @@ impl SceneRequest {
 
 /// Maps a scene error to the problem naming the field of the request actually sent.
 pub fn scene_error(e: SceneError, ctx: &SceneContext) -> ApiError {
-    let api = ApiError::from(e.error);
-    match e.entry {
-        Some(k) => api.nest(&ctx.entry_pointer[k]),
-        None => rename(api, "/output", "/migration_output"),
-    }
+    let support = e
+        .entry
+        .and_then(|k| ctx.entry_pointer.get(k))
+        .map(String::as_str);
+    ApiError::from_physics(e.error, |p| scene_pointer(p, support))
 }
 
 /// One design check of an impact.
@@ -1112,7 +1113,7 @@ impl SceneResponse {
             any_exceeded: (&st.any_exceeded).into(),
         });
         let csv = match (&r.runs, inputs.migration_output.runs_csv) {
-            (Some(runs), true) => Some(scene::runs_csv(case, runs)),
+            (Some(runs), true) => Some(runs_csv(case, runs)),
             _ => None,
         };
         let migration = r.migration.clone().map(|m| {
@@ -1139,4 +1140,38 @@ impl SceneResponse {
             model_version: meta.model_version,
         }
     }
+}
+/// The runs of an ensemble as CSV: `/v1/migration`'s columns, then
+/// `support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded`
+/// (empty when no support was struck); numbers in shortest round-trip form.
+pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
+    let summaries: Vec<RunSummary> = runs.iter().map(|r| r.summary).collect();
+    let base = super::migration::runs_csv(&summaries);
+    let mut out = String::with_capacity(base.len() * 2);
+    for (i, line) in base.lines().enumerate() {
+        out.push_str(line);
+        if i == 0 {
+            out.push_str(",support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded\n");
+            continue;
+        }
+        let r = &runs[i - 1];
+        match r.summary.support {
+            Some(k) => {
+                let e = &case.supports[k];
+                out.push_str(&format!(
+                    ",{},{},{}",
+                    e.support, e.column_index, r.summary.impact_speed
+                ));
+                match r.values {
+                    Some(v) => out.push_str(&format!(
+                        ",{},{},{},false\n",
+                        v.max_force, v.absorbed_energy, v.stress_utilisation
+                    )),
+                    None => out.push_str(",,,,true\n"),
+                }
+            }
+            None => out.push_str(",,,,,,,\n"),
+        }
+    }
+    out
 }

@@ -21,7 +21,7 @@
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
 use super::monte_carlo::{run_stream, uniform01};
-use crate::physics::error::{PhysicsError, PhysicsResult};
+use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 use crate::physics::material::{Rock, RockShape};
 
 /// A planar face of a polyhedral block, in the body frame.
@@ -134,7 +134,7 @@ impl BlockShape {
     /// The convex hull of `points` (m) with density ρ (kg/m³).
     ///
     /// Errors: fewer than 4 non-coplanar points (`field` names the request field).
-    pub fn hull(points: &[[f64; 3]], density: f64, field: &str) -> PhysicsResult<Self> {
+    pub fn hull(points: &[[f64; 3]], density: f64, field: Param) -> PhysicsResult<Self> {
         let pts: Vec<Vector3<f64>> = points
             .iter()
             .map(|p| Vector3::new(p[0], p[1], p[2]))
@@ -292,15 +292,15 @@ impl BlockShape {
 
     /// The block of a rock (api.md `rock`): its shape with the rock's density.
     ///
-    /// Errors: a degenerate polyhedron (`/rock/vertices_m`) or a random polyhedron that gives
-    /// no volume in 100 draws (`/rock/random`).
+    /// Errors: a degenerate polyhedron ([`Param::RockVertices`]) or a random polyhedron that gives
+    /// no volume in 100 draws ([`Param::RockRandomShape`]).
     pub fn of_rock(rock: &Rock) -> PhysicsResult<Self> {
         let rho = rock.density;
         match &rock.shape {
             RockShape::Cube => Ok(Self::cuboid([rock.side_length; 3], rho)),
             RockShape::Cuboid { dimensions } => Ok(Self::cuboid(*dimensions, rho)),
             RockShape::Sphere { radius } => Ok(Self::sphere(*radius, rho)),
-            RockShape::Polyhedron { vertices } => Self::hull(vertices, rho, "/rock/vertices_m"),
+            RockShape::Polyhedron { vertices } => Self::hull(vertices, rho, Param::RockVertices),
             RockShape::RandomPolyhedron {
                 semi_axes,
                 vertices,
@@ -319,7 +319,7 @@ impl BlockShape {
                 if i & 4 == 0 { -0.5 } else { 0.5 } * d[2],
             ]);
         }
-        Self::hull(&pts, density, "/rock/dimensions_m").expect("a cuboid has volume")
+        Self::hull(&pts, density, Param::RockDimensions).expect("a cuboid has volume")
     }
 
     /// A random polyhedron by the ellipsoid method (physics.md §C.3 "Further definitions"):
@@ -341,12 +341,12 @@ impl BlockShape {
                     ]
                 })
                 .collect();
-            if let Ok(s) = Self::hull(&pts, density, "/rock/random") {
+            if let Ok(s) = Self::hull(&pts, density, Param::RockRandomShape) {
                 return Ok(s);
             }
         }
         Err(PhysicsError::invalid(
-            "/rock/random/vertices",
+            Param::RockRandomVertexCount,
             n as f64,
             "100 draws gave no polyhedron with volume: use more vertices",
         ))
@@ -499,7 +499,7 @@ mod tests {
             [-1.0, -1.0, 1.0],
         ]
         .map(|q| q.map(|c| c * a / 8f64.sqrt()));
-        let t = BlockShape::hull(&pts, 1.0, "/x").unwrap();
+        let t = BlockShape::hull(&pts, 1.0, Param::RockVertices).unwrap();
         assert!((t.volume - a.powi(3) / (6.0 * 2f64.sqrt())).abs() < 1e-14);
         for i in 0..3 {
             assert!((t.inertia[i] - t.mass * a * a / 20.0).abs() < 1e-14);
@@ -508,7 +508,7 @@ mod tests {
             BlockShape::hull(
                 &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
                 1.0,
-                "/x"
+                Param::RockVertices
             )
             .is_err()
         );

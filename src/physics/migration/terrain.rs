@@ -13,7 +13,7 @@
 use nalgebra::Vector3;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 
-use crate::physics::error::{PhysicsError, PhysicsResult};
+use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 
 /// Identifier of one planar facet of a floor (the plane floor has the single facet 0).
 pub(crate) type Facet = u32;
@@ -805,7 +805,7 @@ impl Floor {
         let nx = heights.first().map_or(0, Vec::len);
         if ny < 2 || nx < 2 {
             return Err(PhysicsError::invalid(
-                "/face/floor/heights_m",
+                Param::FloorHeights,
                 ny.min(nx) as f64,
                 "a grid needs at least 2 × 2 points",
             ));
@@ -814,7 +814,7 @@ impl Floor {
         for (i, row) in heights.iter().enumerate() {
             if row.len() != nx {
                 return Err(PhysicsError::invalid(
-                    format!("/face/floor/heights_m/{i}"),
+                    Param::FloorHeightRow(i),
                     row.len() as f64,
                     format!("every row must have {nx} heights, like row 0"),
                 ));
@@ -822,7 +822,7 @@ impl Floor {
             for (j, &h) in row.iter().enumerate() {
                 if h.is_infinite() {
                     return Err(PhysicsError::invalid(
-                        format!("/face/floor/heights_m/{i}/{j}"),
+                        Param::FloorHeight(i, j),
                         0.0,
                         "heights must be finite numbers (m)",
                     ));
@@ -841,7 +841,7 @@ impl Floor {
                 .fold((0.0, 0usize), |(s, n), h| (s + h, n + 1));
             if !fill_holes(&mut z, nx, ny) {
                 return Err(PhysicsError::invalid(
-                    "/face/floor",
+                    Param::Floor,
                     0.0,
                     "every node of the grid is without data",
                 ));
@@ -947,7 +947,7 @@ impl Floor {
     fn place_mean_at_origin(&mut self) -> PhysicsResult<()> {
         let z = self.height_at(0.0, 0.0).ok_or_else(|| {
             PhysicsError::invalid(
-                "/face/floor/map/origin_m",
+                Param::FloorMapOrigin,
                 0.0,
                 "the map origin is not on the floor (outside it or over a hole): along_dip_m = 0 \
                  is measured from the floor's height there",
@@ -970,7 +970,7 @@ impl Floor {
             for (k, p) in line.points.iter().enumerate() {
                 if !(p[0].is_finite() && p[1].is_finite()) {
                     return Err(PhysicsError::invalid(
-                        format!("/face/floor/contours/{c}/points_m/{k}"),
+                        Param::FloorContourPoint(c, k),
                         0.0,
                         "points must be finite numbers (m)",
                     ));
@@ -997,7 +997,7 @@ impl Floor {
         }
         if pts.len() > 50_000_000 {
             return Err(PhysicsError::invalid(
-                "/face/floor/resolution_m",
+                Param::FloorResolution,
                 resolution,
                 "the resampled contours have more than 5e7 points: use a coarser resolution_m",
             ));
@@ -1012,7 +1012,7 @@ impl Floor {
         let tri: DelaunayTriangulation<HPoint> =
             DelaunayTriangulation::bulk_load(pts).map_err(|e| {
                 PhysicsError::invalid(
-                    "/face/floor/contours",
+                    Param::FloorContours,
                     0.0,
                     format!("cannot triangulate: {e}"),
                 )
@@ -1041,7 +1041,7 @@ impl Floor {
         }
         if tris.is_empty() {
             return Err(PhysicsError::invalid(
-                "/face/floor/contours",
+                Param::FloorContours,
                 xyz.len() as f64,
                 "the contours do not span a surface (need at least 3 points not on one line)",
             ));
