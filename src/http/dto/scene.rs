@@ -7,6 +7,7 @@ use utoipa::ToSchema;
 use super::column::{ColumnModelDto, ColumnOutputDto, ColumnRequest, ColumnResponse, GalerkinDto};
 use super::common::{Checker, ColumnDto, ContactDto, LawDto, Meta, PlanStep, RockDto, ShapeKind};
 use super::impact::{ImpactRequest, ImpactResponse};
+use super::migration::monte_carlo_dto;
 use super::migration::{
     DistributionDto, FaceDto, LumpedMassDto, MethodDto, MigrationOutputDto, MigrationRequest,
     MigrationResponse, MonteCarloDto, ReleaseDto, RigidBlockDto, SummaryDto,
@@ -137,57 +138,16 @@ impl Default for DesignLimitsDto {
     }
 }
 
-/// A scene's seeded Monte Carlo ensemble: `/v1/migration`'s draws plus the scene's own.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
-#[serde(deny_unknown_fields, default)]
-pub struct SceneMonteCarloDto {
-    /// Number of runs, in [1, limit] (the server's `max_monte_carlo_runs`).
-    #[schema(default = 200, minimum = 1, maximum = 1000000, example = 200)]
-    pub runs: u64,
-    /// Seed (any u64).
-    #[schema(default = 42, example = 42)]
-    pub seed: u64,
-    /// e_n, drawn at every impact, clipped to [0, 1] (default U[0.2, 0.4]).
-    pub restitution_normal: DistributionDto,
-    /// e_t, drawn at every impact after e_n, clipped to [0, 1] (default U[0.7, 0.9]).
-    pub restitution_tangential: DistributionDto,
-    /// μ, drawn once per run (null: the face's μ).
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub friction_coefficient: Option<DistributionDto>,
-    /// β of the contact dashpot (rigid block only; null: the face's β).
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub critical_damping_ratio: Option<DistributionDto>,
-    /// The rock's side length, m, bounds in [0.01, 5] (scene stream; the paper's study range
-    /// is 0.2–0.3 m). A sphere's radius and a cuboid's edges scale with it.
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub side_length_m: Option<DistributionDto>,
-    /// The rock's density, kg/m³, bounds in [100, 20000] (scene stream; the paper's 2000–3000).
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub density_kg_m3: Option<DistributionDto>,
-    /// The release across the face y, m, bounds in [−1000, 1000] (scene stream).
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub release_across_m: Option<DistributionDto>,
-}
-
-impl Default for SceneMonteCarloDto {
-    fn default() -> Self {
-        let m = MonteCarloDto::default();
-        Self {
-            runs: m.runs,
-            seed: m.seed,
-            restitution_normal: m.restitution_normal,
-            restitution_tangential: m.restitution_tangential,
-            friction_coefficient: None,
-            critical_damping_ratio: None,
-            side_length_m: None,
-            density_kg_m3: None,
-            release_across_m: None,
-        }
+monte_carlo_dto! {
+    /// A scene's seeded Monte Carlo ensemble: `/v1/migration`'s draws plus the scene's own.
+    pub struct SceneMonteCarloDto {
+        /// The rock's side length, m, bounds in [0.01, 5] (scene stream; the paper's study range
+        /// is 0.2–0.3 m). A sphere's radius and a cuboid's edges scale with it.
+        pub side_length_m: Option<DistributionDto>,
+        /// The rock's density, kg/m³, bounds in [100, 20000] (scene stream; the paper's 2000–3000).
+        pub density_kg_m3: Option<DistributionDto>,
+        /// The release across the face y, m, bounds in [−1000, 1000] (scene stream).
+        pub release_across_m: Option<DistributionDto>,
     }
 }
 
@@ -324,14 +284,7 @@ impl SceneRequest {
     /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
     pub fn resolve(&mut self, config: &Config) -> Result<(SceneCase, SceneContext), ApiError> {
         // the migration part, checked by /v1/migration's own rules and pointers
-        let mc = self.monte_carlo.as_ref().map(|m| MonteCarloDto {
-            runs: m.runs,
-            seed: m.seed,
-            restitution_normal: m.restitution_normal,
-            restitution_tangential: m.restitution_tangential,
-            friction_coefficient: m.friction_coefficient,
-            critical_damping_ratio: m.critical_damping_ratio,
-        });
+        let mc = self.monte_carlo.as_ref().map(MonteCarloDto::from);
         let mut mreq = MigrationRequest {
             method: self.method,
             gravity_m_s2: self.gravity_m_s2,
