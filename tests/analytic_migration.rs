@@ -148,7 +148,7 @@ fn p09_analytic_numbers_through_the_solver() {
     // a_slide = v²/(2S)
     assert!(rel(r.arrival.speed.powi(2) / 240.0, x("a_slide")) < 1e-9);
     // roll from rest (μ must allow it): v = √(2 · 5/7 g sin θ · S)
-    let mut roll = slide.clone();
+    let mut roll = slide;
     roll.lumped_mass.motion = Motion::Roll;
     roll.face.friction_coefficient = x("mu_min_for_rolling");
     let r = solve(&roll);
@@ -430,7 +430,7 @@ fn plane_equivalent_contours_reproduce_the_plane() {
     let mut plane = MigrationCase::default();
     plane.release.across = 0.37;
     let a = solve(&plane);
-    let mut c = plane.clone();
+    let mut c = plane;
     c.face.floor = FloorSpec::Contours {
         contours,
         resolution: 1.0,

@@ -54,6 +54,7 @@ const MEAN_WEIGHT_SHIFT: u32 = 3;
 
 impl Admission {
     /// `slots` solver slots; queue while the expected wait is at most `bound`.
+    #[must_use]
     pub fn new(slots: usize, bound: Duration) -> Self {
         Self {
             slots: slots.max(1),
@@ -131,6 +132,7 @@ impl std::fmt::Debug for AppState {
 
 impl AppState {
     /// Builds the state: `max_concurrent` permits and a rayon pool of `solver_threads` threads.
+    #[must_use]
     pub fn new(config: Config) -> Self {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(config.solver_threads())
@@ -148,11 +150,13 @@ impl AppState {
     }
 
     /// The time limit of one computation.
+    #[must_use]
     pub fn time_limit(&self) -> Duration {
         Duration::from_secs_f64(self.config.compute_timeout_s)
     }
 
     /// The solver slots and their queue.
+    #[must_use]
     pub fn admission(&self) -> &Admission {
         &self.admission
     }
@@ -309,6 +313,7 @@ pub fn to_json_bytes<T: Serialize>(value: &T) -> Result<Vec<u8>, ApiError> {
 }
 
 /// A 200 JSON response from bytes produced by [`to_json_bytes`].
+#[must_use]
 pub fn json_response(bytes: Vec<u8>) -> Response {
     (
         StatusCode::OK,

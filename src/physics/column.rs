@@ -228,6 +228,7 @@ pub struct ColumnResult {
 }
 
 /// The contact law of a solved impact (k = P_cap/δ_cap, P_ref = e·P_cap; Hertz κ).
+#[must_use]
 pub fn force_law_of(impact: &ImpactResult) -> ForceLaw {
     match &impact.detail {
         ImpactDetail::Line(l) => {

@@ -169,6 +169,7 @@ impl std::error::Error for PhysicsError {}
 
 /// `x` with `digits` significant digits for a message a person reads: plain decimals for
 /// 1e-4 ≤ |x| < 1e7 (0.05454154, 2.335413), scientific notation beyond (1.234568e-9).
+#[must_use]
 pub fn significant(x: f64, digits: usize) -> String {
     let digits = digits.max(1);
     if x == 0.0 || !x.is_finite() {

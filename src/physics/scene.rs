@@ -96,6 +96,7 @@ pub enum Limit {
 
 impl DesignLimits {
     /// The limits that are checked, with their allowed values, in api.md order.
+    #[must_use]
     pub fn active(&self) -> Vec<(Limit, f64)> {
         [
             (Limit::StressUtilisation, self.stress_utilisation),
@@ -121,6 +122,7 @@ pub struct SceneDraws {
 
 impl SceneDraws {
     /// True when a draw changes something between runs.
+    #[must_use]
     pub fn any(&self) -> bool {
         self.side_length.is_some() || self.density.is_some() || self.release_across.is_some()
     }
@@ -232,6 +234,7 @@ pub struct StrikeValues {
 
 impl Strike {
     /// The values of the strike (None past the capacity; zeros without an impact).
+    #[must_use]
     pub fn values(&self) -> Option<StrikeValues> {
         match self {
             Strike::NoImpact => Some(StrikeValues::default()),
@@ -260,6 +263,7 @@ impl Strike {
 }
 
 /// The checks of a strike against the limits.
+#[must_use]
 pub fn checks(limits: &DesignLimits, strike: &Strike) -> Vec<Check> {
     let v = strike.values();
     limits
@@ -434,6 +438,7 @@ pub fn rock_extent(rock: &Rock) -> Result<(f64, f64), PhysicsError> {
 }
 
 /// The rock as it enters the impact: itself when a cube, else the cube of equal mass and density.
+#[must_use]
 pub fn impact_rock(rock: &Rock, mass: f64) -> Rock {
     if rock.shape == RockShape::Cube {
         return rock.clone();
@@ -535,6 +540,7 @@ fn outcome(
 }
 
 /// The supports as the migration sees them, for a rock of bounding radius `r_rock`.
+#[must_use]
 pub fn stops(case: &SceneCase, r_rock: f64) -> Vec<SupportStop> {
     case.supports
         .iter()
@@ -547,6 +553,7 @@ pub fn stops(case: &SceneCase, r_rock: f64) -> Vec<SupportStop> {
 }
 
 /// The scene-only stream of run `index`: seeded by (seed, run index, 1).
+#[must_use]
 pub fn scene_stream(seed: u64, index: u64) -> rand_pcg::Pcg64 {
     // as the run's stream of /v1/migration, (seed, index), with the third word 1 mixed in
     let mut sm =
@@ -912,6 +919,7 @@ fn ensemble(case: &SceneCase, mc: &MonteCarlo, control: &Control) -> SceneResult
 }
 
 /// The outcomes of runs.
+#[must_use]
 pub fn outcomes_of(runs: &[RunSummary]) -> Outcomes {
     let n = runs.len().max(1) as f64;
     let f = |r: StopReason| runs.iter().filter(|s| s.stop_reason == r).count() as f64 / n;

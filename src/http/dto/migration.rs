@@ -776,7 +776,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                     let rel = o - shift[i];
                     if !(-1e6..=1e6).contains(&rel) {
                         ck.push(
-                            field.clone(),
+                            field,
                             num(*o),
                             format!(
                                 "the grid's first cell centre {} = {o} m{} must lie in [−1e6, 1e6] m",
@@ -1610,6 +1610,7 @@ fn rigid_plan(mc: bool, trajectory: bool) -> Vec<PlanStep> {
 }
 
 /// The api.md name of a stop reason.
+#[must_use]
 pub fn stop_name(s: StopReason) -> &'static str {
     match s {
         StopReason::LowerEnd => "lower_end",
@@ -1622,6 +1623,7 @@ pub fn stop_name(s: StopReason) -> &'static str {
 
 /// CSV of per-run summaries with api.md's header; numbers in shortest round-trip form, runs
 /// numbered from 0 (the run index of the random stream).
+#[must_use]
 pub fn runs_csv(runs: &[RunSummary]) -> String {
     let mut s = String::from(
         "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s\n",

@@ -75,6 +75,7 @@ fn place(param: Param) -> Place {
 
 /// The JSON Pointer of `param` in a standalone request (`/v1/impact`, `/v1/column`,
 /// `/v1/migration`); a batch item or study nests it under its own prefix.
+#[must_use]
 pub fn request_pointer(param: Param) -> String {
     match place(param) {
         Place::Root(f) => format!("/{f}"),
@@ -91,6 +92,7 @@ pub fn request_pointer(param: Param) -> String {
 ///
 /// The scene's impact speed is `impact_velocity_m_s` when sent (else the migration's, which no
 /// field names); its coupled window is the default one, chosen by `column_model`.
+#[must_use]
 pub fn scene_pointer(param: Param, support: Option<&str>) -> String {
     match param {
         Param::ImpactVelocity => return "/impact_velocity_m_s".into(),

@@ -1013,6 +1013,11 @@ fn comparison_dto(case: &SceneCase, m: &MethodSummary) -> MethodComparisonDto {
 
 impl SceneResponse {
     /// Builds the response from the report, the case and the resolved request.
+    #[must_use]
+    #[allow(
+        clippy::needless_pass_by_value,
+        reason = "the route hands over the report and context it no longer needs"
+    )]
     pub fn new(r: SceneReport, case: &SceneCase, ctx: SceneContext, inputs: SceneRequest) -> Self {
         let plan = plan_of(&r);
         let mut warnings: Vec<super::Warning> = r
@@ -1097,6 +1102,7 @@ impl SceneResponse {
 /// The runs of an ensemble as CSV: `/v1/migration`'s columns, then
 /// `support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded`
 /// (empty when no support was struck); numbers in shortest round-trip form.
+#[must_use]
 pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
     let summaries: Vec<RunSummary> = runs.iter().map(|r| r.summary).collect();
     let base = super::migration::runs_csv(&summaries);

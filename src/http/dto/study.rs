@@ -58,6 +58,7 @@ pub enum StudyGrid {
 }
 
 /// The paper's study ranges (physics.md §D.1): each a ratio of 1.5.
+#[must_use]
 pub fn paper_parameters() -> Vec<StudyParameterDto> {
     [
         ("velocity_m_s", 4.0, 6.0),
@@ -75,6 +76,7 @@ pub fn paper_parameters() -> Vec<StudyParameterDto> {
 }
 
 /// The paper's Figure 21 abscissae x = p/p_max: 2/3, 3/4, 5/6, 11/12, 1.
+#[must_use]
 pub fn paper_x_values() -> Vec<f64> {
     vec![2.0 / 3.0, 0.75, 5.0 / 6.0, 11.0 / 12.0, 1.0]
 }
@@ -280,6 +282,7 @@ const OUTPUTS: [(&str, Models); 25] = [
 ];
 
 /// Outputs a study may ask for, by model: numeric fields the column response always has.
+#[must_use]
 pub fn study_outputs(coupled: bool) -> Vec<&'static str> {
     let own = if coupled {
         Models::Coupled
@@ -294,6 +297,7 @@ pub fn study_outputs(coupled: bool) -> Vec<&'static str> {
 }
 
 /// The default outputs of a model (api.md).
+#[must_use]
 pub fn default_outputs(coupled: bool) -> Vec<String> {
     let v: [&str; 4] = if coupled {
         [
@@ -314,6 +318,7 @@ pub fn default_outputs(coupled: bool) -> Vec<String> {
 }
 
 /// JSON Pointer of a dotted path (`rock.density_kg_m3` → `/rock/density_kg_m3`).
+#[must_use]
 pub fn pointer_of(dotted: &str) -> String {
     dotted
         .split('.')

@@ -110,6 +110,7 @@ pub struct HertzImpact {
 
 impl ImpactResult {
     /// Maximum approach δmax, m.
+    #[must_use]
     pub fn max_deformation(&self) -> f64 {
         match &self.detail {
             ImpactDetail::Line(l) => l.max_deformation,
@@ -118,6 +119,7 @@ impl ImpactResult {
     }
 
     /// Maximum contact force Pmax, N.
+    #[must_use]
     pub fn max_force(&self) -> f64 {
         match &self.detail {
             ImpactDetail::Line(l) => l.max_force,
@@ -126,6 +128,7 @@ impl ImpactResult {
     }
 
     /// Maximum contact pressure p₀, Pa.
+    #[must_use]
     pub fn max_pressure(&self) -> f64 {
         match &self.detail {
             ImpactDetail::Line(l) => l.max_pressure,

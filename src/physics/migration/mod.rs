@@ -252,6 +252,7 @@ pub struct SupportStop {
 impl MigrationCase {
     /// Along-dip position where a run ends at the latest (the face length, or the nearest
     /// spanning support at or below the release), m, and that support's index.
+    #[must_use]
     pub fn stop_length(&self) -> (f64, Option<usize>) {
         let mut best = (self.face.length, None);
         for (i, s) in self.supports.iter().enumerate() {
@@ -1348,6 +1349,7 @@ pub const STATISTICS_COLUMNS: usize = 7;
 /// The statistics columns of one run, in the order of [`Statistics`]: arrival speed, down-dip
 /// velocity, kinetic energy and time (None for a run that did not reach the lower end), impact count, runout, largest
 /// bounce height.
+#[must_use]
 pub fn run_columns(r: &RunSummary) -> [Option<f64>; STATISTICS_COLUMNS] {
     let reached = r.stop_reason == StopReason::LowerEnd;
     [

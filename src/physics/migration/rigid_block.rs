@@ -127,6 +127,7 @@ pub struct RigidBlockReport {
 /// Returns (e, contact time s). With `clip` the force is max(0, kx + cẋ) (no tension) and the
 /// contact ends when that force returns to zero; else it ends when the overlap does. Closed
 /// form: x(t) = (v/ω_d) e^{−βωt} sin ω_d t.
+#[must_use]
 pub fn bounce_restitution(m: f64, k: f64, beta: f64, clip: bool) -> (f64, f64) {
     let w = (k / m).sqrt();
     let s = (1.0 - beta * beta).sqrt();

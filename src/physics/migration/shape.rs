@@ -75,6 +75,7 @@ impl BlockShape {
     }
 
     /// Number of contacts of a resting block, N_c: the vertices of the largest face (sphere 1).
+    #[must_use]
     pub fn resting_contacts(&self) -> usize {
         if self.sphere_radius.is_some() {
             1
@@ -84,6 +85,7 @@ impl BlockShape {
     }
 
     /// Σ|r|² over the largest face's vertices, m² (sphere: r²): the rotational stiffness factor.
+    #[must_use]
     pub fn resting_r2(&self) -> f64 {
         match self.sphere_radius {
             Some(r) => r * r,
@@ -96,6 +98,7 @@ impl BlockShape {
     }
 
     /// Distance from the centre of mass to the resting face (sphere: r), m.
+    #[must_use]
     pub fn rest_height(&self) -> f64 {
         match self.sphere_radius {
             Some(r) => r,
@@ -104,6 +107,7 @@ impl BlockShape {
     }
 
     /// Outward normal of the resting face in the body frame (sphere: −z).
+    #[must_use]
     pub fn rest_normal(&self) -> Vector3<f64> {
         match self.sphere_radius {
             Some(_) => -Vector3::z(),
@@ -112,6 +116,7 @@ impl BlockShape {
     }
 
     /// A sphere of radius r and density ρ.
+    #[must_use]
     pub fn sphere(radius: f64, density: f64) -> Self {
         let volume = 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
         let mass = density * volume;
@@ -310,6 +315,7 @@ impl BlockShape {
     }
 
     /// A cuboid with edges [a, b, c] (m) along x, y, z.
+    #[must_use]
     pub fn cuboid(d: [f64; 3], density: f64) -> Self {
         let mut pts = Vec::with_capacity(8);
         for i in 0..8 {

@@ -619,6 +619,7 @@ pub struct MapFrame {
 
 impl MapFrame {
     /// Face coordinates [x, y] (m) of the map point [E, N] (m).
+    #[must_use]
     pub fn to_face(&self, p: [f64; 2]) -> [f64; 2] {
         let (de, dn) = (p[0] - self.origin[0], p[1] - self.origin[1]);
         if self.dip_direction_deg == 90.0 {
@@ -743,6 +744,7 @@ pub const GRID_BYTES_PER_POINT: f64 = 32.0;
 
 /// Estimated memory of an `rows` × `cols` grid floor, bytes: [`GRID_BYTES_PER_POINT`] per
 /// height plus the 64-byte planes of at most 2²⁰ tabled facets.
+#[must_use]
 pub fn grid_bytes(rows: usize, cols: usize) -> f64 {
     let points = rows as f64 * cols as f64;
     let facets = 2.0 * rows.saturating_sub(1) as f64 * cols.saturating_sub(1) as f64;
@@ -752,6 +754,7 @@ pub fn grid_bytes(rows: usize, cols: usize) -> f64 {
 /// Number of points a contour set resampled at most `resolution` m apart will have, computed
 /// before resampling (as f64, so that no count overflows): the figure the memory limit is
 /// checked against.
+#[must_use]
 pub fn contour_points(lines: &[ContourLine], resolution: f64) -> f64 {
     let mut n = 0.0;
     for line in lines {
