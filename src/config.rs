@@ -143,6 +143,7 @@ pub enum Kind {
 
 impl Kind {
     /// The route's name.
+    #[must_use]
     pub fn name(self) -> &'static str {
         match self {
             Kind::Migration => "migration",
@@ -153,6 +154,7 @@ impl Kind {
     }
 
     /// The kind of a route name.
+    #[must_use]
     pub fn from_name(s: &str) -> Option<Self> {
         [Kind::Migration, Kind::Scene, Kind::Study, Kind::Batch]
             .into_iter()
@@ -220,6 +222,7 @@ impl Config {
     }
 
     /// Computations allowed at once: the setting, or max(4, 2 × cores).
+    #[must_use]
     pub fn max_concurrent(&self) -> usize {
         self.max_concurrent
             .unwrap_or_else(|| (2 * cores()).max(4))
@@ -227,21 +230,25 @@ impl Config {
     }
 
     /// Longest expected queue wait admitted (`max_queue_wait_ms`).
+    #[must_use]
     pub fn max_queue_wait(&self) -> Duration {
         Duration::from_secs_f64(self.max_queue_wait_ms / 1e3)
     }
 
     /// Time to receive a request head, also the idle keep-alive timeout.
+    #[must_use]
     pub fn header_timeout(&self) -> Duration {
         Duration::from_secs_f64(self.header_timeout_s)
     }
 
     /// Time to receive a request body.
+    #[must_use]
     pub fn body_timeout(&self) -> Duration {
         Duration::from_secs_f64(self.body_timeout_s)
     }
 
     /// Request body bytes held at once: the setting, or 4 × the body limit (at least the limit).
+    #[must_use]
     pub fn body_budget_bytes(&self) -> usize {
         self.body_budget_bytes
             .unwrap_or(self.max_body_bytes.saturating_mul(4))

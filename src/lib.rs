@@ -4,6 +4,10 @@
 //! [`physics`] holds the pure numerics; [`http`] the REST service; [`config`] its settings;
 //! [`shard`] sharded computations merged into the service's answer.
 
+// No `unwrap` outside tests: a request must never panic the service (Cargo.toml holds the rest
+// of the lint set; this one is here because integration tests unwrap freely).
+#![cfg_attr(not(test), warn(clippy::unwrap_used))]
+
 pub mod config;
 pub mod http;
 pub mod physics;

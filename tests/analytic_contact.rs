@@ -405,7 +405,7 @@ fn near_capacity_from_physical_inputs_against_reference() {
         c.velocity = v1 * (1.0 - eps);
         cases.push(c);
     }
-    let mut j = base.clone();
+    let mut j = base;
     j.contact.law = ContactLaw::Johnson;
     j.contact.modulus = ModulusConvention::TwoBody;
     j.column.contact_radius = 0.01;

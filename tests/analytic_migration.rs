@@ -148,7 +148,7 @@ fn p09_analytic_numbers_through_the_solver() {
     // a_slide = v²/(2S)
     assert!(rel(r.arrival.speed.powi(2) / 240.0, x("a_slide")) < 1e-9);
     // roll from rest (μ must allow it): v = √(2 · 5/7 g sin θ · S)
-    let mut roll = slide.clone();
+    let mut roll = slide;
     roll.lumped_mass.motion = Motion::Roll;
     roll.face.friction_coefficient = x("mu_min_for_rolling");
     let r = solve(&roll);
@@ -430,7 +430,7 @@ fn plane_equivalent_contours_reproduce_the_plane() {
     let mut plane = MigrationCase::default();
     plane.release.across = 0.37;
     let a = solve(&plane);
-    let mut c = plane.clone();
+    let mut c = plane;
     c.face.floor = FloorSpec::Contours {
         contours,
         resolution: 1.0,
@@ -446,8 +446,8 @@ fn roll_needs_enough_friction() {
     c.lumped_mass.motion = Motion::Roll;
     let e = run(&c, &Control::unlimited()).unwrap_err();
     match e {
-        gangue::physics::PhysicsError::InvalidInput { field, .. } => {
-            assert_eq!(field, "/face/friction_coefficient")
+        gangue::physics::PhysicsError::InvalidInput { param, .. } => {
+            assert_eq!(param, gangue::physics::Param::FaceFriction)
         }
         e => panic!("{e:?}"),
     }
@@ -525,8 +525,8 @@ fn trajectory_samples_balance_energy() {
     c.output.sample_interval = 1e-6;
     c.output.max_samples = 1000;
     match run(&c, &Control::unlimited()).unwrap_err() {
-        gangue::physics::PhysicsError::InvalidInput { field, .. } => {
-            assert_eq!(field, "/output/sample_interval_s")
+        gangue::physics::PhysicsError::InvalidInput { param, .. } => {
+            assert_eq!(param, gangue::physics::Param::TrajectorySampleInterval)
         }
         e => panic!("{e:?}"),
     }
@@ -566,9 +566,5 @@ fn ensemble_is_thread_count_independent() {
     let a = pool(1).install(|| solve(&case));
     let b = pool(2).install(|| solve(&case));
     assert_eq!(a, b);
-    let csv = a.runs_csv.unwrap();
-    assert!(csv.starts_with(
-        "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s\n"
-    ));
-    assert_eq!(csv.lines().count(), 3001);
+    assert_eq!(a.runs.map(|r| r.len()), Some(3000));
 }

@@ -195,3 +195,43 @@ async fn a_disconnected_client_stops_the_rest() {
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
 }
+
+/// A rule the physics checks (a roll needs μ ≥ (2/7) tan θ; coupled history times within the
+/// window) names the field inside the item's request, not the root of the batch.
+#[tokio::test]
+async fn a_physics_rule_broken_inside_an_item_names_the_items_field() {
+    let app = common::app();
+    let roll = json!({"face": {"friction_coefficient": 0.01}, "lumped_mass": {"motion": "roll"}});
+    let late = json!({"model": "coupled", "output": {"times_s": [0.0, 10.0]}});
+    let r = post(
+        &app,
+        "/v1/batch",
+        &json!({"items": [
+            {"kind": "impact", "request": {}},
+            {"kind": "spalling", "request": {}},
+            {"kind": "column", "request": late},
+            {"kind": "migration", "request": roll},
+        ]}),
+    )
+    .await;
+    assert_eq!(r.status, 200);
+    let l = lines(&r.body);
+    assert_eq!(l[2]["status"], 422, "{}", l[2]);
+    assert_eq!(
+        l[2]["problem"]["errors"][0]["field"],
+        "/items/2/request/output/times_s/1"
+    );
+    assert_eq!(l[3]["status"], 422, "{}", l[3]);
+    assert_eq!(
+        l[3]["problem"]["errors"][0]["field"],
+        "/items/3/request/face/friction_coefficient"
+    );
+    // the same requests alone name the same fields without the prefix
+    for (path, body, field) in [
+        ("/v1/column", late, "/output/times_s/1"),
+        ("/v1/migration", roll, "/face/friction_coefficient"),
+    ] {
+        let p = assert_problem(&post(&app, path, &body).await, 422, "invalid_input");
+        assert_eq!(p["errors"][0]["field"], field, "{p}");
+    }
+}

@@ -39,6 +39,7 @@ fn hex(bytes: &[u8]) -> String {
 }
 
 /// A case on the sample floors (dip 30°, 18 m) with a trajectory, so that every output is compared.
+#[allow(clippy::needless_pass_by_value, reason = "called with json! literals")]
 fn case(floor: Value) -> Value {
     json!({
         "face": {"dip_deg": 30, "length_m": 18, "floor": floor},

@@ -613,3 +613,36 @@ async fn a_rock_released_within_reach_of_a_column_is_flagged_not_reported_as_a_n
         "{w:?}"
     );
 }
+
+/// A rule the column stage's physics checks (coupled history times within the window, which only
+/// the solved impact fixes) names the scene's own `column_output`, not a column request's
+/// `output` nor a field under a support.
+#[tokio::test]
+async fn a_physics_rule_broken_in_the_column_stage_names_the_scene_field() {
+    let app = common::app();
+    let scene = json!({
+        "impact_velocity_m_s": 5.0,
+        "column_model": "coupled",
+        "column_output": {"times_s": [0.0, 10.0]},
+        "supports": [{"along_dip_m": 10}, {"along_dip_m": 20}],
+    });
+    let r = post(&app, "/v1/scene", &scene).await;
+    let p = common::assert_problem(&r, 422, "invalid_input");
+    assert_eq!(p["errors"][0]["field"], "/column_output/times_s/1", "{p}");
+    // inside a batch item, under the item's request
+    let r = post(
+        &app,
+        "/v1/batch",
+        &json!({"items": [{"kind": "spalling", "request": {}}, {"kind": "scene", "request": scene}]}),
+    )
+    .await;
+    let line: Value = String::from_utf8_lossy(&r.body)
+        .lines()
+        .nth(1)
+        .map(|l| serde_json::from_str(l).unwrap())
+        .unwrap();
+    assert_eq!(
+        line["problem"]["errors"][0]["field"], "/items/1/request/column_output/times_s/1",
+        "{line}"
+    );
+}

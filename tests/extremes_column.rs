@@ -39,6 +39,7 @@ fn shared_fields() -> Vec<(&'static str, Vec<f64>)> {
 }
 
 /// Sets the value at a JSON Pointer, creating objects on the way.
+#[allow(clippy::needless_pass_by_value, reason = "called with json! literals")]
 fn set(body: &mut Value, pointer: &str, v: Value) {
     let mut cur = body;
     let parts: Vec<&str> = pointer.trim_start_matches('/').split('/').collect();

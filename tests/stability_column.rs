@@ -10,7 +10,7 @@ use gangue::physics::column::{
 use gangue::physics::contact::{ForceLaw, HertzImpact, ImpactDetail, ImpactResult, LineImpact};
 use gangue::physics::coupled::{CoupledInput, solve_coupled};
 use gangue::physics::material::{Column, ContactLaw, ContactModel, Damping, ImpactCase, Rock};
-use gangue::physics::{Control, PhysicsError};
+use gangue::physics::{Control, Param, PhysicsError};
 use proptest::prelude::*;
 
 /// Rigid-column impact of the paper line law (physics.md §A.5) or of the equivalent-radius
@@ -365,41 +365,41 @@ fn coupled_limits_and_control() {
 fn invalid_combinations() {
     let (case, imp) = base_coupled();
     let field = |c: &ColumnCase| match solve_column_with_impact(c, &imp, &Control::unlimited()) {
-        Err(PhysicsError::InvalidInput { field, .. }) => field,
+        Err(PhysicsError::InvalidInput { param, .. }) => param,
         other => panic!("expected invalid input, got {other:?}"),
     };
     let paper = ColumnCase {
         mode_shapes: ModeShapes::Paper,
         ..case.clone()
     };
-    assert_eq!(field(&paper), "/galerkin/mode_shapes");
+    assert_eq!(field(&paper), Param::ModeShapes);
     let w = ColumnCase {
         initial_midpoint_displacement: Some(1e-3),
         ..case.clone()
     };
-    assert_eq!(field(&w), "/initial_midpoint_displacement_m");
+    assert_eq!(field(&w), Param::InitialMidpointDisplacement);
     let many = ColumnCase {
         modes: Some(51),
         ..case.clone()
     };
-    assert_eq!(field(&many), "/galerkin/modes");
+    assert_eq!(field(&many), Param::GalerkinModes);
     let late = ColumnCase {
         output: HistoryRequest::Times(vec![0.0, 1.0]),
         ..case.clone()
     };
-    assert_eq!(field(&late), "/output/times_s/1");
+    assert_eq!(field(&late), Param::HistoryTime(1));
     let dec = ColumnCase {
         model: ColumnModel::Decoupled,
         modes: Some(3),
         ..case.clone()
     };
-    assert_eq!(field(&dec), "/galerkin/modes");
+    assert_eq!(field(&dec), Param::GalerkinModes);
     let dec_end = ColumnCase {
         model: ColumnModel::Decoupled,
         end_time: Some(0.1),
         ..case.clone()
     };
-    assert_eq!(field(&dec_end), "/end_time_s");
+    assert_eq!(field(&dec_end), Param::CoupledWindow);
     let no_duration = ColumnCase {
         model: ColumnModel::Decoupled,
         output: HistoryRequest::Uniform {
@@ -408,7 +408,7 @@ fn invalid_combinations() {
         },
         ..case
     };
-    assert_eq!(field(&no_duration), "/output/duration_s");
+    assert_eq!(field(&no_duration), Param::HistoryDuration);
 }
 
 /// 50 modes at a stubby, heavily damped column: finite, conservative.

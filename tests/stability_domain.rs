@@ -18,7 +18,10 @@
 //! to see every request and its answer class.
 
 mod common;
+#[path = "common/openapi.rs"]
+mod openapi;
 
+use openapi::{Leaf, Walk, resolve};
 use serde_json::{Map, Value, json};
 
 /// Failures owned by other files (physics, column and migration DTOs): (endpoint, pointer, value
@@ -39,19 +42,6 @@ const RELATED: &[(&str, &str)] = &[
         "/support_rows/column/inner_diameter_m",
     ),
 ];
-
-/// Objects that must carry members before their fields can be varied: (schema, base object).
-/// `monte_carlo` uses 20 runs so that an ensemble stays cheap ("cost-limited": the fields under
-/// test are not the run count, whose own extremes are sent as such).
-fn base_object(schema: &str) -> Value {
-    match schema {
-        "MonteCarloDto" | "SceneMonteCarloDto" => json!({"runs": 20}),
-        "RandomShapeDto" => json!({"semi_axes_m": [0.2, 0.15, 0.1]}),
-        // A decoupled history needs a window; 10 ms as in the README.
-        "ColumnOutputDto" => json!({"duration_s": 0.01}),
-        _ => json!({}),
-    }
-}
 
 /// A 45° planar grid descending towards +x (east), 9 × 5 nodes 1 m apart, in map coordinates
 /// with the face's origin at (E, N) = (0, 0).
@@ -141,107 +131,6 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             .map(|(_, _, base)| base.clone()),
     );
     out
-}
-
-#[derive(Debug, Clone)]
-struct Leaf {
-    pointer: String,
-    /// Parent objects to create on the way (pointer, base object).
-    parents: Vec<(String, Value)>,
-    integer: bool,
-    min: Bound,
-    max: Bound,
-    /// For an item of a fixed-length array: the array's example and the item index.
-    array: Option<(Value, usize)>,
-}
-
-fn resolve<'a>(doc: &'a Value, mut s: &'a Value) -> (&'a Value, Option<String>) {
-    let mut name = None;
-    loop {
-        if let Some(r) = s.get("$ref").and_then(Value::as_str) {
-            name = r.rsplit('/').next().map(str::to_string);
-            s = doc.pointer(r.trim_start_matches('#')).unwrap();
-        } else if let Some(alts) = s.get("oneOf").and_then(Value::as_array) {
-            match alts.iter().find(|a| a.get("type") != Some(&json!("null"))) {
-                Some(a) => s = a,
-                None => return (s, name),
-            }
-        } else {
-            return (s, name);
-        }
-    }
-}
-
-fn has_type(s: &Value, t: &str) -> bool {
-    match s.get("type") {
-        Some(Value::String(x)) => x == t,
-        Some(Value::Array(a)) => a.iter().any(|x| x == t),
-        _ => false,
-    }
-}
-
-/// A documented bound: (value, closed).
-type Bound = Option<(f64, bool)>;
-
-fn bounds(s: &Value) -> (Bound, Bound) {
-    let f = |k: &str| s.get(k).and_then(Value::as_f64);
-    let min = f("minimum")
-        .map(|v| (v, true))
-        .or(f("exclusiveMinimum").map(|v| (v, false)));
-    let max = f("maximum")
-        .map(|v| (v, true))
-        .or(f("exclusiveMaximum").map(|v| (v, false)));
-    (min, max)
-}
-
-fn walk(doc: &Value, schema: &Value, at: &str, parents: &[(String, Value)], out: &mut Vec<Leaf>) {
-    let Some(props) = schema.get("properties").and_then(Value::as_object) else {
-        return;
-    };
-    for (name, prop) in props {
-        let pointer = format!("{at}/{name}");
-        let (s, ref_name) = resolve(doc, prop);
-        let integer = has_type(s, "integer");
-        if integer || has_type(s, "number") {
-            let (min, max) = bounds(s);
-            if min.is_some() || max.is_some() {
-                out.push(Leaf {
-                    pointer,
-                    parents: parents.to_vec(),
-                    integer,
-                    min,
-                    max,
-                    array: None,
-                });
-            }
-        } else if has_type(s, "array") {
-            let fixed = s.get("minItems").is_some() && s.get("minItems") == s.get("maxItems");
-            let items = s.get("items").unwrap_or(&Value::Null);
-            let (min, max) = bounds(items);
-            if fixed && (min.is_some() || max.is_some()) {
-                let example = prop
-                    .get("example")
-                    .or(s.get("example"))
-                    .cloned()
-                    .expect("a fixed-length array has an example");
-                out.push(Leaf {
-                    pointer: format!("{pointer}/0"),
-                    parents: parents.to_vec(),
-                    integer: false,
-                    min,
-                    max,
-                    array: Some((example, 0)),
-                });
-            }
-        } else if s.get("properties").is_some() {
-            let mut p = parents.to_vec();
-            p.push((
-                pointer.clone(),
-                base_object(ref_name.as_deref().unwrap_or("")),
-            ));
-            walk(doc, s, &pointer, &p, out);
-        }
-    }
 }
 
 fn next_up(x: f64) -> f64 {
@@ -352,7 +241,17 @@ async fn every_documented_numeric_bound_is_answered_or_refused_by_name() {
             &doc["paths"][path]["post"]["requestBody"]["content"]["application/json"]["schema"];
         let (schema, _) = resolve(&doc, body_schema);
         let mut leaves = Vec::new();
-        walk(&doc, schema, "", &[], &mut leaves);
+        openapi::leaves(
+            &doc,
+            schema,
+            "",
+            &[],
+            &Walk {
+                arrays: true,
+                skip: &[],
+            },
+            &mut leaves,
+        );
         assert!(leaves.len() >= 5, "{path}: {} numeric leaves", leaves.len());
         for leaf in &leaves {
             for base in contexts(path, &leaf.pointer) {

@@ -5,7 +5,8 @@ use axum::response::{IntoResponse, Response};
 use serde::Serialize;
 use serde_json::{Map, Value, json};
 
-use crate::physics::PhysicsError;
+use crate::http::dto::param::request_pointer;
+use crate::physics::{Param, PhysicsError};
 
 /// Media type of problem responses.
 pub const PROBLEM_JSON: &str = "application/problem+json";
@@ -131,6 +132,7 @@ pub const PROBLEM_TYPES: &[ProblemType] = &[
 ];
 
 /// Looks up a problem type by code.
+#[must_use]
 pub fn problem_type(code: &str) -> Option<&'static ProblemType> {
     PROBLEM_TYPES.iter().find(|p| p.code == code)
 }
@@ -185,6 +187,7 @@ impl ApiError {
     }
 
     /// An error of `code` listing several offending fields; the detail summarises them.
+    #[must_use]
     pub fn from_field_errors(code: &str, errors: Vec<FieldError>) -> Self {
         let detail = match errors.as_slice() {
             [] => "invalid request".to_string(),
@@ -204,6 +207,7 @@ impl ApiError {
     }
 
     /// 503 `overloaded` with a Retry-After.
+    #[must_use]
     pub fn overloaded(retry_after_s: u64) -> Self {
         let mut e = Self::new(
             "overloaded",
@@ -221,6 +225,7 @@ impl ApiError {
 
     /// Fills the value of the `/velocity_m_s` entry of a `capacity_exceeded` problem with the speed
     /// that was sent, m/s (the physics error does not carry it); other problems are unchanged.
+    #[must_use]
     pub fn with_capacity_velocity(mut self, velocity_m_s: f64) -> Self {
         if self.problem.code == "capacity_exceeded" {
             for e in &mut self.errors {
@@ -234,6 +239,7 @@ impl ApiError {
 
     /// Names the field whose value drives the step count of a `too_many_steps` problem (e.g. the
     /// coupled window `/end_time_s`), with the value used; other problems are unchanged.
+    #[must_use]
     pub fn with_step_field(mut self, field: &str, value: f64) -> Self {
         if self.problem.code == "too_many_steps" && self.errors.is_empty() {
             self.errors.push(FieldError {
@@ -246,27 +252,32 @@ impl ApiError {
     }
 
     /// Adds an extension member to the problem object.
+    #[must_use]
     pub fn with_extension(mut self, key: &str, value: Value) -> Self {
         self.extensions.insert(key.to_string(), value);
         self
     }
 
     /// The problem code, e.g. `invalid_input`.
+    #[must_use]
     pub fn code(&self) -> &'static str {
         self.problem.code
     }
 
     /// The HTTP status.
+    #[must_use]
     pub fn status(&self) -> StatusCode {
         StatusCode::from_u16(self.problem.status).unwrap_or(StatusCode::INTERNAL_SERVER_ERROR)
     }
 
     /// The offending fields.
+    #[must_use]
     pub fn errors(&self) -> &[FieldError] {
         &self.errors
     }
 
     /// Prefixes every field pointer (used when a request is nested, e.g. in a batch or study).
+    #[must_use]
     pub fn nest(mut self, prefix: &str) -> Self {
         for e in &mut self.errors {
             e.field = format!("{prefix}{}", e.field);
@@ -275,6 +286,7 @@ impl ApiError {
     }
 
     /// The problem object as JSON (also used inside batch and streaming lines).
+    #[must_use]
     pub fn to_problem(&self) -> Value {
         let mut body = Map::new();
         body.insert(
@@ -322,13 +334,23 @@ pub fn num(v: f64) -> Value {
 }
 
 impl From<PhysicsError> for ApiError {
+    /// The problem for a physics error of a standalone request (`/v1/impact`, `/v1/column`,
+    /// `/v1/migration`; a batch item nests it).
     fn from(e: PhysicsError) -> Self {
+        ApiError::from_physics(e, request_pointer)
+    }
+}
+
+impl ApiError {
+    /// The problem for a physics error, naming a parameter at fault by `pointer(param)`: the JSON
+    /// Pointer of that parameter in the request actually sent.
+    pub fn from_physics(e: PhysicsError, pointer: impl Fn(Param) -> String) -> Self {
         match e {
             PhysicsError::InvalidInput {
-                field,
+                param,
                 value,
                 message,
-            } => ApiError::invalid(field, num(value), message),
+            } => ApiError::invalid(pointer(param), num(value), message),
             PhysicsError::CapacityExceeded {
                 energy_parameter,
                 max_velocity_m_s,

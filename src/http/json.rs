@@ -45,6 +45,7 @@ impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for AppJson<T> {
 }
 
 /// True when the content type is `application/json` or `…+json` (parameters ignored).
+#[must_use]
 pub fn is_json(ct: Option<&header::HeaderValue>) -> bool {
     let Some(ct) = ct.and_then(|v| v.to_str().ok()) else {
         return false;
@@ -96,6 +97,7 @@ pub struct BodyGuard {
 impl BodyGuard {
     /// A guard with a body limit (bytes), a read timeout, a budget (bytes) and the longest wait
     /// for the budget.
+    #[must_use]
     pub fn new(limit: usize, timeout: Duration, budget_bytes: usize, admit_wait: Duration) -> Self {
         let budget_kib = u32::try_from(budget_bytes.div_ceil(1024))
             .unwrap_or(Semaphore::MAX_PERMITS as u32)
@@ -111,6 +113,7 @@ impl BodyGuard {
     }
 
     /// Budget bytes not held by a body now.
+    #[must_use]
     pub fn available_bytes(&self) -> usize {
         self.budget.available_permits() * 1024
     }
@@ -1113,6 +1116,7 @@ mod tests {
         opt: Option<f64>,
     }
 
+    #[allow(clippy::needless_pass_by_value, reason = "called with json! literals")]
     fn err(v: Value) -> ApiError {
         from_value::<Outer>(&v).unwrap_err()
     }

@@ -271,6 +271,7 @@ fn add_post_responses(doc: &mut serde_json::Value) {
 
 /// The served document: utoipa's, with derived defaults (which have no constant value) tidied,
 /// array bounds and the POST answers (NDJSON, explicit problem statuses) added.
+#[must_use]
 pub fn openapi_value() -> serde_json::Value {
     let mut doc = serde_json::to_value(ApiDoc::openapi()).expect("the OpenAPI document serializes");
     add_array_bounds(&mut doc);
@@ -310,6 +311,7 @@ pub fn openapi_value() -> serde_json::Value {
 }
 
 /// The document as pretty JSON with a trailing newline (the committed `openapi/openapi.json`).
+#[must_use]
 pub fn openapi_json() -> String {
     let mut s = serde_json::to_string_pretty(&openapi_value()).expect("the document serializes");
     s.push('\n');

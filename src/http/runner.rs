@@ -54,6 +54,7 @@ const MEAN_WEIGHT_SHIFT: u32 = 3;
 
 impl Admission {
     /// `slots` solver slots; queue while the expected wait is at most `bound`.
+    #[must_use]
     pub fn new(slots: usize, bound: Duration) -> Self {
         Self {
             slots: slots.max(1),
@@ -131,6 +132,7 @@ impl std::fmt::Debug for AppState {
 
 impl AppState {
     /// Builds the state: `max_concurrent` permits and a rayon pool of `solver_threads` threads.
+    #[must_use]
     pub fn new(config: Config) -> Self {
         let nice = config.solver_nice;
         let pool = rayon::ThreadPoolBuilder::new()
@@ -150,11 +152,13 @@ impl AppState {
     }
 
     /// The time limit of one computation.
+    #[must_use]
     pub fn time_limit(&self) -> Duration {
         Duration::from_secs_f64(self.config.compute_timeout_s)
     }
 
     /// The solver slots and their queue.
+    #[must_use]
     pub fn admission(&self) -> &Admission {
         &self.admission
     }
@@ -328,6 +332,7 @@ pub fn to_json_bytes<T: Serialize>(value: &T) -> Result<Vec<u8>, ApiError> {
 }
 
 /// A 200 JSON response from bytes produced by [`to_json_bytes`].
+#[must_use]
 pub fn json_response(bytes: Vec<u8>) -> Response {
     (
         StatusCode::OK,
@@ -641,7 +646,7 @@ mod tests {
     async fn physics_errors_pass_through() {
         let s = state(60.0, 2);
         let r = run_solver(&s, |_c: &Control| -> Result<u8, ApiError> {
-            Err(PhysicsError::invalid("/x", 1.0, "bad").into())
+            Err(PhysicsError::invalid(crate::physics::Param::RockDensity, 1.0, "bad").into())
         })
         .await;
         assert_eq!(r.unwrap_err().code(), "invalid_input");

@@ -8,7 +8,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use nalgebra::DMatrix;
 
-use super::error::{PhysicsError, PhysicsResult};
+use super::error::{Param, PhysicsError, PhysicsResult};
 use super::material::{Column, Damping, Section};
 use super::numeric::quadrature::gauss_legendre;
 
@@ -46,6 +46,7 @@ pub enum ModeShapes {
 ///
 /// # References
 /// physics.md §B.3.
+#[must_use]
 pub fn clamped_root(i: usize) -> f64 {
     let i = i.max(1);
     let base = (2 * i + 1) as f64 * FRAC_PI_2;
@@ -82,11 +83,13 @@ pub struct BeamMode {
 
 impl BeamMode {
     /// The exact i-th clamped–clamped mode (i ≥ 1).
+    #[must_use]
     pub fn clamped(i: usize) -> Self {
         Self::with_lambda(clamped_root(i))
     }
 
     /// The shape function of the given λ > 0 (exact only when λ is a root of cos λ cosh λ = 1).
+    #[must_use]
     pub fn with_lambda(lambda: f64) -> Self {
         let em = (-lambda).exp();
         let (s, c) = lambda.sin_cos();
@@ -118,18 +121,21 @@ impl BeamMode {
     /// let m = gangue::physics::beam::BeamMode::clamped(1);
     /// assert!((m.shape(0.5) - 1.588146262064605).abs() < 1e-14);
     /// ```
+    #[must_use]
     pub fn shape(&self, x: f64) -> f64 {
         let (a, b, c, s) = self.parts(x);
         a + b - c + self.sigma * s
     }
 
     /// dφ/dx (derivative in x = s/l), dimensionless.
+    #[must_use]
     pub fn slope(&self, x: f64) -> f64 {
         let (a, b, c, s) = self.parts(x);
         self.lambda * (a - b + s + self.sigma * c)
     }
 
     /// d²φ/dx², dimensionless; the beam curvature is wᵢ·φ″(x)/l².
+    #[must_use]
     pub fn curvature(&self, x: f64) -> f64 {
         let (a, b, c, s) = self.parts(x);
         self.lambda * self.lambda * (a + b + c - self.sigma * s)
@@ -157,6 +163,7 @@ pub struct ModeIntegrals {
 ///
 /// # References
 /// physics.md §B.4 (table of the first shape function's constants).
+#[must_use]
 pub fn mode_integrals_quadrature(mode: &BeamMode) -> ModeIntegrals {
     let nodes = gauss_legendre(20);
     let panels = 32;
@@ -187,6 +194,7 @@ pub fn mode_integrals_quadrature(mode: &BeamMode) -> ModeIntegrals {
 ///
 /// # References
 /// physics.md §B.4: A¹¹ᵢᵢ = σλ(σλ − 2); A¹¹ᵢⱼ = 4λᵢ²λⱼ²(σⱼλⱼ − σᵢλᵢ)(1 + sᵢsⱼ)/(λᵢ⁴ − λⱼ⁴).
+#[must_use]
 pub fn rotary_integral(i: usize, mi: &BeamMode, j: usize, mj: &BeamMode) -> f64 {
     let (si, sj) = (mi.sigma * mi.lambda, mj.sigma * mj.lambda);
     if i == j {
@@ -217,6 +225,7 @@ pub struct FirstMode {
 ///
 /// # References
 /// physics.md §B.4 (paper constants 1.000008614, 12.30251267, 500.5509646, φ(½) = 1.588).
+#[must_use]
 pub fn first_mode(shapes: ModeShapes) -> FirstMode {
     match shapes {
         ModeShapes::Exact => {
@@ -276,7 +285,7 @@ fn modal_mass_stiffness(
 /// from the mode-1 damping ratio with the **exact** mode 1 (rotary inertia as configured).
 ///
 /// # Errors
-/// `InvalidInput` at `/column/damping_coefficient_n_s_m2` or `/column/damping_ratio` for a
+/// `InvalidInput` at [`Param::ColumnDampingCoefficient`] or [`Param::ColumnDampingRatio`] for a
 /// negative or non-finite value.
 ///
 /// # References
@@ -286,7 +295,7 @@ pub fn damping_coefficient(column: &Column, rotary_inertia: bool) -> PhysicsResu
         Damping::Coefficient(c) => {
             if !(c >= 0.0 && c.is_finite()) {
                 return Err(PhysicsError::invalid(
-                    "/column/damping_coefficient_n_s_m2",
+                    Param::ColumnDampingCoefficient,
                     c,
                     "the damping coefficient must lie in [0, 1e9] N·s/m²",
                 ));
@@ -296,7 +305,7 @@ pub fn damping_coefficient(column: &Column, rotary_inertia: bool) -> PhysicsResu
         Damping::Ratio(z) => {
             if !(z >= 0.0 && z.is_finite()) {
                 return Err(PhysicsError::invalid(
-                    "/column/damping_ratio",
+                    Param::ColumnDampingRatio,
                     z,
                     "the damping ratio must lie in [0, 10]",
                 ));
@@ -363,6 +372,7 @@ impl SingleMode {
     }
 
     /// Free vibration from w₁(0) = `w0` (m), ẇ₁(0) = 0.
+    #[must_use]
     pub fn free_vibration(&self, w0: f64) -> FreeVibration {
         FreeVibration::new(self.mass, self.damping, self.stiffness, w0)
     }
@@ -439,6 +449,7 @@ pub struct ModalSample {
 
 impl FreeVibration {
     /// The oscillator M, C, K (kg, N·s/m, N/m; M, K > 0, C ≥ 0) released from w₀ (m) at rest.
+    #[must_use]
     pub fn new(mass: f64, damping: f64, stiffness: f64, w0: f64) -> Self {
         let omega_n = (stiffness / mass).sqrt();
         let zeta = damping / (2.0 * (stiffness * mass).sqrt());
@@ -457,6 +468,7 @@ impl FreeVibration {
     }
 
     /// The damping regime.
+    #[must_use]
     pub fn regime(&self) -> Regime {
         if self.zeta < 1.0 {
             Regime::Underdamped
@@ -500,6 +512,7 @@ impl FreeVibration {
     }
 
     /// Modal displacement and velocity at time t ≥ 0 (m, m/s).
+    #[must_use]
     pub fn state(&self, t: f64) -> (f64, f64) {
         let (ec, es) = self.kernels(t);
         (
@@ -527,6 +540,7 @@ impl FreeVibration {
     ///
     /// # References
     /// physics.md §B.5.
+    #[must_use]
     pub fn sample(&self, t: f64) -> ModalSample {
         let (ec, es) = self.kernels(t);
         let wn2 = self.omega_n * self.omega_n;
@@ -562,6 +576,7 @@ impl FreeVibration {
     ///
     /// # References
     /// physics.md §B.5.
+    #[must_use]
     pub fn sample_uniform(&self, duration: f64, n: usize) -> Vec<ModalSample> {
         let mut out = Vec::with_capacity(n);
         self.for_each_uniform(duration, n, |s| out.push(s));
@@ -749,11 +764,13 @@ impl FreeVibration {
     }
 
     /// Initial (absorbed) energy U₀ = ½Kw₀², J.
+    #[must_use]
     pub fn initial_energy(&self) -> f64 {
         0.5 * self.stiffness * self.w0 * self.w0
     }
 
     /// Decay rate of the envelope, 1/s: ζω_n for ζ < 1, |r₁| = ω_n/(ζ + √(ζ²−1)) for ζ ≥ 1.
+    #[must_use]
     pub fn decay_rate(&self) -> f64 {
         if self.zeta < 1.0 {
             self.sigma
@@ -776,6 +793,7 @@ impl FreeVibration {
     ///
     /// # References
     /// physics.md §B.5.
+    #[must_use]
     pub fn decay_time(&self, fraction: f64) -> Option<f64> {
         if !(fraction > 0.0 && fraction < 1.0) {
             return None;
@@ -856,7 +874,7 @@ impl Galerkin {
     /// c (N·s/m²) and rotary inertia on or off.
     ///
     /// # Errors
-    /// `InvalidInput` at `/galerkin/modes` for n outside [1, 50].
+    /// `InvalidInput` at [`Param::GalerkinModes`] for n outside [1, 50].
     ///
     /// # References
     /// physics.md §B.4.
@@ -868,7 +886,7 @@ impl Galerkin {
     ) -> PhysicsResult<Self> {
         if n == 0 || n > MAX_MODES {
             return Err(PhysicsError::invalid(
-                "/galerkin/modes",
+                Param::GalerkinModes,
                 n as f64,
                 "the number of modes must lie in [1, 50]",
             ));
@@ -922,11 +940,13 @@ impl Galerkin {
     ///
     /// # References
     /// physics.md §B.7.
+    #[must_use]
     pub fn natural_frequencies(&self) -> Vec<f64> {
         generalized_frequencies(&self.mass, &self.stiffness)
     }
 
     /// Damping ratios ζᵢ = Cᵢᵢ/(2√(KᵢᵢMᵢᵢ)) of each mode (dimensionless).
+    #[must_use]
     pub fn damping_ratios(&self) -> Vec<f64> {
         (0..self.modes.len())
             .map(|i| {
@@ -937,6 +957,7 @@ impl Galerkin {
 }
 
 /// √eig(M⁻¹K)/2π (Hz, ascending) for symmetric positive-definite M and symmetric K.
+#[must_use]
 pub fn generalized_frequencies(mass: &DMatrix<f64>, stiffness: &DMatrix<f64>) -> Vec<f64> {
     let n = mass.nrows();
     let Some(chol) = mass.clone().cholesky() else {

@@ -7,7 +7,7 @@ use super::beam::{
 use super::contact::{ForceLaw, ImpactDetail, ImpactResult, force_law, solve_impact};
 use super::control::Control;
 use super::coupled::{CoupledInput, solve_coupled};
-use super::error::{PhysicsError, PhysicsResult};
+use super::error::{Param, PhysicsError, PhysicsResult};
 use super::material::{Damping, ImpactCase, Section};
 use super::validity;
 
@@ -230,6 +230,7 @@ pub struct ColumnResult {
 }
 
 /// The contact law of a solved impact (k = P_cap/δ_cap, P_ref = e·P_cap; Hertz κ).
+#[must_use]
 pub fn force_law_of(impact: &ImpactResult) -> ForceLaw {
     match &impact.detail {
         ImpactDetail::Line(l) => {
@@ -283,7 +284,7 @@ fn check_times(times: &[f64], limit: Option<f64>) -> PhysicsResult<()> {
     for (i, &t) in times.iter().enumerate() {
         if !(t >= 0.0 && t.is_finite()) {
             return Err(PhysicsError::invalid(
-                format!("/output/times_s/{i}"),
+                Param::HistoryTime(i),
                 t,
                 "history times must lie in [0, 1e6] s",
             ));
@@ -292,7 +293,7 @@ fn check_times(times: &[f64], limit: Option<f64>) -> PhysicsResult<()> {
             && t > end
         {
             return Err(PhysicsError::invalid(
-                format!("/output/times_s/{i}"),
+                Param::HistoryTime(i),
                 t,
                 format!("coupled history times must lie in [0, end_time_s = {end:e}] s"),
             ));
@@ -314,7 +315,7 @@ fn sample_times(
         HistoryRequest::Times(t) => {
             if t.len() > max_samples {
                 return Err(PhysicsError::invalid(
-                    "/output/times_s",
+                    Param::HistoryTimes,
                     t.len() as f64,
                     format!("at most {max_samples} history times"),
                 ));
@@ -328,7 +329,7 @@ fn sample_times(
                 (None, Some(w)) => w,
                 (None, None) => {
                     return Err(PhysicsError::invalid(
-                        "/output/duration_s",
+                        Param::HistoryDuration,
                         0.0,
                         "the decoupled history needs duration_s in (0, 1e6] s",
                     ));
@@ -336,7 +337,7 @@ fn sample_times(
             };
             if !(d > 0.0 && d.is_finite()) {
                 return Err(PhysicsError::invalid(
-                    "/output/duration_s",
+                    Param::HistoryDuration,
                     d,
                     "duration_s must lie in (0, 1e6] s",
                 ));
@@ -345,7 +346,7 @@ fn sample_times(
                 && d > w
             {
                 return Err(PhysicsError::invalid(
-                    "/output/duration_s",
+                    Param::HistoryDuration,
                     d,
                     format!("a coupled history's duration_s must not exceed end_time_s = {w:e} s"),
                 ));
@@ -354,7 +355,7 @@ fn sample_times(
                 Some(n) => {
                     if *n < 2 || *n > max_samples {
                         return Err(PhysicsError::invalid(
-                            "/output/samples",
+                            Param::HistorySamples,
                             *n as f64,
                             format!("samples must lie in [2, {max_samples}]"),
                         ));
@@ -403,10 +404,10 @@ fn stress_of(case: &ImpactCase, curvature_clamp: f64, curvature_mid: f64) -> Ben
 /// Solves `/v1/column` for an impact already solved (for the scene chain and for tests).
 ///
 /// # Errors
-/// `InvalidInput` for: decoupled with more than one mode (`/galerkin/modes`) or an `end_time`
-/// (`/end_time_s`); coupled with non-exact shapes (`/galerkin/mode_shapes`), with an initial
-/// displacement (`/initial_midpoint_displacement_m`) or with modes outside [1, 50]; history times
-/// or durations out of range (`/output/…`). Otherwise as [`solve_column`].
+/// `InvalidInput` for: decoupled with more than one mode ([`Param::GalerkinModes`]) or an
+/// `end_time` ([`Param::CoupledWindow`]); coupled with non-exact shapes ([`Param::ModeShapes`]),
+/// with an initial displacement ([`Param::InitialMidpointDisplacement`]) or with modes outside
+/// [1, 50]; history times or durations out of range ([`Param::HistoryTime`] and the like). Otherwise as [`solve_column`].
 ///
 /// # References
 /// physics.md §B.5–§B.7.
@@ -430,7 +431,7 @@ fn solve_inner(
     let dmax = impact.max_deformation();
     if !(ke >= MIN_KINETIC_ENERGY && dmax >= f64::MIN_POSITIVE) {
         return Err(PhysicsError::invalid(
-            "/velocity_m_s",
+            Param::ImpactVelocity,
             case.impact.velocity,
             format!(
                 "the impact energy ½mv² = {ke:e} J (maximum approach {dmax:e} m) is below what \
@@ -499,7 +500,7 @@ fn assemble_result(
     let utilisation = stress.clamp.max(stress.midpoint) / yield_stress;
     if !utilisation.is_finite() {
         return Err(PhysicsError::invalid(
-            "/column/yield_stress_pa",
+            Param::ColumnYieldStress,
             yield_stress,
             format!(
                 "the stress utilisation (largest bending stress {:e} Pa / yield stress) overflows \
@@ -563,14 +564,14 @@ fn decoupled(
         && n != 1
     {
         return Err(PhysicsError::invalid(
-            "/galerkin/modes",
+            Param::GalerkinModes,
             n as f64,
             "the decoupled model uses mode 1 only (modes = 1)",
         ));
     }
     if let Some(t) = case.end_time {
         return Err(PhysicsError::invalid(
-            "/end_time_s",
+            Param::CoupledWindow,
             t,
             "end_time_s applies to the coupled model only",
         ));
@@ -580,7 +581,7 @@ fn decoupled(
         Some(w) => {
             if !(w > 0.0 && w <= 1.0) {
                 return Err(PhysicsError::invalid(
-                    "/initial_midpoint_displacement_m",
+                    Param::InitialMidpointDisplacement,
                     w,
                     "the initial midpoint displacement must lie in (0, 1] m",
                 ));
@@ -678,14 +679,14 @@ fn coupled(
 ) -> PhysicsResult<ColumnResult> {
     if case.mode_shapes != ModeShapes::Exact {
         return Err(PhysicsError::invalid(
-            "/galerkin/mode_shapes",
+            Param::ModeShapes,
             0.0,
             "the coupled model uses exact mode shapes only",
         ));
     }
     if let Some(w) = case.initial_midpoint_displacement {
         return Err(PhysicsError::invalid(
-            "/initial_midpoint_displacement_m",
+            Param::InitialMidpointDisplacement,
             w,
             "initial_midpoint_displacement_m applies to the decoupled model only",
         ));
@@ -699,7 +700,7 @@ fn coupled(
     let end_time = match case.end_time {
         Some(t) if !(t >= MIN_END_TIME && t.is_finite()) => {
             return Err(PhysicsError::invalid(
-                "/end_time_s",
+                Param::CoupledWindow,
                 t,
                 "end_time_s must lie in [1e-9, 1e3] s",
             ));
@@ -708,7 +709,7 @@ fn coupled(
         None if 50.0 * tc <= MAX_DEFAULT_END_TIME => 50.0 * tc,
         None => {
             return Err(PhysicsError::invalid(
-                "/end_time_s",
+                Param::CoupledWindow,
                 50.0 * tc,
                 format!(
                     "the default window, 50 × the rigid contact duration = {:e} s, exceeds \

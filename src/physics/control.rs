@@ -30,11 +30,13 @@ impl Default for Control {
 
 impl Control {
     /// A handle with no deadline that is never cancelled unless [`Control::cancel`] is called.
+    #[must_use]
     pub fn unlimited() -> Self {
         Self::with_deadline(None)
     }
 
     /// A handle that reports a timeout once `deadline` has passed.
+    #[must_use]
     pub fn with_deadline(deadline: Option<Instant>) -> Self {
         Self {
             inner: Arc::new(Inner {
@@ -52,6 +54,7 @@ impl Control {
     }
 
     /// True once [`Control::cancel`] has been called.
+    #[must_use]
     pub fn is_cancelled(&self) -> bool {
         self.inner.cancelled.load(Ordering::Relaxed)
     }
@@ -83,6 +86,7 @@ impl Control {
     }
 
     /// Progress so far as (done, total); total is 0 when the solver did not announce one.
+    #[must_use]
     pub fn progress(&self) -> (u64, u64) {
         (
             self.inner.done.load(Ordering::Relaxed),

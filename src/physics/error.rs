@@ -8,11 +8,11 @@ pub type PhysicsResult<T> = Result<T, PhysicsError>;
 /// Why a computation produced no answer.
 #[derive(Debug, Clone, PartialEq)]
 pub enum PhysicsError {
-    /// An input outside the model's validity; `field` is a JSON Pointer into the request
-    /// (e.g. `/face/friction_coefficient`), `value` the offending value.
+    /// An input outside the model's validity: `param` names the model parameter at fault (the
+    /// web layer maps it to the field of the request actually sent), `value` the offending value.
     InvalidInput {
-        /// JSON Pointer of the offending request field.
-        field: String,
+        /// The parameter at fault.
+        param: Param,
         /// The offending value.
         value: f64,
         /// What is wrong and what would be valid.
@@ -42,11 +42,104 @@ pub enum PhysicsError {
     Numerical(String),
 }
 
+/// A model parameter an error concerns, in physics terms, with the indices that locate it in a
+/// list. Physics never names request fields: the web layer maps each parameter to the JSON Pointer
+/// of the request actually sent (a standalone request, a batch item, a scene support).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Param {
+    /// Impact speed of the rock on the column, m/s.
+    ImpactVelocity,
+    /// Side length (contact length) of a cube rock, m.
+    RockSideLength,
+    /// Rock density, kg/m³.
+    RockDensity,
+    /// Rock Young's modulus, Pa.
+    RockElasticModulus,
+    /// Rock Poisson ratio.
+    RockPoissonRatio,
+    /// Radius of a sphere rock, m.
+    RockRadius,
+    /// Rounded-corner radius of a cube rock (point contact), m.
+    RockCornerRadius,
+    /// Edge lengths of a cuboid rock, m.
+    RockDimensions,
+    /// Vertices of a polyhedral rock, m.
+    RockVertices,
+    /// The random polyhedron generator of a rock.
+    RockRandomShape,
+    /// Number of vertices of a random polyhedral rock.
+    RockRandomVertexCount,
+    /// Contact radius of the column, m.
+    ColumnContactRadius,
+    /// Column Young's modulus, Pa.
+    ColumnElasticModulus,
+    /// Column Poisson ratio.
+    ColumnPoissonRatio,
+    /// Column yield stress, Pa.
+    ColumnYieldStress,
+    /// Column length between its clamped ends, m.
+    ColumnLength,
+    /// Column viscous damping coefficient, N·s/m².
+    ColumnDampingCoefficient,
+    /// Column damping ratio of mode 1.
+    ColumnDampingRatio,
+    /// The contact force law.
+    ContactLaw,
+    /// Number of Galerkin modes.
+    GalerkinModes,
+    /// Mode-shape variant of the Galerkin modes.
+    ModeShapes,
+    /// Integration window of the coupled column model, s.
+    CoupledWindow,
+    /// Initial midpoint displacement of the decoupled column model, m.
+    InitialMidpointDisplacement,
+    /// The list of column history times.
+    HistoryTimes,
+    /// Column history time number `.0`, s.
+    HistoryTime(usize),
+    /// Duration of a uniform column history, s.
+    HistoryDuration,
+    /// Sample count of a uniform column history.
+    HistorySamples,
+    /// Sampling interval of a migration trajectory, s.
+    TrajectorySampleInterval,
+    /// The floor of the face as a whole.
+    Floor,
+    /// Map coordinates of a floor.
+    FloorMap,
+    /// Map origin of a floor, m.
+    FloorMapOrigin,
+    /// The height grid of a floor.
+    FloorHeights,
+    /// Row `.0` of a floor's height grid.
+    FloorHeightRow(usize),
+    /// Height at row `.0`, column `.1` of a floor grid, m.
+    FloorHeight(usize, usize),
+    /// The contour lines of a floor.
+    FloorContours,
+    /// Point `.1` of contour line `.0`, m.
+    FloorContourPoint(usize, usize),
+    /// Resampling resolution of a contour floor, m.
+    FloorResolution,
+    /// Across-face release position, m.
+    ReleaseAcross,
+    /// Along-dip release position, m.
+    ReleaseAlongDip,
+    /// Rock–floor friction coefficient.
+    FaceFriction,
+    /// Distribution of the drawn friction coefficient of an ensemble.
+    DrawnFriction,
+    /// Normal contact stiffness of the floor, N/m.
+    FaceNormalStiffness,
+    /// Time step of the rigid-block integrator, s.
+    RigidBlockTimeStep,
+}
+
 impl PhysicsError {
     /// Shorthand for [`PhysicsError::InvalidInput`].
-    pub fn invalid(field: impl Into<String>, value: f64, message: impl Into<String>) -> Self {
+    pub fn invalid(param: Param, value: f64, message: impl Into<String>) -> Self {
         Self::InvalidInput {
-            field: field.into(),
+            param,
             value,
             message: message.into(),
         }
@@ -57,10 +150,10 @@ impl fmt::Display for PhysicsError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::InvalidInput {
-                field,
+                param,
                 value,
                 message,
-            } => write!(f, "{field} = {value}: {message}"),
+            } => write!(f, "{param:?} = {value}: {message}"),
             Self::CapacityExceeded { message, .. } => f.write_str(message),
             Self::TooManySteps { estimated, limit } => {
                 write!(f, "about {estimated:.3e} steps needed, limit {limit:.3e}")
@@ -76,6 +169,7 @@ impl std::error::Error for PhysicsError {}
 
 /// `x` with `digits` significant digits for a message a person reads: plain decimals for
 /// 1e-4 ≤ |x| < 1e7 (0.05454154, 2.335413), scientific notation beyond (1.234568e-9).
+#[must_use]
 pub fn significant(x: f64, digits: usize) -> String {
     let digits = digits.max(1);
     if x == 0.0 || !x.is_finite() {

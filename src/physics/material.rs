@@ -70,6 +70,7 @@ impl Rock {
     /// Volume of the block, m³, for the shapes whose volume is known in closed form
     /// (cube, sphere, cuboid); polyhedra report their hull volume through the migration shape
     /// module, and fall back to the cube here.
+    #[must_use]
     pub fn volume(&self) -> f64 {
         match &self.shape {
             RockShape::Sphere { radius } => 4.0 / 3.0 * PI * radius.powi(3),
@@ -79,6 +80,7 @@ impl Rock {
     }
 
     /// Mass of the block, kg (cube ρL³, sphere 4/3πr³ρ, cuboid ρabc).
+    #[must_use]
     pub fn mass(&self) -> f64 {
         self.density * self.volume()
     }
@@ -149,6 +151,7 @@ pub struct Section {
 
 impl Column {
     /// Section properties of the hollow tube.
+    #[must_use]
     pub fn section(&self) -> Section {
         let (d1, d2) = (self.outer_diameter, self.inner_diameter);
         let area = PI * (d1 * d1 - d2 * d2) / 4.0;

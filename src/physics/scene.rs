@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use super::column::{self, ColumnCase, ColumnDetail, ColumnModel, ColumnResult};
 use super::contact::{self, ImpactResult};
 use super::control::Control;
-use super::error::PhysicsError;
+use super::error::{Param, PhysicsError};
 use super::material::{Column, ImpactCase, Rock, RockShape};
 use super::migration::shape::BlockShape;
 use super::migration::stats::{self, Summary};
@@ -102,6 +102,7 @@ pub enum Limit {
 
 impl DesignLimits {
     /// The limits that are checked, with their allowed values, in api.md order.
+    #[must_use]
     pub fn active(&self) -> Vec<(Limit, f64)> {
         [
             (Limit::StressUtilisation, self.stress_utilisation),
@@ -127,6 +128,7 @@ pub struct SceneDraws {
 
 impl SceneDraws {
     /// True when a draw changes something between runs.
+    #[must_use]
     pub fn any(&self) -> bool {
         self.side_length.is_some() || self.density.is_some() || self.release_across.is_some()
     }
@@ -238,6 +240,7 @@ pub struct StrikeValues {
 
 impl Strike {
     /// The values of the strike (None past the capacity; zeros without an impact).
+    #[must_use]
     pub fn values(&self) -> Option<StrikeValues> {
         match self {
             Strike::NoImpact => Some(StrikeValues::default()),
@@ -266,6 +269,7 @@ impl Strike {
 }
 
 /// The checks of a strike against the limits.
+#[must_use]
 pub fn checks(limits: &DesignLimits, strike: &Strike) -> Vec<Check> {
     let v = strike.values();
     limits
@@ -440,6 +444,7 @@ pub fn rock_extent(rock: &Rock) -> Result<(f64, f64), PhysicsError> {
 }
 
 /// The rock as it enters the impact: itself when a cube, else the cube of equal mass and density.
+#[must_use]
 pub fn impact_rock(rock: &Rock, mass: f64) -> Rock {
     if rock.shape == RockShape::Cube {
         return rock.clone();
@@ -477,7 +482,7 @@ pub fn strike(
     let e = &case.supports[entry];
     if e.column.length < rock.side_length {
         return Err(tag(PhysicsError::invalid(
-            "/column/length_m",
+            Param::ColumnLength,
             e.column.length,
             format!(
                 "must be at least the contact length L = {} m of the rock that strikes it",
@@ -541,6 +546,7 @@ fn outcome(
 }
 
 /// The supports as the migration sees them, for a rock of bounding radius `r_rock`.
+#[must_use]
 pub fn stops(case: &SceneCase, r_rock: f64) -> Vec<SupportStop> {
     case.supports
         .iter()
@@ -553,6 +559,7 @@ pub fn stops(case: &SceneCase, r_rock: f64) -> Vec<SupportStop> {
 }
 
 /// The scene-only stream of run `index`: seeded by (seed, run index, 1).
+#[must_use]
 pub fn scene_stream(seed: u64, index: u64) -> rand_pcg::Pcg64 {
     // as the run's stream of /v1/migration, (seed, index), with the third word 1 mixed in
     let mut sm =
@@ -987,6 +994,7 @@ fn ensemble(
 }
 
 /// The outcomes of runs.
+#[must_use]
 pub fn outcomes_of(runs: &[RunSummary]) -> Outcomes {
     let n = runs.len().max(1) as f64;
     let f = |r: StopReason| runs.iter().filter(|s| s.stop_reason == r).count() as f64 / n;
@@ -1369,41 +1377,6 @@ fn compare_single(
         });
     }
     Ok(out)
-}
-
-/// The runs of an ensemble as CSV: `/v1/migration`'s columns, then
-/// `support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded`
-/// (empty when no support was struck); numbers in shortest round-trip form.
-pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
-    let summaries: Vec<RunSummary> = runs.iter().map(|r| r.summary).collect();
-    let base = migration::runs_csv(&summaries);
-    let mut out = String::with_capacity(base.len() * 2);
-    for (i, line) in base.lines().enumerate() {
-        out.push_str(line);
-        if i == 0 {
-            out.push_str(",support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded\n");
-            continue;
-        }
-        let r = &runs[i - 1];
-        match r.summary.support {
-            Some(k) => {
-                let e = &case.supports[k];
-                out.push_str(&format!(
-                    ",{},{},{}",
-                    e.support, e.column_index, r.summary.impact_speed
-                ));
-                match r.values {
-                    Some(v) => out.push_str(&format!(
-                        ",{},{},{},false\n",
-                        v.max_force, v.absorbed_energy, v.stress_utilisation
-                    )),
-                    None => out.push_str(",,,,true\n"),
-                }
-            }
-            None => out.push_str(",,,,,,,\n"),
-        }
-    }
-    out
 }
 
 #[cfg(test)]

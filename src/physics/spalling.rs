@@ -24,6 +24,7 @@ pub struct ZoneCounts {
 
 impl ZoneCounts {
     /// The paper's Table 1: lower, middle and upper zones.
+    #[must_use]
     pub fn table1() -> [ZoneCounts; 3] {
         let z = |a, b, c, ab, ac| ZoneCounts {
             spalling: a,
@@ -111,6 +112,7 @@ pub enum CountError {
 
 /// Checks that every count is a finite non-negative number and that no intersection is larger
 /// than either of its events. Returns every violation (zone index and which rule).
+#[must_use]
 pub fn check_counts(zones: &[ZoneCounts]) -> Vec<CountError> {
     let mut out = Vec::new();
     for (i, z) in zones.iter().enumerate() {
@@ -205,6 +207,7 @@ fn statistics(
 ///
 /// # References
 /// physics.md §E (P₁ = |A∩B|/|B|, P₂ = |A∩C|/|C|); Wilson (1927) for the intervals.
+#[must_use]
 pub fn spalling_statistics(zones: &[ZoneCounts]) -> SpallingResult {
     let total = zones
         .iter()

@@ -26,6 +26,7 @@ pub const Z_95: f64 = 1.959_963_984_540_054_2;
 /// # References
 /// E. B. Wilson (1927), "Probable inference, the law of succession, and statistical inference",
 /// J. Am. Stat. Assoc. 22(158), 209–212, doi:10.1080/01621459.1927.10502953.
+#[must_use]
 pub fn wilson_interval(successes: f64, trials: f64, z: f64) -> Option<[f64; 2]> {
     if !(trials > 0.0 && trials.is_finite() && successes.is_finite() && z.is_finite()) {
         return None;

@@ -17,12 +17,14 @@ pub const TIE_REL_NUMERIC: f64 = 1e-6;
 pub const FD_REL_STEP: f64 = 1e-4;
 
 /// `span_over_base` = |y(p_hi) − y(p_lo)| / |y(base)|; `None` when y(base) is 0.
+#[must_use]
 pub fn span_over_base(low: f64, high: f64, base: f64) -> Option<f64> {
     (base != 0.0).then(|| (high - low).abs() / base.abs())
 }
 
 /// `ratio` = max/min of |y(p_hi)| and |y(p_lo)| (≥ 1); `None` when one is 0 or they differ in
 /// sign (the ratio of magnitudes would not measure a change of the output then).
+#[must_use]
 pub fn ratio(low: f64, high: f64) -> Option<f64> {
     if low == 0.0 || high == 0.0 || (low < 0.0) != (high < 0.0) {
         return None;
@@ -33,6 +35,7 @@ pub fn ratio(low: f64, high: f64) -> Option<f64> {
 
 /// The four points of a central difference with one Richardson step at `p`: p − h, p + h,
 /// p − h/2, p + h/2 with h = 1e-4·|p|. `None` when p is 0 (no relative step).
+#[must_use]
 pub fn richardson_points(p: f64) -> Option<[f64; 4]> {
     let h = FD_REL_STEP * p.abs();
     (h > 0.0 && h.is_finite()).then_some([p - h, p + h, p - 0.5 * h, p + 0.5 * h])
@@ -54,6 +57,7 @@ pub fn richardson_points(p: f64) -> Option<[f64; 4]> {
 ///
 /// # References
 /// L. F. Richardson (1911), Phil. Trans. R. Soc. A 210, 307–357; api.md `POST /v1/study`.
+#[must_use]
 pub fn richardson_elasticity(p: f64, y0: f64, x: [f64; 4], y: [f64; 4]) -> Option<f64> {
     if y0 == 0.0 {
         return None;
@@ -75,6 +79,7 @@ pub fn richardson_elasticity(p: f64, y0: f64, x: [f64; 4], y: [f64; 4]) -> Optio
 /// let g = order_groups(&[Some(0.5), Some(2.0), Some(-0.5), None], &[0, 1, 2, 3], TIE_REL);
 /// assert_eq!(g, vec![vec![1], vec![0, 2]]);
 /// ```
+#[must_use]
 pub fn order_groups(measures: &[Option<f64>], rank: &[usize], rel_tol: f64) -> Vec<Vec<usize>> {
     let mut idx: Vec<usize> = (0..measures.len())
         .filter(|&i| measures[i].is_some_and(f64::is_finite))

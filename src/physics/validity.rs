@@ -40,6 +40,7 @@ pub const MAX_STRESS_UTILISATION: f64 = 1.0;
 /// Warnings on a contact with maximum pressure `max_pressure` (Pa) and maximum approach
 /// `max_deformation` (m) against a column of yield stress `yield_stress` (Pa) and contact radius
 /// `contact_radius` (m).
+#[must_use]
 pub fn contact_warnings(
     max_pressure: f64,
     max_deformation: f64,
@@ -81,6 +82,7 @@ pub const NEAR_CAPACITY_ENERGY_PARAMETER: f64 = 0.9;
 
 /// Warnings of an impact against a rigid column: near the law's capacity (G > 0.9), then the
 /// validity of the contact (pressure and approach).
+#[must_use]
 pub fn impact_warnings(case: &ImpactCase, result: &ImpactResult) -> Vec<Warning> {
     let mut out = Vec::new();
     if let ImpactDetail::Line(l) = &result.detail
@@ -108,6 +110,7 @@ pub fn impact_warnings(case: &ImpactCase, result: &ImpactResult) -> Vec<Warning>
 /// The maximum contact pressure at a contact force `force` (N) on the law of `impact`, Pa: the
 /// rigid-column p₀ scaled as √P (line laws, p₀ = √(P E*/(πRL))) or P^{1/3} (Hertz, p₀ ∝ P/(ab)
 /// with a, b ∝ P^{1/3}).
+#[must_use]
 pub fn contact_pressure_at(impact: &ImpactResult, force: f64) -> f64 {
     let (p0, pmax) = (impact.max_pressure(), impact.max_force());
     if !(pmax > 0.0 && force >= 0.0) {
@@ -121,6 +124,7 @@ pub fn contact_pressure_at(impact: &ImpactResult, force: f64) -> f64 {
 
 /// The warning that the stress utilisation `utilisation` (largest bending stress / yield
 /// stress) exceeds [`MAX_STRESS_UTILISATION`], if it does.
+#[must_use]
 pub fn stress_warning(utilisation: f64) -> Option<Warning> {
     (utilisation > MAX_STRESS_UTILISATION).then(|| Warning {
         code: STRESS_UTILISATION_ABOVE_ONE,

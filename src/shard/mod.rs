@@ -134,6 +134,7 @@ fn inputs_hash(kind: Kind, inputs: &[u8]) -> String {
 }
 
 /// The global item range of shard `i` of `k` over `n` items: ⌊i·n/k⌋ .. ⌊(i+1)·n/k⌋.
+#[must_use]
 pub fn shard_range(i: u64, k: u64, n: u64) -> std::ops::Range<u64> {
     let at = |j: u64| (u128::from(j) * u128::from(n) / u128::from(k)) as u64;
     at(i)..at(i + 1)
@@ -229,6 +230,7 @@ impl From<ApiError> for Failure {
     }
 }
 
+#[allow(clippy::needless_pass_by_value, reason = "used as a map_err closure")]
 fn io_err(path: &Path, e: std::io::Error) -> Failure {
     Failure::from(format!("{}: {e}", path.display()))
 }

@@ -216,6 +216,7 @@ pub fn json_items(body: &Value) -> Result<Vec<Value>, ApiError> {
 
 /// Splits an NDJSON body into items: one per non-empty line; a line that is not JSON becomes
 /// that item's 400 `malformed_json` problem naming `/items/{index}`.
+#[must_use]
 pub fn ndjson_items(body: &[u8]) -> Vec<Result<Value, ApiError>> {
     body.split(|&b| b == b'\n')
         .filter(|line| line.iter().any(|b| !b.is_ascii_whitespace()))

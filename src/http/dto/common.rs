@@ -57,6 +57,7 @@ fn fmt_num(v: f64) -> String {
 
 impl Checker {
     /// A fresh checker.
+    #[must_use]
     pub fn new() -> Self {
         Self::default()
     }
@@ -129,6 +130,7 @@ impl Checker {
     }
 
     /// True when no error was recorded.
+    #[must_use]
     pub fn is_ok(&self) -> bool {
         self.errors.is_empty()
     }
@@ -181,6 +183,7 @@ impl NumberField {
     /// # Panics
     /// On a field without a fixed default (a programming error caught by the unit tests).
     #[track_caller]
+    #[must_use]
     pub const fn value(&self) -> f64 {
         match self.default {
             FieldDefault::Value(v) => v,
@@ -196,6 +199,7 @@ impl NumberField {
     /// The OpenAPI schema of the field: number (double), description, default, example and the
     /// documented bounds.
     #[allow(deprecated)] // `example`: the document keeps the single example of its other fields
+    #[must_use]
     pub fn schema(&self) -> utoipa::openapi::schema::Object {
         use utoipa::openapi::schema::{KnownFormat, ObjectBuilder, SchemaFormat, SchemaType, Type};
         let ty = if self.nullable {
@@ -458,6 +462,7 @@ pub const IMPACT_FIELDS: &[(&str, NumberField)] = &[
 impl NumberField {
     /// The field as `/v1/presets` lists it: default (number, `null` or `"derived"`), the bounds
     /// under their JSON Schema names, the unit and the description.
+    #[must_use]
     pub fn preset(&self) -> Value {
         let mut o = serde_json::Map::new();
         o.insert(
@@ -1015,6 +1020,7 @@ pub struct Meta {
 
 impl Meta {
     /// Metadata with the crate version and the given plan.
+    #[must_use]
     pub fn new(plan: Vec<PlanStep>) -> Self {
         Self {
             model_version: MODEL_VERSION.into(),

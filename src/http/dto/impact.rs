@@ -210,6 +210,7 @@ pub struct ImpactResponse {
 
 impl ImpactResponse {
     /// Builds the response from the physics result, the optional curve and the resolved request.
+    #[must_use]
     pub fn new(
         r: &ImpactResult,
         curve: Option<CurveDto>,

@@ -12,7 +12,7 @@ use crate::http::error::{ApiError, num};
 use crate::physics::migration::{
     self, ContactModel, ContourLine, Distribution, EventKind, Face, FloorSpec, LumpedMassOptions,
     MapFrame, Method, MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase,
-    Release, RigidBlockOptions, StopReason, Summary,
+    Release, RigidBlockOptions, RunSummary, StopReason, Summary,
 };
 
 /// Migration method.
@@ -404,7 +404,7 @@ pub struct DistributionDto {
 }
 
 impl DistributionDto {
-    fn uniform(min: f64, max: f64) -> Self {
+    pub(crate) fn uniform(min: f64, max: f64) -> Self {
         Self {
             distribution: DistributionKind::Uniform,
             min: Some(min),
@@ -486,43 +486,82 @@ impl DistributionDto {
     }
 }
 
-/// A seeded Monte Carlo ensemble.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
-#[serde(deny_unknown_fields, default)]
-pub struct MonteCarloDto {
-    /// Number of runs, in [1, limit]: the server's `max_monte_carlo_runs` (/v1/presets
-    /// `limits`), by default 1 000 000, the maximum shown here.
-    #[schema(default = 200, minimum = 1, maximum = 1000000, example = 200)]
-    pub runs: u64,
-    /// Seed (any u64); the same request and seed give the same bytes.
-    #[schema(default = 42, example = 42)]
-    pub seed: u64,
-    /// e_n, drawn at every impact, clipped to [0, 1] (default U[0.2, 0.4]).
-    pub restitution_normal: DistributionDto,
-    /// e_t, drawn at every impact after e_n, clipped to [0, 1] (default U[0.7, 0.9]).
-    pub restitution_tangential: DistributionDto,
-    /// μ, drawn once per run (null: the face's μ for every run).
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub friction_coefficient: Option<DistributionDto>,
-    /// β of the contact dashpot, drawn once per run after μ, in [0, 1) (rigid block only; null:
-    /// the face's β for every run).
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub critical_damping_ratio: Option<DistributionDto>,
-}
-
-impl Default for MonteCarloDto {
-    fn default() -> Self {
-        Self {
-            runs: 200,
-            seed: 42,
-            restitution_normal: DistributionDto::uniform(0.2, 0.4),
-            restitution_tangential: DistributionDto::uniform(0.7, 0.9),
-            friction_coefficient: None,
-            critical_damping_ratio: None,
+/// Declares a Monte Carlo request object: the draws of every ensemble (runs, seed, e_n, e_t, μ,
+/// β), then the object's own optional draws; its `Default` (200 runs, seed 42, U[0.2, 0.4],
+/// U[0.7, 0.9], the rest null) and its [`MonteCarloDto`] part. One declaration for `/v1/migration`
+/// and `/v1/scene` (serde's `flatten` cannot be combined with `deny_unknown_fields`).
+macro_rules! monte_carlo_dto {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident {
+            $( $(#[$fmeta:meta])* pub $field:ident: Option<$ty:ty>, )*
         }
-    }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+        #[serde(deny_unknown_fields, default)]
+        pub struct $name {
+            /// Number of runs, in [1, limit]: the server's `max_monte_carlo_runs` (/v1/presets
+            /// `limits`), by default 1 000 000, the maximum shown here.
+            #[schema(default = 200, minimum = 1, maximum = 1000000, example = 200)]
+            pub runs: u64,
+            /// Seed (any u64); the same request and seed give the same bytes.
+            #[schema(default = 42, example = 42)]
+            pub seed: u64,
+            /// e_n, drawn at every impact, clipped to [0, 1] (default U[0.2, 0.4]).
+            pub restitution_normal: DistributionDto,
+            /// e_t, drawn at every impact after e_n, clipped to [0, 1] (default U[0.7, 0.9]).
+            pub restitution_tangential: DistributionDto,
+            /// μ, drawn once per run (null: the face's μ for every run).
+            #[schema(default = json!(null))]
+            #[serde(skip_serializing_if = "Option::is_none")]
+            pub friction_coefficient: Option<DistributionDto>,
+            /// β of the contact dashpot, drawn once per run after μ, in [0, 1) (rigid block only;
+            /// null: the face's β for every run).
+            #[schema(default = json!(null))]
+            #[serde(skip_serializing_if = "Option::is_none")]
+            pub critical_damping_ratio: Option<DistributionDto>,
+            $(
+                $(#[$fmeta])*
+                #[schema(default = json!(null))]
+                #[serde(skip_serializing_if = "Option::is_none")]
+                pub $field: Option<$ty>,
+            )*
+        }
+
+        impl Default for $name {
+            fn default() -> Self {
+                Self {
+                    runs: 200,
+                    seed: 42,
+                    restitution_normal: DistributionDto::uniform(0.2, 0.4),
+                    restitution_tangential: DistributionDto::uniform(0.7, 0.9),
+                    friction_coefficient: None,
+                    critical_damping_ratio: None,
+                    $( $field: None, )*
+                }
+            }
+        }
+
+        impl From<&$name> for MonteCarloDto {
+            fn from(m: &$name) -> Self {
+                Self {
+                    runs: m.runs,
+                    seed: m.seed,
+                    restitution_normal: m.restitution_normal,
+                    restitution_tangential: m.restitution_tangential,
+                    friction_coefficient: m.friction_coefficient,
+                    critical_damping_ratio: m.critical_damping_ratio,
+                }
+            }
+        }
+    };
+}
+pub(crate) use monte_carlo_dto;
+
+monte_carlo_dto! {
+    /// A seeded Monte Carlo ensemble.
+    pub struct MonteCarloDto {}
 }
 
 /// What to report besides the arrival.
@@ -737,7 +776,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                     let rel = o - shift[i];
                     if !(-1e6..=1e6).contains(&rel) {
                         ck.push(
-                            field.clone(),
+                            field,
                             num(*o),
                             format!(
                                 "the grid's first cell centre {} = {o} m{} must lie in [−1e6, 1e6] m",
@@ -1570,8 +1609,39 @@ fn rigid_plan(mc: bool, trajectory: bool) -> Vec<PlanStep> {
     ]
 }
 
-fn stop_name(s: StopReason) -> &'static str {
-    migration::stop_reason_name(s)
+/// The api.md name of a stop reason.
+#[must_use]
+pub fn stop_name(s: StopReason) -> &'static str {
+    match s {
+        StopReason::LowerEnd => "lower_end",
+        StopReason::AtRest => "at_rest",
+        StopReason::EndTime => "end_time",
+        StopReason::LeftFloor => "left_floor",
+        StopReason::Support => "support",
+    }
+}
+
+/// CSV of per-run summaries with api.md's header; numbers in shortest round-trip form, runs
+/// numbered from 0 (the run index of the random stream).
+#[must_use]
+pub fn runs_csv(runs: &[RunSummary]) -> String {
+    let mut s = String::from(
+        "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s\n",
+    );
+    for (i, r) in runs.iter().enumerate() {
+        s.push_str(&format!(
+            "{i},{},{},{},{},{},{},{},{}\n",
+            r.time,
+            r.speed,
+            r.kinetic_energy,
+            r.impact_count,
+            r.runout,
+            r.max_bounce_height,
+            stop_name(r.stop_reason),
+            r.along_dip_velocity
+        ));
+    }
+    s
 }
 
 impl MigrationResponse {
@@ -1688,7 +1758,7 @@ impl MigrationResponse {
                 runout_m: (&s.runout).into(),
                 max_bounce_height_m: (&s.max_bounce_height).into(),
             }),
-            runs_csv: r.runs_csv,
+            runs_csv: r.runs.as_deref().map(runs_csv),
             rigid_block: r.rigid_block.map(|b| RigidBlockOutDto {
                 time_step_s: b.time_step,
                 critical_time_step_s: b.critical_time_step,

@@ -7,6 +7,7 @@ pub mod common;
 pub mod floor;
 pub mod impact;
 pub mod migration;
+pub mod param;
 pub mod scene;
 pub mod spalling;
 pub mod study;

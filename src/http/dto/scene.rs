@@ -7,17 +7,20 @@ use utoipa::ToSchema;
 use super::column::{ColumnModelDto, ColumnOutputDto, ColumnRequest, ColumnResponse, GalerkinDto};
 use super::common::{Checker, ColumnDto, ContactDto, LawDto, Meta, PlanStep, RockDto, ShapeKind};
 use super::impact::{ImpactRequest, ImpactResponse};
+use super::migration::monte_carlo_dto;
 use super::migration::{
     DistributionDto, FaceDto, LumpedMassDto, MethodDto, MigrationOutputDto, MigrationRequest,
     MigrationResponse, MonteCarloDto, ReleaseDto, RigidBlockDto, SummaryDto,
 };
+use super::param::scene_pointer;
 use crate::config::Config;
 use crate::http::error::{ApiError, FieldError, num};
 use crate::http::runner::to_json_bytes;
-use crate::physics::migration::Method;
+use crate::physics::migration::{Method, RunSummary};
 use crate::physics::scene::{
     self, Check, DesignLimits, Limit, MethodSummary, Outcomes, Probability, ReleaseZone, SceneCase,
-    SceneDraws, SceneError, SceneReport, SceneStatistics, Strike, SupportEntry, TABLE1_SHARES,
+    SceneDraws, SceneError, SceneReport, SceneRun, SceneStatistics, Strike, SupportEntry,
+    TABLE1_SHARES,
 };
 
 /// A support along the face: spanning (`across_m` null) or one column at (`along_dip_m`,
@@ -137,57 +140,16 @@ impl Default for DesignLimitsDto {
     }
 }
 
-/// A scene's seeded Monte Carlo ensemble: `/v1/migration`'s draws plus the scene's own.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
-#[serde(deny_unknown_fields, default)]
-pub struct SceneMonteCarloDto {
-    /// Number of runs, in [1, limit] (the server's `max_monte_carlo_runs`).
-    #[schema(default = 200, minimum = 1, maximum = 1000000, example = 200)]
-    pub runs: u64,
-    /// Seed (any u64).
-    #[schema(default = 42, example = 42)]
-    pub seed: u64,
-    /// e_n, drawn at every impact, clipped to [0, 1] (default U[0.2, 0.4]).
-    pub restitution_normal: DistributionDto,
-    /// e_t, drawn at every impact after e_n, clipped to [0, 1] (default U[0.7, 0.9]).
-    pub restitution_tangential: DistributionDto,
-    /// μ, drawn once per run (null: the face's μ).
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub friction_coefficient: Option<DistributionDto>,
-    /// β of the contact dashpot (rigid block only; null: the face's β).
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub critical_damping_ratio: Option<DistributionDto>,
-    /// The rock's side length, m, bounds in [0.01, 5] (scene stream; the paper's study range
-    /// is 0.2–0.3 m). A sphere's radius and a cuboid's edges scale with it.
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub side_length_m: Option<DistributionDto>,
-    /// The rock's density, kg/m³, bounds in [100, 20000] (scene stream; the paper's 2000–3000).
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub density_kg_m3: Option<DistributionDto>,
-    /// The release across the face y, m, bounds in [−1000, 1000] (scene stream).
-    #[schema(default = json!(null))]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub release_across_m: Option<DistributionDto>,
-}
-
-impl Default for SceneMonteCarloDto {
-    fn default() -> Self {
-        let m = MonteCarloDto::default();
-        Self {
-            runs: m.runs,
-            seed: m.seed,
-            restitution_normal: m.restitution_normal,
-            restitution_tangential: m.restitution_tangential,
-            friction_coefficient: None,
-            critical_damping_ratio: None,
-            side_length_m: None,
-            density_kg_m3: None,
-            release_across_m: None,
-        }
+monte_carlo_dto! {
+    /// A scene's seeded Monte Carlo ensemble: `/v1/migration`'s draws plus the scene's own.
+    pub struct SceneMonteCarloDto {
+        /// The rock's side length, m, bounds in [0.01, 5] (scene stream; the paper's study range
+        /// is 0.2–0.3 m). A sphere's radius and a cuboid's edges scale with it.
+        pub side_length_m: Option<DistributionDto>,
+        /// The rock's density, kg/m³, bounds in [100, 20000] (scene stream; the paper's 2000–3000).
+        pub density_kg_m3: Option<DistributionDto>,
+        /// The release across the face y, m, bounds in [−1000, 1000] (scene stream).
+        pub release_across_m: Option<DistributionDto>,
     }
 }
 
@@ -324,14 +286,7 @@ impl SceneRequest {
     /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
     pub fn resolve(&mut self, config: &Config) -> Result<(SceneCase, SceneContext), ApiError> {
         // the migration part, checked by /v1/migration's own rules and pointers
-        let mc = self.monte_carlo.as_ref().map(|m| MonteCarloDto {
-            runs: m.runs,
-            seed: m.seed,
-            restitution_normal: m.restitution_normal,
-            restitution_tangential: m.restitution_tangential,
-            friction_coefficient: m.friction_coefficient,
-            critical_damping_ratio: m.critical_damping_ratio,
-        });
+        let mc = self.monte_carlo.as_ref().map(MonteCarloDto::from);
         let mut mreq = MigrationRequest {
             method: self.method,
             gravity_m_s2: self.gravity_m_s2,
@@ -711,11 +666,11 @@ impl SceneRequest {
 
 /// Maps a scene error to the problem naming the field of the request actually sent.
 pub fn scene_error(e: SceneError, ctx: &SceneContext) -> ApiError {
-    let api = ApiError::from(e.error);
-    match e.entry {
-        Some(k) => api.nest(&ctx.entry_pointer[k]),
-        None => rename(api, "/output", "/migration_output"),
-    }
+    let support = e
+        .entry
+        .and_then(|k| ctx.entry_pointer.get(k))
+        .map(String::as_str);
+    ApiError::from_physics(e.error, |p| scene_pointer(p, support))
 }
 
 /// One design check of an impact.
@@ -1158,6 +1113,11 @@ fn comparison_dto(case: &SceneCase, m: &MethodSummary) -> MethodComparisonDto {
 
 impl SceneResponse {
     /// Builds the response from the report, the case and the resolved request.
+    #[must_use]
+    #[allow(
+        clippy::needless_pass_by_value,
+        reason = "the route hands over the report and context it no longer needs"
+    )]
     pub fn new(r: SceneReport, case: &SceneCase, ctx: SceneContext, inputs: SceneRequest) -> Self {
         let plan = plan_of(&r.plan);
         let mut warnings = warnings_of(&r.warnings);
@@ -1168,7 +1128,7 @@ impl SceneResponse {
             .collect();
         let statistics = r.statistics.as_ref().map(|st| statistics_dto(st, case));
         let csv = match (&r.runs, inputs.migration_output.runs_csv) {
-            (Some(runs), true) => Some(scene::runs_csv(case, runs)),
+            (Some(runs), true) => Some(runs_csv(case, runs)),
             _ => None,
         };
         let migration = r.migration.clone().map(|m| {
@@ -1332,8 +1292,8 @@ impl SceneHead {
         if let Some(m) = self.migration {
             let m = match (&tail.runs, resp.inputs.migration_output.runs_csv) {
                 (Some(runs), true) => {
-                    let csv = serde_json::to_vec(&scene::runs_csv(case, runs))
-                        .map_err(ApiError::internal)?;
+                    let csv =
+                        serde_json::to_vec(&runs_csv(case, runs)).map_err(ApiError::internal)?;
                     splice(m.as_bytes(), "runs-csv", &csv)?
                 }
                 _ => m.into_bytes(),
@@ -1342,4 +1302,40 @@ impl SceneHead {
         }
         splice(&bytes, "piece-1", self.impacts.as_bytes())
     }
+}
+
+/// The runs of an ensemble as CSV: `/v1/migration`'s columns, then
+/// `support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded`
+/// (empty when no support was struck); numbers in shortest round-trip form.
+#[must_use]
+pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
+    let summaries: Vec<RunSummary> = runs.iter().map(|r| r.summary).collect();
+    let base = super::migration::runs_csv(&summaries);
+    let mut out = String::with_capacity(base.len() * 2);
+    for (i, line) in base.lines().enumerate() {
+        out.push_str(line);
+        if i == 0 {
+            out.push_str(",support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded\n");
+            continue;
+        }
+        let r = &runs[i - 1];
+        match r.summary.support {
+            Some(k) => {
+                let e = &case.supports[k];
+                out.push_str(&format!(
+                    ",{},{},{}",
+                    e.support, e.column_index, r.summary.impact_speed
+                ));
+                match r.values {
+                    Some(v) => out.push_str(&format!(
+                        ",{},{},{},false\n",
+                        v.max_force, v.absorbed_energy, v.stress_utilisation
+                    )),
+                    None => out.push_str(",,,,true\n"),
+                }
+            }
+            None => out.push_str(",,,,,,,\n"),
+        }
+    }
+    out
 }

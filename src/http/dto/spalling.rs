@@ -386,6 +386,7 @@ fn undefined_warning(names: &[String], at: Option<usize>, u: Undefined) -> Warni
 
 impl SpallingResponse {
     /// Computes the statistics of a resolved case and builds the response.
+    #[must_use]
     pub fn compute(case: &SpallingCase, inputs: SpallingRequest) -> Self {
         let r: SpallingResult = spalling_statistics(&case.counts);
         let mut meta = Meta::new(vec![PlanStep::ran(

@@ -58,6 +58,7 @@ pub enum StudyGrid {
 }
 
 /// The paper's study ranges (physics.md §D.1): each a ratio of 1.5.
+#[must_use]
 pub fn paper_parameters() -> Vec<StudyParameterDto> {
     [
         ("velocity_m_s", 4.0, 6.0),
@@ -75,6 +76,7 @@ pub fn paper_parameters() -> Vec<StudyParameterDto> {
 }
 
 /// The paper's Figure 21 abscissae x = p/p_max: 2/3, 3/4, 5/6, 11/12, 1.
+#[must_use]
 pub fn paper_x_values() -> Vec<f64> {
     vec![2.0 / 3.0, 0.75, 5.0 / 6.0, 11.0 / 12.0, 1.0]
 }
@@ -238,71 +240,64 @@ pub struct StudyResponse {
     pub model_version: String,
 }
 
+/// The column models a study output exists for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Models {
+    /// Both models.
+    Both,
+    /// The decoupled model only.
+    Decoupled,
+    /// The coupled model only.
+    Coupled,
+}
+
+/// Every study output and the models it exists for: numeric fields the column response always
+/// has, in the order the error message lists them.
+const OUTPUTS: [(&str, Models); 25] = [
+    ("damping_coefficient_n_s_m2", Models::Both),
+    ("modal_mass_kg", Models::Both),
+    ("modal_stiffness_n_m", Models::Both),
+    ("modal_damping_n_s_m", Models::Both),
+    ("midpoint_mode_value", Models::Both),
+    ("decay_rate_1_s", Models::Both),
+    ("midpoint_stiffness_n_m", Models::Both),
+    ("midpoint_mass_kg", Models::Both),
+    ("kinetic_energy_j", Models::Both),
+    ("stress_utilisation", Models::Both),
+    ("max_force_n", Models::Both),
+    ("energy_ratio", Models::Both),
+    ("max_bending_stress_pa.clamp", Models::Both),
+    ("max_bending_stress_pa.midpoint", Models::Both),
+    ("max_deformation_m", Models::Decoupled),
+    ("initial_modal_displacement_m", Models::Decoupled),
+    ("absorbed_energy_j", Models::Decoupled),
+    ("max_contact_deformation_m", Models::Coupled),
+    ("max_midpoint_displacement_m", Models::Coupled),
+    ("contact_count", Models::Coupled),
+    ("rebound_velocity_m_s", Models::Coupled),
+    ("column_energy_after_contact_j", Models::Coupled),
+    ("rock_velocity_end_m_s", Models::Coupled),
+    ("column_energy_end_j", Models::Coupled),
+    ("damping_energy_j", Models::Coupled),
+];
+
 /// Outputs a study may ask for, by model: numeric fields the column response always has.
-pub fn study_outputs(coupled: bool) -> &'static [&'static str] {
-    const COMMON: [&str; 14] = [
-        "damping_coefficient_n_s_m2",
-        "modal_mass_kg",
-        "modal_stiffness_n_m",
-        "modal_damping_n_s_m",
-        "midpoint_mode_value",
-        "decay_rate_1_s",
-        "midpoint_stiffness_n_m",
-        "midpoint_mass_kg",
-        "kinetic_energy_j",
-        "stress_utilisation",
-        "max_force_n",
-        "energy_ratio",
-        "max_bending_stress_pa.clamp",
-        "max_bending_stress_pa.midpoint",
-    ];
-    const DECOUPLED: [&str; 17] = [
-        COMMON[0],
-        COMMON[1],
-        COMMON[2],
-        COMMON[3],
-        COMMON[4],
-        COMMON[5],
-        COMMON[6],
-        COMMON[7],
-        COMMON[8],
-        COMMON[9],
-        COMMON[10],
-        COMMON[11],
-        COMMON[12],
-        COMMON[13],
-        "max_deformation_m",
-        "initial_modal_displacement_m",
-        "absorbed_energy_j",
-    ];
-    const COUPLED: [&str; 22] = [
-        COMMON[0],
-        COMMON[1],
-        COMMON[2],
-        COMMON[3],
-        COMMON[4],
-        COMMON[5],
-        COMMON[6],
-        COMMON[7],
-        COMMON[8],
-        COMMON[9],
-        COMMON[10],
-        COMMON[11],
-        COMMON[12],
-        COMMON[13],
-        "max_contact_deformation_m",
-        "max_midpoint_displacement_m",
-        "contact_count",
-        "rebound_velocity_m_s",
-        "column_energy_after_contact_j",
-        "rock_velocity_end_m_s",
-        "column_energy_end_j",
-        "damping_energy_j",
-    ];
-    if coupled { &COUPLED } else { &DECOUPLED }
+#[must_use]
+pub fn study_outputs(coupled: bool) -> Vec<&'static str> {
+    let own = if coupled {
+        Models::Coupled
+    } else {
+        Models::Decoupled
+    };
+    OUTPUTS
+        .iter()
+        .filter(|(_, m)| *m == Models::Both || *m == own)
+        .map(|(name, _)| *name)
+        .collect()
 }
 
 /// The default outputs of a model (api.md).
+#[must_use]
 pub fn default_outputs(coupled: bool) -> Vec<String> {
     let v: [&str; 4] = if coupled {
         [
@@ -323,6 +318,7 @@ pub fn default_outputs(coupled: bool) -> Vec<String> {
 }
 
 /// JSON Pointer of a dotted path (`rock.density_kg_m3` → `/rock/density_kg_m3`).
+#[must_use]
 pub fn pointer_of(dotted: &str) -> String {
     dotted
         .split('.')

@@ -115,6 +115,7 @@ impl Drop for CancelItemsOnDrop {
 }
 
 /// The NDJSON answer line of item `index`: its result or its problem.
+#[must_use]
 pub fn line(index: usize, r: Result<Vec<u8>, ApiError>) -> bytes::Bytes {
     let mut l = format!("{{\"index\":{index},").into_bytes();
     match r {

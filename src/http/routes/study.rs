@@ -451,11 +451,13 @@ pub fn plan(config: &Config, mut req: StudyRequest) -> Result<StudyPlan, ApiErro
 
 impl StudyPlan {
     /// Number of points: the base (point 0) and the items (1 ..).
+    #[must_use]
     pub fn points(&self) -> u64 {
         self.slots.len() as u64
     }
 
     /// The resolved request (the response's `inputs`).
+    #[must_use]
     pub fn inputs(&self) -> StudyRequest {
         let mut req = self.req.clone();
         req.base = self.base_resolved.clone();
@@ -565,9 +567,9 @@ fn finish_study(
     let mut grid_y = vec![vec![vec![vec![0.0; n]; n]; no]; pairs.len()];
     let mut prop = vec![vec![0.0; req.x_values.len()]; np];
     let mut diff = vec![vec![[0.0; 4]; no]; np];
-    for (slot, r) in slots.iter().zip(&results) {
+    for (slot, r) in slots.iter().zip(results) {
         match *slot {
-            Slot::Base => base_y = r.clone(),
+            Slot::Base => base_y = r,
             Slot::Curve(i, k) => (0..no).for_each(|o| curve_y[i][o][k] = r[o]),
             Slot::Grid(g, yi, xi) => (0..no).for_each(|o| grid_y[g][o][yi][xi] = r[o]),
             Slot::Proportion(i, k) => prop[i][k] = r[ie],

@@ -42,6 +42,7 @@ pub const DURATION_REL_TOL: f64 = 1e-11;
 /// # References
 /// physics.md §A.6 (parametrisation E(P) = ½mv² sin²θ). Instead of the breakpoints 1e-6,
 /// 1e-3 near θ = 0 the piece (0, 0.1] is integrated in σ = −ln θ, where it is smooth.
+#[must_use]
 pub fn line_duration_integral(u0: f64) -> Integral {
     line_duration_quadrature(u0, DURATION_REL_TOL)
 }
@@ -217,6 +218,7 @@ const J_NEAR_Q: f64 = 0.006;
 /// to t = 0 (J = π/2 + (π ln 2/2)·t + O(t²)). Below, J·√(1 + u₀) equals the integral
 /// ∫₀^{√G} e^{u(G − w²)/2} dw, analytic in 1 − G apart from a (1 − G)·ln(1 − G) term (its
 /// coefficient is −√2/8), fitted in that form.
+#[must_use]
 pub fn line_duration_factor(u0: f64) -> f64 {
     if u0.is_nan() || u0 < 0.0 {
         return f64::NAN;
@@ -247,6 +249,7 @@ pub fn line_duration_factor(u0: f64) -> f64 {
 ///
 /// # References
 /// physics.md §A.6, §A.7.
+#[must_use]
 pub fn contact_duration(detail: &ImpactDetail, mass: f64, v: f64) -> f64 {
     match detail {
         ImpactDetail::Line(l) => {

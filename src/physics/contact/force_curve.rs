@@ -21,6 +21,7 @@ use crate::physics::material::ImpactCase;
 ///
 /// # References
 /// physics.md §A.5 (P(δ) = kδ/(−W₋₁(−kδ/P_ref))).
+#[must_use]
 pub fn force_curve(law: &ForceLaw, max_deformation: f64, n: usize) -> (Vec<f64>, Vec<f64>) {
     let cap = law.deformation_capacity().unwrap_or(f64::INFINITY);
     let mut deltas = Vec::with_capacity(n);

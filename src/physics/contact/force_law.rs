@@ -67,6 +67,7 @@ impl ForceLaw {
     /// Contact force P(δ) at approach δ ≥ 0, N; 0 for δ ≤ 0. For the log laws this is the W₋₁
     /// inverse P = kδ/(1 + u(e·kδ/P_ref)); past the capacity δ_cap (by more than the rounding of
     /// e·kδ/P_ref, 8 ulp) it returns `None`.
+    #[must_use]
     pub fn force(&self, delta: f64) -> Option<f64> {
         if delta <= 0.0 {
             return Some(0.0);
@@ -90,6 +91,7 @@ impl ForceLaw {
     }
 
     /// Approach at the capacity δ_cap = P_ref/(e k), m; `None` for Hertz (unbounded).
+    #[must_use]
     pub fn deformation_capacity(&self) -> Option<f64> {
         match *self {
             ForceLaw::Log { k, p_ref } => Some(p_ref / (E * k)),
@@ -100,6 +102,7 @@ impl ForceLaw {
     /// A log law from its capacity: k = P_cap/δ_cap, N/m, and P_ref = e·P_cap, N (the law of a
     /// solved impact whose capacity force `force_capacity` and approach `deformation_capacity`
     /// are known).
+    #[must_use]
     pub fn log_from_capacity(force_capacity: f64, deformation_capacity: f64) -> Self {
         ForceLaw::Log {
             k: force_capacity / deformation_capacity,
@@ -108,6 +111,7 @@ impl ForceLaw {
     }
 
     /// Force at the capacity P_cap = P_ref/e, N; `None` for Hertz (unbounded).
+    #[must_use]
     pub fn force_capacity(&self) -> Option<f64> {
         match *self {
             ForceLaw::Log { p_ref, .. } => Some(p_ref / E),
@@ -116,6 +120,7 @@ impl ForceLaw {
     }
 
     /// Largest energy the law stores E_cap = P_ref²/(4e²k), J; `None` for Hertz (unbounded).
+    #[must_use]
     pub fn energy_capacity(&self) -> Option<f64> {
         match *self {
             ForceLaw::Log { k, p_ref } => Some(p_ref * p_ref / (4.0 * E.powi(2) * k)),
@@ -131,6 +136,7 @@ impl ForceLaw {
 ///
 /// # References
 /// physics.md §A.5: E(P) = P²/(4k)·(2 ln(P_ref/P) − 1); §A.7: E = (2/5)κδ^{5/2}.
+#[must_use]
 pub fn contact_energy(law: &ForceLaw, delta: f64) -> Option<f64> {
     if delta <= 0.0 {
         return Some(0.0);

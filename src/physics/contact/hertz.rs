@@ -281,6 +281,7 @@ pub(super) fn hertz_root_newton(target: f64) -> Option<(f64, f64, CompleteEllipt
 ///
 /// # References
 /// physics.md §A.7; K. L. Johnson, *Contact Mechanics* (CUP 1985) §4.2 and §3.4.
+#[must_use]
 pub fn hertz_geometry(
     e_star: f64,
     corner_radius: f64,

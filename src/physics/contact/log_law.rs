@@ -21,6 +21,7 @@ const E_FOURTH: DoubleDouble = DoubleDouble {
 ///
 /// `paper`: P_cap = πE*L³/R, P_ref = e·P_cap; `johnson` (any other law): P_cap = 4πLE*R/e²,
 /// P_ref = 4πLE*R/e (each formed directly, as physics.md §A.5 prints it).
+#[must_use]
 pub fn log_law_forces(law: ContactLaw, e_star: f64, length: f64, radius: f64) -> (f64, f64) {
     let (es, l, r) = (e_star, length, radius);
     match law {

@@ -7,7 +7,7 @@
 
 use std::f64::consts::{E, PI};
 
-use super::error::{PhysicsError, PhysicsResult};
+use super::error::{Param, PhysicsError, PhysicsResult};
 use super::material::{ContactLaw, ImpactCase, ModulusConvention, Rock, RockShape};
 use super::numeric::double_double::DoubleDouble;
 
@@ -110,6 +110,7 @@ pub struct HertzImpact {
 
 impl ImpactResult {
     /// Maximum approach δmax, m.
+    #[must_use]
     pub fn max_deformation(&self) -> f64 {
         match &self.detail {
             ImpactDetail::Line(l) => l.max_deformation,
@@ -118,6 +119,7 @@ impl ImpactResult {
     }
 
     /// Maximum contact force Pmax, N.
+    #[must_use]
     pub fn max_force(&self) -> f64 {
         match &self.detail {
             ImpactDetail::Line(l) => l.max_force,
@@ -126,6 +128,7 @@ impl ImpactResult {
     }
 
     /// Maximum contact pressure p₀, Pa.
+    #[must_use]
     pub fn max_pressure(&self) -> f64 {
         match &self.detail {
             ImpactDetail::Line(l) => l.max_pressure,
@@ -134,7 +137,7 @@ impl ImpactResult {
     }
 }
 
-fn check_positive(field: &str, value: f64) -> PhysicsResult<()> {
+fn check_positive(field: Param, value: f64) -> PhysicsResult<()> {
     if value > 0.0 && value.is_finite() {
         Ok(())
     } else {
@@ -146,7 +149,7 @@ fn check_positive(field: &str, value: f64) -> PhysicsResult<()> {
     }
 }
 
-fn check_poisson(field: &str, value: f64) -> PhysicsResult<()> {
+fn check_poisson(field: Param, value: f64) -> PhysicsResult<()> {
     if (0.0..0.5).contains(&value) {
         Ok(())
     } else {
@@ -157,29 +160,29 @@ fn check_poisson(field: &str, value: f64) -> PhysicsResult<()> {
 /// Keeps the contact solvers total on any case (the web layer checks the documented ranges
 /// first).
 pub(super) fn check_case(case: &ImpactCase) -> PhysicsResult<()> {
-    check_positive("/velocity_m_s", case.velocity)?;
-    check_positive("/rock/side_length_m", case.rock.side_length)?;
-    check_positive("/rock/density_kg_m3", case.rock.density)?;
-    check_positive("/rock/elastic_modulus_pa", case.rock.elastic_modulus)?;
-    check_poisson("/rock/poisson_ratio", case.rock.poisson_ratio)?;
-    check_positive("/column/contact_radius_m", case.column.contact_radius)?;
+    check_positive(Param::ImpactVelocity, case.velocity)?;
+    check_positive(Param::RockSideLength, case.rock.side_length)?;
+    check_positive(Param::RockDensity, case.rock.density)?;
+    check_positive(Param::RockElasticModulus, case.rock.elastic_modulus)?;
+    check_poisson(Param::RockPoissonRatio, case.rock.poisson_ratio)?;
+    check_positive(Param::ColumnContactRadius, case.column.contact_radius)?;
     if case.contact.modulus == ModulusConvention::TwoBody {
-        check_positive("/column/elastic_modulus_pa", case.column.elastic_modulus)?;
-        check_poisson("/column/poisson_ratio", case.column.poisson_ratio)?;
+        check_positive(Param::ColumnElasticModulus, case.column.elastic_modulus)?;
+        check_poisson(Param::ColumnPoissonRatio, case.column.poisson_ratio)?;
     }
     match (&case.rock.shape, case.contact.law) {
         (RockShape::Sphere { radius }, ContactLaw::HertzPoint) => {
-            check_positive("/rock/radius_m", *radius)?
+            check_positive(Param::RockRadius, *radius)?
         }
         (RockShape::Sphere { .. }, _) => {
             return Err(PhysicsError::invalid(
-                "/contact/law",
+                Param::ContactLaw,
                 f64::NAN,
                 "a sphere rock has no flat face for a line contact: use the hertz_point law",
             ));
         }
         (_, ContactLaw::HertzPoint) => {
-            check_positive("/rock/corner_radius_m", case.rock.corner_radius)?
+            check_positive(Param::RockCornerRadius, case.rock.corner_radius)?
         }
         _ => {}
     }
@@ -458,10 +461,10 @@ mod tests {
     fn sphere_allows_only_hertz() {
         let mut c = ImpactCase::default();
         c.rock.shape = RockShape::Sphere { radius: 0.1 };
-        let Err(PhysicsError::InvalidInput { field, .. }) = solve_impact(&c) else {
+        let Err(PhysicsError::InvalidInput { param, .. }) = solve_impact(&c) else {
             panic!()
         };
-        assert_eq!(field, "/contact/law");
+        assert_eq!(param, Param::ContactLaw);
         c.contact.law = ContactLaw::HertzPoint;
         let r = solve_impact(&c).unwrap();
         assert!(rel(r.mass, 2500.0 * 4.0 / 3.0 * PI * 1e-3) < 1e-15);

@@ -42,6 +42,7 @@ pub(super) fn effective_modulus_dd(
 ///
 /// # References
 /// physics.md §A.2 (Johnson's convention; E′ = 2E* is not used).
+#[must_use]
 pub fn effective_modulus(rock: &Rock, column: &Column, convention: ModulusConvention) -> f64 {
     effective_modulus_dd(rock, column, convention).to_f64()
 }

@@ -36,7 +36,7 @@ pub use terrain::{
 use self::lumped_mass::{Recording, RunOut, Setup, simulate};
 use self::terrain::Floor;
 use super::control::Control;
-use super::error::{PhysicsError, PhysicsResult};
+use super::error::{Param, PhysicsError, PhysicsResult};
 use super::material::{Rock, RockShape};
 
 /// Migration method.
@@ -252,6 +252,7 @@ pub struct SupportStop {
 impl MigrationCase {
     /// Along-dip position where a run ends at the latest (the face length, or the nearest
     /// spanning support at or below the release), m, and that support's index.
+    #[must_use]
     pub fn stop_length(&self) -> (f64, Option<usize>) {
         let mut best = (self.face.length, None);
         for (i, s) in self.supports.iter().enumerate() {
@@ -618,45 +619,10 @@ pub struct MigrationResult {
     pub statistics: Option<Statistics>,
     /// Per-run summaries (Monte Carlo with `runs_csv`).
     pub runs: Option<Vec<RunSummary>>,
-    /// The per-run summaries as CSV (api.md header).
-    pub runs_csv: Option<String>,
     /// Warnings.
     pub warnings: Vec<Warning>,
     /// Time step, steps and mass properties (rigid block only).
     pub rigid_block: Option<RigidBlockReport>,
-}
-
-/// The api.md name of a stop reason.
-pub fn stop_reason_name(r: StopReason) -> &'static str {
-    match r {
-        StopReason::LowerEnd => "lower_end",
-        StopReason::AtRest => "at_rest",
-        StopReason::EndTime => "end_time",
-        StopReason::LeftFloor => "left_floor",
-        StopReason::Support => "support",
-    }
-}
-
-/// CSV of per-run summaries with api.md's header; numbers in shortest round-trip form, runs
-/// numbered from 0 (the run index of the random stream).
-pub fn runs_csv(runs: &[RunSummary]) -> String {
-    let mut s = String::from(
-        "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s\n",
-    );
-    for (i, r) in runs.iter().enumerate() {
-        s.push_str(&format!(
-            "{i},{},{},{},{},{},{},{},{}\n",
-            r.time,
-            r.speed,
-            r.kinetic_energy,
-            r.impact_count,
-            r.runout,
-            r.max_bounce_height,
-            stop_reason_name(r.stop_reason),
-            r.along_dip_velocity
-        ));
-    }
-    s
 }
 
 /// Everything a run needs that does not change between Monte Carlo runs.
@@ -708,7 +674,7 @@ pub(crate) fn build_floor(case: &MigrationCase) -> PhysicsResult<Arc<Floor>> {
             } => Floor::contours_in_map(dip, contours, *resolution, map)?,
             _ => {
                 return Err(PhysicsError::invalid(
-                    "/face/floor/map",
+                    Param::FloorMap,
                     0.0,
                     "map coordinates apply to grid and contour floors",
                 ));
@@ -729,7 +695,7 @@ fn prepare_on(case: &MigrationCase, floor: Arc<Floor>) -> PhysicsResult<Prepared
             let ext = floor.extent();
             if !(y >= ext[2] && y <= ext[3]) {
                 return Err(PhysicsError::invalid(
-                    "/release/across_m",
+                    Param::ReleaseAcross,
                     y,
                     format!(
                         "the release must be over the floor: y in [{}, {}] m",
@@ -744,7 +710,7 @@ fn prepare_on(case: &MigrationCase, floor: Arc<Floor>) -> PhysicsResult<Prepared
             };
             let off = || {
                 PhysicsError::invalid(
-                    "/release/along_dip_m",
+                    Param::ReleaseAlongDip,
                     rel.along_dip,
                     "the release point is not on the floor at this across_m (outside it or over a hole)",
                 )
@@ -885,10 +851,10 @@ fn v3(v: &Vector3<f64>) -> [f64; 3] {
 
 /// Runs a migration case: the nominal trajectory and, when asked, the Monte Carlo ensemble.
 ///
-/// Errors: `InvalidInput` for a roll with μ < (2/7) tan θ (`/face/friction_coefficient`, or
-/// `/monte_carlo/friction_coefficient` when the drawn μ can fall below it), a release off a grid
-/// or contour floor, a malformed floor, too many trajectory samples (`/output/sample_interval_s`)
-/// or the rigid-block method (`/method`, not available yet); `TooManySteps` past
+/// Errors: `InvalidInput` for a roll with μ < (2/7) tan θ ([`Param::FaceFriction`], or
+/// [`Param::DrawnFriction`] when the drawn μ can fall below it), a release off a grid
+/// or contour floor, a malformed floor, too many trajectory samples ([`Param::TrajectorySampleInterval`])
+/// or the rigid-block method (not available yet); `TooManySteps` past
 /// `max_steps_per_run`; `Cancelled`/`TimedOut` from the control.
 ///
 /// # Special cases
@@ -938,7 +904,7 @@ pub fn run_part(
     if case.lumped_mass.motion == Motion::Roll {
         if face.friction_coefficient < mu_roll {
             return Err(PhysicsError::invalid(
-                "/face/friction_coefficient",
+                Param::FaceFriction,
                 face.friction_coefficient,
                 format!("rolling without slip needs μ ≥ (2/7) tan θ = {mu_roll:.6}"),
             ));
@@ -947,7 +913,7 @@ pub fn run_part(
             && d.lower_bound() < mu_roll
         {
             return Err(PhysicsError::invalid(
-                "/monte_carlo/friction_coefficient",
+                Param::DrawnFriction,
                 d.lower_bound(),
                 format!("rolling without slip needs every drawn μ ≥ (2/7) tan θ = {mu_roll:.6}"),
             ));
@@ -1066,7 +1032,6 @@ fn nominal_run(
         },
         events,
         trajectory,
-        runs_csv: None,
         runs: None,
         statistics: None,
         warnings,
@@ -1135,7 +1100,7 @@ fn sample_trajectory(
     let n = n_grid + 1.0 + if n_grid * dt < t_end { 1.0 } else { 0.0 };
     if n.is_nan() || n > case.output.max_samples as f64 {
         return Err(PhysicsError::invalid(
-            "/output/sample_interval_s",
+            Param::TrajectorySampleInterval,
             dt,
             format!(
                 "the trajectory of {t_end:.6} s would need {n} samples, more than the limit {}",
@@ -1384,6 +1349,7 @@ pub const STATISTICS_COLUMNS: usize = 7;
 /// The statistics columns of one run, in the order of [`Statistics`]: arrival speed, down-dip
 /// velocity, kinetic energy and time (None for a run that did not reach the lower end), impact count, runout, largest
 /// bounce height.
+#[must_use]
 pub fn run_columns(r: &RunSummary) -> [Option<f64>; STATISTICS_COLUMNS] {
     let reached = r.stop_reason == StopReason::LowerEnd;
     [
@@ -1454,7 +1420,6 @@ pub fn attach_ensemble<R: RunRecords + ?Sized>(
     if runs_csv {
         let mut runs = Vec::with_capacity(records.runs() as usize);
         records.for_each_run(&mut |x| runs.push(*x))?;
-        r.runs_csv = Some(self::runs_csv(&runs));
         r.runs = Some(runs);
     }
     r.statistics = Some(st);

@@ -45,6 +45,7 @@ pub enum Distribution {
 
 impl Distribution {
     /// Smallest value the distribution can give (−∞ for the normal).
+    #[must_use]
     pub fn lower_bound(&self) -> f64 {
         match *self {
             Distribution::Uniform { min, .. } | Distribution::TruncatedNormal { min, .. } => min,
@@ -64,6 +65,7 @@ pub fn splitmix64(state: &mut u64) -> u64 {
 }
 
 /// The random stream of run `index` of an ensemble with `seed`.
+#[must_use]
 pub fn run_stream(seed: u64, index: u64) -> Pcg64 {
     let mut sm = seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15);
     let hi = splitmix64(&mut sm) as u128;

@@ -42,7 +42,7 @@ use super::{
     Trajectory,
 };
 use crate::physics::control::Control;
-use crate::physics::error::{PhysicsError, PhysicsResult};
+use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 
 /// Young's modulus of the floor for the Hertz law, Pa (physics.md §C.3).
 pub const FLOOR_MODULUS_PA: f64 = 4.38e9;
@@ -127,6 +127,7 @@ pub struct RigidBlockReport {
 /// Returns (e, contact time s). With `clip` the force is max(0, kx + cẋ) (no tension) and the
 /// contact ends when that force returns to zero; else it ends when the overlap does. Closed
 /// form: x(t) = (v/ω_d) e^{−βωt} sin ω_d t.
+#[must_use]
 pub fn bounce_restitution(m: f64, k: f64, beta: f64, clip: bool) -> (f64, f64) {
     let w = (k / m).sqrt();
     let s = (1.0 - beta * beta).sqrt();
@@ -285,8 +286,8 @@ impl<'a> Model<'a> {
             }
         };
         let (field, what) = match hertz {
-            None => ("/face/normal_stiffness_n_m", o.normal_stiffness),
-            Some(_) => ("/rock/elastic_modulus_pa", case.rock.elastic_modulus),
+            None => (Param::FaceNormalStiffness, o.normal_stiffness),
+            Some(_) => (Param::RockElasticModulus, case.rock.elastic_modulus),
         };
         if static_overlap > 0.01 * shape.smallest_dimension {
             return Err(PhysicsError::invalid(
@@ -307,7 +308,7 @@ impl<'a> Model<'a> {
             Some(dt) => {
                 if dt > dt_crit {
                     return Err(PhysicsError::invalid(
-                        "/rigid_block/time_step_s",
+                        Param::RigidBlockTimeStep,
                         dt,
                         format!("above the critical time step {dt_crit:.6e} s"),
                     ));
@@ -326,7 +327,7 @@ impl<'a> Model<'a> {
             .locate(floor_pt.x, floor_pt.y, 1.0, 0.0)
             .or_else(|| floor.locate(floor_pt.x, floor_pt.y, 0.0, 0.0))
             .ok_or_else(|| {
-                PhysicsError::invalid("/release/along_dip_m", rel.along_dip, "off the floor")
+                PhysicsError::invalid(Param::ReleaseAlongDip, rel.along_dip, "off the floor")
             })?;
         let pl = floor.facet_plane(facet);
         let nf = pl.normal();
@@ -1374,7 +1375,7 @@ impl<'a> Model<'a> {
     fn sample(&self, r: &mut Recorder, st: &State, diss: f64, _stored: f64) -> PhysicsResult<()> {
         if r.tr.time.len() >= r.max {
             return Err(PhysicsError::invalid(
-                "/output/sample_interval_s",
+                Param::TrajectorySampleInterval,
                 r.interval,
                 format!("the trajectory would need more than {} samples", r.max),
             ));
@@ -1582,7 +1583,6 @@ fn nominal_run(
         },
         events: case.output.events.then_some(out.events),
         trajectory: out.trajectory,
-        runs_csv: None,
         runs: None,
         statistics: None,
         warnings,

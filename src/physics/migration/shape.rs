@@ -21,7 +21,7 @@
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
 use super::monte_carlo::{run_stream, uniform01};
-use crate::physics::error::{PhysicsError, PhysicsResult};
+use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 use crate::physics::material::{Rock, RockShape};
 
 /// A planar face of a polyhedral block, in the body frame.
@@ -75,6 +75,7 @@ impl BlockShape {
     }
 
     /// Number of contacts of a resting block, N_c: the vertices of the largest face (sphere 1).
+    #[must_use]
     pub fn resting_contacts(&self) -> usize {
         if self.sphere_radius.is_some() {
             1
@@ -84,6 +85,7 @@ impl BlockShape {
     }
 
     /// Σ|r|² over the largest face's vertices, m² (sphere: r²): the rotational stiffness factor.
+    #[must_use]
     pub fn resting_r2(&self) -> f64 {
         match self.sphere_radius {
             Some(r) => r * r,
@@ -96,6 +98,7 @@ impl BlockShape {
     }
 
     /// Distance from the centre of mass to the resting face (sphere: r), m.
+    #[must_use]
     pub fn rest_height(&self) -> f64 {
         match self.sphere_radius {
             Some(r) => r,
@@ -104,6 +107,7 @@ impl BlockShape {
     }
 
     /// Outward normal of the resting face in the body frame (sphere: −z).
+    #[must_use]
     pub fn rest_normal(&self) -> Vector3<f64> {
         match self.sphere_radius {
             Some(_) => -Vector3::z(),
@@ -112,6 +116,7 @@ impl BlockShape {
     }
 
     /// A sphere of radius r and density ρ.
+    #[must_use]
     pub fn sphere(radius: f64, density: f64) -> Self {
         let volume = 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
         let mass = density * volume;
@@ -134,7 +139,7 @@ impl BlockShape {
     /// The convex hull of `points` (m) with density ρ (kg/m³).
     ///
     /// Errors: fewer than 4 non-coplanar points (`field` names the request field).
-    pub fn hull(points: &[[f64; 3]], density: f64, field: &str) -> PhysicsResult<Self> {
+    pub fn hull(points: &[[f64; 3]], density: f64, field: Param) -> PhysicsResult<Self> {
         let pts: Vec<Vector3<f64>> = points
             .iter()
             .map(|p| Vector3::new(p[0], p[1], p[2]))
@@ -292,15 +297,15 @@ impl BlockShape {
 
     /// The block of a rock (api.md `rock`): its shape with the rock's density.
     ///
-    /// Errors: a degenerate polyhedron (`/rock/vertices_m`) or a random polyhedron that gives
-    /// no volume in 100 draws (`/rock/random`).
+    /// Errors: a degenerate polyhedron ([`Param::RockVertices`]) or a random polyhedron that gives
+    /// no volume in 100 draws ([`Param::RockRandomShape`]).
     pub fn of_rock(rock: &Rock) -> PhysicsResult<Self> {
         let rho = rock.density;
         match &rock.shape {
             RockShape::Cube => Ok(Self::cuboid([rock.side_length; 3], rho)),
             RockShape::Cuboid { dimensions } => Ok(Self::cuboid(*dimensions, rho)),
             RockShape::Sphere { radius } => Ok(Self::sphere(*radius, rho)),
-            RockShape::Polyhedron { vertices } => Self::hull(vertices, rho, "/rock/vertices_m"),
+            RockShape::Polyhedron { vertices } => Self::hull(vertices, rho, Param::RockVertices),
             RockShape::RandomPolyhedron {
                 semi_axes,
                 vertices,
@@ -310,6 +315,7 @@ impl BlockShape {
     }
 
     /// A cuboid with edges [a, b, c] (m) along x, y, z.
+    #[must_use]
     pub fn cuboid(d: [f64; 3], density: f64) -> Self {
         let mut pts = Vec::with_capacity(8);
         for i in 0..8 {
@@ -319,7 +325,7 @@ impl BlockShape {
                 if i & 4 == 0 { -0.5 } else { 0.5 } * d[2],
             ]);
         }
-        Self::hull(&pts, density, "/rock/dimensions_m").expect("a cuboid has volume")
+        Self::hull(&pts, density, Param::RockDimensions).expect("a cuboid has volume")
     }
 
     /// A random polyhedron by the ellipsoid method (physics.md §C.3 "Further definitions"):
@@ -341,12 +347,12 @@ impl BlockShape {
                     ]
                 })
                 .collect();
-            if let Ok(s) = Self::hull(&pts, density, "/rock/random") {
+            if let Ok(s) = Self::hull(&pts, density, Param::RockRandomShape) {
                 return Ok(s);
             }
         }
         Err(PhysicsError::invalid(
-            "/rock/random/vertices",
+            Param::RockRandomVertexCount,
             n as f64,
             "100 draws gave no polyhedron with volume: use more vertices",
         ))
@@ -499,7 +505,7 @@ mod tests {
             [-1.0, -1.0, 1.0],
         ]
         .map(|q| q.map(|c| c * a / 8f64.sqrt()));
-        let t = BlockShape::hull(&pts, 1.0, "/x").unwrap();
+        let t = BlockShape::hull(&pts, 1.0, Param::RockVertices).unwrap();
         assert!((t.volume - a.powi(3) / (6.0 * 2f64.sqrt())).abs() < 1e-14);
         for i in 0..3 {
             assert!((t.inertia[i] - t.mass * a * a / 20.0).abs() < 1e-14);
@@ -508,7 +514,7 @@ mod tests {
             BlockShape::hull(
                 &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
                 1.0,
-                "/x"
+                Param::RockVertices
             )
             .is_err()
         );

@@ -52,6 +52,7 @@ pub struct Summary {
 /// use gangue::physics::migration::stats::percentile_sorted;
 /// assert_eq!(percentile_sorted(&[1.0, 2.0, 3.0, 4.0], 0.5), 2.5);
 /// ```
+#[must_use]
 pub fn percentile_sorted(sorted: &[f64], p: f64) -> f64 {
     let n = sorted.len();
     if n == 0 {
@@ -73,6 +74,7 @@ pub fn percentile_sorted(sorted: &[f64], p: f64) -> f64 {
 ///
 /// # References
 /// api.md `POST /v1/migration` (statistics).
+#[must_use]
 pub fn summarize(values: &[f64]) -> Option<Summary> {
     summarize_owned(values.to_vec())
 }
@@ -128,11 +130,13 @@ impl FirstPass {
     }
 
     /// Number of values seen.
+    #[must_use]
     pub fn count(&self) -> u64 {
         self.n
     }
 
     /// The second pass this one sets up (mean, histogram bins), or None for no values.
+    #[must_use]
     pub fn second_pass(&self) -> Option<SecondPass> {
         (self.n > 0).then(|| SecondPass {
             n: self.n,
@@ -173,6 +177,7 @@ impl SecondPass {
 
     /// The summary, given the values of the sorted column at the ranks [`order_ranks`] listed
     /// (same length and order).
+    #[must_use]
     pub fn finish(&self, order_values: &[f64]) -> Summary {
         let n = self.n as usize;
         let ranks = order_ranks(self.n);
@@ -221,6 +226,7 @@ pub const PERCENTILES: [f64; 4] = [0.05, 0.50, 0.95, 0.99];
 /// The 0-based ranks in the column sorted by `f64::total_cmp` whose values the type-7
 /// percentiles of `n` values need (⌊h⌋ and ⌊h⌋ + 1 for each level), ascending, without repeats.
 /// Empty for n = 0.
+#[must_use]
 pub fn order_ranks(n: u64) -> Vec<u64> {
     if n == 0 {
         return Vec::new();
@@ -278,7 +284,7 @@ mod tests {
             })
             .collect();
         let s = summarize(&xs).unwrap();
-        let mut sorted = xs.clone();
+        let mut sorted = xs;
         sorted.sort_by(f64::total_cmp);
         for (p, got) in [(0.05, s.p05), (0.5, s.p50), (0.95, s.p95), (0.99, s.p99)] {
             assert_eq!(got, percentile_sorted(&sorted, p));

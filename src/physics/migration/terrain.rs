@@ -13,7 +13,7 @@
 use nalgebra::Vector3;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 
-use crate::physics::error::{PhysicsError, PhysicsResult};
+use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 
 /// Identifier of one planar facet of a floor (the plane floor has the single facet 0).
 pub(crate) type Facet = u32;
@@ -619,6 +619,7 @@ pub struct MapFrame {
 
 impl MapFrame {
     /// Face coordinates [x, y] (m) of the map point [E, N] (m).
+    #[must_use]
     pub fn to_face(&self, p: [f64; 2]) -> [f64; 2] {
         let (de, dn) = (p[0] - self.origin[0], p[1] - self.origin[1]);
         if self.dip_direction_deg == 90.0 {
@@ -743,6 +744,7 @@ pub const GRID_BYTES_PER_POINT: f64 = 32.0;
 
 /// Estimated memory of an `rows` × `cols` grid floor, bytes: [`GRID_BYTES_PER_POINT`] per
 /// height plus the 64-byte planes of at most 2²⁰ tabled facets.
+#[must_use]
 pub fn grid_bytes(rows: usize, cols: usize) -> f64 {
     let points = rows as f64 * cols as f64;
     let facets = 2.0 * rows.saturating_sub(1) as f64 * cols.saturating_sub(1) as f64;
@@ -752,6 +754,7 @@ pub fn grid_bytes(rows: usize, cols: usize) -> f64 {
 /// Number of points a contour set resampled at most `resolution` m apart will have, computed
 /// before resampling (as f64, so that no count overflows): the figure the memory limit is
 /// checked against.
+#[must_use]
 pub fn contour_points(lines: &[ContourLine], resolution: f64) -> f64 {
     let mut n = 0.0;
     for line in lines {
@@ -805,7 +808,7 @@ impl Floor {
         let nx = heights.first().map_or(0, Vec::len);
         if ny < 2 || nx < 2 {
             return Err(PhysicsError::invalid(
-                "/face/floor/heights_m",
+                Param::FloorHeights,
                 ny.min(nx) as f64,
                 "a grid needs at least 2 × 2 points",
             ));
@@ -814,7 +817,7 @@ impl Floor {
         for (i, row) in heights.iter().enumerate() {
             if row.len() != nx {
                 return Err(PhysicsError::invalid(
-                    format!("/face/floor/heights_m/{i}"),
+                    Param::FloorHeightRow(i),
                     row.len() as f64,
                     format!("every row must have {nx} heights, like row 0"),
                 ));
@@ -822,7 +825,7 @@ impl Floor {
             for (j, &h) in row.iter().enumerate() {
                 if h.is_infinite() {
                     return Err(PhysicsError::invalid(
-                        format!("/face/floor/heights_m/{i}/{j}"),
+                        Param::FloorHeight(i, j),
                         0.0,
                         "heights must be finite numbers (m)",
                     ));
@@ -841,7 +844,7 @@ impl Floor {
                 .fold((0.0, 0usize), |(s, n), h| (s + h, n + 1));
             if !fill_holes(&mut z, nx, ny) {
                 return Err(PhysicsError::invalid(
-                    "/face/floor",
+                    Param::Floor,
                     0.0,
                     "every node of the grid is without data",
                 ));
@@ -947,7 +950,7 @@ impl Floor {
     fn place_mean_at_origin(&mut self) -> PhysicsResult<()> {
         let z = self.height_at(0.0, 0.0).ok_or_else(|| {
             PhysicsError::invalid(
-                "/face/floor/map/origin_m",
+                Param::FloorMapOrigin,
                 0.0,
                 "the map origin is not on the floor (outside it or over a hole): along_dip_m = 0 \
                  is measured from the floor's height there",
@@ -970,7 +973,7 @@ impl Floor {
             for (k, p) in line.points.iter().enumerate() {
                 if !(p[0].is_finite() && p[1].is_finite()) {
                     return Err(PhysicsError::invalid(
-                        format!("/face/floor/contours/{c}/points_m/{k}"),
+                        Param::FloorContourPoint(c, k),
                         0.0,
                         "points must be finite numbers (m)",
                     ));
@@ -997,7 +1000,7 @@ impl Floor {
         }
         if pts.len() > 50_000_000 {
             return Err(PhysicsError::invalid(
-                "/face/floor/resolution_m",
+                Param::FloorResolution,
                 resolution,
                 "the resampled contours have more than 5e7 points: use a coarser resolution_m",
             ));
@@ -1012,7 +1015,7 @@ impl Floor {
         let tri: DelaunayTriangulation<HPoint> =
             DelaunayTriangulation::bulk_load(pts).map_err(|e| {
                 PhysicsError::invalid(
-                    "/face/floor/contours",
+                    Param::FloorContours,
                     0.0,
                     format!("cannot triangulate: {e}"),
                 )
@@ -1041,7 +1044,7 @@ impl Floor {
         }
         if tris.is_empty() {
             return Err(PhysicsError::invalid(
-                "/face/floor/contours",
+                Param::FloorContours,
                 xyz.len() as f64,
                 "the contours do not span a surface (need at least 3 points not on one line)",
             ));

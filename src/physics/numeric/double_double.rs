@@ -19,6 +19,7 @@ pub struct DoubleDouble {
 
 /// s + e = a + b exactly (Knuth's two-sum, any magnitudes).
 #[inline]
+#[must_use]
 pub fn two_sum(a: f64, b: f64) -> DoubleDouble {
     let s = a + b;
     let bb = s - a;
@@ -30,6 +31,7 @@ pub fn two_sum(a: f64, b: f64) -> DoubleDouble {
 
 /// s + e = a + b exactly when |a| ≥ |b| (Dekker's fast two-sum).
 #[inline]
+#[must_use]
 pub fn fast_two_sum(a: f64, b: f64) -> DoubleDouble {
     let s = a + b;
     DoubleDouble {
@@ -48,6 +50,7 @@ fn split(a: f64) -> (f64, f64) {
 
 /// p + e = a·b exactly (Dekker's two-product, barring overflow).
 #[inline]
+#[must_use]
 pub fn two_prod(a: f64, b: f64) -> DoubleDouble {
     let p = a * b;
     let (ah, al) = split(a);
@@ -66,6 +69,7 @@ impl DoubleDouble {
     };
 
     /// The exact f64 `x`.
+    #[must_use]
     pub fn new(x: f64) -> Self {
         DoubleDouble { hi: x, lo: 0.0 }
     }

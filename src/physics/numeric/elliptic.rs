@@ -41,6 +41,7 @@ pub struct CompleteElliptic {
 /// # References
 /// DLMF §19.8 (AGM for K and E), <https://dlmf.nist.gov/19.8>; cₙ₊₁ = cₙ²/(4aₙ₊₁) avoids the
 /// cancellation in (aₙ − bₙ)/2.
+#[must_use]
 pub fn complete_elliptic_parts(m: f64, m1: f64) -> CompleteElliptic {
     if m1 <= 0.0 {
         return CompleteElliptic {
@@ -92,6 +93,7 @@ pub fn complete_elliptic_parts(m: f64, m1: f64) -> CompleteElliptic {
 ///
 /// # References
 /// DLMF §19.8.
+#[must_use]
 pub fn complete_elliptic(m: f64) -> (f64, f64) {
     let r = complete_elliptic_parts(m, 1.0 - m);
     (r.k, r.e)
@@ -104,6 +106,7 @@ pub fn complete_elliptic(m: f64) -> (f64, f64) {
 ///
 /// # References
 /// DLMF §19.8.
+#[must_use]
 pub fn ellip_k(m: f64) -> f64 {
     complete_elliptic(m).0
 }
@@ -115,6 +118,7 @@ pub fn ellip_k(m: f64) -> f64 {
 ///
 /// # References
 /// DLMF §19.8.
+#[must_use]
 pub fn ellip_e(m: f64) -> f64 {
     complete_elliptic(m).1
 }

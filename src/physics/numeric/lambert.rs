@@ -25,6 +25,7 @@
 /// # References
 /// physics.md §A.5 (series: the standard branch-point expansion of W₋₁, Corless et al. 1996,
 /// "On the Lambert W function", Adv. Comput. Math. 5, 329–359, doi:10.1007/BF02124750).
+#[must_use]
 pub fn branch_u(g: f64) -> Option<f64> {
     if !(0.0..=1.0).contains(&g) {
         return None;
@@ -56,6 +57,7 @@ pub fn branch_u(g: f64) -> Option<f64> {
 ///
 /// # References
 /// physics.md §A.5.
+#[must_use]
 pub fn branch_u_log(y: f64) -> Option<f64> {
     if y.is_nan() || y < 0.0 {
         return None;
@@ -77,6 +79,7 @@ pub fn branch_u_log(y: f64) -> Option<f64> {
 ///
 /// # References
 /// physics.md §A.5.
+#[must_use]
 pub fn branch_u_parts(q: f64, y: f64) -> f64 {
     let mut u = if q < 2e-3 {
         let s = (2.0 * q).sqrt();
@@ -216,6 +219,7 @@ pub(crate) fn branch_u_far(inv_g: f64, y: f64) -> (f64, f64) {
 /// # References
 /// Below u = 0.25 it uses ln(1 + u) = 2 atanh(w), w = u/(2 + u), so that
 /// u − ln(1 + u) = u²/(2 + u) − 2(w³/3 + w⁵/5 + …), a sum without cancellation.
+#[must_use]
 pub fn u_minus_ln1p(u: f64) -> f64 {
     if u < 0.25 {
         let w = u / (2.0 + u);
@@ -234,6 +238,7 @@ pub fn u_minus_ln1p(u: f64) -> f64 {
 }
 
 /// W₋₁(−G/e) = −1 − u(G) for G ∈ [0, 1]; `None` outside.
+#[must_use]
 pub fn lambert_wm1_of_g(g: f64) -> Option<f64> {
     branch_u(g).map(|u| -1.0 - u)
 }

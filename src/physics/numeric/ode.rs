@@ -94,6 +94,7 @@ pub struct Dopri5 {
 impl Dopri5 {
     /// A stepper for `dim` components with relative tolerance `rtol`, absolute tolerances `atol`
     /// and first trial step `h0` (s).
+    #[must_use]
     pub fn new(rtol: f64, atol: Vec<f64>, h0: f64) -> Self {
         let dim = atol.len();
         let z = || vec![0.0; dim];
@@ -296,11 +297,13 @@ impl Dopri5 {
     }
 
     /// Start time and size (s) of the last accepted step.
+    #[must_use]
     pub fn last_step(&self) -> (f64, f64) {
         (self.t_old, self.h_old)
     }
 
     /// Dense output of component `i` at θ = (t − t_old)/h_old ∈ [0, 1].
+    #[must_use]
     pub fn dense(&self, i: usize, theta: f64) -> f64 {
         let r = &self.rcont;
         let t1 = 1.0 - theta;
@@ -321,6 +324,7 @@ impl Dopri5 {
 
     /// The dense output of the linear functional Σ aⱼ·y_{idxⱼ} over the last step, as the five
     /// coefficients of [`Dopri5::eval_functional`].
+    #[must_use]
     pub fn functional(&self, terms: &[(usize, f64)]) -> [f64; 5] {
         let mut out = [0.0; 5];
         for &(i, a) in terms {
@@ -332,6 +336,7 @@ impl Dopri5 {
     }
 
     /// Value at θ of a functional's dense output (coefficients from [`Dopri5::functional`]).
+    #[must_use]
     pub fn eval_functional(c: &[f64; 5], theta: f64) -> f64 {
         let t1 = 1.0 - theta;
         c[0] + theta * (c[1] + t1 * (c[2] + theta * (c[3] + t1 * c[4])))

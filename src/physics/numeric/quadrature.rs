@@ -267,6 +267,7 @@ fn integrate_inner<F: FnMut(f64) -> f64>(
 
 /// The `n` Gauss–Legendre nodes and weights (x, w) on [−1, 1], by Newton on the Legendre
 /// recurrence (exact for polynomials of degree ≤ 2n − 1).
+#[must_use]
 pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
     let mut out = Vec::with_capacity(n);
     for i in 1..=n {

@@ -2,6 +2,7 @@
 
 /// Σ cₖ Tₖ(x) for x ∈ [−1, 1] by Clenshaw's recurrence (`c` non-empty).
 #[inline]
+#[must_use]
 pub fn chebyshev(c: &[f64], x: f64) -> f64 {
     let (mut b1, mut b2) = (0.0, 0.0);
     for &coefficient in c[1..].iter().rev() {
@@ -14,6 +15,7 @@ pub fn chebyshev(c: &[f64], x: f64) -> f64 {
 
 /// Σ cₖ xᵏ by Horner's rule (0 for an empty `c`).
 #[inline]
+#[must_use]
 pub fn horner(c: &[f64], x: f64) -> f64 {
     c.iter()
         .rev()
