@@ -439,27 +439,12 @@ fn resolve_trap(floor: &Floor, p: &Vector3<f64>, g: f64, mu: f64, roll: bool) ->
                 continue;
             }
             let nb = floor.facet_plane(fb).normal();
-            // the crease starts on the edge itself: at its end node when p is that close to
-            // it, else at p's foot on the edge line. A line from p (up to `tol` aside) to an end
-            // would leave the edge and pass under the neighbouring facets (a rock 1.5e-9 m off
-            // a steep crease line was 1.7e-8 m below the floor).
-            let (ea, eb) = (
-                Vector3::new(a[0], a[1], z[k]),
-                Vector3::new(b[0], b[1], z[(k + 1) % 3]),
-            );
-            let near_a = (a[0] - p.x).hypot(a[1] - p.y) <= tol;
-            let near_b = (b[0] - p.x).hypot(b[1] - p.y) <= tol;
-            let p3 = if near_a {
-                ea
-            } else if near_b {
-                eb
-            } else {
-                ea + (eb - ea) * (u / len).clamp(0.0, 1.0)
-            };
-            for (q3, near) in [(ea, near_a), (eb, near_b)] {
-                if near {
+            let p3 = Vector3::new(p.x, p.y, pl.z(p.x, p.y));
+            for (q, qz) in [(a, z[k]), (b, z[(k + 1) % 3])] {
+                if (q[0] - p.x).hypot(q[1] - p.y) <= tol {
                     continue;
                 }
+                let q3 = Vector3::new(q[0], q[1], qz);
                 if let Some(cr) = crease_of([p3, q3], &n, &nb, &out, &Vector3::zeros(), g) {
                     let ge = gv.dot(&cr.e);
                     let drive = if roll {
@@ -680,10 +665,7 @@ pub(crate) fn simulate(
                     (f, dir)
                 }
                 TrapExit::Crease(f, c) => {
-                    // onto the edge (a move of at most 1e-7 of the cell); the height is set
-                    // below with its energy booked
-                    s.p.x = c.ends[0].x;
-                    s.p.y = c.ends[0].y;
+                    s.p = c.ends[0];
                     s.crease = Some(c);
                     (f, c.e)
                 }
@@ -845,18 +827,6 @@ pub(crate) fn simulate(
             }
             Some(_) if s.crease.is_some() => {
                 let c = s.crease.expect("checked");
-                // a crease piece runs on the crease segment itself: a rock moved off it (a nudge
-                // off a vertex moves it 1e-9 of the floor's extent along the old facet's slope)
-                // is put back at its foot on the segment, the height change booked. A piece
-                // parallel to the crease 1e-8 m beside it passes under the neighbouring facet
-                // rising from it (1.7e-8 m below a steep crease's floor).
-                let len = (c.ends[1] - c.ends[0]).dot(&c.e);
-                let foot = c.ends[0] + c.e * (s.p - c.ends[0]).dot(&c.e).clamp(0.0, len);
-                if foot.x != s.p.x || foot.y != s.p.y {
-                    s.p.x = foot.x;
-                    s.p.y = foot.y;
-                    set_height(&mut s, foot.z, g, ke_factor);
-                }
                 let ve = s.v.dot(&c.e);
                 // the motion is along the crease line: a velocity part across it (left by a
                 // correction at a vertex) is removed as a booked transition, never dropped
@@ -889,6 +859,7 @@ pub(crate) fn simulate(
                     stop_at = ve.abs() / ae.abs();
                 }
                 t_max = t_max.min(stop_at);
+                let len = (c.ends[1] - c.ends[0]).dot(&c.e);
                 // on the edge: a rounding error past an end would never cross it again
                 let u0 = (s.p - c.ends[0]).dot(&c.e).clamp(0.0, len);
                 let t_end_edge = super::terrain::outward_root(u0 - len, ve, ae)
@@ -912,8 +883,8 @@ pub(crate) fn simulate(
                         v0: c.e * ve,
                         a: c.e * ae,
                         fric: c.e * (dir * mu * c.n_tot),
-                        // what this branch booked before the piece (the move onto the crease,
-                        // a removed velocity part) is part of its start
+                        // what this branch booked before the piece (a removed velocity part,
+                        // a rest) is part of its start
                         diss0: s.e_imp + s.e_fric + s.e_trans,
                         // rolling along the crease: the spin axis is horizontal-most normal to it
                         rolling: roll.then(|| crease_up(&c.e)),
@@ -1068,7 +1039,37 @@ pub(crate) fn simulate(
                             s.crease = Some(c);
                         }
                     }
-                    if zero_steps > 16 {
+                    if zero_steps > 16
+                        && let Some(c) = s.crease
+                    {
+                        // stuck at a vertex on a crease: move a hair along the crease line
+                        // itself. Moved along the old facet's slope instead, a rock 1e-8 m
+                        // beside a steep crease ran parallel to it under the facet rising from
+                        // it (1.7e-8 m below the floor).
+                        let ve = s.v.dot(&c.e);
+                        let sgn = if ve != 0.0 { ve } else { gv.dot(&c.e) }.signum();
+                        let ext = floor.extent();
+                        let eps = 1e-9 * (ext[1] - ext[0]).abs().clamp(1e-3, 1e3);
+                        let len = (c.ends[1] - c.ends[0]).dot(&c.e);
+                        let u = (s.p - c.ends[0]).dot(&c.e) + sgn * eps;
+                        let q = c.ends[0] + c.e * u;
+                        s.p.x = q.x;
+                        s.p.y = q.y;
+                        if (0.0..=len).contains(&u) {
+                            set_height(&mut s, q.z, g, ke_factor);
+                        } else {
+                            // past the crease's end: onto the facet beyond it
+                            s.crease = None;
+                            let dir = c.e * sgn;
+                            match floor.locate(s.p.x, s.p.y, dir.x, dir.y) {
+                                Some(fc) => {
+                                    change_facet(&mut s, fc, Some(n), &mut rec);
+                                }
+                                None => break (moving, StopReason::LeftFloor),
+                            }
+                        }
+                        zero_steps = 0;
+                    } else if zero_steps > 16 {
                         // stuck on a vertex by rounding: move a hair along the motion
                         let dir = if s.v.norm() > 0.0 { s.v } else { a };
                         let h = (dir.x * dir.x + dir.y * dir.y).sqrt();
