@@ -883,7 +883,9 @@ pub(crate) fn simulate(
                         v0: c.e * ve,
                         a: c.e * ae,
                         fric: c.e * (dir * mu * c.n_tot),
-                        diss0,
+                        // what this branch booked before the piece (a removed velocity part,
+                        // a rest) is part of its start
+                        diss0: s.e_imp + s.e_fric + s.e_trans,
                         // rolling along the crease: the spin axis is horizontal-most normal to it
                         rolling: roll.then(|| crease_up(&c.e)),
                         spin: (0.0, Vector3::zeros()),
@@ -1037,7 +1039,37 @@ pub(crate) fn simulate(
                             s.crease = Some(c);
                         }
                     }
-                    if zero_steps > 16 {
+                    if zero_steps > 16
+                        && let Some(c) = s.crease
+                    {
+                        // stuck at a vertex on a crease: move a hair along the crease line
+                        // itself. Moved along the old facet's slope instead, a rock 1e-8 m
+                        // beside a steep crease ran parallel to it under the facet rising from
+                        // it (1.7e-8 m below the floor).
+                        let ve = s.v.dot(&c.e);
+                        let sgn = if ve != 0.0 { ve } else { gv.dot(&c.e) }.signum();
+                        let ext = floor.extent();
+                        let eps = 1e-9 * (ext[1] - ext[0]).abs().clamp(1e-3, 1e3);
+                        let len = (c.ends[1] - c.ends[0]).dot(&c.e);
+                        let u = (s.p - c.ends[0]).dot(&c.e) + sgn * eps;
+                        let q = c.ends[0] + c.e * u;
+                        s.p.x = q.x;
+                        s.p.y = q.y;
+                        if (0.0..=len).contains(&u) {
+                            set_height(&mut s, q.z, g, ke_factor);
+                        } else {
+                            // past the crease's end: onto the facet beyond it
+                            s.crease = None;
+                            let dir = c.e * sgn;
+                            match floor.locate(s.p.x, s.p.y, dir.x, dir.y) {
+                                Some(fc) => {
+                                    change_facet(&mut s, fc, Some(n), &mut rec);
+                                }
+                                None => break (moving, StopReason::LeftFloor),
+                            }
+                        }
+                        zero_steps = 0;
+                    } else if zero_steps > 16 {
                         // stuck on a vertex by rounding: move a hair along the motion
                         let dir = if s.v.norm() > 0.0 { s.v } else { a };
                         let h = (dir.x * dir.x + dir.y * dir.y).sqrt();

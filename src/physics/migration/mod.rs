@@ -1162,10 +1162,9 @@ fn sample_trajectory(
         tr.time.push(t);
         tr.position.push(v3(&p));
         tr.along_dip.push(mean.along(&p));
-        if !on_floor {
-            // invariant: every flight sample lies above the floor
-            lumped_mass::check_above_floor(&pr.floor, &p, t)?;
-        }
+        // invariant: every sample lies on or above the floor, in flight and on the ground (the
+        // solver checks events and piece ends; a piece between them is checked here)
+        lumped_mass::check_above_floor(&pr.floor, &p, t)?;
         tr.height.push(if on_floor {
             0.0
         } else {
