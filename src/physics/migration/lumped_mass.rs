@@ -1047,12 +1047,24 @@ pub(crate) fn simulate(
                         // beside a steep crease ran parallel to it under the facet rising from
                         // it (1.7e-8 m below the floor).
                         let ve = s.v.dot(&c.e);
-                        let sgn = if ve != 0.0 { ve } else { gv.dot(&c.e) }.signum();
                         let ext = floor.extent();
                         let eps = 1e-9 * (ext[1] - ext[0]).abs().clamp(1e-3, 1e3);
                         let len = (c.ends[1] - c.ends[0]).dot(&c.e);
-                        let u = (s.p - c.ends[0]).dot(&c.e) + sgn * eps;
+                        let along = (s.p - c.ends[0]).dot(&c.e);
+                        let ke = 0.5 * ke_factor * s.v.norm_squared();
+                        // along the motion (at rest: downhill)
+                        let sgn = if ve != 0.0 { ve } else { gv.dot(&c.e) }.signum();
+                        let rise = |sg: f64| g * ((c.ends[0] + c.e * (along + sg * eps)).z - s.p.z);
+                        let u = along + sgn * eps;
                         let q = c.ends[0] + c.e * u;
+                        if (0.0..=len).contains(&u) && rise(sgn) > ke {
+                            // a rise it cannot pay for: trapped at the bottom of the crease,
+                            // at rest where it is (moved, it would book a negative
+                            // loss: 2.3e-5 J for a 3.4e-8 m lift)
+                            s.e_trans += ke;
+                            s.v = Vector3::zeros();
+                            break (Phase::Stopped, StopReason::AtRest);
+                        }
                         s.p.x = q.x;
                         s.p.y = q.y;
                         if (0.0..=len).contains(&u) {
