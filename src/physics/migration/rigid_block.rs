@@ -1202,6 +1202,7 @@ impl<'a> Model<'a> {
             }
             // Newton–Euler
             let speed_before = st.v.norm();
+            let v_old = st.v;
             acc_prev = f / m;
             st.v += f * (h / m);
             let mb = r.transpose() * mom;
@@ -1216,11 +1217,10 @@ impl<'a> Model<'a> {
             }
             wacc_prev = r * ((w1 - w0) / h);
             st.w = w1;
-            // Dissipation is booked as the force times the step's displacement (v_{n+1/2} Δt,
-            // the one the potential energy sees); with the kinetic energy taken at the
-            // synchronised velocity (`synced`) the account then closes to O(Δt²).
-            let v_bar = st.v;
-            let w_bar = r * w1;
+            // Dissipation is booked with the step's mean velocities, the ones whose product
+            // with a force gives the leapfrog's kinetic-energy change.
+            let v_bar = (v_old + st.v) * 0.5;
+            let w_bar = r * ((w0 + w1) * 0.5);
             damping -= (v_bar.dot(&f_damp) + w_bar.dot(&m_damp)) * h;
             friction -= (v_bar.dot(&f_slip) + w_bar.dot(&m_slip)) * h + es_slip;
             st.c += st.v * h;
@@ -1389,8 +1389,8 @@ impl<'a> Model<'a> {
             }
             let nf = n_skip as f64;
             // N leapfrog steps under the constant force, exactly: v ← v + N a h,
-            // x ← x + N h v + a h² N(N+1)/2; the dissipation over that displacement
-            let path = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * (nf + 1.0));
+            // x ← x + N h v + a h² N(N+1)/2; the dissipation with the steps' mean velocities
+            let path = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * nf);
             damping -= path.dot(&f_damp);
             friction -= path.dot(&f_slip);
             st.c += v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * (nf + 1.0));
