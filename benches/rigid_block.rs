@@ -157,6 +157,8 @@ fn bench(c: &mut Criterion) {
     for d in [2.0, 1.0, 0.5, 0.25] {
         let mut case = block(30.0, 0.0);
         case.end_time = Some(1.0);
+        // 1 m down the grid, so that the block rests wholly on it (the grid starts at x = 0)
+        case.release.along_dip = 1.0;
         case.face.floor = plane_grid(30.0, d);
         g.throughput(Throughput::Elements(steps_of(&case)));
         g.bench_with_input(BenchmarkId::new("flat_slide_1s", d), &case, |b, case| {

@@ -5,8 +5,9 @@
 import { initFloor } from './floor.js';
 import { buildForm } from './form.js';
 import { csvButton, fillTable, fmt, h, showWarnings } from './format.js';
+import { postJson } from './api.js';
 import { initPanel } from './panel.js';
-import { destroy, linePlot, plotMessage } from './plot.js';
+import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
 
 const MIGRATION_GROUPS = [
   {
@@ -141,7 +142,15 @@ export function initMigration() {
     side: document.getElementById('migration-side-plot'),
     plan: document.getElementById('migration-plan-plot'),
     energy: document.getElementById('migration-energy-plot'),
+    orientation: document.getElementById('migration-orientation-plot'),
   };
+  const orientationCard = document.getElementById('migration-orientation-card');
+  const compareBox = document.getElementById('migration-compare');
+  const comparePlot = document.getElementById('migration-compare-plot');
+  const compareBody = document.querySelector('#migration-compare-table tbody');
+  // "Compare both methods" runs the panel once with this set: the request is sent
+  // with each method and the answer carries both.
+  let compareNext = false;
   buildForm(form, MIGRATION_GROUPS);
   const floor = initFloor(form);
   form.floor = floor;
@@ -215,10 +224,19 @@ export function initMigration() {
         if (mc.friction_coefficient) mc.friction_coefficient = { distribution: 'truncated_normal', ...mc.friction_coefficient };
         request.output = { ...request.output, runs_csv: true };
       }
+      if (compareNext) {
+        compareNext = false;
+        delete request.monte_carlo;
+        request.output = { ...request.output, trajectory: true, runs_csv: false };
+        Object.defineProperty(request, 'compare', { value: true, enumerable: false });
+      }
       return request;
     },
-    stream: (request) => Boolean(request.monte_carlo),
-    busy: (request) => (request.monte_carlo ? `Running ${request.monte_carlo.runs} runs…` : 'Computing…'),
+    send: (request, opts) => (request.compare ? sendBoth(request, opts) : postJson('v1/migration', request, opts)),
+    stream: (request) => Boolean(request.monte_carlo) && !request.compare,
+    busy: (request) => (request.compare
+      ? 'Computing with both methods…'
+      : request.monte_carlo ? `Running ${request.monte_carlo.runs} runs…` : 'Computing…'),
     render,
     clear: () => {
       empty.hidden = false;
@@ -227,8 +245,26 @@ export function initMigration() {
       showWarnings(warnings, []);
       renderStatistics(null);
       renderTrajectory(null);
+      renderComparison(null);
     },
   });
+
+  document.getElementById('migration-compare-button').addEventListener('click', () => {
+    compareNext = true;
+    panel.run();
+  });
+
+  /** Sends the request with each method; the answer is the form's own method's, with both attached. */
+  async function sendBoth(request, opts) {
+    const answers = {};
+    for (const method of ['lumped_mass', 'rigid_block']) {
+      const answer = await postJson('v1/migration', { ...request, method }, { signal: opts.signal });
+      if (!answer.ok) return { ...answer, label: `with "method": "${method}"` };
+      answers[method] = answer.data;
+    }
+    const own = answers[request.method ?? 'lumped_mass'] ?? answers.lumped_mass;
+    return { ok: true, status: 200, data: { ...own, comparison: answers } };
+  }
 
   const tableTitle = document.getElementById('migration-table-title');
 
@@ -243,7 +279,74 @@ export function initMigration() {
     runsCsv = data.runs_csv ?? null;
     renderStatistics(data.statistics);
     renderTrajectory(data.trajectory, data);
+    renderComparison(data.comparison ?? null);
     floor.showPath(data);
+  }
+
+  function renderComparison(both) {
+    compareBox.hidden = !both;
+    compareBody.replaceChildren();
+    if (!both) {
+      destroy(comparePlot);
+      return;
+    }
+    const names = { lumped_mass: 'lumped mass', rigid_block: 'rigid block (DEM)' };
+    const tables = [];
+    for (const [method, d] of Object.entries(both)) {
+      const a = d.arrival;
+      compareBody.append(h('tr', { dataset: { method } },
+        h('th', { scope: 'row' }, names[method]),
+        h('td', { class: 'num', dataset: { out: `comparison.${method}.arrival.speed_m_s` } }, `${fmt(a.speed_m_s, 5)} m/s`),
+        h('td', { class: 'num' }, `${fmt(a.time_s, 5)} s`),
+        h('td', { class: 'num' }, String(d.impact_count)),
+        h('td', {}, outcomeWords(d))));
+      const tr = d.trajectory;
+      if (tr) tables.push([tr.along_dip_m, tr.speed_m_s]);
+    }
+    if (tables.length === 2) {
+      // one ascending distance axis for both curves (null where a method has no sample)
+      const sorted = tables.map(([xs, ys]) => {
+        const idx = xs.map((_, i) => i).sort((i, j) => xs[i] - xs[j] || i - j);
+        const out = [[], []];
+        for (const i of idx) {
+          // a repeated distance (at rest) keeps its last sample
+          if (out[0].length && out[0][out[0].length - 1] === xs[i]) out[1][out[1].length - 1] = ys[i];
+          else { out[0].push(xs[i]); out[1].push(ys[i]); }
+        }
+        return out;
+      });
+      const joined = joinSeries(sorted);
+      linePlot(comparePlot, {
+        x: { label: 'along the dip (m)', values: joined[0] },
+        y: { label: 'speed (m/s)' },
+        series: [
+          { label: `${names.lumped_mass} (m/s)`, values: joined[1] },
+          { label: `${names.rigid_block} (m/s)`, values: joined[2] },
+        ],
+      });
+      comparePlot.csv = () => [['along_dip_m', 'lumped_mass_speed_m_s', 'rigid_block_speed_m_s'],
+        ...joined[0].map((x, i) => [x, joined[1][i] ?? '', joined[2][i] ?? ''])];
+    } else {
+      plotMessage(comparePlot, 'Ask for the trajectory to see the two curves.');
+    }
+  }
+
+  /** Roll, pitch, yaw (z–y–x Tait–Bryan, degrees) of quaternions [w, x, y, z], unwrapped. */
+  function eulerDegrees(qs) {
+    const out = [[], [], []];
+    const last = [null, null, null];
+    for (const [w, x, y, z] of qs) {
+      const roll = Math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y));
+      const pitch = Math.asin(Math.max(-1, Math.min(1, 2 * (w * y - z * x))));
+      const yaw = Math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z));
+      [roll, pitch, yaw].forEach((r, k) => {
+        let deg = r * 180 / Math.PI;
+        if (last[k] !== null && k !== 1) deg += 360 * Math.round((last[k] - deg) / 360);
+        last[k] = deg;
+        out[k].push(deg);
+      });
+    }
+    return out;
   }
 
   function renderStatistics(stats) {
@@ -335,6 +438,22 @@ export function initMigration() {
       y2: { label: 'energy (kJ)' },
       series: energySeries,
     });
+    const q = tr.orientation_wxyz;
+    orientationCard.hidden = !q?.length;
+    if (q?.length) {
+      const [roll, pitch, yaw] = eulerDegrees(q);
+      linePlot(plots.orientation, {
+        x: { label: 'time (s)', values: tr.time_s, range: range(tr.time_s) },
+        y: { label: 'angle (°)' },
+        series: [
+          { label: 'roll (°)', values: roll },
+          { label: 'pitch (°)', values: pitch },
+          { label: 'yaw (°)', values: yaw },
+        ],
+      });
+    } else {
+      destroy(plots.orientation);
+    }
     const trajectoryCsv = () => trajectoryRows(tr);
     for (const el of Object.values(plots)) el.csv = trajectoryCsv;
   }
