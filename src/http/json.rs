@@ -259,11 +259,11 @@ pub fn check_json(bytes: &[u8]) -> Result<(), ApiError> {
         &mut de,
     )
     .and_then(|()| de.end());
-    checked.map_err(|e| parse_problem(e, dup.into_inner()))
+    checked.map_err(|e| parse_problem(&e, dup.into_inner()))
 }
 
 /// The problem for a failed first pass: the repeated key when one was found, else bad syntax.
-fn parse_problem(e: serde_json::Error, dup: Option<(String, Value)>) -> ApiError {
+fn parse_problem(e: &serde_json::Error, dup: Option<(String, Value)>) -> ApiError {
     match dup {
         Some((field, value)) => ApiError::from_field_errors(
             "invalid_input",

@@ -656,6 +656,7 @@ pub fn solve(case: &SceneCase, control: &Control) -> SceneResult<SceneReport> {
 }
 
 /// True when an impact of the report went past the contact capacity (the plan says so).
+#[must_use]
 pub fn nominal_capacity(report: &SceneReport) -> bool {
     report
         .impacts
@@ -1013,6 +1014,7 @@ pub const ENTRY_COLUMNS: usize = 5;
 /// The support entry a run struck within the contact capacity and its statistics columns, in
 /// the order of [`EntryStatistics`]: impact speed (m/s), δmax (m), Pmax (N), absorbed energy (J),
 /// stress utilisation. None when the run reached no support or went past the capacity.
+#[must_use]
 pub fn entry_columns(r: &SceneRun) -> Option<(usize, [f64; ENTRY_COLUMNS])> {
     let k = r.summary.support?;
     if r.capacity_exceeded {
