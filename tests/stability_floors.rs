@@ -705,3 +705,31 @@ fn a_bouncing_roll_on_a_very_rough_grid_never_books_a_negative_loss() {
     );
     assert_above_the_floor(&c);
 }
+
+/// A rock rolling fast (3.2 m/s) onto a rough 14 × 5 grid after a 1.1 m drop, with no rebound
+/// cutoff, stays on the floor (it was found 10.7 m below it at t = 3.17 s by the 100 000-case
+/// run; the solver's invariant refuses the answer with `internal`). Known defect: at t ≈ 1.6976 s
+/// the rock, rocking along the crease x = 3d through the node (3d, d) at about 1e-5 m/s, leaves
+/// the node in a flight that strikes no facet and falls vertically. Run with `--ignored`.
+#[test]
+#[ignore = "known defect: a near-rest flight from a grid node strikes no facet (issue notes)"]
+fn a_fast_roll_after_a_drop_on_a_rough_grid_stays_on_the_floor() {
+    let c = rough_case(
+        3504190736417842837,
+        24.735821354151888,
+        0.6992275106364256,
+        3.4897607360297105,
+        14,
+        5,
+        0.0,
+        0.19273168106846642,
+        0.6043480082420976,
+        1.1256444144979094,
+        0.23080735895608326,
+        0.23449059332395794,
+        3.203573887328512,
+        0.0,
+        true,
+    );
+    assert_above_the_floor(&c);
+}
