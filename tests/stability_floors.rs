@@ -708,11 +708,10 @@ fn a_bouncing_roll_on_a_very_rough_grid_never_books_a_negative_loss() {
 
 /// A rock rolling fast (3.2 m/s) onto a rough 14 × 5 grid after a 1.1 m drop, with no rebound
 /// cutoff, stays on the floor (it was found 10.7 m below it at t = 3.17 s by the 100 000-case
-/// run; the solver's invariant refuses the answer with `internal`). Known defect: at t ≈ 1.6976 s
-/// the rock, rocking along the crease x = 3d through the node (3d, d) at about 1e-5 m/s, leaves
-/// the node in a flight that strikes no facet and falls vertically. Run with `--ignored`.
+/// run): at t ≈ 1.6976 s the rock, rocking through the node (3d, d) at about 1e-4 m/s, bounced
+/// off one facet's plane 3e-10 m over its steeper neighbour, 5.3e-10 m under that neighbour's
+/// plane; too slow ever to rise through it, it struck nothing and fell vertically.
 #[test]
-#[ignore = "known defect: a near-rest flight from a grid node strikes no facet (issue notes)"]
 fn a_fast_roll_after_a_drop_on_a_rough_grid_stays_on_the_floor() {
     let c = rough_case(
         3504190736417842837,
