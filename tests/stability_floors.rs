@@ -732,3 +732,30 @@ fn a_fast_roll_after_a_drop_on_a_rough_grid_stays_on_the_floor() {
     );
     assert_above_the_floor(&c);
 }
+
+/// A rock sliding (e_n 0.77, no rebound cutoff) after a 2.1 m drop on a rough 20 × 7 grid stays
+/// on the floor. Known defect, found by the 100 000-case run: at t ≈ 2.1717 s, 2.5e-8 m beside
+/// the grid line y = d, the rock is 1.7e-8 m below the floor and the solver's invariant refuses
+/// the answer (500 `internal`, never a number). Run with `--ignored`.
+#[test]
+#[ignore = "known defect: 1.7e-8 m below the floor beside a grid line; refused by the invariant"]
+fn a_bouncing_slide_beside_a_grid_line_stays_on_the_floor() {
+    let c = rough_case(
+        4801936032137501939,
+        32.424444858032366,
+        0.767789702046382,
+        6.421566747454174,
+        20,
+        7,
+        0.0,
+        0.765231889023679,
+        0.36426549222892035,
+        2.059803139742293,
+        0.5883071798084004,
+        0.305290945509302,
+        3.0670419324110525,
+        0.0,
+        false,
+    );
+    assert_above_the_floor(&c);
+}

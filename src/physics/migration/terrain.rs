@@ -1197,9 +1197,10 @@ impl Floor {
         // rounding of the start point's height against a facet's plane (a few ulps of its
         // coordinates), far below the invariant's 1e-9 tolerance
         let h_round = 1e-12 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()));
-        // a start below a facet's plane by less than the floor invariant's tolerance: the
-        // rock is on that plane to the rounding of positions near a node (a rock on one facet's
-        // plane a few 1e-10 m over its steeper neighbour lies under the neighbour's plane)
+        // a start below a facet's plane by less than the floor invariant's tolerance, never
+        // rising to it: the rock is on that plane to the rounding of positions near a node (a
+        // rock on one facet's plane a few 1e-10 m over its steeper neighbour lies under the
+        // neighbour's plane)
         let h_under = 1e-9 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()));
         let root = |pl: &FacetPlane| -> Option<(f64, bool)> {
             let h0 = pl.height(p);
@@ -1221,7 +1222,7 @@ impl Floor {
             if slope >= -1e-12 * (1.0 + b.abs()) {
                 return (h0.abs() <= h_round && b <= 1e-12).then_some((0.0, true));
             }
-            if r < -1e-12 && h0 >= -h_under {
+            if r < -1e-12 && h0 >= -h_round {
                 return Some((0.0, true));
             }
             Some((r, false))
