@@ -1197,20 +1197,10 @@ impl Floor {
         // rounding of the start point's height against a facet's plane (a few ulps of its
         // coordinates), far below the invariant's 1e-9 tolerance
         let h_round = 1e-12 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()));
-        // a start below a facet's plane by less than the floor invariant's tolerance, never
-        // rising to it: the rock is on that plane to the rounding of positions near a node (a
-        // rock on one facet's plane a few 1e-10 m over its steeper neighbour lies under the
-        // neighbour's plane)
-        let h_under = 1e-9 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()));
         let root = |pl: &FacetPlane| -> Option<(f64, bool)> {
             let h0 = pl.height(p);
             let b = pl.height_rate(v);
-            let Some(r) = descent_root(h0, b, g) else {
-                // below the plane and never rising to it (slower than √(2 g |h0|) across it):
-                // a strike now (a rock nearly at rest at a grid node 5e-10 m under a facet's
-                // plane struck nothing and fell 10 m through the floor)
-                return (h0 >= -h_under && b <= 0.0).then_some((0.0, true));
-            };
+            let r = descent_root(h0, b, g)?;
             // a strike: the height decreases through zero (not a graze at the start)
             let slope = b - g * r;
             // A start on the plane (to rounding) not moving away from it is a strike now, if the
