@@ -583,6 +583,19 @@ impl FreeVibration {
         out
     }
 
+    /// Coefficients shared by the uniform samplers: ω_d² = ω_n²(1 − ζ)(1 + ζ) in 1/s², ω_n² in
+    /// 1/s², and the dissipated-energy factor c w₀² ω_n² / (4σ) in J (0 without damping).
+    fn uniform_coefficients(&self) -> (f64, f64, f64) {
+        let wn2 = self.omega_n * self.omega_n;
+        let q2 = wn2 * (1.0 - self.zeta) * (1.0 + self.zeta);
+        let dis_factor = if self.damping == 0.0 || self.sigma == 0.0 {
+            0.0
+        } else {
+            self.damping * self.w0 * self.w0 * wn2 / (4.0 * self.sigma)
+        };
+        (q2, wn2, dis_factor)
+    }
+
     /// Calls `f` with the samples of [`FreeVibration::sample_uniform`] in time order, without
     /// collecting them (callers write straight into their own arrays).
     pub fn for_each_uniform(&self, duration: f64, n: usize, mut f: impl FnMut(ModalSample)) {
@@ -595,14 +608,8 @@ impl FreeVibration {
             return;
         }
         let dt = duration / (n - 1) as f64;
-        let q2 = self.omega_n * self.omega_n * (1.0 - self.zeta) * (1.0 + self.zeta);
+        let (q2, wn2, dis_factor) = self.uniform_coefficients();
         let s = self.sigma;
-        let wn2 = self.omega_n * self.omega_n;
-        let dis_factor = if self.damping == 0.0 || s == 0.0 {
-            0.0
-        } else {
-            self.damping * self.w0 * self.w0 * wn2 / (4.0 * s)
-        };
         let (half_m, half_k) = (0.5 * self.mass, 0.5 * self.stiffness);
         // Kernels and 1 − e^{−2στ} at τ = jΔ, j < BLOCK (only as many as there are samples).
         let len = BLOCK.min(n);
@@ -693,14 +700,8 @@ impl FreeVibration {
             return;
         }
         let dt = duration / (n - 1) as f64;
-        let q2 = self.omega_n * self.omega_n * (1.0 - self.zeta) * (1.0 + self.zeta);
+        let (q2, wn2, dis_factor) = self.uniform_coefficients();
         let s = self.sigma;
-        let wn2 = self.omega_n * self.omega_n;
-        let dis_factor = if self.damping == 0.0 || s == 0.0 {
-            0.0
-        } else {
-            self.damping * self.w0 * self.w0 * wn2 / (4.0 * s)
-        };
         let (half_m, half_k, w0) = (0.5 * self.mass, 0.5 * self.stiffness, self.w0);
         let len = BLOCK.min(n);
         let mut kc = [0.0; BLOCK];
