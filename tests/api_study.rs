@@ -385,3 +385,55 @@ mod properties {
         }
     }
 }
+
+/// A base field refused only when a point is solved (an impact energy below what double
+/// precision resolves) is named under `/base`, and a swept value refused at solve time names its
+/// parameter; the detail names the same pointer as `errors`, also inside a batch item.
+#[tokio::test]
+async fn a_field_refused_while_solving_a_point_is_named_as_sent() {
+    let app = common::app();
+    let r = post(
+        &app,
+        "/v1/study",
+        &json!({"base": {"velocity_m_s": 1e-300},
+                "parameters": [{"name": "rock.density_kg_m3", "min": 2000.0, "max": 3000.0}]}),
+    )
+    .await;
+    let p = assert_problem(&r, 422, "invalid_input");
+    assert_eq!(p["errors"][0]["field"], "/base/velocity_m_s", "{p}");
+    assert!(
+        p["detail"]
+            .as_str()
+            .unwrap()
+            .starts_with("/base/velocity_m_s:"),
+        "{p}"
+    );
+
+    let swept = json!({"parameters": [
+        {"name": "rock.density_kg_m3", "min": 2000.0, "max": 3000.0},
+        {"name": "column.yield_stress_pa", "min": 1e-300, "max": 1e-299}]});
+    let r = post(&app, "/v1/study", &swept).await;
+    let p = assert_problem(&r, 422, "invalid_input");
+    assert_eq!(p["errors"][0]["field"], "/parameters/1", "{p}");
+
+    let r = post(
+        &app,
+        "/v1/batch",
+        &json!({"items": [{"kind": "column", "request": {}},
+                          {"kind": "study", "request": {"base": {"velocity_m_s": 1e-300}}}]}),
+    )
+    .await;
+    assert_eq!(r.status, 200);
+    let line: Value =
+        serde_json::from_str(String::from_utf8_lossy(&r.body).lines().nth(1).unwrap()).unwrap();
+    assert_eq!(line["status"], 422, "{line}");
+    let field = "/items/1/request/base/velocity_m_s";
+    assert_eq!(line["problem"]["errors"][0]["field"], field, "{line}");
+    assert!(
+        line["problem"]["detail"]
+            .as_str()
+            .unwrap()
+            .starts_with(&format!("{field}:")),
+        "{line}"
+    );
+}

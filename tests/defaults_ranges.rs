@@ -230,6 +230,7 @@ async fn mismatches(app: &axum::Router, doc: &Value, path: &str, schema: &str) -
     let mut all = Vec::new();
     let walk = Walk {
         arrays: false,
+        object_arrays: false,
         // The study's base is a column request, checked on /v1/column.
         skip: &["/base"],
     };

@@ -6,11 +6,14 @@
 //! outside a documented bound the answer is 422 naming exactly that field (documented bound ==
 //! enforced bound).
 //!
-//! For each POST body schema (impact, column, migration, scene) the test walks the properties (through
-//! `$ref` and nullable `oneOf`), and for every numeric leaf with a documented minimum or maximum
+//! For each POST body schema (impact, column, migration, scene, study, spalling) the test walks
+//! the properties (through `$ref`, nullable `oneOf` and the first item of arrays of objects such
+//! as `/supports/0` or `/zones/0`), and for every numeric leaf with a documented minimum or maximum
 //! sends, one field at a time with everything else at its default: the bound, the value just
 //! inside (next f64, ±1 for integers), 5e-324 and 1e-300 where in range, and the value just
-//! outside. Fixed three-item arrays (`dimensions_m`, `semi_axes_m`) vary their first item.
+//! outside. Fixed three-item arrays (`dimensions_m`, `semi_axes_m`) vary their first item. The
+//! same requests are then sent again as items of `POST /v1/batch`, where each item must answer
+//! like its endpoint and a refusal must name `/items/i/request/…`.
 //!
 //! Cases that are known to fail in code other engineers are fixing are listed in
 //! [`KNOWN_ELSEWHERE`]; they are reported, not failed, and the list is to be emptied as those fixes
@@ -30,9 +33,22 @@ const KNOWN_ELSEWHERE: &[(&str, &str, &str)] = &[];
 
 /// Documented cross-field rules: an in-range value of the first field may be refused naming the
 /// second, whose default it contradicts (api.md: D₂ < D₁; the column at least the contact length
-/// L of a cube).
+/// L of a cube; a zone's A∩B at most min(A, B) and A∩C at most min(A, C)).
 const RELATED: &[(&str, &str)] = &[
     ("/column/outer_diameter_m", "/column/inner_diameter_m"),
+    (
+        "/supports/0/column/outer_diameter_m",
+        "/supports/0/column/inner_diameter_m",
+    ),
+    (
+        "/base/column/outer_diameter_m",
+        "/base/column/inner_diameter_m",
+    ),
+    ("/base/rock/side_length_m", "/base/column/length_m"),
+    ("/zones/0/spalling", "/zones/0/spalling_and_high"),
+    ("/zones/0/spalling", "/zones/0/spalling_and_low"),
+    ("/zones/0/high_resistance", "/zones/0/spalling_and_high"),
+    ("/zones/0/low_resistance", "/zones/0/spalling_and_low"),
     ("/rock/side_length_m", "/column/length_m"),
     ("/rock/side_length_m", "/supports/0/column/length_m"),
     ("/support_rows/lowest_along_dip_m", "/support_rows/count"),
@@ -206,7 +222,10 @@ fn values(leaf: &Leaf) -> Vec<(String, Value, bool)> {
 fn body_for(leaf: &Leaf, base: &Value, value: Value) -> Value {
     let mut body = base.clone();
     for (p, base) in &leaf.parents {
-        if body.pointer(p).is_none_or(|v| !v.is_object()) {
+        if body
+            .pointer(p)
+            .is_none_or(|v| !v.is_object() && !v.is_array())
+        {
             let (parent, key) = p.rsplit_once('/').unwrap();
             let obj = body.pointer_mut(parent).unwrap().as_object_mut().unwrap();
             obj.insert(key.to_string(), base.clone());
@@ -226,37 +245,59 @@ fn body_for(leaf: &Leaf, base: &Value, value: Value) -> Value {
     body
 }
 
-#[tokio::test]
-async fn every_documented_numeric_bound_is_answered_or_refused_by_name() {
-    let doc: Value = serde_json::from_str(&gangue::http::openapi::openapi_json()).unwrap();
-    let app = gangue::app(gangue::config::Config {
-        compute_timeout_s: 20.0,
-        ..Default::default()
-    });
-    let mut failures: Vec<(String, String, String, String)> = Vec::new();
-    let mut sent = 0usize;
-    let t0 = std::time::Instant::now();
-    for path in ["/v1/impact", "/v1/column", "/v1/migration", "/v1/scene"] {
+/// Every endpoint whose request body is walked, with the pointers not descended into.
+const ENDPOINTS: &[(&str, &[&str])] = &[
+    ("/v1/impact", &[]),
+    ("/v1/column", &[]),
+    ("/v1/migration", &[]),
+    ("/v1/scene", &[]),
+    // A study's base must not ask for a history (`output` null); its other fields are the
+    // column request's.
+    ("/v1/study", &["/base/output"]),
+    ("/v1/spalling", &[]),
+];
+
+/// One request of the walk: a documented numeric field set to one extreme value.
+struct Case {
+    /// Endpoint.
+    path: &'static str,
+    /// JSON Pointer of the varied field in the endpoint's own body.
+    pointer: String,
+    /// Which extreme (`min`, `above-max`, …), with a note when the value was capped.
+    label: String,
+    /// The value sent.
+    value: Value,
+    /// Whether the value is inside the documented range.
+    inside: bool,
+    /// The endpoint's body.
+    body: Value,
+}
+
+/// Every case of every endpoint, in a fixed order.
+fn cases(doc: &Value) -> Vec<Case> {
+    let mut out = Vec::new();
+    for &(path, skip) in ENDPOINTS {
         let body_schema =
             &doc["paths"][path]["post"]["requestBody"]["content"]["application/json"]["schema"];
-        let (schema, _) = resolve(&doc, body_schema);
+        let (schema, _) = resolve(doc, body_schema);
         let mut leaves = Vec::new();
         openapi::leaves(
-            &doc,
+            doc,
             schema,
             "",
             &[],
             &Walk {
                 arrays: true,
-                skip: &[],
+                object_arrays: true,
+                skip,
             },
             &mut leaves,
         );
-        assert!(leaves.len() >= 5, "{path}: {} numeric leaves", leaves.len());
+        assert!(leaves.len() >= 3, "{path}: {} numeric leaves", leaves.len());
         for leaf in &leaves {
             for base in contexts(path, &leaf.pointer) {
                 for (label, mut value, inside) in values(leaf) {
-                    let mut note = "";
+                    let mut label = label;
                     if (label == "max" || label == "max-")
                         && let Some(&(_, _, cap)) = COST_LIMITED
                             .iter()
@@ -268,61 +309,72 @@ async fn every_documented_numeric_bound_is_answered_or_refused_by_name() {
                         } else {
                             json!(cap)
                         };
-                        note = " (cost-limited)";
+                        label.push_str(" (cost-limited)");
                     }
                     let body = body_for(leaf, &base, value.clone());
-                    let r = common::post(&app, path, &body).await;
-                    sent += 1;
-                    let text = String::from_utf8_lossy(&r.body).to_string();
-                    let parsed: Option<Value> = serde_json::from_slice(&r.body).ok();
-                    let status = r.status.as_u16();
-                    let names = |p: &Value, field: &str| {
-                        p["errors"]
-                            .as_array()
-                            .is_some_and(|e| e.iter().any(|e| e["field"] == field))
-                    };
-                    let named = |p: &Value| {
-                        names(p, &leaf.pointer)
-                            || (inside
-                                && RELATED
-                                    .iter()
-                                    .any(|(f, other)| *f == leaf.pointer && names(p, other)))
-                    };
-                    let outcome = match (&parsed, status) {
-                        (None, _) => Err(format!("{status}, body not JSON (NaN/Infinity?)")),
-                        (_, s) if s >= 500 => Err(format!("{s}")),
-                        (Some(_), 200) if inside => Ok("200".to_string()),
-                        (Some(_), 200) => Err("200 just outside the documented bound".into()),
-                        (Some(p), 422) if named(p) => Ok(format!("422 {}", p["type"])),
-                        (Some(p), 422) if inside && p["type"] == "/problems/capacity_exceeded" => {
-                            Ok("422 capacity_exceeded".into())
-                        }
-                        (Some(p), s) => Err(format!("{s} {} not naming the field", p["type"])),
-                    };
-                    println!(
-                        "{path} {} {label}{note} = {value}: {}",
-                        leaf.pointer,
-                        match &outcome {
-                            Ok(o) => o.clone(),
-                            Err(e) => format!("FAIL {e}"),
-                        }
-                    );
-                    if let Err(e) = outcome {
-                        let excerpt: String = text.chars().take(300).collect();
-                        failures.push((
-                            path.to_string(),
-                            leaf.pointer.clone(),
-                            label.clone(),
-                            format!("{e}: request {body} -> {excerpt}"),
-                        ));
-                    }
+                    out.push(Case {
+                        path,
+                        pointer: leaf.pointer.clone(),
+                        label,
+                        value,
+                        inside,
+                        body,
+                    });
                 }
             }
         }
     }
-    println!("{sent} requests in {:.1} s", t0.elapsed().as_secs_f64());
+    out
+}
+
+/// Whether a problem names `field` (as sent, under `prefix`) in its `errors`.
+fn names(problem: &Value, prefix: &str, field: &str) -> bool {
+    let want = format!("{prefix}{field}");
+    problem["errors"]
+        .as_array()
+        .is_some_and(|e| e.iter().any(|e| e["field"] == want.as_str()))
+}
+
+/// The answer class of one case (`Ok`) or what is wrong with it (`Err`): `status` and `answer`
+/// are the endpoint's status and JSON (result or problem), `prefix` the pointer of the
+/// endpoint's body inside the request actually sent.
+fn judge(case: &Case, status: u16, answer: Option<&Value>, prefix: &str) -> Result<String, String> {
+    let named = |p: &Value| {
+        names(p, prefix, &case.pointer)
+            || (case.inside
+                && RELATED
+                    .iter()
+                    .any(|(f, other)| *f == case.pointer && names(p, prefix, other)))
+    };
+    // A detail that opens with a pointer opens with the first error's pointer, as sent.
+    if let Some(p) = answer.filter(|_| status >= 400)
+        && let Some(detail) = p["detail"].as_str()
+        && detail.starts_with('/')
+        && let Some((lead, _)) = detail.split_once(':')
+        && p["errors"][0]["field"].as_str() != Some(lead)
+    {
+        return Err(format!(
+            "detail names {lead}, errors[0] names {}",
+            p["errors"][0]["field"]
+        ));
+    }
+    match (answer, status) {
+        (None, _) => Err(format!("{status}, body not JSON (NaN/Infinity?)")),
+        (_, s) if s >= 500 => Err(format!("{s}")),
+        (Some(_), 200) if case.inside => Ok("200".to_string()),
+        (Some(_), 200) => Err("200 just outside the documented bound".into()),
+        (Some(p), 422) if named(p) => Ok(format!("422 {}", p["type"])),
+        (Some(p), 422) if case.inside && p["type"] == "/problems/capacity_exceeded" => {
+            Ok("422 capacity_exceeded".into())
+        }
+        (Some(p), s) => Err(format!("{s} {} not naming the field", p["type"])),
+    }
+}
+
+/// Fails with every unexpected failure; reports the known ones and known ones that now pass.
+fn report(failures: &[(String, String, String, String)]) {
     let mut unexpected = Vec::new();
-    for (path, pointer, label, what) in &failures {
+    for (path, pointer, label, what) in failures {
         if KNOWN_ELSEWHERE.contains(&(path.as_str(), pointer.as_str(), label.as_str())) {
             println!("known elsewhere: {path} {pointer} {label}: {what}");
         } else {
@@ -343,4 +395,119 @@ async fn every_documented_numeric_bound_is_answered_or_refused_by_name() {
         unexpected.len(),
         unexpected.join("\n")
     );
+}
+
+fn app() -> axum::Router {
+    gangue::app(gangue::config::Config {
+        compute_timeout_s: 20.0,
+        ..Default::default()
+    })
+}
+
+fn doc() -> Value {
+    serde_json::from_str(&gangue::http::openapi::openapi_json()).unwrap()
+}
+
+#[tokio::test]
+async fn every_documented_numeric_bound_is_answered_or_refused_by_name() {
+    let app = app();
+    let all = cases(&doc());
+    let mut failures: Vec<(String, String, String, String)> = Vec::new();
+    let t0 = std::time::Instant::now();
+    for path in ["/v1/study", "/v1/spalling", "/v1/scene"] {
+        assert!(
+            all.iter().any(|c| c.path == path),
+            "{path} has no bounded numeric field"
+        );
+    }
+    assert!(
+        all.iter()
+            .any(|c| c.pointer.starts_with("/supports/0/column/")),
+        "the walk enters arrays of objects"
+    );
+    for case in &all {
+        let r = common::post(&app, case.path, &case.body).await;
+        let parsed: Option<Value> = serde_json::from_slice(&r.body).ok();
+        let outcome = judge(case, r.status.as_u16(), parsed.as_ref(), "");
+        println!(
+            "{} {} {} = {}: {}",
+            case.path,
+            case.pointer,
+            case.label,
+            case.value,
+            match &outcome {
+                Ok(o) => o.clone(),
+                Err(e) => format!("FAIL {e}"),
+            }
+        );
+        if let Err(e) = outcome {
+            let excerpt: String = String::from_utf8_lossy(&r.body).chars().take(300).collect();
+            failures.push((
+                case.path.to_string(),
+                case.pointer.clone(),
+                case.label.clone(),
+                format!("{e}: request {} -> {excerpt}", case.body),
+            ));
+        }
+    }
+    println!(
+        "{} requests in {:.1} s",
+        all.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    report(&failures);
+}
+
+/// The same extremes as items of `POST /v1/batch`: each item answers what its own endpoint
+/// answers, and a refusal names the field under `/items/i/request`.
+#[tokio::test]
+async fn every_documented_numeric_bound_inside_a_batch_item_is_answered_or_refused_by_name() {
+    let app = app();
+    let all = cases(&doc());
+    let mut failures: Vec<(String, String, String, String)> = Vec::new();
+    let t0 = std::time::Instant::now();
+    // Items per batch, below the default item limit.
+    const CHUNK: usize = 200;
+    for chunk in all.chunks(CHUNK) {
+        let items: Vec<Value> = chunk
+            .iter()
+            .map(|c| json!({"kind": c.path.trim_start_matches("/v1/"), "request": c.body}))
+            .collect();
+        let r = common::post(&app, "/v1/batch", &json!({"items": items})).await;
+        assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+        let text = String::from_utf8_lossy(&r.body).to_string();
+        let lines: Vec<Option<Value>> =
+            text.lines().map(|l| serde_json::from_str(l).ok()).collect();
+        assert_eq!(lines.len(), chunk.len(), "one line per item");
+        for (i, (case, line)) in chunk.iter().zip(&lines).enumerate() {
+            let prefix = format!("/items/{i}/request");
+            let outcome = match line {
+                None => Err(format!("line {i} not JSON (NaN/Infinity?)")),
+                Some(l) if l["index"] != i => Err(format!("line {i} has index {}", l["index"])),
+                Some(l) => {
+                    let status = l["status"].as_u64().map_or(0, |s| s as u16);
+                    let answer = if status == 200 {
+                        l.get("result")
+                    } else {
+                        l.get("problem")
+                    };
+                    judge(case, status, answer, &prefix)
+                }
+            };
+            if let Err(e) = outcome {
+                failures.push((
+                    case.path.to_string(),
+                    case.pointer.clone(),
+                    case.label.clone(),
+                    format!("batch item: {e}: item {} -> {:?}", case.body, line),
+                ));
+            }
+        }
+    }
+    println!(
+        "{} batch items in {:.1} s",
+        all.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    report(&failures);
 }

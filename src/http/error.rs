@@ -278,9 +278,20 @@ impl ApiError {
 
     /// Prefixes every field pointer (used when a request is nested, e.g. in a batch or study).
     #[must_use]
-    pub fn nest(mut self, prefix: &str) -> Self {
+    pub fn nest(self, prefix: &str) -> Self {
+        self.rename_fields(|f| format!("{prefix}{f}"))
+    }
+
+    /// Renames every field pointer by `rename`, and the first field where the detail names it.
+    #[must_use]
+    pub fn rename_fields(mut self, rename: impl Fn(&str) -> String) -> Self {
+        if let Some(first) = self.errors.first()
+            && let Some(rest) = self.detail.strip_prefix(&format!("{}:", first.field))
+        {
+            self.detail = format!("{}:{rest}", rename(&first.field));
+        }
         for e in &mut self.errors {
-            e.field = format!("{prefix}{}", e.field);
+            e.field = rename(&e.field);
         }
         self
     }

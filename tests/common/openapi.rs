@@ -28,6 +28,8 @@ pub struct Leaf {
 pub struct Walk<'a> {
     /// Also list the items of fixed-length arrays with bounded items.
     pub arrays: bool,
+    /// Also descend into the first item of arrays of objects (given the array's example).
+    pub object_arrays: bool,
     /// Pointers not to descend into (checked on another route).
     pub skip: &'a [&'a str],
 }
@@ -120,6 +122,18 @@ pub fn leaves(
             }
             let fixed = s.get("minItems").is_some() && s.get("minItems") == s.get("maxItems");
             let items = s.get("items").unwrap_or(&Value::Null);
+            let (item_schema, _) = resolve(doc, items);
+            if walk.object_arrays && item_schema.get("properties").is_some() {
+                let example = prop
+                    .get("example")
+                    .or(s.get("example"))
+                    .cloned()
+                    .expect("an array of objects has an example");
+                let mut p = parents.to_vec();
+                p.push((pointer.clone(), example));
+                leaves(doc, item_schema, &format!("{pointer}/0"), &p, walk, out);
+                continue;
+            }
             let (min, max) = bounds(items);
             if fixed && (min.is_some() || max.is_some()) {
                 let example = prop

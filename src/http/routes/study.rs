@@ -496,8 +496,18 @@ impl StudyPlan {
                 )]
             }
         };
-        let (req, case) = resolve_point(config, &point_json(&self.base_json, &sets))?;
-        let resp = column::solve(&case, req, control)?;
+        // A point's error names the swept parameter that set the field, else the base's field.
+        let blame_point = |e: ApiError| {
+            e.rename_fields(|f| {
+                params
+                    .iter()
+                    .position(|p| p.pointer == f && sets.iter().any(|(s, _)| *s == f))
+                    .map_or_else(|| format!("/base{f}"), |i| format!("/parameters/{i}"))
+            })
+        };
+        let (req, case) =
+            resolve_point(config, &point_json(&self.base_json, &sets)).map_err(blame_point)?;
+        let resp = column::solve(&case, req, control).map_err(blame_point)?;
         let v = serde_json::to_value(&resp).map_err(ApiError::internal)?;
         let out = extract(&v, &extract_names)?;
         control.add_done(1);
