@@ -143,8 +143,10 @@ pub fn check_counts(zones: &[ZoneCounts]) -> Vec<CountError> {
     out
 }
 
+/// `100 · num / den` %, formed as 100 · (num / den) so that a part never exceeds 100 %
+/// (num ≤ den gives a quotient ≤ 1, and 100 · 1 is exact).
 fn pct(num: f64, den: f64) -> Percent {
-    (den > 0.0).then(|| 100.0 * num / den)
+    (den > 0.0).then(|| 100.0 * (num / den))
 }
 
 fn ci_pct(num: f64, den: f64) -> Option<[f64; 2]> {
