@@ -400,3 +400,21 @@ async fn light_damping_decay_time_is_the_envelope_time() {
     let (above, _) = decay(a + 1e-9).await;
     assert!(common::rel(below, above) < 1e-7, "{below} against {above}");
 }
+
+/// A coupled history sampled 5e-324 s after the first touch stored NaN as the contact energy of
+/// the log law (the force there is subnormal, P_ref/P overflowed and P²·∞ = NaN), answered 500;
+/// found by the long Schemathesis run through `/v1/scene`. Every sample is finite now and the
+/// contact energy at that instant is 0 (P² underflows).
+#[tokio::test]
+async fn a_coupled_history_sampled_at_a_subnormal_time_is_finite() {
+    let app = common::app();
+    let column = json!({"model": "coupled", "output": {"duration_s": 5e-324, "samples": 2}});
+    let r = common::post(&app, "/v1/column", &column).await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    assert_eq!(b["history"]["contact_energy_j"], json!([0.0, 0.0]), "{b}");
+    let scene = json!({"column_model": "coupled",
+                       "column_output": {"duration_s": 5e-324, "samples": 2}});
+    let r = common::post(&app, "/v1/scene", &scene).await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+}

@@ -147,7 +147,15 @@ pub fn contact_energy(law: &ForceLaw, delta: f64) -> Option<f64> {
             if p == 0.0 {
                 return Some(0.0);
             }
-            Some(p * p / (4.0 * k) * (2.0 * (p_ref / p).ln() - 1.0))
+            // For a subnormal P the quotient P_ref/P overflows (and P²·∞ was NaN): then
+            // ln P_ref − ln P, finite, and P² underflowing to 0 gives the right limit.
+            let q = p_ref / p;
+            let ln_q = if q.is_finite() {
+                q.ln()
+            } else {
+                p_ref.ln() - p.ln()
+            };
+            Some(p * p / (4.0 * k) * (2.0 * ln_q - 1.0))
         }
         ForceLaw::Hertz { kappa } => Some(0.4 * kappa * delta * delta * delta.sqrt()),
     }
