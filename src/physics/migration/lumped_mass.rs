@@ -284,6 +284,32 @@ fn set_height(s: &mut St, z: f64, g: f64, ke_factor: f64) {
     }
 }
 
+/// Height, m, of the floor's surface at p when p is under it by more than rounding: the
+/// highest plane among the facets whose triangles come within 2e-9 of a cell of p in plan
+/// (at a node or an edge, the highest of the planes meeting there). A flight starts there,
+/// and a strike puts the rock there: from a point under a neighbour's plane a slow rock never
+/// rises through it, so no strike on it is found and the rock falls through the floor (a rock
+/// rolling through a node at 3e-4 m/s took off 2e-9 m under a steeper facet's plane and fell
+/// 10 m). None when p is on or above that surface (to the flight search's own rounding
+/// allowance, 1e-12 of its coordinates).
+fn floor_surface_above(floor: &Floor, p: &Vector3<f64>) -> Option<f64> {
+    let h_round = 1e-12 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()));
+    floor
+        .top_height_near(p.x, p.y, 2e-9 * floor.cell_size())
+        .filter(|&top| top - p.z > h_round)
+}
+
+/// Puts the rock on the plane of the facet it moves onto, at height `z` (see [`set_height`]),
+/// then onto the floor's surface where that is higher ([`floor_surface_above`]): near a node
+/// the rock may lie over a third facet whose plane is higher (3e-9 m for a rock rolling along
+/// a valley through a node of a very rough grid).
+fn set_floor_height(s: &mut St, floor: &Floor, z: f64, g: f64, ke_factor: f64) {
+    set_height(s, z, g, ke_factor);
+    if let Some(top) = floor_surface_above(floor, &s.p) {
+        set_height(s, top, g, ke_factor);
+    }
+}
+
 /// Smallest positive root of ½ c t² + b t − s = 0 (s > 0), or +∞.
 fn reach_time(s: f64, b: f64, c: f64) -> f64 {
     if s <= 0.0 {
@@ -545,7 +571,7 @@ pub(crate) fn simulate(
         let plb = floor.facet_plane(fb);
         let nb = plb.normal();
         let z = plb.z(s.p.x, s.p.y);
-        set_height(s, z, g, ke_factor);
+        set_floor_height(s, floor, z, g, ke_factor);
         let vn = s.v.dot(&nb);
         let sp = s.v.norm();
         if vn > 1e-9 * sp + 1e-12 {
@@ -674,7 +700,7 @@ pub(crate) fn simulate(
             s.v = dir * vd;
             s.e_trans += before - 0.5 * kf * vd * vd;
             let z = floor.facet_plane(f).z(s.p.x, s.p.y);
-            set_height(&mut s, z, g, kf);
+            set_floor_height(&mut s, floor, z, g, kf);
             if s.ground.is_none() {
                 enter_ground(&mut s, f, &mut rec);
             } else {
@@ -686,6 +712,12 @@ pub(crate) fn simulate(
             // measure along the dip from the last floor point (local terms)
             s.s_r += (s.p - s.r).dot(&dip);
             s.r = s.p;
+        }
+        // a flight starts on or above every plane it could strike
+        if s.ground.is_none()
+            && let Some(top) = floor_surface_above(floor, &s.p)
+        {
+            set_height(&mut s, top, g, 1.0);
         }
         let t_left = su.end_time.map_or(f64::INFINITY, |te| te - s.t);
         let s_left = su.length - (s.s_r + (s.p - s.r).dot(&dip));
@@ -776,6 +808,11 @@ pub(crate) fn simulate(
                         let n = pl.normal();
                         let z = pl.z(s.p.x, s.p.y);
                         set_height(&mut s, z, g, 1.0);
+                        // on the floor's surface itself: a strike accepted a rounding
+                        // tolerance outside the struck facet may lie under a neighbour's plane
+                        if let Some(top) = floor_surface_above(floor, &s.p) {
+                            set_height(&mut s, top, g, 1.0);
+                        }
                         if (s.p - p_start).norm() <= trap_len {
                             trap += 1;
                         } else {
@@ -1103,7 +1140,7 @@ pub(crate) fn simulate(
                                 }
                                 let kf = if s.ground.is_some() { ke_factor } else { 1.0 };
                                 let z = floor.facet_plane(fc).z(s.p.x, s.p.y);
-                                set_height(&mut s, z, g, kf);
+                                set_floor_height(&mut s, floor, z, g, kf);
                             }
                             None => break (moving, StopReason::LeftFloor),
                         }
