@@ -707,15 +707,14 @@ fn a_bouncing_roll_on_a_very_rough_grid_never_books_a_negative_loss() {
 }
 
 /// A rock rolling fast (3.2 m/s) onto a rough 14 × 5 grid after a 1.1 m drop, with no rebound
-/// cutoff, stays on the floor. Known defect, found by the 100 000-case run: at t ≈ 1.6976 s the
-/// rock, rocking through the node (3d, d) at about 1e-4 m/s, bounces off one facet's plane
-/// 3e-10 m over its steeper neighbour, 5.3e-10 m under that neighbour's plane; too slow ever to
-/// rise through it, it strikes nothing and falls. The solver's invariant refuses the answer
-/// (500 `internal`, never a number). Treating such a start as a strike now fixes this case but
-/// put a sliding rock 1.7e-8 m under a grid line in the 20 000-case run (the next test). Run
-/// with `--ignored`.
+/// cutoff, stays on the floor (found by the 100 000-case run). At t ≈ 1.6976 s the rock,
+/// rocking through the node (3d, d) at 3e-4 m/s after a series of near-rest bounces there,
+/// took off a few nm from the node while under a neighbouring facet's plane by less than 1e-9
+/// m; too slow ever to rise through that plane, it struck nothing and fell (2.3e-8 m below the
+/// floor 1e-4 s later, 10.7 m by t = 3.17 s), and the solver's invariant refused the answer
+/// (500 `internal`). Every flight now starts on the floor's surface there, the highest of the
+/// planes meeting at the node, and a strike puts the rock there too.
 #[test]
-#[ignore = "known defect: a near-rest bounce at a grid node strikes no facet; refused by the invariant"]
 fn a_fast_roll_after_a_drop_on_a_rough_grid_stays_on_the_floor() {
     let c = rough_case(
         3504190736417842837,
@@ -758,6 +757,33 @@ fn a_bouncing_slide_beside_a_grid_line_stays_on_the_floor() {
         3.0670419324110525,
         0.0,
         false,
+    );
+    assert_above_the_floor(&c);
+}
+
+/// A rock rolling along a valley (a cell's diagonal) of a very rough 19 × 6 grid through a node
+/// at 0.65 m/s, then bouncing there, stays on the floor (found by the 100 000-case run). Moved
+/// onto the next facet's plane a few 1e-10 m past the node, it lay 3.2e-9 m under the floor's
+/// surface there (a third facet's plane, steeper by about 4), beyond the invariant's rounding
+/// tolerance: refused with a 500. A facet change now puts the rock on the floor's surface.
+#[test]
+fn a_roll_along_a_valley_through_a_rough_node_stays_on_the_floor() {
+    let c = rough_case(
+        4499541606044643937,
+        44.167255491079594,
+        0.6908419073397245,
+        6.719818155542484,
+        19,
+        6,
+        0.0,
+        0.8603503666020014,
+        0.24113057726394163,
+        0.3501186570083411,
+        0.14965457815587593,
+        0.034338378759319686,
+        4.3513756464135085,
+        0.0,
+        true,
     );
     assert_above_the_floor(&c);
 }

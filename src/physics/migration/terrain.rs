@@ -1112,6 +1112,51 @@ impl Floor {
             .map(|f| self.facet_plane(f).z(x, y))
     }
 
+    /// Highest plane, m, at (x, y) among the facets (holes excepted) whose closed triangle comes
+    /// within `tol` m of it in plan; None when there is none. At a node or on an edge this is
+    /// the highest of the planes meeting there: a point at that height is on or above every
+    /// facet a flight from it can strike, so none is missed from underneath.
+    pub(crate) fn top_height_near(&self, x: f64, y: f64, tol: f64) -> Option<f64> {
+        let mut top: Option<f64> = None;
+        let mut take = |f: Facet, c: &[[f64; 2]; 3]| {
+            if !self.is_hole(f) && inside_tri(c, x, y, tol) {
+                let z = self.facet_plane(f).z(x, y);
+                top = Some(top.map_or(z, |t: f64| t.max(z)));
+            }
+        };
+        match &self.kind {
+            FloorKind::Plane(p) => return Some(p.z(x, y)),
+            FloorKind::Grid(g) => {
+                let c = &g.cells;
+                let ux = (x - c.x0) / c.d;
+                let uy = (y - c.y0) / c.d;
+                let (Some(ci), Some(cj)) = (
+                    CellGrid::axis_cell(ux, 0.0, c.ncx),
+                    CellGrid::axis_cell(uy, 0.0, c.ncy),
+                ) else {
+                    return None;
+                };
+                for nj in cj.saturating_sub(1)..=(cj + 1).min(c.ncy - 1) {
+                    for ni in ci.saturating_sub(1)..=(ci + 1).min(c.ncx - 1) {
+                        for half in 0..2 {
+                            let f = g.facet(ni, nj, half);
+                            take(f, &g.corners_at(f, nj, ni).0);
+                        }
+                    }
+                }
+            }
+            FloorKind::Mesh(m) => {
+                let c = &m.cells;
+                let ci = CellGrid::axis_cell((x - c.x0) / c.d, 0.0, c.ncx)?;
+                let cj = CellGrid::axis_cell((y - c.y0) / c.d, 0.0, c.ncy)?;
+                for &f in m.bucket(ci, cj) {
+                    take(f, &m.corners(f).0);
+                }
+            }
+        }
+        top
+    }
+
     /// Whether facet f was removed (a corner without data): not part of the floor.
     #[inline]
     pub(crate) fn is_hole(&self, f: Facet) -> bool {
@@ -1581,6 +1626,22 @@ mod tests {
             FlightEnd::Hit { t, .. } => assert!(t > 0.05, "{t}"),
             e => panic!("{e:?}"),
         }
+    }
+
+    #[test]
+    fn the_top_plane_near_a_valley_line_is_the_floor_beside_it() {
+        // a V-shaped valley along x = 1: z = 1 − x, then z = x − 1
+        let h = vec![vec![1.0, 0.0, 1.0]; 3];
+        let f = Floor::grid(0.5, [0.0, 0.0], 1.0, &h).unwrap();
+        // 1e-10 m past the valley line: the floor there is the rising facet's plane (+1e-10);
+        // the facet left behind, extended, is 1e-10 below it
+        let top = f.top_height_near(1.0 + 1e-10, 0.5, 2e-9).unwrap();
+        assert!((top - 1e-10).abs() < 1e-16, "{top}");
+        assert_eq!(f.height_at(1.0 + 1e-10, 0.5), Some(top));
+        // away from every edge only the facet's own plane counts
+        assert_eq!(f.top_height_near(0.5, 0.25, 2e-9), Some(0.5));
+        // off the floor: none
+        assert_eq!(f.top_height_near(-1.0, 0.5, 2e-9), None);
     }
 
     #[test]
