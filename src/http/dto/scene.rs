@@ -461,10 +461,9 @@ impl SceneRequest {
             end_time_s: None,
             output: self.column_output.clone(),
         };
-        let column_case = template.resolve(config).map_err(|e| {
-            let e = rename(e, "/output", "/column_output");
-            rename(e, "/rock", "/rock")
-        });
+        let column_case = template
+            .resolve(config)
+            .map_err(|e| rename(e, "/output", "/column_output"));
         let column_case = match column_case {
             Ok(c) => c,
             Err(e) => {
