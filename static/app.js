@@ -3,14 +3,14 @@
 
 import { getJson } from './js/api.js';
 import { initColumn } from './js/column.js';
-import { applyState, formState, setDefaults } from './js/form.js';
+import { applyServerDefaults, applyState, formState, setDefaults } from './js/form.js';
 import { csvButton, download, fmt, h, tableRows } from './js/format.js';
 import { initImpact } from './js/impact.js';
 import { initMigration } from './js/migration.js';
 import { plotPng } from './js/plot.js';
-import { initScene } from './js/scene.js';
-import { initSpalling } from './js/spalling.js';
-import { initStudy } from './js/study.js';
+import { initScene, setSceneRanges } from './js/scene.js';
+import { initSpalling, setSpallingDefaults } from './js/spalling.js';
+import { initStudy, setStudyDefaults } from './js/study.js';
 
 const TABS = ['scene', 'impact', 'column', 'migration', 'study', 'spalling'];
 const CASE_FORMS = ['scene', 'impact', 'column', 'migration'];
@@ -74,38 +74,40 @@ function initTabs() {
 
 // ---- presets and settings --------------------------------------------------
 
-/** SI values keyed by pointer, from a nested object of GET /v1/presets. */
-function pointers(obj, prefix, keys) {
-  const out = {};
-  for (const key of keys) if (obj && typeof obj[key] !== 'object' && obj[key] !== undefined) out[`${prefix}/${key}`] = obj[key];
-  return out;
-}
-
+/**
+ * Every form's starting values from GET /v1/presets `defaults`: each route's
+ * default request (what `{}` means to the server) and the defaults of the
+ * objects sent only when ticked. Nothing numeric is written in the page.
+ */
 function applyPresetValues() {
-  if (!presets) return;
-  const rock = pointers(presets.rock, '/rock', ['side_length_m', 'density_kg_m3', 'elastic_modulus_pa', 'poisson_ratio']);
-  const stage = presets.column?.first_stage ?? {};
-  const column = {
-    ...pointers(presets.column, '/column', ['elastic_modulus_pa', 'poisson_ratio', 'density_kg_m3', 'yield_stress_pa']),
-    ...pointers(stage, '/column', ['outer_diameter_m', 'inner_diameter_m', 'length_m']),
-  };
-  const face = pointers(presets.face, '/face', ['dip_deg', 'length_m']);
-  setDefaults(forms.impact, { ...rock, ...column });
-  setDefaults(forms.migration, {
-    '/rock/side_length_m': presets.rock?.side_length_m,
-    '/rock/density_kg_m3': presets.rock?.density_kg_m3,
-    '/face/friction_coefficient': presets.rock?.friction_coefficient,
-    ...face,
-  });
+  const d = presets.defaults;
+  const o = d.objects;
+  applyServerDefaults(forms.impact, d.impact);
+  applyServerDefaults(forms.column, d.column);
+  applyServerDefaults(forms.migration, d.migration, { '/monte_carlo': o.monte_carlo });
+  applyServerDefaults(forms.scene, d.scene, { '/monte_carlo': o.scene_monte_carlo, '/support_rows': o.support_rows });
+  const across = forms.scene.querySelector('[data-local="across"]');
+  across.value = across.defaultValue = String(o.support_rows.across_m[0]);
+  for (const [id, value] of [['floor-elevation-property', o.floor.elevation_property], ['floor-resolution', o.floor.resolution_m]]) {
+    const el = document.getElementById(id);
+    if (el) el.value = el.defaultValue = String(value);
+  }
+  setSceneRanges(presets.study);
+  setStudyDefaults(d.study);
+  setSpallingDefaults(d.spalling);
 }
 
 /** The recommended or the paper's settings on every tab (GET /v1/presets `presets`). */
 function applySettings(name) {
   settings = name;
-  const p = presets?.presets?.[name] ?? (name === 'paper'
-    ? { contact: { law: 'paper', effective_modulus: 'paper' }, galerkin: { mode_shapes: 'paper' }, column: { damping_coefficient_n_s_m2: 1 } }
-    : { contact: { law: 'johnson', effective_modulus: 'two_body' }, galerkin: { mode_shapes: 'exact' }, column: { damping_ratio: 0.02 }, model: 'coupled' });
-  setDefaults(forms.impact, { '/contact/law': p.contact?.law, '/contact/effective_modulus': p.contact?.effective_modulus });
+  // A setting the preset does not name is the server's default; the damping
+  // value not in use keeps the other preset's (ratio) or the default (c).
+  const p = presets.presets[name];
+  const d = presets.defaults;
+  setDefaults(forms.impact, {
+    '/contact/law': p.contact?.law ?? d.impact.contact.law,
+    '/contact/effective_modulus': p.contact?.effective_modulus ?? d.impact.contact.effective_modulus,
+  });
   const col = forms.column;
   const ratio = p.column?.damping_ratio !== undefined;
   const kind = col.querySelector('[data-local="damping"]');
@@ -113,20 +115,20 @@ function applySettings(name) {
   kind.value = ratio ? 'ratio' : 'coefficient';
   kind.dispatchEvent(new Event('change'));
   setDefaults(col, {
-    '/galerkin/mode_shapes': p.galerkin?.mode_shapes ?? 'exact',
-    '/column/damping_ratio': p.column?.damping_ratio ?? 0.02,
-    '/column/damping_coefficient_n_s_m2': p.column?.damping_coefficient_n_s_m2 ?? 1,
+    '/galerkin/mode_shapes': p.galerkin?.mode_shapes ?? d.column.galerkin.mode_shapes,
+    '/column/damping_ratio': p.column?.damping_ratio ?? presets.presets.recommended.column.damping_ratio,
+    '/column/damping_coefficient_n_s_m2': p.column?.damping_coefficient_n_s_m2 ?? presets.fields['/column/damping_coefficient_n_s_m2'].default,
   });
   const models = col.querySelector('[data-local="models"]');
-  const model = p.model ?? 'decoupled';
+  const model = p.model ?? d.column.model;
   for (const o of models.options) o.defaultSelected = o.value === model;
   models.value = model;
-  setDefaults(forms.scene, { '/column_model': p.model ?? 'decoupled' });
+  setDefaults(forms.scene, { '/column_model': p.model ?? d.scene.column_model });
   const study = document.getElementById('study-form');
   if (study) {
-    study.elements.model.value = p.model ?? 'decoupled';
-    study.elements.law.value = p.contact?.law ?? 'paper';
-    study.elements.effective_modulus.value = p.contact?.effective_modulus ?? 'paper';
+    study.elements.model.value = p.model ?? d.study.base.model;
+    study.elements.law.value = p.contact?.law ?? d.study.base.contact.law;
+    study.elements.effective_modulus.value = p.contact?.effective_modulus ?? d.study.base.contact.effective_modulus;
   }
   document.getElementById('preset-recommended').setAttribute('aria-pressed', String(name === 'recommended'));
   document.getElementById('preset-paper').setAttribute('aria-pressed', String(name === 'paper'));
@@ -468,12 +470,20 @@ async function main() {
   initCases();
   initExports();
   initPrint();
-  document.getElementById('preset-recommended').addEventListener('click', () => applySettings('recommended'));
-  document.getElementById('preset-paper').addEventListener('click', () => applySettings('paper'));
 
+  // The forms start empty: nothing is computed until the server's defaults are in.
+  const buttons = [...document.querySelectorAll('form button[type="submit"], #migration-compare-button, .settings button')];
+  for (const b of buttons) b.disabled = true;
   presets = await getJson('v1/presets');
+  if (!presets?.defaults) {
+    document.getElementById('preset-note').textContent = 'The server\'s defaults (GET /v1/presets) could not be loaded: reload the page to compute.';
+    return;
+  }
   applyPresetValues();
   applySettings('recommended');
+  for (const b of buttons) b.disabled = false;
+  document.getElementById('preset-recommended').addEventListener('click', () => applySettings('recommended'));
+  document.getElementById('preset-paper').addEventListener('click', () => applySettings('paper'));
   await showVersion();
 
   const { tab, encoded } = parseHash();

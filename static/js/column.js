@@ -14,7 +14,7 @@ const COLUMN_GROUPS = [
     legend: 'Model',
     fields: [
       {
-        local: 'models', label: 'Run', kind: 'select', value: 'both',
+        local: 'models', label: 'Run', kind: 'select', settings: true,
         options: [['both', 'both, side by side'], ['coupled', 'coupled (recommended)'], ['decoupled', 'decoupled (paper)']],
         hint: '<b>coupled</b>: rock, contact and column integrated together (conserves energy); <b>decoupled</b>: the paper\'s method (the rigid-column approach as initial displacement; overstates the energy)',
       },
@@ -24,31 +24,37 @@ const COLUMN_GROUPS = [
     legend: 'Galerkin modes',
     pointer: '/galerkin',
     fields: [
-      { pointer: '/galerkin/modes', label: 'Modes (coupled)', kind: 'integer', value: 3, hint: 'the decoupled method uses mode 1' },
       {
-        pointer: '/galerkin/mode_shapes', label: 'Mode shapes', kind: 'select', value: 'exact',
+        pointer: '/galerkin/modes', label: 'Modes (coupled)', kind: 'integer', hint: 'the decoupled method uses mode 1',
+        choice: { value: 3, why: 'the server derives it from the model (1 decoupled, 3 coupled); the page runs both' },
+      },
+      {
+        pointer: '/galerkin/mode_shapes', label: 'Mode shapes', kind: 'select', settings: true,
         options: [['exact', 'exact (recommended)'], ['paper', 'paper (printed)'], ['approx', 'approx (λ = 3π/2)']],
         hint: '<code>paper</code> and <code>approx</code>: decoupled only',
       },
-      { pointer: '/galerkin/rotary_inertia', label: 'Rotary inertia', kind: 'checkbox', value: true, hint: 'include the sections\' rotation (J₀ = ρ<sub>s</sub>I)' },
+      { pointer: '/galerkin/rotary_inertia', label: 'Rotary inertia', kind: 'checkbox', hint: 'include the sections\' rotation (J₀ = ρ<sub>s</sub>I)' },
     ],
   },
   {
     legend: 'Damping',
     fields: [
       {
-        local: 'damping', label: 'Given as', kind: 'select', value: 'ratio',
+        local: 'damping', label: 'Given as', kind: 'select', settings: true,
         options: [['ratio', 'ratio ζ₁ (recommended)'], ['coefficient', 'coefficient c (paper)']],
         hint: 'the paper\'s c = 1 N·s/m² barely damps at all (decay in minutes)',
       },
-      { pointer: '/column/damping_coefficient_n_s_m2', label: 'Coefficient <i>c</i>', unit: 'N·s/m²', value: 1, hint: 'the paper\'s value is 1' },
-      { pointer: '/column/damping_ratio', label: 'Damping ratio <i>ζ</i>₁', unit: '', value: 0.02 },
+      { pointer: '/column/damping_coefficient_n_s_m2', label: 'Coefficient <i>c</i>', unit: 'N·s/m²', settings: true, hint: 'the paper\'s value is 1' },
+      { pointer: '/column/damping_ratio', label: 'Damping ratio <i>ζ</i>₁', unit: '', settings: true },
     ],
   },
   {
     legend: 'Time',
     fields: [
-      { pointer: '/output/duration_s', label: 'History duration', unit: 'ms', exp: -3, value: 20 },
+      {
+        pointer: '/output/duration_s', label: 'History duration', unit: 'ms', exp: -3,
+        choice: { value: 20, why: 'the history is optional on the server (no default window); 20 ms shows the contact and the first vibrations' },
+      },
       { pointer: '/output/samples', label: 'Samples', kind: 'integer', placeholder: 'auto' },
       {
         pointer: '/initial_midpoint_displacement_m', label: 'Initial midpoint displacement', unit: 'mm', exp: -3,

@@ -10,10 +10,14 @@ let nextId = 0;
 /**
  * Builds fieldsets into `form .form-fields` from groups:
  * `{legend, id?, toggle?: {label, checked}, note?, fields: [field]}` where a
- * field is `{pointer | local, label, unit?, exp?, value?, kind?, options?,
- * placeholder?, hint?}` and kind is number (default), integer, select or
- * checkbox. `local` names a control that shapes the request but is not a
+ * field is `{pointer | local, label, unit?, exp?, kind?, options?,
+ * placeholder?, hint?, choice?}` and kind is number (default), integer, select
+ * or checkbox. `local` names a control that shapes the request but is not a
  * field itself. A group with `toggle` is sent only while its box is ticked.
+ * A field's starting value is the server's default (GET /v1/presets, see
+ * applyServerDefaults) or its settings preset; only a field with `choice`
+ * `{value, why}` starts from the page's own value (an example case where the
+ * server has none, e.g. 62 supports), and it is marked `data-choice`.
  */
 export function buildForm(form, groups) {
   const container = form.querySelector('.form-fields');
@@ -44,16 +48,19 @@ function buildField(field) {
   if (field.pointer) data.pointer = field.pointer;
   if (field.local) data.local = field.local;
   if (field.exp) data.exp = String(field.exp);
+  if (field.choice) data.choice = field.choice.why;
+  if (field.settings) data.settings = 'true';
   const kind = field.kind ?? 'number';
+  const start = field.choice?.value;
   data.kind = kind;
 
   let control;
   if (kind === 'select') {
     control = h('select', { id, dataset: data },
       field.options.map(([value, label]) =>
-        h('option', { value, selected: String(value) === String(field.value) }, label)));
+        h('option', { value, selected: String(value) === String(start) }, label)));
   } else if (kind === 'checkbox') {
-    control = h('input', { id, type: 'checkbox', dataset: data, checked: Boolean(field.value) });
+    control = h('input', { id, type: 'checkbox', dataset: data, checked: Boolean(start) });
   } else {
     // Text, not type=number: the page reads and judges every character itself,
     // so letters, "1e400" or an empty box are field errors, never a silent default.
@@ -63,7 +70,7 @@ function buildField(field) {
       inputmode: kind === 'integer' ? 'numeric' : 'decimal',
       autocomplete: 'off',
       spellcheck: 'false',
-      value: field.value ?? undefined,
+      value: start ?? undefined,
       placeholder: field.placeholder,
       dataset: field.placeholder ? { ...data, optional: 'true' } : data,
     });
@@ -314,6 +321,27 @@ export function setDefaults(form, values) {
     }
     el.dispatchEvent(new Event('change', { bubbles: true }));
   }
+}
+
+/**
+ * Fills a form from the server's defaults (GET /v1/presets `defaults`): every
+ * control whose pointer has a value in the request object `defaults` shows it
+ * and restores it on Defaults. `objects` maps a pointer prefix to the defaults
+ * of an object the request carries only when ticked (`/monte_carlo`). Fields
+ * with the page's own starting value (`data-choice`) and those the settings
+ * set (`data-settings`) are left alone; a default that is null or absent
+ * (derived by the server) leaves the field empty on its "auto" placeholder.
+ */
+export function applyServerDefaults(form, defaults, objects = {}) {
+  const values = {};
+  for (const el of form.querySelectorAll('[data-pointer]')) {
+    if (el.dataset.choice || el.dataset.settings) continue;
+    const pointer = el.dataset.pointer;
+    const prefix = Object.keys(objects).find((p) => pointer.startsWith(`${p}/`));
+    const value = prefix ? pickPointer(objects[prefix], pointer.slice(prefix.length)) : pickPointer(defaults, pointer);
+    if (value !== undefined && value !== null) values[pointer] = value;
+  }
+  setDefaults(form, values);
 }
 
 /** SI → display text, exactly (shifts the decimal exponent of the shortest form). */

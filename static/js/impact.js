@@ -8,22 +8,22 @@ import { destroy, linePlot, plotMessage } from './plot.js';
 
 const CURVE_POINTS = 200;
 
-/** Defaults: the paper's base case with the recommended settings; GET /v1/presets overrides them. */
+/** The fields; their starting values are the server's defaults (GET /v1/presets) and the settings. */
 export const IMPACT_GROUPS = [
   {
     legend: 'Impact',
     fields: [
-      { pointer: '/velocity_m_s', label: 'Velocity <i>v</i>', unit: 'm/s', value: 5 },
+      { pointer: '/velocity_m_s', label: 'Velocity <i>v</i>', unit: 'm/s' },
     ],
   },
   {
     legend: 'Rock (cube)',
     pointer: '/rock',
     fields: [
-      { pointer: '/rock/side_length_m', label: 'Side <i>L</i>', unit: 'mm', exp: -3, value: 300 },
-      { pointer: '/rock/density_kg_m3', label: 'Density <i>ρ</i>', unit: 'kg/m³', value: 2500 },
-      { pointer: '/rock/elastic_modulus_pa', label: 'Elastic modulus <i>E</i>', unit: 'GPa', exp: 9, value: 5 },
-      { pointer: '/rock/poisson_ratio', label: 'Poisson ratio <i>ν</i>', unit: '', value: 0.28 },
+      { pointer: '/rock/side_length_m', label: 'Side <i>L</i>', unit: 'mm', exp: -3 },
+      { pointer: '/rock/density_kg_m3', label: 'Density <i>ρ</i>', unit: 'kg/m³' },
+      { pointer: '/rock/elastic_modulus_pa', label: 'Elastic modulus <i>E</i>', unit: 'GPa', exp: 9 },
+      { pointer: '/rock/poisson_ratio', label: 'Poisson ratio <i>ν</i>', unit: '' },
       {
         pointer: '/rock/corner_radius_m', label: 'Corner radius <i>r</i><sub>c</sub>', unit: 'mm', exp: -3,
         placeholder: 'auto', hint: 'empty: min(20 mm, <i>L</i>/2); used by <code>hertz_point</code> only',
@@ -34,13 +34,13 @@ export const IMPACT_GROUPS = [
     legend: 'Column (first stage)',
     pointer: '/column',
     fields: [
-      { pointer: '/column/outer_diameter_m', label: 'Outer diameter <i>D</i>₁', unit: 'mm', exp: -3, value: 250 },
-      { pointer: '/column/inner_diameter_m', label: 'Inner diameter <i>D</i>₂', unit: 'mm', exp: -3, value: 235 },
-      { pointer: '/column/length_m', label: 'Length <i>l</i>', unit: 'm', value: 1.31 },
-      { pointer: '/column/elastic_modulus_pa', label: 'Steel modulus <i>E</i><sub>s</sub>', unit: 'GPa', exp: 9, value: 208 },
-      { pointer: '/column/poisson_ratio', label: 'Poisson ratio <i>ν</i><sub>s</sub>', unit: '', value: 0.3 },
-      { pointer: '/column/density_kg_m3', label: 'Density <i>ρ</i><sub>s</sub>', unit: 'kg/m³', value: 7850 },
-      { pointer: '/column/yield_stress_pa', label: 'Yield stress <i>σ</i><sub>y</sub>', unit: 'MPa', exp: 6, value: 345, hint: 'the limit of the stress and contact-pressure checks' },
+      { pointer: '/column/outer_diameter_m', label: 'Outer diameter <i>D</i>₁', unit: 'mm', exp: -3 },
+      { pointer: '/column/inner_diameter_m', label: 'Inner diameter <i>D</i>₂', unit: 'mm', exp: -3 },
+      { pointer: '/column/length_m', label: 'Length <i>l</i>', unit: 'm' },
+      { pointer: '/column/elastic_modulus_pa', label: 'Steel modulus <i>E</i><sub>s</sub>', unit: 'GPa', exp: 9 },
+      { pointer: '/column/poisson_ratio', label: 'Poisson ratio <i>ν</i><sub>s</sub>', unit: '' },
+      { pointer: '/column/density_kg_m3', label: 'Density <i>ρ</i><sub>s</sub>', unit: 'kg/m³' },
+      { pointer: '/column/yield_stress_pa', label: 'Yield stress <i>σ</i><sub>y</sub>', unit: 'MPa', exp: 6, hint: 'the limit of the stress and contact-pressure checks' },
       { pointer: '/column/contact_radius_m', label: 'Contact radius <i>R</i>', unit: 'mm', exp: -3, placeholder: 'auto', hint: 'empty: half the outer diameter' },
     ],
   },
@@ -49,17 +49,17 @@ export const IMPACT_GROUPS = [
     pointer: '/contact',
     fields: [
       {
-        pointer: '/contact/law', label: 'Contact law', kind: 'select', value: 'johnson',
+        pointer: '/contact/law', label: 'Contact law', kind: 'select', settings: true,
         options: [['johnson', 'johnson (recommended)'], ['paper', 'paper (Eq. 4)'], ['hertz_point', 'hertz_point (corner)']],
         hint: '<b>johnson</b>: a face or edge of the cube strikes the column (line contact, corrected law); <b>paper</b>: reproduces the paper\'s numbers; <b>hertz_point</b>: a corner strikes (point contact)',
       },
       {
-        pointer: '/contact/effective_modulus', label: 'Effective modulus <i>E</i>*', kind: 'select', value: 'two_body',
+        pointer: '/contact/effective_modulus', label: 'Effective modulus <i>E</i>*', kind: 'select', settings: true,
         options: [['two_body', 'two_body (recommended)'], ['paper', 'paper (rock only)']],
         hint: 'two_body counts the steel\'s own deformation; the paper neglects it',
       },
       {
-        pointer: '/contact/hertz_exact', label: 'Exact elliptical Hertz <i>κ</i>', kind: 'checkbox', value: true,
+        pointer: '/contact/hertz_exact', label: 'Exact elliptical Hertz <i>κ</i>', kind: 'checkbox',
         hint: 'hertz_point only: elliptical contact, else the equivalent radius',
       },
     ],

@@ -9,16 +9,19 @@ import { postJson } from './api.js';
 import { initPanel } from './panel.js';
 import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
 
+/** Why the friction spread starts from the page's own values. */
+const FRICTION_SPREAD = 'an example spread: the server has none unless one is sent';
+
 const MIGRATION_GROUPS = [
   {
     legend: 'Working face',
     pointer: '/face',
     fields: [
-      { pointer: '/face/dip_deg', label: 'Dip <i>θ</i>', unit: '°', value: 45 },
-      { pointer: '/face/length_m', label: 'Length along the dip', unit: 'm', value: 120 },
-      { pointer: '/face/friction_coefficient', label: 'Friction coefficient <i>μ</i>', unit: '', value: 0.2 },
-      { pointer: '/face/restitution_normal', label: 'Normal restitution <i>e</i><sub>n</sub>', unit: '', value: 0.3 },
-      { pointer: '/face/restitution_tangential', label: 'Tangential restitution <i>e</i><sub>t</sub>', unit: '', value: 0.8 },
+      { pointer: '/face/dip_deg', label: 'Dip <i>θ</i>', unit: '°' },
+      { pointer: '/face/length_m', label: 'Length along the dip', unit: 'm' },
+      { pointer: '/face/friction_coefficient', label: 'Friction coefficient <i>μ</i>', unit: '' },
+      { pointer: '/face/restitution_normal', label: 'Normal restitution <i>e</i><sub>n</sub>', unit: '' },
+      { pointer: '/face/restitution_tangential', label: 'Tangential restitution <i>e</i><sub>t</sub>', unit: '' },
     ],
   },
   {
@@ -26,19 +29,19 @@ const MIGRATION_GROUPS = [
     pointer: '/rock',
     fields: [
       {
-        pointer: '/method', label: 'Method', kind: 'select', value: 'lumped_mass',
+        pointer: '/method', label: 'Method', kind: 'select',
         options: [['lumped_mass', 'lumped mass'], ['rigid_block', 'rigid block (DEM)']],
         hint: '<b>lumped mass</b>: a point with restitution and friction, fast (closed-form flights); <b>rigid block</b>: the cube tumbles and its corners strike (as PFC3D in the paper), slower',
       },
       {
-        pointer: '/rock/shape', label: 'Shape', kind: 'select', value: 'cube',
+        pointer: '/rock/shape', label: 'Shape', kind: 'select',
         options: [['cube', 'cube'], ['sphere', 'sphere (r = L/2)']],
         hint: 'the shape sets the mass and, for the rigid block, how it tumbles',
       },
-      { pointer: '/rock/side_length_m', label: 'Cube side <i>L</i>', unit: 'mm', exp: -3, value: 300 },
-      { pointer: '/rock/density_kg_m3', label: 'Density <i>ρ</i>', unit: 'kg/m³', value: 2500 },
+      { pointer: '/rock/side_length_m', label: 'Cube side <i>L</i>', unit: 'mm', exp: -3 },
+      { pointer: '/rock/density_kg_m3', label: 'Density <i>ρ</i>', unit: 'kg/m³' },
       {
-        pointer: '/lumped_mass/motion', label: 'Ground motion', kind: 'select', value: 'slide',
+        pointer: '/lumped_mass/motion', label: 'Ground motion', kind: 'select',
         options: [['slide', 'slide'], ['roll', 'roll (sphere, no slip)']],
         hint: 'lumped mass: <b>slide</b> with friction μ, or <b>roll</b> as a sphere without slip (needs μ ≥ (2/7) tan θ)',
       },
@@ -48,10 +51,10 @@ const MIGRATION_GROUPS = [
     legend: 'Release',
     pointer: '/release',
     fields: [
-      { pointer: '/release/drop_height_m', label: 'Drop height', unit: 'm', value: 3.27 },
-      { pointer: '/release/along_dip_m', label: 'Along the dip', unit: 'm', value: 0 },
-      { pointer: '/release/across_m', label: 'Across the face', unit: 'm', value: 0 },
-      { pointer: '/release/speed_m_s', label: 'Initial speed (down-dip)', unit: 'm/s', value: 0 },
+      { pointer: '/release/drop_height_m', label: 'Drop height', unit: 'm' },
+      { pointer: '/release/along_dip_m', label: 'Along the dip', unit: 'm' },
+      { pointer: '/release/across_m', label: 'Across the face', unit: 'm' },
+      { pointer: '/release/speed_m_s', label: 'Initial speed (down-dip)', unit: 'm/s' },
     ],
   },
   {
@@ -60,12 +63,12 @@ const MIGRATION_GROUPS = [
     toggle: { name: 'monte_carlo', checked: false },
     note: 'Restitution drawn uniformly at every impact (lumped mass). The outcome table shows the nominal run; the ensemble is in the percentiles.',
     fields: [
-      { pointer: '/monte_carlo/runs', label: 'Runs', kind: 'integer', value: 200 },
-      { pointer: '/monte_carlo/seed', label: 'Seed', kind: 'integer', value: 42 },
-      { pointer: '/monte_carlo/restitution_normal/min', label: '<i>e</i><sub>n</sub> min', unit: '', value: 0.2 },
-      { pointer: '/monte_carlo/restitution_normal/max', label: '<i>e</i><sub>n</sub> max', unit: '', value: 0.4 },
-      { pointer: '/monte_carlo/restitution_tangential/min', label: '<i>e</i><sub>t</sub> min', unit: '', value: 0.7 },
-      { pointer: '/monte_carlo/restitution_tangential/max', label: '<i>e</i><sub>t</sub> max', unit: '', value: 0.9 },
+      { pointer: '/monte_carlo/runs', label: 'Runs', kind: 'integer' },
+      { pointer: '/monte_carlo/seed', label: 'Seed', kind: 'integer' },
+      { pointer: '/monte_carlo/restitution_normal/min', label: '<i>e</i><sub>n</sub> min', unit: '' },
+      { pointer: '/monte_carlo/restitution_normal/max', label: '<i>e</i><sub>n</sub> max', unit: '' },
+      { pointer: '/monte_carlo/restitution_tangential/min', label: '<i>e</i><sub>t</sub> min', unit: '' },
+      { pointer: '/monte_carlo/restitution_tangential/max', label: '<i>e</i><sub>t</sub> max', unit: '' },
     ],
   },
   {
@@ -74,18 +77,21 @@ const MIGRATION_GROUPS = [
     toggle: { name: 'friction_spread', checked: false },
     note: 'Truncated normal, drawn once per run.',
     fields: [
-      { pointer: '/monte_carlo/friction_coefficient/mean', label: 'Mean', unit: '', value: 0.2 },
-      { pointer: '/monte_carlo/friction_coefficient/std', label: 'Standard deviation', unit: '', value: 0.02 },
-      { pointer: '/monte_carlo/friction_coefficient/min', label: 'Min', unit: '', value: 0 },
-      { pointer: '/monte_carlo/friction_coefficient/max', label: 'Max', unit: '', value: 1 },
+      { pointer: '/monte_carlo/friction_coefficient/mean', label: 'Mean', unit: '', choice: { value: 0.2, why: FRICTION_SPREAD } },
+      { pointer: '/monte_carlo/friction_coefficient/std', label: 'Standard deviation', unit: '', choice: { value: 0.02, why: FRICTION_SPREAD } },
+      { pointer: '/monte_carlo/friction_coefficient/min', label: 'Min', unit: '', choice: { value: 0, why: FRICTION_SPREAD } },
+      { pointer: '/monte_carlo/friction_coefficient/max', label: 'Max', unit: '', choice: { value: 1, why: FRICTION_SPREAD } },
     ],
   },
   {
     legend: 'Output',
     pointer: '/output',
     fields: [
-      { pointer: '/output/trajectory', label: 'Trajectory', kind: 'checkbox', value: true },
-      { pointer: '/output/sample_interval_s', label: 'Sample interval', unit: 's', value: 0.01 },
+      {
+        pointer: '/output/trajectory', label: 'Trajectory', kind: 'checkbox',
+        choice: { value: true, why: 'the page draws the trajectory; the server samples it only when asked' },
+      },
+      { pointer: '/output/sample_interval_s', label: 'Sample interval', unit: 's' },
     ],
   },
 ];

@@ -10,21 +10,24 @@ import { csvButton, fmt, h, showWarnings } from './format.js';
 import { initPanel } from './panel.js';
 import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
 
+/** Why the release across the face starts from the page's own range. */
+const RELEASE_ACROSS = 'an assumed range across the face (the server draws none unless asked)';
+
 const SCENE_GROUPS = [
   {
     legend: 'Supports',
     fields: [
       {
-        local: 'supports', label: 'Supports', kind: 'select', value: 'rows',
+        local: 'supports', label: 'Supports', kind: 'select', choice: { value: 'rows', why: 'the server\'s default is one support at the lower end; the page checks the rows of supports' },
         options: [['rows', 'rows (Table 1 numbering)'], ['lower_end', 'one at the lower end']],
         hint: 'rows: support k stands at the lowest position − (k − 1) × spacing',
       },
-      { pointer: '/support_rows/lowest_along_dip_m', label: 'Lowest support along the dip', unit: 'm', value: 118.5 },
-      { pointer: '/support_rows/spacing_m', label: 'Spacing', unit: 'm', value: 1.5 },
-      { pointer: '/support_rows/count', label: 'Number of supports', kind: 'integer', value: 62 },
+      { pointer: '/support_rows/lowest_along_dip_m', label: 'Lowest support along the dip', unit: 'm' },
+      { pointer: '/support_rows/spacing_m', label: 'Spacing', unit: 'm' },
+      { pointer: '/support_rows/count', label: 'Number of supports', kind: 'integer' },
       {
-        local: 'across', label: 'Column position across the face', unit: 'm', value: 0.9,
-        hint: 'one column of each support stands there (api.md default 0.9 m); a rock can pass beside it',
+        local: 'across', label: 'Column position across the face', unit: 'm',
+        hint: 'one column of each support stands there (the server\'s default); a rock can pass beside it',
       },
     ],
   },
@@ -32,7 +35,7 @@ const SCENE_GROUPS = [
     legend: 'Impact',
     fields: [
       {
-        pointer: '/column_model', label: 'Column model', kind: 'select', value: 'coupled',
+        pointer: '/column_model', label: 'Column model', kind: 'select', settings: true,
         options: [['coupled', 'coupled (recommended)'], ['decoupled', 'decoupled (the paper)']],
         hint: 'coupled conserves energy; decoupled overstates the column energy',
       },
@@ -46,7 +49,7 @@ const SCENE_GROUPS = [
     legend: 'Release',
     fields: [
       {
-        local: 'release_zones', label: 'Release points', kind: 'select', value: 'table1',
+        local: 'release_zones', label: 'Release points', kind: 'select', choice: { value: 'table1', why: 'an ensemble from the spalling zones; the server releases at the given point unless asked' },
         options: [['table1', 'Table 1 spalling zones'], ['release', 'Migration tab\'s point']],
         hint: 'Table 1: upper third 23.3 %, middle 58.3 %, lower 18.4 % (Monte Carlo only)',
       },
@@ -58,25 +61,26 @@ const SCENE_GROUPS = [
     toggle: { name: 'scene_monte_carlo', checked: true },
     note: 'Restitution at every impact; release points from the zones; the rock\'s size and density drawn in the paper\'s study ranges.',
     fields: [
-      { pointer: '/monte_carlo/runs', label: 'Runs', kind: 'integer', value: 200 },
-      { pointer: '/monte_carlo/seed', label: 'Seed', kind: 'integer', value: 42 },
-      { pointer: '/monte_carlo/release_across_m/min', label: 'Release across the face, from', unit: 'm', value: 0 },
+      { pointer: '/monte_carlo/runs', label: 'Runs', kind: 'integer' },
+      { pointer: '/monte_carlo/seed', label: 'Seed', kind: 'integer' },
+      { pointer: '/monte_carlo/release_across_m/min', label: 'Release across the face, from', unit: 'm', choice: { value: 0, why: RELEASE_ACROSS } },
       {
-        pointer: '/monte_carlo/release_across_m/max', label: 'to', unit: 'm', value: 1.8,
+        pointer: '/monte_carlo/release_across_m/max', label: 'to', unit: 'm', choice: { value: 1.8, why: RELEASE_ACROSS },
         hint: 'uniform; where along the strike the rock leaves the wall (an assumed range: set your face\'s)',
       },
-      { local: 'vary_rock', label: 'Vary size 0.2–0.3 m and density 2000–3000 kg/m³', kind: 'checkbox', value: false },
+      { local: 'vary_rock', label: 'Vary size 0.2–0.3 m and density 2000–3000 kg/m³', kind: 'checkbox' },
     ],
   },
   {
     legend: 'Design limits',
     pointer: '/design_limits',
     fields: [
-      { pointer: '/design_limits/stress_utilisation', label: 'Stress utilisation σ/σy', unit: '', value: 1 },
+      { pointer: '/design_limits/stress_utilisation', label: 'Stress utilisation σ/σy', unit: '' },
       { pointer: '/design_limits/max_force_n', label: 'Rated force', unit: 'kN', exp: 3, placeholder: 'none' },
       { pointer: '/design_limits/absorbed_energy_j', label: 'Design energy', unit: 'J', placeholder: 'none' },
       {
-        pointer: '/design_limits/acceptable_probability', label: 'Acceptable probability', unit: '', value: 0.01,
+        pointer: '/design_limits/acceptable_probability', label: 'Acceptable probability', unit: '',
+        choice: { value: 0.01, why: 'the server\'s default 0 marks any exceedance; the page shows a 1 % threshold' },
         hint: 'a support whose exceedance probability is above this is marked exceeded',
       },
     ],
@@ -94,6 +98,14 @@ const LIMIT_WORDS = { stress_utilisation: 'stress utilisation σ/σy', max_force
 const STAT_COLUMNS = ['mean', 'std', 'min', 'p05', 'p50', 'p95', 'p99', 'max'];
 const OUTCOMES = [['support', 'struck a support'], ['lower_end', 'reached the lower end'], ['at_rest', 'came to rest'],
   ['left_floor', 'left the floor'], ['end_time', 'still moving at the end time']];
+
+/** The paper's study ranges of the rock (GET /v1/presets `study`), drawn when "vary" is ticked. */
+let rockRanges = {};
+
+/** Takes the rock's study ranges from GET /v1/presets. */
+export function setSceneRanges(study) {
+  rockRanges = Object.fromEntries((study?.parameters ?? []).map((p) => [p.name, { min: p.min, max: p.max }]));
+}
 
 export function initScene() {
   const form = document.getElementById('scene-form');
@@ -157,7 +169,7 @@ export function initScene() {
         own2.support_rows = rows;
       } else {
         delete own2.support_rows;
-        request.supports = [{ along_dip_m: m.face?.length_m ?? 120, across_m: null, column }];
+        request.supports = [{ along_dip_m: m.face.length_m, across_m: null, column }];
       }
       Object.assign(request, own2);
       if (request.column_model === 'decoupled') delete request.galerkin.modes;
@@ -166,12 +178,12 @@ export function initScene() {
         if (own.local.release_zones === 'table1') request.release_zones = 'table1';
         if (request.monte_carlo.release_across_m) request.monte_carlo.release_across_m = { distribution: 'uniform', ...request.monte_carlo.release_across_m };
         if (own.local.vary_rock) {
-          request.monte_carlo.side_length_m = { distribution: 'uniform', min: 0.2, max: 0.3 };
-          request.monte_carlo.density_kg_m3 = { distribution: 'uniform', min: 2000, max: 3000 };
+          request.monte_carlo.side_length_m = { distribution: 'uniform', ...rockRanges['rock.side_length_m'] };
+          request.monte_carlo.density_kg_m3 = { distribution: 'uniform', ...rockRanges['rock.density_kg_m3'] };
         }
         request.migration_output = { runs_csv: true };
       } else {
-        request.migration_output = { trajectory: true, sample_interval_s: 0.01 };
+        request.migration_output = { trajectory: true, sample_interval_s: m.output?.sample_interval_s };
       }
       return request;
     },

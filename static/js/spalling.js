@@ -7,11 +7,15 @@ import { fmt, h, showWarnings } from './format.js';
 import { initPanel } from './panel.js';
 import { destroy, linePlot, plotMessage } from './plot.js';
 
-const TABLE1 = [
-  { name: 'lower', spalling: 118, high_resistance: 8, low_resistance: 22, spalling_and_high: 5, spalling_and_low: 4.5 },
-  { name: 'middle', spalling: 375, high_resistance: 65, low_resistance: 17, spalling_and_high: 32, spalling_and_low: 10.5 },
-  { name: 'upper', spalling: 150, high_resistance: 14, low_resistance: 8, spalling_and_high: 9, spalling_and_low: 2 },
-];
+/** The paper's Table 1 as the server's default zones (GET /v1/presets `defaults.spalling`). */
+let table1 = [];
+
+/** Fills the counts table from the server's default zones. */
+export function setSpallingDefaults(spalling) {
+  table1 = spalling.zones;
+  const input = document.getElementById('spalling-input');
+  if (input) countsTable(input, table1);
+}
 const COUNTS = [
   ['spalling', 'A (spalling)'],
   ['high_resistance', 'B (high resistance)'],
@@ -96,10 +100,9 @@ export function initSpalling() {
   const output = document.getElementById('spalling-table');
   const plot = document.getElementById('spalling-plot');
   if (!form) return null;
-  countsTable(input, TABLE1);
   form.addEventListener('reset', (event) => {
     event.preventDefault();
-    countsTable(input, TABLE1);
+    countsTable(input, table1);
   });
   return initPanel({
     name: 'spalling',

@@ -8,17 +8,13 @@ import { fmt, h, showWarnings } from './format.js';
 import { initPanel } from './panel.js';
 import { destroy, linePlot } from './plot.js';
 
-const PAPER = [
-  ['velocity_m_s', 4, 6],
-  ['rock.side_length_m', 0.2, 0.3],
-  ['rock.elastic_modulus_pa', 4e9, 6e9],
-  ['rock.density_kg_m3', 2000, 3000],
-];
+/** The server's default study (GET /v1/presets `defaults.study`): the paper's ranges and points. */
+let defaults = { parameters: [], points: '' };
 
 function paramRows(el, rows) {
   el.replaceChildren(
     h('thead', {}, h('tr', {}, h('th', {}, 'parameter (dotted path)'), h('th', {}, 'min'), h('th', {}, 'max'), h('th', {}, 'use'))),
-    h('tbody', {}, ...rows.map(([name, min, max], i) => h('tr', {},
+    h('tbody', {}, ...rows.map(({ name, min, max }, i) => h('tr', {},
       h('td', {}, h('input', { type: 'text', value: name, 'data-param': i, 'data-field': 'name', size: 24, id: `study-parameters-${i}-name`, 'data-target': `/parameters/${i}/name`, 'aria-label': `parameter ${i + 1}` })),
       h('td', {}, h('input', { type: 'text', inputmode: 'decimal', value: min, 'data-param': i, 'data-field': 'min', id: `study-parameters-${i}-min`, 'data-target': `/parameters/${i}/min`, 'aria-label': `${name} min`, size: 10 })),
       h('td', {}, h('input', { type: 'text', inputmode: 'decimal', value: max, 'data-param': i, 'data-field': 'max', id: `study-parameters-${i}-max`, 'data-target': `/parameters/${i}/max`, 'aria-label': `${name} max`, size: 10 })),
@@ -168,6 +164,18 @@ function render(data, els) {
   }
 }
 
+/** Fills the study form from the server's default study request. */
+export function setStudyDefaults(study) {
+  defaults = study;
+  const form = document.getElementById('study-form');
+  if (!form) return;
+  paramRows(document.getElementById('study-parameters'), study.parameters);
+  form.elements.points.value = String(study.points);
+  form.elements.points.defaultValue = String(study.points);
+  for (const o of form.elements.grid.options) o.defaultSelected = o.value === study.grid;
+  form.elements.grid.value = study.grid;
+}
+
 export function initStudy() {
   const form = document.getElementById('study-form');
   if (!form) return null;
@@ -185,9 +193,8 @@ export function initStudy() {
   form.elements.points.dataset.target = '/points';
   form.elements.points.type = 'text';
   form.elements.points.inputMode = 'numeric';
-  paramRows(table, PAPER);
-  form.addEventListener('reset', () => setTimeout(() => paramRows(table, PAPER)));
-  return initPanel({
+  form.addEventListener('reset', () => setTimeout(() => paramRows(table, defaults.parameters)));
+  const panel = initPanel({
     name: 'study',
     form,
     endpoint: 'v1/study',
@@ -212,4 +219,5 @@ export function initStudy() {
       for (const el of [els.curves, els.fig21Table, els.sensitivity, els.paper, els.grids]) el.replaceChildren();
     },
   });
+  return panel;
 }

@@ -150,6 +150,68 @@ async function noHorizontalScroll(page, what) {
   assert(scroll <= client, `${what}: the page is ${scroll} px wide in a ${client} px window (scrolls sideways)`);
 }
 
+
+// ---- the forms against the server's defaults --------------------------------
+
+/** Which default request (GET /v1/presets `defaults`) each case form shows, and its optional objects. */
+const FORM_DEFAULTS = {
+  '#impact-form': (d) => [d.impact, {}],
+  '#column-form': (d) => [d.column, {}],
+  '#migration-form': (d) => [d.migration, { '/monte_carlo': d.objects.monte_carlo }],
+  '#scene-form': (d) => [d.scene, { '/monte_carlo': d.objects.scene_monte_carlo, '/support_rows': d.objects.support_rows }],
+};
+
+function pickPointer(obj, pointer) {
+  return pointer.split('/').slice(1).reduce((o, k) => (o === null || o === undefined ? undefined : o[k]), obj);
+}
+
+/** Every control of the case forms that carries a request field, as the page shows it. */
+async function formControls(page) {
+  return page.evaluate((selectors) => selectors.flatMap((sel) => [...document.querySelectorAll(`${sel} [data-pointer]`)].map((el) => ({
+    form: sel,
+    pointer: el.dataset.pointer,
+    kind: el.dataset.kind,
+    exp: Number(el.dataset.exp ?? 0),
+    value: el.value,
+    checked: el.checked,
+    choice: el.dataset.choice ?? null,
+    settings: el.dataset.settings === 'true',
+  }))), Object.keys(FORM_DEFAULTS));
+}
+
+/**
+ * Compares each control with the server's default for its field: a number
+ * typed in a display unit is converted to SI; a null or absent default is an
+ * empty box (the server derives it). Returns the mismatches and how many
+ * fields were compared.
+ */
+function compareWithDefaults(controls, defaults) {
+  const bad = [];
+  let compared = 0;
+  for (const c of controls) {
+    if (c.choice || c.settings) continue;
+    const [request, objects] = FORM_DEFAULTS[c.form](defaults);
+    const prefix = Object.keys(objects).find((p) => c.pointer.startsWith(`${p}/`));
+    const expected = prefix ? pickPointer(objects[prefix], c.pointer.slice(prefix.length)) : pickPointer(request, c.pointer);
+    let shownValue;
+    if (c.kind === 'checkbox') shownValue = c.checked;
+    else if (c.kind === 'select') shownValue = c.value;
+    else shownValue = c.value.trim() === '' ? null : Number(`${c.value.trim()}e${c.exp}`);
+    const want = expected === undefined ? null : expected;
+    compared += 1;
+    if (shownValue !== want) bad.push(`${c.form} ${c.pointer}: shows ${JSON.stringify(c.value)} (${shownValue}), the server's default is ${JSON.stringify(want)}`);
+  }
+  return { bad, compared };
+}
+
+/** Every number in a JSON value nudged by its own size × 1.0625 (+ 0.5 for a zero), whole numbers kept whole. */
+function nudged(value) {
+  if (typeof value === 'number') return Number.isInteger(value) ? value + 1 : value * 1.0625 + (value === 0 ? 0.5 : 0);
+  if (Array.isArray(value)) return value.map(nudged);
+  if (value && typeof value === 'object') return Object.fromEntries(Object.entries(value).map(([k, v]) => [k, nudged(v)]));
+  return value;
+}
+
 // ---- sections ------------------------------------------------------------
 
 async function pageSection(page) {
@@ -162,6 +224,91 @@ async function pageSection(page) {
     assert(Number(yieldMpa) * 1e6 === presets.column.yield_stress_pa, `yield ${yieldMpa} MPa vs presets`);
     assert(await field(page, '#impact-form', '/contact/law').inputValue() === presets.presets.recommended.contact.law, 'law is the recommended one');
     assert(await page.locator('#preset-recommended').getAttribute('aria-pressed') === 'true', 'Recommended is not pressed');
+  });
+
+  await check('page: every form field of every panel starts at the server\'s default (GET /v1/presets defaults)', async () => {
+    await open(page, '#impact');
+    const presets = await (await fetch(`${BASE}/v1/presets`)).json();
+    const controls = await formControls(page);
+    const { bad, compared } = compareWithDefaults(controls, presets.defaults);
+    assert(compared >= 40, `only ${compared} fields compared`);
+    assert(bad.length === 0, bad.join('\n'));
+    // The page's own starting values are few and each says why.
+    const choices = controls.filter((c) => c.choice);
+    assert(choices.length <= 10 && choices.every((c) => c.choice.length > 20), `page choices: ${choices.map((c) => c.pointer).join(', ')}`);
+    // Settings fields: the recommended preset where it names them, else the server's default.
+    const rec = presets.presets.recommended;
+    for (const [form, pointer, want] of [
+      ['#impact-form', '/contact/law', rec.contact.law],
+      ['#impact-form', '/contact/effective_modulus', rec.contact.effective_modulus],
+      ['#column-form', '/galerkin/mode_shapes', rec.galerkin.mode_shapes],
+      ['#column-form', '/column/damping_ratio', rec.column.damping_ratio],
+      ['#column-form', '/column/damping_coefficient_n_s_m2', presets.fields['/column/damping_coefficient_n_s_m2'].default],
+      ['#scene-form', '/column_model', rec.model],
+    ]) {
+      const v = await field(page, form, pointer).inputValue();
+      assert(String(v) === String(want), `${form} ${pointer}: ${v}, expected ${want}`);
+    }
+    // Study and spalling: the default study request and Table 1.
+    const study = presets.defaults.study;
+    assert(await page.locator('#study-form input[name="points"]').inputValue() === String(study.points), 'study points');
+    for (const [i, p] of study.parameters.entries()) {
+      for (const key of ['name', 'min', 'max']) {
+        const v = await page.locator(`#study-parameters-${i}-${key}`).inputValue();
+        assert(key === 'name' ? v === p.name : Number(v) === p[key], `study parameter ${i} ${key}: ${v} vs ${p[key]}`);
+      }
+    }
+    for (const [i, z] of presets.defaults.spalling.zones.entries()) {
+      for (const key of ['spalling', 'high_resistance', 'low_resistance', 'spalling_and_high', 'spalling_and_low']) {
+        const v = await page.locator(`#spalling-zones-${i}-${key}`).inputValue();
+        assert(Number(v) === z[key], `spalling zone ${i} ${key}: ${v} vs ${z[key]}`);
+      }
+    }
+  });
+
+  await check('page: no default is written in the page: other defaults from /v1/presets show up in every form, and Defaults restores them', async () => {
+    const real = await (await fetch(`${BASE}/v1/presets`)).json();
+    const fake = { ...real, defaults: nudged(real.defaults) };
+    // Strings and selects stay valid; the settings must still name real options.
+    await page.route('**/v1/presets', (route) => route.fulfill({ json: fake }));
+    try {
+      await open(page, '#migration');
+      const { bad, compared } = compareWithDefaults(await formControls(page), fake.defaults);
+      assert(compared >= 40, `only ${compared} fields compared`);
+      assert(bad.length === 0, bad.join('\n'));
+      const points = await page.locator('#study-form input[name="points"]').inputValue();
+      assert(points === String(fake.defaults.study.points), `study points ${points}`);
+      const count = await page.locator('#spalling-zones-0-spalling').inputValue();
+      assert(Number(count) === fake.defaults.spalling.zones[0].spalling, `Table 1 count ${count}`);
+      await field(page, '#migration-form', '/face/dip_deg').fill('33');
+      await page.locator('#migration-form button[type="reset"]').click();
+      await page.waitForTimeout(50);
+      const dip = await field(page, '#migration-form', '/face/dip_deg').inputValue();
+      assert(Number(dip) === fake.defaults.migration.face.dip_deg, `Defaults restored dip ${dip}`);
+    } finally {
+      await page.unroute('**/v1/presets');
+    }
+  });
+
+  await check('page: nothing can be computed before the server\'s defaults arrive', async () => {
+    let release;
+    const held = new Promise((resolve) => { release = resolve; });
+    // A request the page gave up on (a reload) may be gone by the time it is released.
+    await page.route('**/v1/presets', async (route) => { await held; await route.continue().catch(() => {}); });
+    try {
+      await page.goto(`${BASE}/?load=${Date.now()}#impact`, { waitUntil: 'load' });
+      await page.waitForSelector('#impact-form button[type="submit"]', { state: 'attached' });
+      const before = await page.evaluate(() => [...document.querySelectorAll('form button[type="submit"]')].map((b) => b.disabled));
+      assert(before.length >= 6 && before.every(Boolean), `submit buttons before the defaults: ${before}`);
+      assert(await field(page, '#impact-form', '/velocity_m_s').inputValue() === '', 'a velocity is shown before the defaults');
+      release();
+      await page.waitForSelector('body[data-ready="true"]', { timeout: WAIT_MS });
+      const after = await page.evaluate(() => [...document.querySelectorAll('form button[type="submit"]')].map((b) => b.disabled));
+      assert(after.every((d) => !d), `submit buttons after the defaults: ${after}`);
+    } finally {
+      release();
+      await page.unroute('**/v1/presets');
+    }
   });
 
   await check('page: the guidance names the tool, the paper, the contact law to choose and the departures', async () => {

@@ -154,6 +154,9 @@ pub enum FieldDefault {
     Derived,
     /// `null`: the field is unused unless sent (the schema shows `"default": null`).
     Null,
+    /// None: the field must be sent where it is used (a grid's spacing); no `default` in the
+    /// schema.
+    Required,
 }
 
 /// One numeric request field, written once: its description, default, documented interval,
@@ -215,7 +218,7 @@ impl NumberField {
         b = match self.default {
             FieldDefault::Value(v) => b.default(Some(json!(v))),
             FieldDefault::Null => b.default(Some(Value::Null)),
-            FieldDefault::Derived => b,
+            FieldDefault::Derived | FieldDefault::Required => b,
         };
         b = match self.lo {
             Bound::Closed(x) => b.minimum(Some(x)),
@@ -460,7 +463,7 @@ pub const IMPACT_FIELDS: &[(&str, NumberField)] = &[
 ];
 
 impl NumberField {
-    /// The field as `/v1/presets` lists it: default (number, `null` or `"derived"`), the bounds
+    /// The field as `/v1/presets` lists it: default (number, `null`, `"derived"` or `"required"`), the bounds
     /// under their JSON Schema names, the unit and the description.
     #[must_use]
     pub fn preset(&self) -> Value {
@@ -471,6 +474,7 @@ impl NumberField {
                 FieldDefault::Value(v) => json!(v),
                 FieldDefault::Null => Value::Null,
                 FieldDefault::Derived => json!("derived"),
+                FieldDefault::Required => json!("required"),
             },
         );
         match self.lo {

@@ -5,7 +5,10 @@ use serde_json::{Value, json};
 use sha2::{Digest, Sha256};
 use utoipa::ToSchema;
 
-use super::common::{Checker, Meta, PlanStep, RockDto, Warning, some};
+use super::common::Bound::{Closed, Open};
+use super::common::{
+    Checker, FieldDefault, Meta, NumberField, PlanStep, RockDto, Warning, number_schemas, some,
+};
 use super::floor::{self as formats, Sorted};
 use crate::config::Config;
 use crate::http::error::{ApiError, num};
@@ -14,6 +17,147 @@ use crate::physics::migration::{
     MapFrame, Method, MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase,
     Release, RigidBlockOptions, RunSummary, StopReason, Summary,
 };
+
+/// Declares the numeric fields of a request as [`NumberField`]s, each with its schema function.
+macro_rules! number_fields {
+    ($(
+        $(#[$meta:meta])*
+        $name:ident, $schema:ident: $description:expr, $default:expr, $lo:expr, $hi:expr,
+        $unit:expr, $example:expr;
+    )*) => {
+        $(
+            $(#[$meta])*
+            pub const $name: NumberField = NumberField {
+                description: $description,
+                default: $default,
+                lo: $lo,
+                hi: $hi,
+                unit: $unit,
+                example: $example,
+                nullable: matches!($default, FieldDefault::Null),
+            };
+        )*
+        number_schemas! { $( $schema => $name; )* }
+    };
+}
+
+number_fields! {
+    /// `gravity_m_s2` (migration and scene).
+    GRAVITY, gravity_schema: "Gravity g, m/s², in [0.1, 100].",
+        FieldDefault::Value(9.81), Closed(0.1), Closed(100.0), "m/s²", 9.81;
+    /// `face.dip_deg`.
+    FACE_DIP, face_dip_schema: "Dip θ, degrees, in [5, 80].",
+        FieldDefault::Value(45.0), Closed(5.0), Closed(80.0), "°", 45.0;
+    /// `face.length_m`.
+    FACE_LENGTH, face_length_schema: "Face length along dip S, m, in (0, 10000].",
+        FieldDefault::Value(120.0), Open(0.0), Closed(10000.0), "m", 120.0;
+    /// `face.friction_coefficient`.
+    FACE_FRICTION, face_friction_schema: "Coulomb friction μ, in [0, 2].",
+        FieldDefault::Value(0.2), Closed(0.0), Closed(2.0), "", 0.2;
+    /// `face.restitution_normal`.
+    FACE_RESTITUTION_NORMAL, face_restitution_normal_schema: "Normal restitution e_n, in [0, 1].",
+        FieldDefault::Value(0.3), Closed(0.0), Closed(1.0), "", 0.3;
+    /// `face.restitution_tangential`.
+    FACE_RESTITUTION_TANGENTIAL, face_restitution_tangential_schema:
+        "Tangential restitution e_t, in [0, 1].",
+        FieldDefault::Value(0.8), Closed(0.0), Closed(1.0), "", 0.8;
+    /// `face.normal_stiffness_n_m` (rigid block).
+    FACE_NORMAL_STIFFNESS, face_normal_stiffness_schema:
+        "Normal contact stiffness k_n (rigid block), N/m, in [1e3, 1e12].",
+        FieldDefault::Value(1e8), Closed(1e3), Closed(1e12), "N/m", 1e8;
+    /// `face.shear_stiffness_n_m` (rigid block).
+    FACE_SHEAR_STIFFNESS, face_shear_stiffness_schema:
+        "Shear contact stiffness k_s (rigid block), N/m, in [1e3, 1e12].",
+        FieldDefault::Value(1e8), Closed(1e3), Closed(1e12), "N/m", 1e8;
+    /// `face.critical_damping_ratio` (rigid block).
+    FACE_CRITICAL_DAMPING, face_critical_damping_schema:
+        "Critical damping ratio β of the contact dashpot (rigid block), in [0, 1).",
+        FieldDefault::Value(0.35), Closed(0.0), Open(1.0), "", 0.35;
+    /// `face.local_damping` (rigid block).
+    FACE_LOCAL_DAMPING, face_local_damping_schema: "PFC local damping α (rigid block), in [0, 1).",
+        FieldDefault::Value(0.0), Closed(0.0), Open(1.0), "", 0.0;
+    /// `face.floor.resolution_m` (contour floors).
+    FLOOR_RESOLUTION, floor_resolution_schema:
+        "Largest spacing of resampled contour points, m, in [0.01, 100] (default 1).",
+        FieldDefault::Value(1.0), Closed(0.01), Closed(100.0), "m", 1.0;
+    /// `release.drop_height_m`.
+    RELEASE_DROP_HEIGHT, release_drop_height_schema:
+        "Vertical lift above the floor point, m, in [0, 1000] (0: starts on the floor).",
+        FieldDefault::Value(3.27), Closed(0.0), Closed(1000.0), "m", 3.27;
+    /// `release.along_dip_m` (cross-field bound: below `face.length_m`; the documented maximum
+    /// is the longest face's).
+    RELEASE_ALONG_DIP, release_along_dip_schema:
+        "Along-dip position of the floor point, m, in [0, length_m): the upper bound depends on\n\
+         `face.length_m` (at most 10 000 m).",
+        FieldDefault::Value(0.0), Closed(0.0), Open(10000.0), "m (below length_m)", 0.0;
+    /// `release.across_m`.
+    RELEASE_ACROSS, release_across_schema: "Across-face position y, m, in [−1000, 1000].",
+        FieldDefault::Value(0.0), Closed(-1000.0), Closed(1000.0), "m", 0.0;
+    /// `release.speed_m_s`.
+    RELEASE_SPEED, release_speed_schema:
+        "Initial speed along the floor's down-dip direction, m/s, in [0, 1000].",
+        FieldDefault::Value(0.0), Closed(0.0), Closed(1000.0), "m/s", 0.0;
+    /// `lumped_mass.stop_normal_speed_m_s`.
+    STOP_NORMAL_SPEED, stop_normal_speed_schema:
+        "Normal rebound speed below which the ground phase starts, m/s, in [0, 100].",
+        FieldDefault::Value(0.5), Closed(0.0), Closed(100.0), "m/s", 0.5;
+    /// `rigid_block.time_step_s` (`null`: safety × Δt_crit).
+    TIME_STEP, time_step_schema: "Time step, s, in (0, 1] (default: safety × Δt_crit).",
+        FieldDefault::Null, Open(0.0), Closed(1.0), "s", 1e-5;
+    /// `rigid_block.time_step_safety`.
+    TIME_STEP_SAFETY, time_step_safety_schema:
+        "Safety factor on the critical time step, in (0, 1].",
+        FieldDefault::Value(0.2), Open(0.0), Closed(1.0), "", 0.2;
+    /// `end_time_s` of a migration (`null`: run to the lower end).
+    MIGRATION_END_TIME, migration_end_time_schema:
+        "Stop at this time instead of the lower end, s, in (0, 1e5].",
+        FieldDefault::Null, Open(0.0), Closed(1e5), "s", 2.0;
+    /// `end_time_s` of a scene (`null`: no time limit); the migration's interval.
+    SCENE_END_TIME, scene_end_time_schema:
+        "Stop at this time, s, in (0, 1e5] (null: no time limit).",
+        FieldDefault::Null, MIGRATION_END_TIME.lo, MIGRATION_END_TIME.hi, "s", 20.0;
+    /// `face.floor.spacing_m` (grid floors; required there).
+    FLOOR_SPACING, floor_spacing_schema: "Grid spacing d, m, in [0.01, 100].",
+        FieldDefault::Required, Closed(0.01), Closed(100.0), "m", 0.5;
+    /// `face.floor.map.dip_direction_deg` (required in `map`).
+    MAP_DIP_DIRECTION, map_dip_direction_schema:
+        "Azimuth of the face's down-dip x axis, degrees clockwise from north, in [0, 360); y is x\n\
+         turned 90° anticlockwise seen from above.",
+        FieldDefault::Required, Closed(0.0), Open(360.0), "° (clockwise from north)", 135.0;
+    /// `output.sample_interval_s` (`migration_output` in a scene).
+    SAMPLE_INTERVAL, sample_interval_schema: "Trajectory sample interval, s, in [1e-6, 100].",
+        FieldDefault::Value(0.01), Closed(1e-6), Closed(100.0), "s", 0.01;
+}
+
+/// The numeric fields of `/v1/migration` with a documented default or bound, by JSON Pointer
+/// (what `/v1/presets` lists under `migration_fields`; the rock's are in `fields`).
+pub const MIGRATION_FIELDS: &[(&str, NumberField)] = &[
+    ("/gravity_m_s2", GRAVITY),
+    ("/face/dip_deg", FACE_DIP),
+    ("/face/length_m", FACE_LENGTH),
+    ("/face/friction_coefficient", FACE_FRICTION),
+    ("/face/restitution_normal", FACE_RESTITUTION_NORMAL),
+    ("/face/restitution_tangential", FACE_RESTITUTION_TANGENTIAL),
+    ("/face/normal_stiffness_n_m", FACE_NORMAL_STIFFNESS),
+    ("/face/shear_stiffness_n_m", FACE_SHEAR_STIFFNESS),
+    ("/face/critical_damping_ratio", FACE_CRITICAL_DAMPING),
+    ("/face/local_damping", FACE_LOCAL_DAMPING),
+    ("/face/floor/spacing_m", FLOOR_SPACING),
+    ("/face/floor/resolution_m", FLOOR_RESOLUTION),
+    ("/face/floor/map/dip_direction_deg", MAP_DIP_DIRECTION),
+    ("/release/drop_height_m", RELEASE_DROP_HEIGHT),
+    ("/release/along_dip_m", RELEASE_ALONG_DIP),
+    ("/release/across_m", RELEASE_ACROSS),
+    ("/release/speed_m_s", RELEASE_SPEED),
+    ("/lumped_mass/stop_normal_speed_m_s", STOP_NORMAL_SPEED),
+    ("/rigid_block/time_step_s", TIME_STEP),
+    ("/rigid_block/time_step_safety", TIME_STEP_SAFETY),
+    ("/end_time_s", MIGRATION_END_TIME),
+    ("/output/sample_interval_s", SAMPLE_INTERVAL),
+];
+
+/// The default `face.floor.elevation_property` of GeoJSON contours.
+pub const ELEVATION_PROPERTY: &str = "elevation";
 
 /// Migration method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema, Default)]
@@ -57,7 +201,7 @@ pub struct ContourDto {
 pub struct MapDto {
     /// Azimuth of the face's down-dip x axis, degrees clockwise from north, in [0, 360); y is x
     /// turned 90° anticlockwise seen from above.
-    #[schema(minimum = 0.0, maximum = 360.0, example = 135.0)]
+    #[schema(schema_with = map_dip_direction_schema)]
     pub dip_direction_deg: f64,
     /// Map coordinates [E, N] of the face's origin (`along_dip_m` = 0), m, each in [−1e8, 1e8].
     #[schema(example = json!([500000.0, 4200000.0]))]
@@ -79,7 +223,7 @@ pub struct FloorDto {
     pub origin_m: Option<[f64; 2]>,
     /// Grid spacing d, m, in [0.01, 100].
     #[serde(deserialize_with = "some")]
-    #[schema(minimum = 0.01, maximum = 100.0, example = 0.5)]
+    #[schema(schema_with = floor_spacing_schema)]
     pub spacing_m: Option<f64>,
     /// Grid heights: `heights_m[i][j]` is z at (x₀ + j·d, y₀ + i·d), m; at most 4096 × 4096.
     #[serde(deserialize_with = "some")]
@@ -109,7 +253,7 @@ pub struct FloorDto {
     pub elevation_property: Option<String>,
     /// Largest spacing of resampled contour points, m, in [0.01, 100] (default 1).
     #[serde(deserialize_with = "some")]
-    #[schema(default = 1.0, minimum = 0.01, maximum = 100.0, example = 1.0)]
+    #[schema(schema_with = floor_resolution_schema)]
     pub resolution_m: Option<f64>,
     /// Map coordinates: the grid or contours are given in (E, N) and placed on the face by a
     /// rigid transform.
@@ -223,38 +367,33 @@ pub enum ContactModelDto {
 #[serde(deny_unknown_fields, default)]
 pub struct FaceDto {
     /// Dip θ, degrees, in [5, 80].
-    #[schema(default = 45.0, minimum = 5.0, maximum = 80.0, example = 45.0)]
+    #[schema(schema_with = face_dip_schema)]
     pub dip_deg: f64,
     /// Face length along dip S, m, in (0, 10000].
-    #[schema(
-        default = 120.0,
-        exclusive_minimum = 0.0,
-        maximum = 10000.0,
-        example = 120.0
-    )]
+    #[schema(schema_with = face_length_schema)]
     pub length_m: f64,
     /// Floor: plane, grid or contours.
     pub floor: FloorDto,
     /// Coulomb friction μ, in [0, 2].
-    #[schema(default = 0.2, minimum = 0.0, maximum = 2.0, example = 0.2)]
+    #[schema(schema_with = face_friction_schema)]
     pub friction_coefficient: f64,
     /// Normal restitution e_n, in [0, 1].
-    #[schema(default = 0.3, minimum = 0.0, maximum = 1.0, example = 0.3)]
+    #[schema(schema_with = face_restitution_normal_schema)]
     pub restitution_normal: f64,
     /// Tangential restitution e_t, in [0, 1].
-    #[schema(default = 0.8, minimum = 0.0, maximum = 1.0, example = 0.8)]
+    #[schema(schema_with = face_restitution_tangential_schema)]
     pub restitution_tangential: f64,
     /// Normal contact stiffness k_n (rigid block), N/m, in [1e3, 1e12].
-    #[schema(default = 1e8, minimum = 1e3, maximum = 1e12, example = 1e8)]
+    #[schema(schema_with = face_normal_stiffness_schema)]
     pub normal_stiffness_n_m: f64,
     /// Shear contact stiffness k_s (rigid block), N/m, in [1e3, 1e12].
-    #[schema(default = 1e8, minimum = 1e3, maximum = 1e12, example = 1e8)]
+    #[schema(schema_with = face_shear_stiffness_schema)]
     pub shear_stiffness_n_m: f64,
     /// Critical damping ratio β of the contact dashpot (rigid block), in [0, 1).
-    #[schema(default = 0.35, minimum = 0.0, exclusive_maximum = 1.0, example = 0.35)]
+    #[schema(schema_with = face_critical_damping_schema)]
     pub critical_damping_ratio: f64,
     /// PFC local damping α (rigid block), in [0, 1).
-    #[schema(default = 0.0, minimum = 0.0, exclusive_maximum = 1.0, example = 0.0)]
+    #[schema(schema_with = face_local_damping_schema)]
     pub local_damping: f64,
     /// Normal contact law (rigid block).
     #[schema(default = "linear", example = "linear")]
@@ -264,16 +403,16 @@ pub struct FaceDto {
 impl Default for FaceDto {
     fn default() -> Self {
         Self {
-            dip_deg: 45.0,
-            length_m: 120.0,
+            dip_deg: FACE_DIP.value(),
+            length_m: FACE_LENGTH.value(),
             floor: FloorDto::default(),
-            friction_coefficient: 0.2,
-            restitution_normal: 0.3,
-            restitution_tangential: 0.8,
-            normal_stiffness_n_m: 1e8,
-            shear_stiffness_n_m: 1e8,
-            critical_damping_ratio: 0.35,
-            local_damping: 0.0,
+            friction_coefficient: FACE_FRICTION.value(),
+            restitution_normal: FACE_RESTITUTION_NORMAL.value(),
+            restitution_tangential: FACE_RESTITUTION_TANGENTIAL.value(),
+            normal_stiffness_n_m: FACE_NORMAL_STIFFNESS.value(),
+            shear_stiffness_n_m: FACE_SHEAR_STIFFNESS.value(),
+            critical_damping_ratio: FACE_CRITICAL_DAMPING.value(),
+            local_damping: FACE_LOCAL_DAMPING.value(),
             contact_model: ContactModelDto::Linear,
         }
     }
@@ -284,27 +423,27 @@ impl Default for FaceDto {
 #[serde(deny_unknown_fields, default)]
 pub struct ReleaseDto {
     /// Vertical lift above the floor point, m, in [0, 1000] (0: starts on the floor).
-    #[schema(default = 3.27, minimum = 0.0, maximum = 1000.0, example = 3.27)]
+    #[schema(schema_with = release_drop_height_schema)]
     pub drop_height_m: f64,
     /// Along-dip position of the floor point, m, in [0, length_m): the upper bound depends on
     /// `face.length_m` (at most 10 000 m).
-    #[schema(default = 0.0, minimum = 0.0, example = 0.0)]
+    #[schema(schema_with = release_along_dip_schema)]
     pub along_dip_m: f64,
     /// Across-face position y, m, in [−1000, 1000].
-    #[schema(default = 0.0, minimum = -1000.0, maximum = 1000.0, example = 0.0)]
+    #[schema(schema_with = release_across_schema)]
     pub across_m: f64,
     /// Initial speed along the floor's down-dip direction, m/s, in [0, 1000].
-    #[schema(default = 0.0, minimum = 0.0, maximum = 1000.0, example = 0.0)]
+    #[schema(schema_with = release_speed_schema)]
     pub speed_m_s: f64,
 }
 
 impl Default for ReleaseDto {
     fn default() -> Self {
         Self {
-            drop_height_m: 3.27,
-            along_dip_m: 0.0,
-            across_m: 0.0,
-            speed_m_s: 0.0,
+            drop_height_m: RELEASE_DROP_HEIGHT.value(),
+            along_dip_m: RELEASE_ALONG_DIP.value(),
+            across_m: RELEASE_ACROSS.value(),
+            speed_m_s: RELEASE_SPEED.value(),
         }
     }
 }
@@ -328,7 +467,7 @@ pub struct LumpedMassDto {
     #[schema(default = "slide", example = "slide")]
     pub motion: MotionDto,
     /// Normal rebound speed below which the ground phase starts, m/s, in [0, 100].
-    #[schema(default = 0.5, minimum = 0.0, maximum = 100.0, example = 0.5)]
+    #[schema(schema_with = stop_normal_speed_schema)]
     pub stop_normal_speed_m_s: f64,
 }
 
@@ -336,7 +475,7 @@ impl Default for LumpedMassDto {
     fn default() -> Self {
         Self {
             motion: MotionDto::Slide,
-            stop_normal_speed_m_s: 0.5,
+            stop_normal_speed_m_s: STOP_NORMAL_SPEED.value(),
         }
     }
 }
@@ -346,11 +485,11 @@ impl Default for LumpedMassDto {
 #[serde(deny_unknown_fields, default)]
 pub struct RigidBlockDto {
     /// Time step, s, in (0, 1] (default: safety × Δt_crit).
-    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1.0, example = 1e-5)]
+    #[schema(schema_with = time_step_schema)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time_step_s: Option<f64>,
     /// Safety factor on the critical time step, in (0, 1].
-    #[schema(default = 0.2, exclusive_minimum = 0.0, maximum = 1.0, example = 0.2)]
+    #[schema(schema_with = time_step_safety_schema)]
     pub time_step_safety: f64,
 }
 
@@ -358,7 +497,7 @@ impl Default for RigidBlockDto {
     fn default() -> Self {
         Self {
             time_step_s: None,
-            time_step_safety: 0.2,
+            time_step_safety: TIME_STEP_SAFETY.value(),
         }
     }
 }
@@ -572,7 +711,7 @@ pub struct MigrationOutputDto {
     #[schema(default = false, example = false)]
     pub trajectory: bool,
     /// Trajectory sample interval, s, in [1e-6, 100].
-    #[schema(default = 0.01, minimum = 1e-6, maximum = 100.0, example = 0.01)]
+    #[schema(schema_with = sample_interval_schema)]
     pub sample_interval_s: f64,
     /// Report the events of the (nominal) run.
     #[schema(default = true, example = true)]
@@ -586,7 +725,7 @@ impl Default for MigrationOutputDto {
     fn default() -> Self {
         Self {
             trajectory: false,
-            sample_interval_s: 0.01,
+            sample_interval_s: SAMPLE_INTERVAL.value(),
             events: true,
             runs_csv: false,
         }
@@ -601,7 +740,7 @@ pub struct MigrationRequest {
     #[schema(default = "lumped_mass", example = "lumped_mass")]
     pub method: MethodDto,
     /// Gravity g, m/s², in [0.1, 100].
-    #[schema(default = 9.81, minimum = 0.1, maximum = 100.0, example = 9.81)]
+    #[schema(schema_with = gravity_schema)]
     pub gravity_m_s2: f64,
     /// The working face.
     pub face: FaceDto,
@@ -614,7 +753,7 @@ pub struct MigrationRequest {
     /// Rigid-block options.
     pub rigid_block: RigidBlockDto,
     /// Stop at this time instead of the lower end, s, in (0, 1e5].
-    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1e5, example = 2.0)]
+    #[schema(schema_with = migration_end_time_schema)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub end_time_s: Option<f64>,
     /// Monte Carlo ensemble (null: one deterministic run).
@@ -629,7 +768,7 @@ impl Default for MigrationRequest {
     fn default() -> Self {
         Self {
             method: MethodDto::LumpedMass,
-            gravity_m_s2: 9.81,
+            gravity_m_s2: GRAVITY.value(),
             face: FaceDto::default(),
             rock: RockDto::default(),
             release: ReleaseDto::default(),
@@ -694,13 +833,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
         for (i, o) in m.origin_m.iter().enumerate() {
             ck.closed(&p(&format!("map/origin_m/{i}")), *o, -1e8, 1e8, "m");
         }
-        ck.closed_open(
-            &p("map/dip_direction_deg"),
-            m.dip_direction_deg,
-            0.0,
-            360.0,
-            "° (clockwise from north)",
-        );
+        MAP_DIP_DIRECTION.check(ck, &p("map/dip_direction_deg"), m.dip_direction_deg);
         MapFrame {
             origin: m.origin_m,
             dip_direction_deg: m.dip_direction_deg,
@@ -846,7 +979,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
             }
             let spacing = match f.spacing_m {
                 Some(d) => {
-                    ck.closed(&p("spacing_m"), d, 0.01, 100.0, "m");
+                    FLOOR_SPACING.check(ck, &p("spacing_m"), d);
                     d
                 }
                 None => {
@@ -911,8 +1044,8 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
             ] {
                 stray(ck, name, v, "a contour floor");
             }
-            let resolution = *f.resolution_m.get_or_insert(1.0);
-            ck.closed(&p("resolution_m"), resolution, 0.01, 100.0, "m");
+            let resolution = *f.resolution_m.get_or_insert(FLOOR_RESOLUTION.value());
+            let resolution_ok = FLOOR_RESOLUTION.check(ck, &p("resolution_m"), resolution);
             // the lines with pointers to each one's points and elevation
             let (lines, paths): (Vec<ContourDto>, Vec<(String, String)>) =
                 if let Some(g) = &f.geojson {
@@ -924,7 +1057,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                     );
                     let prop = f
                         .elevation_property
-                        .get_or_insert_with(|| "elevation".into())
+                        .get_or_insert_with(|| ELEVATION_PROPERTY.into())
                         .clone();
                     f.sha256 = Some(f.digest());
                     let gp = p("geojson");
@@ -1084,7 +1217,7 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
                     points: c.points_m,
                 })
                 .collect();
-            if total <= 4_000_000 && (0.01..=100.0).contains(&resolution) {
+            if total <= 4_000_000 && resolution_ok {
                 // estimated before resampling: the work and memory grow with length / resolution
                 let points = migration::contour_points(&contours, resolution);
                 check_floor_memory(
@@ -1112,53 +1245,45 @@ impl MigrationRequest {
     pub fn resolve(&mut self, config: &Config) -> Result<MigrationCase, ApiError> {
         let mut ck = Checker::new();
         let rigid = self.method == MethodDto::RigidBlock;
-        ck.closed("/gravity_m_s2", self.gravity_m_s2, 0.1, 100.0, "m/s²");
+        GRAVITY.check(&mut ck, "/gravity_m_s2", self.gravity_m_s2);
         let f = &mut self.face;
-        ck.closed("/face/dip_deg", f.dip_deg, 5.0, 80.0, "°");
-        ck.open_closed("/face/length_m", f.length_m, 0.0, 10000.0, "m");
-        ck.closed(
-            "/face/friction_coefficient",
-            f.friction_coefficient,
-            0.0,
-            2.0,
-            "",
-        );
-        ck.closed(
-            "/face/restitution_normal",
-            f.restitution_normal,
-            0.0,
-            1.0,
-            "",
-        );
-        ck.closed(
-            "/face/restitution_tangential",
-            f.restitution_tangential,
-            0.0,
-            1.0,
-            "",
-        );
-        ck.closed(
-            "/face/normal_stiffness_n_m",
-            f.normal_stiffness_n_m,
-            1e3,
-            1e12,
-            "N/m",
-        );
-        ck.closed(
-            "/face/shear_stiffness_n_m",
-            f.shear_stiffness_n_m,
-            1e3,
-            1e12,
-            "N/m",
-        );
-        ck.closed_open(
-            "/face/critical_damping_ratio",
-            f.critical_damping_ratio,
-            0.0,
-            1.0,
-            "",
-        );
-        ck.closed_open("/face/local_damping", f.local_damping, 0.0, 1.0, "");
+        for (field, pointer, v) in [
+            (FACE_DIP, "/face/dip_deg", f.dip_deg),
+            (FACE_LENGTH, "/face/length_m", f.length_m),
+            (
+                FACE_FRICTION,
+                "/face/friction_coefficient",
+                f.friction_coefficient,
+            ),
+            (
+                FACE_RESTITUTION_NORMAL,
+                "/face/restitution_normal",
+                f.restitution_normal,
+            ),
+            (
+                FACE_RESTITUTION_TANGENTIAL,
+                "/face/restitution_tangential",
+                f.restitution_tangential,
+            ),
+            (
+                FACE_NORMAL_STIFFNESS,
+                "/face/normal_stiffness_n_m",
+                f.normal_stiffness_n_m,
+            ),
+            (
+                FACE_SHEAR_STIFFNESS,
+                "/face/shear_stiffness_n_m",
+                f.shear_stiffness_n_m,
+            ),
+            (
+                FACE_CRITICAL_DAMPING,
+                "/face/critical_damping_ratio",
+                f.critical_damping_ratio,
+            ),
+            (FACE_LOCAL_DAMPING, "/face/local_damping", f.local_damping),
+        ] {
+            field.check(&mut ck, pointer, v);
+        }
         let floor = resolve_floor(&mut f.floor, &mut ck, config.max_floor_bytes);
         let rock = self.rock.resolve("/rock", false, &mut ck);
         if !rigid
@@ -1174,44 +1299,35 @@ impl MigrationRequest {
             );
         }
         let r = &self.release;
-        ck.closed("/release/drop_height_m", r.drop_height_m, 0.0, 1000.0, "m");
-        ck.closed_open(
+        RELEASE_DROP_HEIGHT.check(&mut ck, "/release/drop_height_m", r.drop_height_m);
+        // The documented maximum is the longest face's; the bound enforced is below length_m.
+        ck.range(
             "/release/along_dip_m",
             r.along_dip_m,
-            0.0,
-            self.face.length_m,
-            "m (below length_m)",
+            RELEASE_ALONG_DIP.lo,
+            Open(self.face.length_m),
+            RELEASE_ALONG_DIP.unit,
         );
-        ck.closed("/release/across_m", r.across_m, -1000.0, 1000.0, "m");
-        ck.closed("/release/speed_m_s", r.speed_m_s, 0.0, 1000.0, "m/s");
-        ck.closed(
+        RELEASE_ACROSS.check(&mut ck, "/release/across_m", r.across_m);
+        RELEASE_SPEED.check(&mut ck, "/release/speed_m_s", r.speed_m_s);
+        STOP_NORMAL_SPEED.check(
+            &mut ck,
             "/lumped_mass/stop_normal_speed_m_s",
             self.lumped_mass.stop_normal_speed_m_s,
-            0.0,
-            100.0,
-            "m/s",
         );
         if let Some(dt) = self.rigid_block.time_step_s {
-            ck.open_closed("/rigid_block/time_step_s", dt, 0.0, 1.0, "s");
+            TIME_STEP.check(&mut ck, "/rigid_block/time_step_s", dt);
         }
-        ck.open_closed(
+        TIME_STEP_SAFETY.check(
+            &mut ck,
             "/rigid_block/time_step_safety",
             self.rigid_block.time_step_safety,
-            0.0,
-            1.0,
-            "",
         );
         if let Some(t) = self.end_time_s {
-            ck.open_closed("/end_time_s", t, 0.0, 1e5, "s");
+            MIGRATION_END_TIME.check(&mut ck, "/end_time_s", t);
         }
         let o = &self.output;
-        ck.closed(
-            "/output/sample_interval_s",
-            o.sample_interval_s,
-            1e-6,
-            100.0,
-            "s",
-        );
+        SAMPLE_INTERVAL.check(&mut ck, "/output/sample_interval_s", o.sample_interval_s);
         let monte_carlo = self.monte_carlo.as_ref().map(|mc| {
             ck.count("/monte_carlo/runs", mc.runs, 1, config.max_runs, "runs");
             MonteCarlo {

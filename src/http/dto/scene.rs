@@ -162,7 +162,7 @@ pub struct SceneRequest {
     #[schema(default = "lumped_mass", example = "lumped_mass")]
     pub method: MethodDto,
     /// Gravity g, m/s², in [0.1, 100].
-    #[schema(default = 9.81, minimum = 0.1, maximum = 100.0, example = 9.81)]
+    #[schema(schema_with = super::migration::gravity_schema)]
     pub gravity_m_s2: f64,
     /// The working face.
     pub face: FaceDto,
@@ -175,7 +175,7 @@ pub struct SceneRequest {
     /// Rigid-block options.
     pub rigid_block: RigidBlockDto,
     /// Stop at this time, s, in (0, 1e5] (null: no time limit).
-    #[schema(default = json!(null), exclusive_minimum = 0.0, maximum = 1e5, example = 20.0)]
+    #[schema(schema_with = super::migration::scene_end_time_schema)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub end_time_s: Option<f64>,
     /// Monte Carlo ensemble (null: one deterministic run).
@@ -223,7 +223,7 @@ impl Default for SceneRequest {
     fn default() -> Self {
         Self {
             method: MethodDto::LumpedMass,
-            gravity_m_s2: 9.81,
+            gravity_m_s2: super::migration::GRAVITY.value(),
             face: FaceDto::default(),
             rock: RockDto::default(),
             release: ReleaseDto::default(),
@@ -461,10 +461,9 @@ impl SceneRequest {
             end_time_s: None,
             output: self.column_output.clone(),
         };
-        let column_case = template.resolve(config).map_err(|e| {
-            let e = rename(e, "/output", "/column_output");
-            rename(e, "/rock", "/rock")
-        });
+        let column_case = template
+            .resolve(config)
+            .map_err(|e| rename(e, "/output", "/column_output"));
         let column_case = match column_case {
             Ok(c) => c,
             Err(e) => {

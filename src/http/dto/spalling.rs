@@ -96,7 +96,9 @@ pub struct SpallingRequest {
     pub low_resistance_n: Option<f64>,
 }
 
-fn table1_zones() -> Vec<ZoneCountsDto> {
+/// The paper's Table 1 as zone counts (the default `zones`).
+#[must_use]
+pub fn table1_zones() -> Vec<ZoneCountsDto> {
     ["lower", "middle", "upper"]
         .iter()
         .zip(ZoneCounts::table1())

@@ -7,6 +7,15 @@ use include_dir::{Dir, include_dir};
 use serde_json::{Value, json};
 
 use crate::http::dto::common::{self, MODEL_VERSION};
+use crate::http::dto::{
+    column::ColumnRequest,
+    impact::ImpactRequest,
+    migration,
+    migration::MigrationRequest,
+    scene::{SceneMonteCarloDto, SceneRequest, SupportRowsDto},
+    spalling,
+    study::StudyRequest,
+};
 use crate::http::error::{ApiError, problem_type};
 use crate::http::runner::AppState;
 
@@ -21,6 +30,10 @@ pub async fn healthz() -> Response {
 }
 
 /// Named defaults (paper Tables 2–4), presets, the study ranges and the service's limits.
+///
+/// Also the numeric fields' defaults and ranges (`fields`, `migration_fields`) and each route's
+/// default request (`defaults`: what `{}` means, derived fields left out; `defaults.objects`: the
+/// defaults of objects used only when sent), from which the page fills its forms.
 #[utoipa::path(get, path = "/v1/presets", tag = "service",
     responses((status = 200, description = "Tables 2–4, presets, study ranges, limits", body = Value)))]
 pub async fn presets(State(state): State<AppState>) -> Response {
@@ -35,20 +48,20 @@ fn presets_value(state: &AppState) -> Value {
             "density_kg_m3": common::ROCK_DENSITY.value(),
             "elastic_modulus_pa": common::ROCK_ELASTIC_MODULUS.value(),
             "poisson_ratio": common::ROCK_POISSON_RATIO.value(),
-            "friction_coefficient": 0.2,
+            "friction_coefficient": migration::FACE_FRICTION.value(),
             "side_length_m": common::ROCK_SIDE_LENGTH.value(),
-            "normal_stiffness_n_m": 1e8,
-            "shear_stiffness_n_m": 1e8,
+            "normal_stiffness_n_m": migration::FACE_NORMAL_STIFFNESS.value(),
+            "shear_stiffness_n_m": migration::FACE_SHEAR_STIFFNESS.value(),
             "note": "Table 2 prints normal and tangential stiffness as 1 N/m, which cannot hold a 67.5 kg block; the service uses 1e8 N/m (physics.md §C.3)"
         },
         "face": {
             "source": "paper Table 3",
             "density_kg_m3": 2800.0,
-            "dip_deg": 45.0,
+            "dip_deg": migration::FACE_DIP.value(),
             "internal_friction_angle_deg": 30.0,
             "elastic_modulus_pa": 4.38e9,
-            "critical_damping_ratio": 0.35,
-            "length_m": 120.0
+            "critical_damping_ratio": migration::FACE_CRITICAL_DAMPING.value(),
+            "length_m": migration::FACE_LENGTH.value()
         },
         "column": {
             "source": "paper Table 4, hydraulic support ZZ6500/22/48",
@@ -65,10 +78,25 @@ fn presets_value(state: &AppState) -> Value {
             "yield_stress_pa": common::COLUMN_YIELD_STRESS.value(),
             "note": "Table 4's piston and rod diameters are read as outer and inner diameter of the first stage (physics.md §B.1)"
         },
-        "fields": common::IMPACT_FIELDS
-            .iter()
-            .map(|(pointer, field)| ((*pointer).to_owned(), field.preset()))
-            .collect::<serde_json::Map<String, Value>>(),
+        "fields": fields(common::IMPACT_FIELDS),
+        "migration_fields": fields(migration::MIGRATION_FIELDS),
+        "defaults": {
+            "impact": to_value(&ImpactRequest::default()),
+            "column": to_value(&ColumnRequest::default()),
+            "migration": to_value(&MigrationRequest::default()),
+            "scene": to_value(&SceneRequest::default()),
+            "study": to_value(&StudyRequest::default()),
+            "spalling": {"zones": to_value(&spalling::table1_zones())},
+            "objects": {
+                "monte_carlo": to_value(&migration::MonteCarloDto::default()),
+                "scene_monte_carlo": to_value(&SceneMonteCarloDto::default()),
+                "support_rows": to_value(&SupportRowsDto::default()),
+                "floor": {
+                    "elevation_property": migration::ELEVATION_PROPERTY,
+                    "resolution_m": migration::FLOOR_RESOLUTION.value()
+                }
+            }
+        },
         "presets": {
             "paper": {
                 "contact": {"law": "paper", "effective_modulus": "paper"},
@@ -113,6 +141,20 @@ fn presets_value(state: &AppState) -> Value {
             "max_floor_bytes": c.max_floor_bytes
         }
     })
+}
+
+/// Numeric fields as `/v1/presets` lists them, keyed by JSON Pointer.
+fn fields(list: &[(&str, common::NumberField)]) -> Value {
+    Value::Object(
+        list.iter()
+            .map(|(pointer, field)| ((*pointer).to_owned(), field.preset()))
+            .collect(),
+    )
+}
+
+/// A default request as JSON (the DTOs always serialize).
+fn to_value<T: serde::Serialize>(v: &T) -> Value {
+    serde_json::to_value(v).unwrap_or(Value::Null)
 }
 
 /// A short page explaining one problem type (the `type` of error responses).
