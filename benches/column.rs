@@ -1,6 +1,7 @@
 //! Column benchmarks: the decoupled closed-form history (10⁴ samples) and the coupled impact's
 //! run time against its error over integrator tolerances 1e-4 … 1e-12 (3 modes, base case);
-//! the coupled impact with 10 and 50 modes and with the largest damping (group `coupled_stiff`).
+//! the coupled impact with 10 and 50 modes and with the largest damping, and the refusal of a run
+//! needing twice its step limit (group `coupled_stiff`).
 
 use std::f64::consts::{E, PI};
 use std::hint::black_box;
@@ -88,6 +89,20 @@ fn benches(c: &mut Criterion) {
     damped.impact.column.damping = Damping::Coefficient(1e9);
     g.bench_function("damping_1e9_tol_1e-6", |b| {
         b.iter(|| solve_column_with_impact(black_box(&damped), &imp, &ctl).is_ok())
+    });
+    // A run needing about twice its step limit (10 modes, tolerance 1e-6): the time until it is
+    // refused.
+    let mut over = ColumnCase {
+        modes: Some(10),
+        ..coupled_case(1e-6)
+    };
+    let needed = match solve_column_with_impact(&over, &imp, &ctl).unwrap().detail {
+        ColumnDetail::Coupled(d) => d.steps,
+        ColumnDetail::Decoupled(_) => unreachable!(),
+    };
+    over.max_steps = needed / 2;
+    g.bench_function("modes_10_limit_half_the_steps_needed", |b| {
+        b.iter(|| solve_column_with_impact(black_box(&over), &imp, &ctl).is_err())
     });
     g.finish();
 }

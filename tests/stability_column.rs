@@ -427,3 +427,33 @@ fn fifty_modes_heavy_damping() {
     };
     assert!(d.estimated_error < 1e-5, "{}", d.estimated_error);
 }
+
+/// A coupled run needing about twice its step limit is refused with an honest count. Physical
+/// expectation: once the rock has rebounded beyond the reach of the column's energy
+/// (|w_mid| ≤ √(2·E_col·φᵀK⁻¹φ)), it never touches the column again, so the rest of the
+/// window is the free propagator's fixed steps; the refusal names the pass's true step count
+/// (within 2 %), not an extrapolation from a limit reached late in the window.
+#[test]
+fn coupled_run_needing_twice_the_step_limit_is_refused_with_its_true_count() {
+    let (mut case, imp) = base_coupled();
+    case.modes = Some(10);
+    case.tolerance = 1e-6;
+    let r = solve_column_with_impact(&case, &imp, &Control::unlimited()).unwrap();
+    let ColumnDetail::Coupled(d) = r.detail else {
+        panic!()
+    };
+    let needed = d.steps as f64;
+    eprintln!("needed {needed} steps, {} contacts", d.contact_count);
+    case.max_steps = (needed / 2.0) as u64;
+    match solve_column_with_impact(&case, &imp, &Control::unlimited()) {
+        Err(PhysicsError::TooManySteps { estimated, limit }) => {
+            eprintln!("estimated {estimated}, limit {limit}");
+            assert_eq!(limit, case.max_steps as f64);
+            assert!(
+                (estimated / needed - 1.0).abs() < 0.02,
+                "estimated {estimated}, needed {needed}"
+            );
+        }
+        other => panic!("expected TooManySteps, got {other:?}"),
+    }
+}

@@ -775,6 +775,9 @@ fn run_pass(
         .copied()
         .unwrap_or(0.0);
     let mut free: Option<FreeFlight> = None;
+    // φ(½)ᵀK⁻¹φ(½), m²/J: |w_mid| ≤ √(2·E_col·reach) for a column holding energy E_col
+    // (Cauchy–Schwarz in the norm of K, and E_col ≥ ½wᵀKw).
+    let reach: f64 = (0..n).map(|j| sys.phi[j] * sys.phi[j] / sys.k[j]).sum();
     // The exact propagator steps at 1/8 of the shortest period; its in-step Taylor series need
     // ‖Aτ‖ ≲ 1, so a damping rate (M⁻¹C)ᵢᵢ above 2/h (heavy damping) keeps the adaptive
     // integrator in flight as well.
@@ -802,6 +805,10 @@ fn run_pass(
                 &mut st,
                 control,
                 input.max_steps,
+                &|yy: &[f64]| {
+                    let (kin, strain) = column_energy(yy);
+                    (2.0 * (kin + strain) * reach).sqrt()
+                },
             )?;
             t = t_new;
             if recontact {
@@ -975,6 +982,7 @@ fn free_flight(
     st: &mut Dopri5,
     control: &Control,
     max_steps: u64,
+    amplitude_bound: &dyn Fn(&[f64]) -> f64,
 ) -> PhysicsResult<(bool, f64)> {
     let n = ff.n;
     let zl = 2 * n;
@@ -1023,10 +1031,30 @@ fn free_flight(
     let mut gz = vec![0.0; zl];
     let (mut ye, mut tb1, mut tb2) = (vec![0.0; dim], vec![0.0; zl], vec![0.0; zl]);
     deriv(y, &mut dy0);
+    let mut steps_in_flight = 0u64;
     loop {
         if t >= t_end {
             return Ok((false, t));
         }
+        // Once the rock recedes (u̇ ≤ 0) beyond the reach of the column's energy
+        // (u < −√(2·E_col·reach), E_col never grows in flight), it never touches the column
+        // again: the rest of the window is this propagator's fixed steps, counted exactly, and
+        // a pass that cannot finish within the limit is refused now (checked on entry and
+        // every 64 steps).
+        if steps_in_flight.is_multiple_of(64)
+            && y[ROCK_VELOCITY] <= 0.0
+            && y[ROCK_DISPLACEMENT] < -amplitude_bound(y) * (1.0 + 1e-9)
+        {
+            let remaining = ((t_end - t) / ff.h).ceil();
+            let total = st.steps as f64 + remaining;
+            if total > max_steps as f64 {
+                return Err(PhysicsError::TooManySteps {
+                    estimated: total,
+                    limit: max_steps as f64,
+                });
+            }
+        }
+        steps_in_flight += 1;
         st.steps += 1;
         if st.steps % 1000 == 999 {
             control.check()?;

@@ -5,7 +5,7 @@ use std::f64::consts::{E, PI};
 
 use super::hertz::hertz_geometry;
 use super::log_law::log_law_forces;
-use super::modulus::effective_modulus;
+use super::modulus::{effective_modulus, effective_modulus_f64};
 use super::{check_case, corner_radius};
 use crate::physics::error::PhysicsResult;
 use crate::physics::material::{ContactLaw, ImpactCase};
@@ -49,16 +49,25 @@ pub enum ForceLaw {
 /// physics.md §A.5 (paper: P_ref = eπE*L³/R; johnson: P_ref = 4πLE*R/e), §A.7.
 pub fn force_law(case: &ImpactCase) -> PhysicsResult<ForceLaw> {
     check_case(case)?;
-    let es = effective_modulus(&case.rock, &case.column, case.contact.modulus);
     let l = case.rock.side_length;
     let r = case.column.contact_radius;
     Ok(match case.contact.law {
-        law @ (ContactLaw::Paper | ContactLaw::Johnson) => ForceLaw::Log {
-            k: PI * l * es,
-            p_ref: log_law_forces(law, es, l, r).1,
-        },
+        law @ (ContactLaw::Paper | ContactLaw::Johnson) => {
+            let es = effective_modulus(&case.rock, &case.column, case.contact.modulus);
+            ForceLaw::Log {
+                k: PI * l * es,
+                p_ref: log_law_forces(law, es, l, r).1,
+            }
+        }
+        // The same E* (plain f64) as `impact_maxima`, so the coupled and rigid κ are identical.
         ContactLaw::HertzPoint => ForceLaw::Hertz {
-            kappa: hertz_geometry(es, corner_radius(case), r, case.contact.hertz_exact).stiffness,
+            kappa: hertz_geometry(
+                effective_modulus_f64(&case.rock, &case.column, case.contact.modulus),
+                corner_radius(case),
+                r,
+                case.contact.hertz_exact,
+            )
+            .stiffness,
         },
     })
 }

@@ -28,8 +28,14 @@ pub struct HertzGeometry {
 /// ln of B/A − 1 = r_c/R as a function of the logit x = ln(m/(1 − m)) of the ellipse parameter,
 /// and the AGM parts at that m.
 pub(super) fn hertz_log_ratio(x: f64) -> (f64, f64, f64, CompleteElliptic) {
-    let m = 1.0 / (1.0 + (-x).exp());
-    let m1 = 1.0 / (1.0 + x.exp());
+    // m = 1/(1 + e^{−x}) and 1 − m = e^{−x}·m from one exponential (each within 2 ulp).
+    let ex = (-x).exp();
+    let m = 1.0 / (1.0 + ex);
+    let m1 = if ex.is_finite() {
+        ex * m
+    } else {
+        1.0 / (1.0 + x.exp())
+    };
     let r = complete_elliptic_parts(m, m1);
     // B/A − 1 = m (1/2 − t(1 − m/2)) / (m₁ s), free of cancellation on the whole domain; with
     // ln(m/m₁) = x it takes one logarithm.
@@ -302,7 +308,13 @@ pub fn hertz_geometry(
             semi_axis_factor: re,
         };
     }
-    let target = rc.ln() - r.ln(); // ln(B/A − 1)
+    // ln(B/A − 1) = ln(r_c/R): one logarithm of the ratio when it is a normal number.
+    let ratio = rc / r;
+    let target = if ratio.is_normal() && ratio.is_finite() {
+        ratio.ln()
+    } else {
+        rc.ln() - r.ln()
+    };
     let (m, m1, parts) = if let Some(found) = hertz_root_newton(target) {
         found
     } else if target < -40.0 {
