@@ -308,6 +308,20 @@ fn main() {
             let (wall, o) = time_it(|| rapier_slide(dt, 2.0 * t_s, RFloor::Plane, MU, s - 1.0));
             row("rapier3d-f64", "plane", dt, wall, &o, v_s);
         }
+        // the same on a flat 1 m grid
+        let case = ours_case(None, Some(1.0), s, 0.2);
+        let (wall, r) = time_it(|| run(&case, &ctl).expect("our run"));
+        row(
+            "gangue (safety 0.2)",
+            "grid 1 m",
+            r.rigid_block.unwrap().time_step,
+            wall,
+            &ours_outcome(&r),
+            v_s,
+        );
+        let dt = 1.0 / 1000.0;
+        let (wall, o) = time_it(|| rapier_slide(dt, 2.0 * t_s, RFloor::Grid(1.0), MU, s - 1.0));
+        row("rapier3d-f64", "grid 1 m", dt, wall, &o, v_s);
     }
 
     // Monte Carlo: μ ~ U[0.15, 0.25], 32 slides of 1 s on the plane

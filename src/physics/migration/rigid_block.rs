@@ -32,7 +32,13 @@
 //!   forces no longer change, and the leapfrog's N steps under a constant force are advanced
 //!   exactly (v ← v + N a Δt, x ← x + N Δt v + a Δt² N(N+1)/2, the friction work booked with the
 //!   steps' mean velocities) up to two steps before the end time, the lower end or the stop of a
-//!   decelerating slide, and to each trajectory sample.
+//!   decelerating slide, and to each trajectory sample. On a grid or contour floor the same holds
+//!   on a flat patch (vertex–face contacts only, all on one plane), and the skip also stops two
+//!   steps before the block's footprint (its plan box padded by 1 % of r_max, swept along the
+//!   straight path) meets the plan box of a floor triangle off the contact plane, or a contact
+//!   vertex or the centre would leave the union of the coplanar triangles (a hole, the floor's
+//!   edge); the crease, bump or hole is then stepped. A fully flat grid costs what the plane
+//!   costs.
 //! * **Energy**: dashpot and local-damping work → damping; shear-spring work while the Coulomb
 //!   cap holds, and the shear energy a spring still holds when its contact opens → friction; the
 //!   elastic energy of the closed springs → stored. KE + PE + stored + damping + friction +
@@ -213,7 +219,8 @@ struct Model<'a> {
     /// Contact time of a resting face, s (ground phase after 5 of them).
     t_contact: f64,
     max_steps: f64,
-    /// Skip settled slides on the plane in closed form (off only to test the skip).
+    /// Skip settled slides on the plane and flat mesh patches in closed form (off only to test
+    /// the skip).
     skip_slides: bool,
     isotropic: bool,
     static_overlap: f64,
@@ -970,6 +977,9 @@ impl<'a> Model<'a> {
             _ => None,
         };
         let mut steady_since: Option<f64> = None;
+        // (centre, distance): a settled slide that met the edge of its flat patch tries again
+        // only once the centre has moved that far
+        let mut patch_wait: Option<(Vector3<f64>, f64)> = None;
         // the velocities lag the positions by half of this step (leapfrog); None: in step
         let mut half_step: Option<f64> = None;
         loop {
@@ -1353,14 +1363,23 @@ impl<'a> Model<'a> {
             } else {
                 still_since = None;
             }
-            // a steady slide on the plane is skipped in closed form
-            let steady = plane_normal.filter(|_| {
-                self.skip_slides
-                    && self.alpha == 0.0
-                    && !has_columns
-                    && geos.len() >= 3
-                    && n_slip == geos.len()
-            });
+            // a steady slide on the plane, or on a flat patch of a mesh floor (vertex–face
+            // contacts only, all on one plane), is skipped in closed form
+            let steady = if self.skip_slides
+                && self.alpha == 0.0
+                && !has_columns
+                && geos.len() >= 3
+                && n_slip == geos.len()
+            {
+                plane_normal.or_else(|| {
+                    let n = geos[0].n;
+                    geos.iter()
+                        .all(|g| g.key < (1 << 62) && g.n.dot(&n) >= 1.0 - 1e-12)
+                        .then_some(n)
+                })
+            } else {
+                None
+            };
             let Some(nrm) = steady else {
                 steady_since = None;
                 continue;
@@ -1384,9 +1403,35 @@ impl<'a> Model<'a> {
             if st.t - since < 2.0 * self.t_contact {
                 continue;
             }
-            let n_skip = self.steady_steps(&st, &v_t, &a_t, end_t, rec.as_ref().map(|r| r.next));
+            let mut n_skip =
+                self.steady_steps(&st, &v_t, &a_t, end_t, rec.as_ref().map(|r| r.next));
             if n_skip < 8 {
                 continue;
+            }
+            // on a mesh floor, only as far as the footprint stays on the flat patch
+            if plane_normal.is_none() {
+                if patch_wait.is_some_and(|(c, d)| (st.c - c).norm() < d) {
+                    continue;
+                }
+                patch_wait = None;
+                let e = v_t / vs;
+                let (b, c2) = (e.dot(&v_t) * dt, 0.5 * e.dot(&a_t) * dt * dt);
+                let nf = n_skip as f64;
+                let want = b * nf + c2 * nf * (nf + 1.0);
+                let r = self.rot(&st.q);
+                let (run, wait) = self.flat_patch_run(&st.c, &r, &geos, &e, want, &mut tris);
+                if run < want {
+                    let n_patch = steps_to_travel(b, c2, run).floor() - 2.0;
+                    n_skip = if n_patch > 0.0 {
+                        n_skip.min(n_patch as u64)
+                    } else {
+                        0
+                    };
+                    if n_skip < 8 {
+                        patch_wait = Some((st.c, wait));
+                        continue;
+                    }
+                }
             }
             let nf = n_skip as f64;
             // N leapfrog steps under the constant force, exactly: v ← v + N a h,
@@ -1495,29 +1540,157 @@ impl<'a> Model<'a> {
         let s0 = self.mean.along(&st.c) - self.length;
         let b = d.dot(v_t) * dt;
         let c = 0.5 * d.dot(a_t) * dt * dt;
-        let (qa, qb, qc) = (c, b + c, s0);
-        let root = if qa.abs() > 1e-300 {
-            let disc = qb * qb - 4.0 * qa * qc;
-            if disc >= 0.0 {
-                let r = disc.sqrt();
-                [(-qb + r) / (2.0 * qa), (-qb - r) / (2.0 * qa)]
-                    .into_iter()
-                    .filter(|x| *x > 0.0)
-                    .fold(f64::INFINITY, f64::min)
-            } else {
-                f64::INFINITY
-            }
-        } else if qb > 0.0 {
-            -qc / qb
-        } else {
-            f64::INFINITY
-        };
-        n = n.min(root.floor() - 2.0);
+        n = n.min(steps_to_travel(b, c, -s0).floor() - 2.0);
         if n.is_finite() && n > 0.0 {
             n as u64
         } else {
             0
         }
+    }
+
+    /// How far (m, at most `limit`) the block at (c, R), sliding settled on the flat patch of a
+    /// mesh floor that carries its vertex–face contacts `geos`, may translate along the unit
+    /// vector `e` (in the patch) while the stepped run would see the same contacts: every floor
+    /// triangle whose plan box meets the block's plan box (padded by 1 % of r_max) anywhere
+    /// along the way lies in the contact facet's plane, and every contact vertex and the centre
+    /// stay over such a triangle (no hole, not off the floor). Also returns how far the centre
+    /// should move before asking again when the patch ends sooner (past that edge of the patch).
+    ///
+    /// The footprint is swept in chunks of its own size; a non-coplanar triangle limits the run
+    /// where the moving box first meets its plan box, a gap in the cover where the first point
+    /// leaves the union of the coplanar triangles along its path.
+    fn flat_patch_run(
+        &self,
+        c: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        geos: &[Geo],
+        e: &Vector3<f64>,
+        limit: f64,
+        tris: &mut Vec<FloorTriangle>,
+    ) -> (f64, f64) {
+        let sh = &self.shape;
+        let fl = self.floor;
+        // the contact plane: the facet under the first contact vertex
+        let p0 = c + r * sh.vertices[geos[0].key as usize];
+        let Some(fr) = fl.locate(p0.x, p0.y, 0.0, 0.0) else {
+            return (0.0, 0.0);
+        };
+        let pl = fl.facet_plane(fr);
+        let n = pl.normal();
+        let coplanar = |t: &FloorTriangle| {
+            let tn = (t.corners[1] - t.corners[0])
+                .cross(&(t.corners[2] - t.corners[0]))
+                .normalize();
+            tn.dot(&n) >= 1.0 - 1e-12
+                && t.corners
+                    .iter()
+                    .all(|x| (pl.height(x) * n.z).abs() <= 1e-12 * (1.0 + sh.r_max + x.norm()))
+        };
+        let margin = 0.01 * sh.r_max;
+        let (mut bx0, mut bx1, mut by0, mut by1) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
+        let (mut lo_e, mut hi_e) = (f64::INFINITY, f64::NEG_INFINITY);
+        for b in &sh.vertices {
+            let p = c + r * b;
+            bx0 = bx0.min(p.x - margin);
+            bx1 = bx1.max(p.x + margin);
+            by0 = by0.min(p.y - margin);
+            by1 = by1.max(p.y + margin);
+            lo_e = lo_e.min(e.dot(&(p - c)));
+            hi_e = hi_e.max(e.dot(&(p - c)));
+        }
+        // the points that must stay over the patch: the contact vertices and the centre
+        let mut pts: Vec<[f64; 2]> = geos
+            .iter()
+            .map(|g| {
+                let p = c + r * sh.vertices[g.key as usize];
+                [p.x, p.y]
+            })
+            .collect();
+        pts.push([c.x, c.y]);
+        let (ex, ey) = (e.x, e.y);
+        let chunk = (bx1 - bx0).max(by1 - by0).max(fl.cell_size());
+        let eps = 1e-9 * (1.0 + sh.r_max);
+        let mut run = limit;
+        let mut cover: Vec<[f64; 2]> = Vec::new();
+        let mut sa = 0.0f64;
+        while sa < run {
+            let sb = (sa + chunk).min(run);
+            let bx = [bx0 + (sa * ex).min(sb * ex), bx1 + (sa * ex).max(sb * ex)];
+            let by = [by0 + (sa * ey).min(sb * ey), by1 + (sa * ey).max(sb * ey)];
+            tris.clear();
+            fl.triangles_in([bx[0], bx[1], by[0], by[1]], tris);
+            // a triangle off the patch: where the moving box first meets its plan box
+            for t in tris.iter().filter(|t| !coplanar(t)) {
+                let (mut s_in, mut s_out) = (0.0f64, f64::INFINITY);
+                for (lo, hi, d, k) in [(bx0, bx1, ex, 0), (by0, by1, ey, 1)] {
+                    let t_lo = t.corners.iter().map(|x| x[k]).fold(f64::INFINITY, f64::min);
+                    let t_hi = t
+                        .corners
+                        .iter()
+                        .map(|x| x[k])
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    if d == 0.0 {
+                        if hi < t_lo || lo > t_hi {
+                            s_in = f64::INFINITY;
+                        }
+                    } else {
+                        let (a, b) = ((t_lo - hi) / d, (t_hi - lo) / d);
+                        s_in = s_in.max(a.min(b));
+                        s_out = s_out.min(a.max(b));
+                    }
+                }
+                if s_in <= s_out {
+                    run = run.min(s_in);
+                }
+            }
+            // each point's path over [sa, sb] covered by the patch's triangles
+            let sb = sb.min(run);
+            for q in &pts {
+                cover.clear();
+                for t in tris.iter().filter(|t| coplanar(t)) {
+                    let (mut lo, mut hi) = (sa, sb);
+                    for k in 0..3 {
+                        let (a, b) = (t.corners[k], t.corners[(k + 1) % 3]);
+                        let (dx, dy) = (b.x - a.x, b.y - a.y);
+                        // outward (dy, −dx) of a counter-clockwise edge: g(s) ≤ 0 inside
+                        let g0 = dy * (q[0] - a.x) - dx * (q[1] - a.y);
+                        let g1 = dy * ex - dx * ey;
+                        let tol = eps * (dx * dx + dy * dy).sqrt();
+                        if g1 == 0.0 {
+                            if g0 > tol {
+                                hi = f64::NEG_INFINITY;
+                            }
+                        } else if g1 > 0.0 {
+                            hi = hi.min((tol - g0) / g1);
+                        } else {
+                            lo = lo.max((tol - g0) / g1);
+                        }
+                    }
+                    if lo <= hi {
+                        cover.push([lo, hi]);
+                    }
+                }
+                cover.sort_by(|x, y| x[0].total_cmp(&y[0]));
+                let mut reach = sa;
+                for iv in &cover {
+                    if iv[0] > reach + eps {
+                        break;
+                    }
+                    reach = reach.max(iv[1]);
+                }
+                if reach < sb {
+                    run = run.min(reach);
+                }
+            }
+            sa = sb;
+        }
+        let run = run.max(0.0);
+        (run, run + (hi_e - lo_e) + 2.0 * margin)
     }
 
     /// The state with its velocities brought to its time: the leapfrog's velocities lag the
@@ -1638,6 +1811,28 @@ impl<'a> Model<'a> {
         tr.potential_energy.push(pe);
         tr.dissipated_energy.push(diss);
         Ok(())
+    }
+}
+
+/// Steps N at which s(N) = b N + c N (N + 1) (a leapfrog's travel under constant acceleration,
+/// b = v Δt, c = a Δt²/2) first reaches `dist`, as a real number (∞ if never).
+fn steps_to_travel(b: f64, c: f64, dist: f64) -> f64 {
+    let (qa, qb, qc) = (c, b + c, -dist);
+    if qa.abs() > 1e-300 {
+        let disc = qb * qb - 4.0 * qa * qc;
+        if disc >= 0.0 {
+            let r = disc.sqrt();
+            [(-qb + r) / (2.0 * qa), (-qb - r) / (2.0 * qa)]
+                .into_iter()
+                .filter(|x| *x > 0.0)
+                .fold(f64::INFINITY, f64::min)
+        } else {
+            f64::INFINITY
+        }
+    } else if qb > 0.0 {
+        -qc / qb
+    } else {
+        f64::INFINITY
     }
 }
 
@@ -1959,7 +2154,10 @@ fn closest_on_triangle(p: &Vector3<f64>, t: &[Vector3<f64>; 3]) -> (Vector3<f64>
 #[cfg(test)]
 mod tests {
     //! The closed-form skip of a settled slide on the plane reproduces the stepped leapfrog: the
-    //! same end state, friction work and energy account, to rounding over the skipped steps.
+    //! same end state, friction work and energy account, to rounding over the skipped steps; on
+    //! a mesh floor it does so only while the block's footprint stays on a flat patch, so a
+    //! crease, a bump or a hole ahead ends the skip before the block reaches it.
+    use super::super::FloorSpec;
     use super::*;
 
     fn slide(end_time: Option<f64>, mu: f64, length: f64, speed: f64) -> MigrationCase {
@@ -2030,6 +2228,333 @@ mod tests {
                     close(*x, *y, 1e-8);
                 }
             }
+        }
+    }
+
+    /// The 45° face as a grid of spacing d (0 ≤ x ≤ S cos θ + 1 m, |y| ≤ 1 m) with node heights
+    /// −x tan θ + `bump(x, y)`.
+    fn grid(d: f64, length: f64, bump: impl Fn(f64, f64) -> f64) -> FloorSpec {
+        let t = 45f64.to_radians().tan();
+        let nx = ((length * 45f64.to_radians().cos() + 1.0) / d).ceil() as usize + 1;
+        let ny = (2.0 / d).round() as usize + 1;
+        FloorSpec::Grid {
+            origin: [0.0, -1.0],
+            spacing: d,
+            heights: (0..ny)
+                .map(|i| {
+                    let y = -1.0 + i as f64 * d;
+                    (0..nx)
+                        .map(|j| {
+                            let x = j as f64 * d;
+                            -x * t + bump(x, y)
+                        })
+                        .collect()
+                })
+                .collect(),
+        }
+    }
+
+    fn on_grid(mut c: MigrationCase, d: f64, bump: impl Fn(f64, f64) -> f64) -> MigrationCase {
+        c.face.floor = grid(d, c.face.length, bump);
+        c.release.along_dip = 1.0;
+        c
+    }
+
+    /// Asserts that the skipping run `fast` reproduces the stepped run `slow`.
+    fn same_run(case: &MigrationCase, fast: &RunOut, slow: &RunOut) {
+        assert_eq!(fast.reason, slow.reason);
+        assert_eq!(fast.impacts, slow.impacts);
+        close(fast.st.t, slow.st.t, 1e-9);
+        for k in 0..3 {
+            close(fast.st.c[k], slow.st.c[k], 1e-9);
+            close(fast.st.v[k], slow.st.v[k], 1e-8);
+        }
+        close(fast.friction, slow.friction, 1e-8);
+        close(fast.damping, slow.damping, 1e-6);
+        let acc = |o: &RunOut| {
+            let (k, r, p) = case_energy(case, o);
+            k + r + p + o.stored + o.damping + o.friction - o.e_start
+        };
+        close(acc(fast), acc(slow), 1e-6);
+        if let (Some(a), Some(b)) = (&fast.trajectory, &slow.trajectory) {
+            assert_eq!(a.time.len(), b.time.len());
+            for (x, y) in a.speed.iter().zip(&b.speed) {
+                close(*x, *y, 1e-8);
+            }
+        }
+    }
+
+    #[test]
+    fn skipped_slide_on_a_flat_grid_matches_the_stepped_one() {
+        // as on the plane, on a flat grid (vertices cross facets) and on flat contours
+        let flat = |_: f64, _: f64| 0.0;
+        for (case, rec) in [
+            (on_grid(slide(Some(1.0), 0.2, 20.0, 0.0), 0.25, flat), None),
+            (on_grid(slide(None, 0.2, 40.0, 0.0), 1.0, flat), None),
+            (
+                on_grid(slide(None, 0.2, 20.0, 0.0), 0.5, flat),
+                Some((0.05, 10_000)),
+            ),
+            (on_grid(slide(None, 1.2, 20.0, 3.0), 0.5, flat), None),
+        ] {
+            let (fast, slow) = both(&case, rec);
+            assert!(
+                fast.steps * 4 < slow.steps || case.face.friction_coefficient > 1.0,
+                "the skip saved little: {} of {} steps",
+                fast.steps,
+                slow.steps
+            );
+            same_run(&case, &fast, &slow);
+        }
+    }
+
+    #[test]
+    fn a_flat_grid_costs_and_answers_what_the_plane_does() {
+        // the same slide to the lower end of a 60 m face on the plane and on flat grids
+        let plane = slide(None, 0.2, 60.0, 0.0);
+        let mut plane = plane;
+        plane.release.along_dip = 1.0;
+        let pr = super::super::prepare(&plane).unwrap();
+        let p = Model::new(&plane, &pr)
+            .unwrap()
+            .simulate(0.2, 0.35, None, false, None)
+            .unwrap();
+        for d in [2.0, 0.25] {
+            let c = on_grid(plane.clone(), d, |_, _| 0.0);
+            let pr = super::super::prepare(&c).unwrap();
+            let g = Model::new(&c, &pr)
+                .unwrap()
+                .simulate(0.2, 0.35, None, false, None)
+                .unwrap();
+            assert_eq!(g.reason, StopReason::LowerEnd);
+            close(g.st.t, p.st.t, 1e-8);
+            close(g.st.v.norm(), p.st.v.norm(), 1e-8);
+            // a few hundred contact steps each (the loading of the contacts), not 10⁵
+            assert!(
+                g.steps <= 2 * p.steps && p.steps < 1000,
+                "spacing {d}: {} steps on the grid, {} on the plane",
+                g.steps,
+                p.steps
+            );
+        }
+    }
+
+    #[test]
+    fn a_slide_onto_a_crease_or_a_bump_stops_skipping_in_time() {
+        // flat for the first metres of the path, then: a convex crease (steeper by 5°), a
+        // concave one (flatter by 5°), a 5 mm bump (one raised node), a hole (a node without
+        // data) under one edge of the path. Up to the feature the skipping run equals the
+        // stepped one sample by sample; the feature itself is stepped (its impacts dissipate
+        // what the stepped run's do). Past it the two runs agree only loosely: the cube lands
+        // on a face after crossing the feature, and a near-flat landing on four vertices
+        // amplifies the skip's rounding differences (1e-12) into its roll (to about 1e-4).
+        let t = 45f64.to_radians().tan();
+        let kink = move |deg: f64, xc: f64| {
+            move |x: f64, _: f64| {
+                if x > xc {
+                    -(x - xc) * ((45.0 + deg).to_radians().tan() - t)
+                } else {
+                    0.0
+                }
+            }
+        };
+        let node = move |dz: f64, yn: f64| {
+            move |x: f64, y: f64| {
+                if (x - 6.0).abs() < 1e-9 && (y - yn).abs() < 1e-9 {
+                    dz
+                } else {
+                    0.0
+                }
+            }
+        };
+        let at = |x: f64| x / 45f64.to_radians().cos();
+        let base = slide(None, 0.2, 12.0, 0.0);
+        let cases: [(&str, MigrationCase, f64); 4] = [
+            (
+                "convex crease",
+                on_grid(base.clone(), 0.5, kink(5.0, 6.0)),
+                at(6.0),
+            ),
+            (
+                "concave crease",
+                on_grid(base.clone(), 0.5, kink(-5.0, 6.0)),
+                at(6.0),
+            ),
+            (
+                "bump",
+                on_grid(base.clone(), 0.5, node(0.005, 0.0)),
+                at(5.5),
+            ),
+            ("hole", on_grid(base, 0.5, node(f64::NAN, 0.5)), at(5.5)),
+        ];
+        for (name, case, feature) in cases {
+            let (fast, slow) = both(&case, Some((0.02, 100_000)));
+            assert!(
+                fast.steps * 2 < slow.steps,
+                "{name}: the skip saved little: {} of {} steps",
+                fast.steps,
+                slow.steps
+            );
+            let (a, b) = (fast.trajectory.unwrap(), slow.trajectory.unwrap());
+            let mut before = 0;
+            for k in 0..a.time.len().min(b.time.len()) {
+                // up to the feature (the block's front is 0.15 m ahead of its centre)
+                if b.along_dip[k] > feature - 0.3 {
+                    break;
+                }
+                before += 1;
+                close(a.time[k], b.time[k], 1e-12);
+                close(a.along_dip[k], b.along_dip[k], 1e-9);
+                close(a.speed[k], b.speed[k], 1e-8);
+            }
+            assert!(before > 20, "{name}: {before} samples before the feature");
+            // across it: the same stop and about the same dissipation by impacts
+            assert_eq!(fast.reason, slow.reason, "{name}");
+            close(fast.st.t, slow.st.t, 1e-4);
+            close(fast.st.v.norm(), slow.st.v.norm(), 1e-4);
+            close(fast.friction, slow.friction, 1e-4);
+            assert!(
+                (fast.damping - slow.damping).abs() <= 1e-2 * slow.damping.max(1e-3),
+                "{name}: damping {} against {}",
+                fast.damping,
+                slow.damping
+            );
+            eprintln!(
+                "{name}: {} of {} steps; damping {} / {}; impacts {} / {}",
+                fast.steps, slow.steps, fast.damping, slow.damping, fast.impacts, slow.impacts
+            );
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig {
+            cases: 64, ..proptest::prelude::ProptestConfig::default()
+        })]
+
+        /// The flat patch's run never passes a patch boundary: at every pose along it (sampled
+        /// every 1/20 of a cell) the contacts are those of the start (the same block vertices
+        /// on the same plane), and it is no shorter than its footprint-box rule allows.
+        #[test]
+        fn a_patch_boundary_crossing_is_never_skipped_over(
+            d in 0.1..=1.0f64,
+            kind in 0usize..4,
+            bx in 2.0..=6.0f64,
+            by in -0.6..=0.6f64,
+            x0 in 1.0..=3.0f64,
+            y0 in -0.3..=0.3f64,
+            yaw in 0.0..=std::f64::consts::TAU,
+            heading in -0.6..=0.6f64,
+        ) {
+            let t = 45f64.to_radians().tan();
+            // the feature: a raised node, a crease across the face, a hole, none
+            let (gx, gy) = ((bx / d).round() * d, ((by + 1.0) / d).round() * d - 1.0);
+            let feature = move |x: f64, y: f64| match kind {
+                0 if (x - gx).abs() < 1e-9 && (y - gy).abs() < 1e-9 => 0.01,
+                1 if x > gx => -(x - gx) * 0.1,
+                2 if (x - gx).abs() < 1e-9 && (y - gy).abs() < 1e-9 => f64::NAN,
+                _ => 0.0,
+            };
+            let mut c = slide(Some(1.0), 0.2, 12.0, 0.0);
+            c.face.floor = grid(d, 12.0, feature);
+            let pr = super::super::prepare(&c).unwrap();
+            let model = Model::new(&c, &pr).unwrap();
+            // the cube face-down on the plane at (x0, y0), turned by `yaw` about the normal
+            let fl = model.floor;
+            let n = Vector3::new(t, 0.0, 1.0).normalize();
+            let q = UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(n), yaw)
+                * model.q0;
+            let r = model.rot(&q);
+            let z0 = -x0 * t;
+            let c0 = Vector3::new(x0, y0, z0) + n * model.rest_offset;
+            let mut tris = Vec::new();
+            let mut geos = Vec::new();
+            model.contacts(&c0, &r, &mut tris, &mut geos);
+            // (a start off the flat patch is never asked about: the slide is not settled there)
+            if geos.len() != 4 || geos.iter().any(|g| g.key >= 1 << 62 || g.n.dot(&n) < 1.0 - 1e-12) {
+                return Ok(());
+            }
+            let keys = |g: &[Geo]| {
+                let mut k: Vec<u64> = g.iter().map(|x| x.key).collect();
+                k.sort_unstable();
+                k
+            };
+            let k0 = keys(&geos);
+            // down the plane, turned by `heading` across it
+            let dip = Vector3::new(1.0, 0.0, -t).normalize();
+            let across = n.cross(&dip);
+            let e = (dip * heading.cos() + across * heading.sin()).normalize();
+            let limit = 8.0;
+            let (run, _) = model.flat_patch_run(&c0, &r, &geos, &e, limit, &mut tris);
+            let h = d / 20.0;
+            let same = |s: f64, tris: &mut Vec<FloorTriangle>, geos: &mut Vec<Geo>| {
+                let c = c0 + e * s;
+                if fl.locate(c.x, c.y, 0.0, 0.0).is_none() {
+                    return false;
+                }
+                model.contacts(&c, &r, tris, geos);
+                keys(geos) == k0 && geos.iter().all(|g| g.n.dot(&n) >= 1.0 - 1e-12)
+            };
+            let mut s = 0.0;
+            while s <= limit {
+                let ok = same(s, &mut tris, &mut geos);
+                if s <= run && run > 0.0 {
+                    proptest::prop_assert!(ok, "contacts change at {} inside the run {}", s, run);
+                }
+                if !ok {
+                    break;
+                }
+                s += h;
+            }
+            proptest::prop_assert!(run <= limit);
+            // not needlessly short: the run reaches at least where the footprint's plan box
+            // (padded by 1 % of r_max) first meets the plan box of the feature's triangles
+            // (the node ± d, or x ≥ the crease) or leaves the floor's extent
+            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for b in &model.shape.vertices {
+                let p = c0 + r * b;
+                for k in 0..2 {
+                    lo[k] = lo[k].min(p[k] - 0.01 * model.shape.r_max);
+                    hi[k] = hi[k].max(p[k] + 0.01 * model.shape.r_max);
+                }
+            }
+            let ext = fl.extent();
+            let target = match kind {
+                1 => Some([[gx, f64::INFINITY], [f64::NEG_INFINITY, f64::INFINITY]]),
+                3 => None,
+                _ => Some([[gx - d, gx + d], [gy - d, gy + d]]),
+            };
+            let (mut meet_in, mut meet_out, mut leave) = (0.0f64, f64::INFINITY, f64::INFINITY);
+            for k in 0..2 {
+                let ek = e[k];
+                if let Some(tb) = target {
+                    if ek == 0.0 {
+                        if hi[k] < tb[k][0] || lo[k] > tb[k][1] {
+                            meet_in = f64::INFINITY;
+                        }
+                    } else {
+                        let (a, b) = ((tb[k][0] - hi[k]) / ek, (tb[k][1] - lo[k]) / ek);
+                        meet_in = meet_in.max(a.min(b));
+                        meet_out = meet_out.min(a.max(b));
+                    }
+                }
+                if ek > 0.0 {
+                    leave = leave.min((ext[2 * k + 1] - hi[k]) / ek);
+                } else if ek < 0.0 {
+                    leave = leave.min((ext[2 * k] - lo[k]) / ek);
+                }
+            }
+            let meet = if target.is_some() && meet_in <= meet_out {
+                meet_in
+            } else {
+                f64::INFINITY
+            };
+            proptest::prop_assert!(
+                run >= meet.min(leave).min(limit) - h,
+                "run {} but the box meets the feature at {} and leaves the floor at {}",
+                run,
+                meet,
+                leave
+            );
         }
     }
 
