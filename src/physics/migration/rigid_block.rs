@@ -964,6 +964,8 @@ impl<'a> Model<'a> {
         }
         let mut first_impact_done = false;
         let mut still_since: Option<f64> = None;
+        // Start (time, centre, orientation) of the current window of uninterrupted contact.
+        let mut quiet_window: Option<(f64, Vector3<f64>, UnitQuaternion<f64>)> = None;
         let mut slip_max = 0.0f64;
         let end_t = self.end_time.unwrap_or(f64::INFINITY);
         let reason;
@@ -1362,6 +1364,23 @@ impl<'a> Model<'a> {
                 }
             } else {
                 still_since = None;
+            }
+            // A block held by its stuck shear springs may keep an elastic vibration that no
+            // dashpot damps (the shear springs have none): its speeds stay above the threshold
+            // while it goes nowhere. At rest too when, over REST_TIME_S of unbroken contact, its
+            // centre and its farthest point moved less than REST_SPEED_M_S·REST_TIME_S.
+            if in_contact {
+                let (t0, c0, q0) = *quiet_window.get_or_insert((st.t, st.c, st.q));
+                if st.t - t0 >= REST_TIME_S {
+                    let reach = REST_SPEED_M_S * REST_TIME_S;
+                    if (st.c - c0).norm() < reach && q0.angle_to(&st.q) * self.shape.r_max < reach {
+                        reason = StopReason::AtRest;
+                        break;
+                    }
+                    quiet_window = Some((st.t, st.c, st.q));
+                }
+            } else {
+                quiet_window = None;
             }
             // a steady slide on the plane, or on a flat patch of a mesh floor (vertex–face
             // contacts only, all on one plane), is skipped in closed form
