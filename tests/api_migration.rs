@@ -298,3 +298,56 @@ async fn bad_input_names_the_field() {
     ];
     common::assert_rejections(&app, "/v1/migration", cases).await;
 }
+
+/// api.md: restitution distributions given explicitly with the rigid block are 422, even when
+/// they equal their defaults (which apply to the lumped mass only, so `"monte_carlo": {}` works
+/// for both methods); a damping-ratio distribution with the lumped mass is 422. Each refusal
+/// echoes the distribution sent as its value (it was null), also inside a scene.
+#[tokio::test]
+async fn distributions_of_the_other_method_are_refused_when_sent_even_at_their_defaults() {
+    let app = common::app();
+    let default_en = json!({"distribution": "uniform", "min": 0.2, "max": 0.4});
+    for path in ["/v1/migration", "/v1/scene"] {
+        let r = post(
+            &app,
+            path,
+            &json!({"method": "rigid_block", "face": {"length_m": 3},
+                    "monte_carlo": {"runs": 2, "restitution_normal": default_en}}),
+        )
+        .await;
+        let p = common::assert_problem(&r, 422, "invalid_input");
+        assert_eq!(
+            p["errors"][0]["field"], "/monte_carlo/restitution_normal",
+            "{p}"
+        );
+        assert_eq!(p["errors"][0]["value"], default_en, "{p}");
+
+        let r = post(
+            &app,
+            path,
+            &json!({"method": "rigid_block", "face": {"length_m": 3}, "monte_carlo": {"runs": 2}}),
+        )
+        .await;
+        assert_eq!(
+            r.status,
+            200,
+            "{path}: {}",
+            String::from_utf8_lossy(&r.body)
+        );
+
+        let beta = json!({"distribution": "uniform", "min": 0.1, "max": 0.4});
+        let r = post(
+            &app,
+            path,
+            &json!({"face": {"length_m": 3},
+                    "monte_carlo": {"runs": 2, "critical_damping_ratio": beta}}),
+        )
+        .await;
+        let p = common::assert_problem(&r, 422, "invalid_input");
+        assert_eq!(
+            p["errors"][0]["field"], "/monte_carlo/critical_damping_ratio",
+            "{p}"
+        );
+        assert_eq!(p["errors"][0]["value"], beta, "{p}");
+    }
+}

@@ -1112,3 +1112,35 @@ mod tests {
         assert_eq!(COLUMN_CONTACT_RADIUS.preset()["default"], "derived");
     }
 }
+
+/// A field's value and whether the request carried it (its default fills in when not); it reads
+/// and writes as the value alone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sent<T> {
+    /// The value sent, or the field's default.
+    pub value: T,
+    /// Whether the request carried the field.
+    pub sent: bool,
+}
+
+impl<T> Sent<T> {
+    /// The field's default, not sent.
+    pub const fn default_value(value: T) -> Self {
+        Self { value, sent: false }
+    }
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Sent<T> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Ok(Self {
+            value: T::deserialize(d)?,
+            sent: true,
+        })
+    }
+}
+
+impl<T: Serialize> Serialize for Sent<T> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.value.serialize(s)
+    }
+}

@@ -647,10 +647,14 @@ macro_rules! monte_carlo_dto {
             /// Seed (any u64); the same request and seed give the same bytes.
             #[schema(default = 42, example = 42)]
             pub seed: u64,
-            /// e_n, drawn at every impact, clipped to [0, 1] (default U[0.2, 0.4]).
-            pub restitution_normal: DistributionDto,
-            /// e_t, drawn at every impact after e_n, clipped to [0, 1] (default U[0.7, 0.9]).
-            pub restitution_tangential: DistributionDto,
+            /// e_n, drawn at every impact, clipped to [0, 1] (default U[0.2, 0.4]; lumped mass
+            /// only: refused when sent with the rigid block).
+            #[schema(value_type = DistributionDto)]
+            pub restitution_normal: $crate::http::dto::common::Sent<DistributionDto>,
+            /// e_t, drawn at every impact after e_n, clipped to [0, 1] (default U[0.7, 0.9];
+            /// lumped mass only: refused when sent with the rigid block).
+            #[schema(value_type = DistributionDto)]
+            pub restitution_tangential: $crate::http::dto::common::Sent<DistributionDto>,
             /// μ, drawn once per run (null: the face's μ for every run).
             #[schema(default = json!(null))]
             #[serde(skip_serializing_if = "Option::is_none")]
@@ -673,8 +677,12 @@ macro_rules! monte_carlo_dto {
                 Self {
                     runs: 200,
                     seed: 42,
-                    restitution_normal: DistributionDto::uniform(0.2, 0.4),
-                    restitution_tangential: DistributionDto::uniform(0.7, 0.9),
+                    restitution_normal: $crate::http::dto::common::Sent::default_value(
+                        DistributionDto::uniform(0.2, 0.4),
+                    ),
+                    restitution_tangential: $crate::http::dto::common::Sent::default_value(
+                        DistributionDto::uniform(0.7, 0.9),
+                    ),
                     friction_coefficient: None,
                     critical_damping_ratio: None,
                     $( $field: None, )*
@@ -1333,13 +1341,13 @@ impl MigrationRequest {
             MonteCarlo {
                 runs: mc.runs,
                 seed: mc.seed,
-                restitution_normal: mc.restitution_normal.resolve(
+                restitution_normal: mc.restitution_normal.value.resolve(
                     "/monte_carlo/restitution_normal",
                     0.0,
                     1.0,
                     &mut ck,
                 ),
-                restitution_tangential: mc.restitution_tangential.resolve(
+                restitution_tangential: mc.restitution_tangential.value.resolve(
                     "/monte_carlo/restitution_tangential",
                     0.0,
                     1.0,
@@ -1355,30 +1363,23 @@ impl MigrationRequest {
             if !rigid {
                 ck.push(
                     "/monte_carlo/critical_damping_ratio",
-                    Value::Null,
+                    serde_json::to_value(d).unwrap_or(Value::Null),
                     "the critical damping ratio belongs to the rigid-block method",
                 );
             }
             Some(d.resolve("/monte_carlo/critical_damping_ratio", 0.0, 0.999, &mut ck))
         });
         if rigid && let Some(mc) = &self.monte_carlo {
-            let def = MonteCarloDto::default();
-            for (name, d, d0) in [
-                (
-                    "restitution_normal",
-                    &mc.restitution_normal,
-                    &def.restitution_normal,
-                ),
-                (
-                    "restitution_tangential",
-                    &mc.restitution_tangential,
-                    &def.restitution_tangential,
-                ),
+            // api.md: restitution distributions given explicitly with the rigid block are 422,
+            // even when equal to their defaults (which apply to the lumped mass only)
+            for (name, d) in [
+                ("restitution_normal", &mc.restitution_normal),
+                ("restitution_tangential", &mc.restitution_tangential),
             ] {
-                if d != d0 {
+                if d.sent {
                     ck.push(
                         format!("/monte_carlo/{name}"),
-                        Value::Null,
+                        serde_json::to_value(d.value).unwrap_or(Value::Null),
                         "the rigid block has no restitution: its ensemble varies friction_coefficient and critical_damping_ratio",
                     );
                 }
