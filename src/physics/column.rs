@@ -553,6 +553,30 @@ fn assemble_result(
     })
 }
 
+/// The rule that the decoupled model has one mode: the message when `modes` breaks it.
+///
+/// # Errors
+/// The rule's message when `modes` is not 1.
+pub fn decoupled_modes_rule(modes: usize) -> Result<(), &'static str> {
+    if modes == 1 {
+        Ok(())
+    } else {
+        Err("the decoupled model uses mode 1 only (modes = 1)")
+    }
+}
+
+/// The rule that only the coupled model has a time window: the message when one is given to the
+/// decoupled model.
+///
+/// # Errors
+/// The rule's message when `end_time` is given.
+pub fn decoupled_window_rule(end_time: Option<f64>) -> Result<(), &'static str> {
+    match end_time {
+        None => Ok(()),
+        Some(_) => Err("applies to the coupled model only"),
+    }
+}
+
 fn decoupled(
     case: &ColumnCase,
     impact: &ImpactResult,
@@ -560,22 +584,13 @@ fn decoupled(
     ke: f64,
     mut warnings: Vec<Warning>,
 ) -> PhysicsResult<ColumnResult> {
-    if let Some(n) = case.modes
-        && n != 1
-    {
-        return Err(PhysicsError::invalid(
-            Param::GalerkinModes,
-            n as f64,
-            "the decoupled model uses mode 1 only (modes = 1)",
-        ));
+    if let Some(n) = case.modes {
+        decoupled_modes_rule(n)
+            .map_err(|m| PhysicsError::invalid(Param::GalerkinModes, n as f64, m))?;
     }
-    if let Some(t) = case.end_time {
-        return Err(PhysicsError::invalid(
-            Param::CoupledWindow,
-            t,
-            "end_time_s applies to the coupled model only",
-        ));
-    }
+    decoupled_window_rule(case.end_time).map_err(|m| {
+        PhysicsError::invalid(Param::CoupledWindow, case.end_time.unwrap_or(f64::NAN), m)
+    })?;
     let (dmax, pmax) = (impact.max_deformation(), impact.max_force());
     let w_mid0 = match case.initial_midpoint_displacement {
         Some(w) => {

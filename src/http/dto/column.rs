@@ -212,19 +212,14 @@ impl ColumnRequest {
                 );
             }
         } else {
-            if modes != 1 {
-                checker.push(
-                    "/galerkin/modes",
-                    json!(modes),
-                    "the decoupled model uses mode 1 only (modes = 1)",
-                );
+            if let Err(m) = crate::physics::column::decoupled_modes_rule(modes as usize) {
+                checker.push("/galerkin/modes", json!(modes), m);
             }
-            if let Some(t) = self.end_time_s {
-                checker.push(
-                    "/end_time_s",
-                    crate::http::error::num(t),
-                    "applies to the coupled model only",
-                );
+            if let (Some(t), Err(m)) = (
+                self.end_time_s,
+                crate::physics::column::decoupled_window_rule(self.end_time_s),
+            ) {
+                checker.push("/end_time_s", crate::http::error::num(t), m);
             }
             if let Some(w) = self.initial_midpoint_displacement_m {
                 INITIAL_MIDPOINT_DISPLACEMENT.check(

@@ -80,12 +80,9 @@ pub fn resolve_impact_case(
             }
         }
         ShapeKind::Sphere => {
-            if !hertz {
-                checker.push(
-                    "/contact/law",
-                    serde_json::json!(contact.law),
-                    "a sphere touches the column at a point: only hertz_point is defined",
-                );
+            let law = crate::physics::material::ContactModel::from(contact).law;
+            if let Err(m) = crate::physics::contact::sphere_law_rule(true, law) {
+                checker.push("/contact/law", serde_json::json!(contact.law), m);
             }
         }
         other => checker.push(

@@ -189,6 +189,19 @@ pub(super) fn check_case(case: &ImpactCase) -> PhysicsResult<()> {
     check_case_fields(case)
 }
 
+/// The rule that a sphere touches the column at a point, so only the Hertz point law is
+/// defined for it: the message when `sphere` and `law` break it.
+///
+/// # Errors
+/// The rule's message for a sphere with a line-contact law.
+pub fn sphere_law_rule(sphere: bool, law: ContactLaw) -> Result<(), &'static str> {
+    if sphere && law != ContactLaw::HertzPoint {
+        Err("a sphere touches the column at a point: only hertz_point is defined")
+    } else {
+        Ok(())
+    }
+}
+
 /// The field-by-field checks of [`check_case`], naming the first invalid field.
 fn check_case_fields(case: &ImpactCase) -> PhysicsResult<()> {
     check_positive(Param::ImpactVelocity, case.velocity)?;
@@ -205,12 +218,9 @@ fn check_case_fields(case: &ImpactCase) -> PhysicsResult<()> {
         (RockShape::Sphere { radius }, ContactLaw::HertzPoint) => {
             check_positive(Param::RockRadius, *radius)?
         }
-        (RockShape::Sphere { .. }, _) => {
-            return Err(PhysicsError::invalid(
-                Param::ContactLaw,
-                f64::NAN,
-                "a sphere rock has no flat face for a line contact: use the hertz_point law",
-            ));
+        (RockShape::Sphere { .. }, law) => {
+            sphere_law_rule(true, law)
+                .map_err(|m| PhysicsError::invalid(Param::ContactLaw, f64::NAN, m))?;
         }
         (_, ContactLaw::HertzPoint) => {
             check_positive(Param::RockCornerRadius, case.rock.corner_radius)?
