@@ -322,23 +322,24 @@ async fn documented_defaults_and_ranges_are_what_the_server_does() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// The schema of the shared rock and column fields, their validation and `/v1/presets` come
-/// from one definition: the presets' `fields` equal the OpenAPI bounds and defaults.
-#[tokio::test]
-async fn presets_list_the_documented_fields() {
-    let app = common::app();
-    let doc: Value = serde_json::from_str(&gangue::http::openapi::openapi_json()).unwrap();
-    let presets = common::get(&app, "/v1/presets").await.json();
-    let fields = presets["fields"].as_object().expect("presets list fields");
-    assert!(fields.len() >= 17, "{}", fields.len());
-    let request = &doc["components"]["schemas"]["ImpactRequest"];
+/// Asserts that each field listed by `/v1/presets` (pointer → bounds and default) has the same
+/// bounds and default in the OpenAPI schema `request`; a default given as a string (one of
+/// `kinds`, e.g. "derived") has none in the document.
+fn assert_fields_are_documented(
+    doc: &Value,
+    request: &str,
+    fields: &serde_json::Map<String, Value>,
+    kinds: &[&str],
+) {
+    let request = &doc["components"]["schemas"][request];
     for (pointer, f) in fields {
         let mut s = request;
         for part in pointer.trim_start_matches('/').split('/') {
-            let (obj, _) = resolve(&doc, s);
+            let (obj, _) = resolve(doc, s);
             s = &obj["properties"][part];
+            assert!(!s.is_null(), "{pointer}: no schema for {part}");
         }
-        let (s, _) = resolve(&doc, s);
+        let (s, _) = resolve(doc, s);
         for key in ["minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"] {
             assert_eq!(
                 s.get(key).and_then(Value::as_f64),
@@ -348,12 +349,24 @@ async fn presets_list_the_documented_fields() {
         }
         match &f["default"] {
             Value::String(d) => {
-                assert_eq!(d, "derived");
+                assert!(kinds.contains(&d.as_str()), "{pointer}: {d}");
                 assert!(s.get("default").is_none(), "{pointer}");
             }
             d => assert_eq!(s.get("default"), Some(d), "{pointer}"),
         }
     }
+}
+
+/// The schema of the shared rock and column fields, their validation and `/v1/presets` come
+/// from one definition: the presets' `fields` equal the OpenAPI bounds and defaults.
+#[tokio::test]
+async fn presets_list_the_documented_fields() {
+    let app = common::app();
+    let doc: Value = serde_json::from_str(&gangue::http::openapi::openapi_json()).unwrap();
+    let presets = common::get(&app, "/v1/presets").await.json();
+    let fields = presets["fields"].as_object().expect("presets list fields");
+    assert!(fields.len() >= 17, "{}", fields.len());
+    assert_fields_are_documented(&doc, "ImpactRequest", fields, &["derived"]);
     // The paper's tables in the presets are the request defaults.
     let column = &presets["column"];
     assert_eq!(
@@ -377,30 +390,7 @@ async fn presets_list_the_documented_migration_fields() {
         .as_object()
         .expect("presets list the migration's fields");
     assert!(fields.len() >= 20, "{}", fields.len());
-    let request = &doc["components"]["schemas"]["MigrationRequest"];
-    for (pointer, f) in fields {
-        let mut s = request;
-        for part in pointer.trim_start_matches('/').split('/') {
-            let (obj, _) = resolve(&doc, s);
-            s = &obj["properties"][part];
-            assert!(!s.is_null(), "{pointer}: no schema for {part}");
-        }
-        let (s, _) = resolve(&doc, s);
-        for key in ["minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"] {
-            assert_eq!(
-                s.get(key).and_then(Value::as_f64),
-                f.get(key).and_then(Value::as_f64),
-                "{pointer} {key}"
-            );
-        }
-        match &f["default"] {
-            Value::String(d) => {
-                assert!(d == "derived" || d == "required", "{pointer}: {d}");
-                assert!(s.get("default").is_none(), "{pointer}");
-            }
-            d => assert_eq!(s.get("default"), Some(d), "{pointer}"),
-        }
-    }
+    assert_fields_are_documented(&doc, "MigrationRequest", fields, &["derived", "required"]);
 }
 
 /// What the page fills its forms from: `/v1/presets` `defaults` holds, for each route, the

@@ -2228,25 +2228,7 @@ mod tests {
                 fast.steps,
                 slow.steps
             );
-            assert_eq!(fast.reason, slow.reason);
-            close(fast.st.t, slow.st.t, 1e-9);
-            for k in 0..3 {
-                close(fast.st.c[k], slow.st.c[k], 1e-9);
-                close(fast.st.v[k], slow.st.v[k], 1e-8);
-            }
-            close(fast.friction, slow.friction, 1e-8);
-            close(fast.damping, slow.damping, 1e-6);
-            let acc = |o: &RunOut| {
-                let (k, r, p) = case_energy(&case, o);
-                k + r + p + o.stored + o.damping + o.friction - o.e_start
-            };
-            close(acc(&fast), acc(&slow), 1e-6);
-            if let (Some(a), Some(b)) = (&fast.trajectory, &slow.trajectory) {
-                assert_eq!(a.time.len(), b.time.len());
-                for (x, y) in a.speed.iter().zip(&b.speed) {
-                    close(*x, *y, 1e-8);
-                }
-            }
+            same_run(&case, &fast, &slow);
         }
     }
 
