@@ -1429,3 +1429,106 @@ impl<'a, 'r> Run<'a, 'r> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! The lumped mass's closed-form pieces against their definitions: the reach time is the
+    //! smallest positive root of ½ct² + bt − s (or +∞ when none is), and a height correction
+    //! keeps KE + PE + the transition term unchanged whether or not the kinetic energy pays.
+    use super::*;
+    use proptest::prelude::*;
+
+    fn state(p: Vector3<f64>, v: Vector3<f64>) -> St {
+        St {
+            t: 0.0,
+            p,
+            v,
+            ground: None,
+            impacts: 0,
+            slide_start: None,
+            max_bounce: 0.0,
+            apex: None,
+            e_imp: 0.0,
+            e_fric: 0.0,
+            e_trans: 0.0,
+            spin: (0.0, Vector3::zeros()),
+            undecelerated: false,
+            rebound_cutoff: false,
+            crease: None,
+            r: p,
+            s_r: 0.0,
+        }
+    }
+
+    #[test]
+    fn reach_time_limits() {
+        assert_eq!(reach_time(0.0, 1.0, 1.0), 0.0);
+        assert_eq!(reach_time(2.0, 4.0, 0.0), 0.5);
+        assert_eq!(reach_time(2.0, 0.0, 0.0), f64::INFINITY);
+        assert_eq!(reach_time(2.0, -1.0, 0.0), f64::INFINITY);
+        // decelerating short of the distance: ½·(−1)t² + t reaches at most ½
+        assert_eq!(reach_time(0.6, 1.0, -1.0), f64::INFINITY);
+        assert!((reach_time(0.5, 1.0, -1.0) - 1.0).abs() < 1e-7);
+        // a subnormal distance from rest: t = √(2s/c), with no underflow to 0
+        let t = reach_time(5e-324, 0.0, 9.81);
+        assert!(
+            t > 0.0 && ((0.5 * 9.81 * t * t) / 5e-324 - 1.0).abs() < 0.5,
+            "{t}"
+        );
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+        /// t solves ½ct² + bt = s to rounding, and no smaller positive time does (the motion
+        /// covers less than s at every earlier time).
+        #[test]
+        fn reach_time_is_the_first_root(
+            s in prop_oneof![1e-12..1.0f64, 1.0..1e4f64],
+            b in -50.0..50.0f64,
+            c in prop_oneof![-50.0..50.0f64, Just(0.0)],
+        ) {
+            let t = reach_time(s, b, c);
+            let x = |t: f64| 0.5 * c * t * t + b * t;
+            if t.is_finite() {
+                prop_assert!(t > 0.0);
+                let scale = (0.5 * c * t * t).abs() + (b * t).abs() + s;
+                prop_assert!((x(t) - s).abs() <= 1e-12 * scale, "x({t}) = {} for s {s}", x(t));
+                for k in 1..8 {
+                    let tk = t * f64::from(k) / 8.0;
+                    prop_assert!(x(tk) < s + 1e-12 * scale, "reached s earlier, at {tk}");
+                }
+            } else {
+                // never reached: the farthest point of the motion falls short of s
+                let farthest = if c < 0.0 && b > 0.0 { -b * b / (2.0 * c) } else if c < 0.0 || (c == 0.0 && b <= 0.0) { 0.0 } else { f64::INFINITY };
+                prop_assert!(farthest < s * (1.0 + 1e-12), "b {b} c {c} s {s}");
+            }
+        }
+
+        /// Moving the rock to another height keeps KE + PE + the transition term: the speed pays
+        /// for a rise it can afford, and what it cannot is booked (the speed is then 0).
+        #[test]
+        fn a_height_correction_keeps_the_energy_account(
+            v in prop::array::uniform3(-20.0..20.0f64),
+            z0 in -100.0..100.0f64,
+            dz in prop_oneof![-1e-6..1e-6f64, -10.0..10.0f64],
+            kf in prop_oneof![Just(1.0), Just(1.4)],
+        ) {
+            let g = 9.81;
+            let mut s = state(Vector3::new(1.0, 2.0, z0), Vector3::from(v));
+            let total = |s: &St| 0.5 * kf * s.v.norm_squared() + g * s.p.z + s.e_trans;
+            let before = total(&s);
+            set_height(&mut s, z0 + dz, g, kf);
+            prop_assert_eq!(s.p.z, z0 + dz);
+            let scale = 0.5 * kf * v.iter().map(|x| x * x).sum::<f64>() + g * (z0.abs() + dz.abs()) + 1.0;
+            prop_assert!((total(&s) - before).abs() <= 1e-13 * scale, "{} against {before}", total(&s));
+            // only a rise the speed cannot pay for is booked (as a negative transition loss)
+            let ke = 0.5 * kf * v.iter().map(|x| x * x).sum::<f64>();
+            if ke >= g * dz {
+                prop_assert_eq!(s.e_trans, 0.0);
+            } else {
+                prop_assert!(s.e_trans < 0.0 && s.v == Vector3::zeros(), "{}", s.e_trans);
+            }
+        }
+    }
+}
