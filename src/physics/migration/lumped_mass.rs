@@ -194,6 +194,32 @@ struct St {
     s_r: f64,
 }
 
+impl St {
+    /// The rock at time 0 at `p` (m) with velocity `v` (m/s), in flight, nothing booked yet;
+    /// `base` is the floor point under it and its `along_dip` (m).
+    fn start(p: Vector3<f64>, v: Vector3<f64>, base: (Vector3<f64>, f64)) -> Self {
+        St {
+            t: 0.0,
+            p,
+            v,
+            ground: None,
+            impacts: 0,
+            slide_start: None,
+            max_bounce: 0.0,
+            apex: None,
+            e_imp: 0.0,
+            e_fric: 0.0,
+            e_trans: 0.0,
+            spin: (0.0, Vector3::zeros()),
+            undecelerated: false,
+            rebound_cutoff: false,
+            crease: None,
+            r: base.0,
+            s_r: base.1,
+        }
+    }
+}
+
 /// A concave edge (V-shaped crease) that holds the rock: it slides along the edge line.
 #[derive(Debug, Clone, Copy)]
 struct Crease {
@@ -565,25 +591,7 @@ impl<'a, 'r> Run<'a, 'r> {
         let mean = floor.mean;
         let g = su.g;
         let roll = su.motion == Motion::Roll;
-        let s = St {
-            t: 0.0,
-            p: su.p0,
-            v: su.v0,
-            ground: None,
-            impacts: 0,
-            slide_start: None,
-            max_bounce: 0.0,
-            apex: None,
-            e_imp: 0.0,
-            e_fric: 0.0,
-            e_trans: 0.0,
-            spin: (0.0, Vector3::zeros()),
-            undecelerated: false,
-            rebound_cutoff: false,
-            crease: None,
-            r: su.base.0,
-            s_r: su.base.1,
-        };
+        let s = St::start(su.p0, su.v0, su.base);
         let p = s.p;
         let mut run = Run {
             su,
@@ -1438,28 +1446,6 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    fn state(p: Vector3<f64>, v: Vector3<f64>) -> St {
-        St {
-            t: 0.0,
-            p,
-            v,
-            ground: None,
-            impacts: 0,
-            slide_start: None,
-            max_bounce: 0.0,
-            apex: None,
-            e_imp: 0.0,
-            e_fric: 0.0,
-            e_trans: 0.0,
-            spin: (0.0, Vector3::zeros()),
-            undecelerated: false,
-            rebound_cutoff: false,
-            crease: None,
-            r: p,
-            s_r: 0.0,
-        }
-    }
-
     #[test]
     fn reach_time_limits() {
         assert_eq!(reach_time(0.0, 1.0, 1.0), 0.0);
@@ -1515,7 +1501,8 @@ mod tests {
             kf in prop_oneof![Just(1.0), Just(1.4)],
         ) {
             let g = 9.81;
-            let mut s = state(Vector3::new(1.0, 2.0, z0), Vector3::from(v));
+            let p = Vector3::new(1.0, 2.0, z0);
+            let mut s = St::start(p, Vector3::from(v), (p, 0.0));
             let total = |s: &St| 0.5 * kf * s.v.norm_squared() + g * s.p.z + s.e_trans;
             let before = total(&s);
             set_height(&mut s, z0 + dz, g, kf);
