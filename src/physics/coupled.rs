@@ -176,6 +176,10 @@ struct System {
     minv: Vec<f64>,
     k: Vec<f64>,
     c: Vec<f64>,
+    /// Curvature coefficients at the clamp φᵢ″(0)/l², 1/m².
+    curv0: Vec<f64>,
+    /// Curvature coefficients at the midpoint φᵢ″(½)/l², 1/m².
+    curvm: Vec<f64>,
     n: usize,
     layout: StateLayout,
     in_contact: std::cell::Cell<bool>,
@@ -190,6 +194,124 @@ impl System {
         }
         d
     }
+}
+
+impl System {
+    /// The coupled system of a run over the active (symmetric) modes, with its mass matrix M
+    /// (kg) and M⁻¹ (1/kg).
+    ///
+    /// # Errors
+    /// `Numerical` when the mass matrix is not positive definite.
+    fn new(input: &CoupledInput) -> PhysicsResult<(Self, DMatrix<f64>, DMatrix<f64>)> {
+        let g = &input.galerkin;
+        // Symmetric modes only: the others are never excited.
+        let active = active_modes(g);
+        let n = active.len();
+        let l = input.column_length;
+        let mass = DMatrix::from_fn(n, n, |i, j| g.mass[(active[i], active[j])]);
+        let minv = mass
+            .clone()
+            .cholesky()
+            .map(|c| c.inverse())
+            .ok_or_else(|| PhysicsError::Numerical("mass matrix not positive definite".into()))?;
+        let sys = System {
+            m: input.rock_mass,
+            law: input.law,
+            phi: active.iter().map(|&i| g.midpoint[i]).collect(),
+            minv: (0..n * n).map(|k| minv[(k / n, k % n)]).collect(),
+            k: active.iter().map(|&i| g.stiffness[(i, i)]).collect(),
+            c: active.iter().map(|&i| g.damping[(i, i)]).collect(),
+            curv0: active
+                .iter()
+                .map(|&i| g.modes[i].curvature(0.0) / (l * l))
+                .collect(),
+            curvm: active
+                .iter()
+                .map(|&i| g.modes[i].curvature(0.5) / (l * l))
+                .collect(),
+            n,
+            layout: StateLayout { n },
+            in_contact: std::cell::Cell::new(true),
+        };
+        Ok((sys, mass, minv))
+    }
+
+    /// Absolute tolerances of the state at relative tolerance `tol`: tol·δ-scale for u,
+    /// tol·v for u̇, tol·√(2E/Kᵢ) for wᵢ, tol·√(2E/Mᵢᵢ) for ẇᵢ and tol·E for the dissipated
+    /// energy and the work, E = `energy_scale` (J).
+    fn absolute_tolerances(
+        &self,
+        input: &CoupledInput,
+        mass: &DMatrix<f64>,
+        tol: f64,
+        energy_scale: f64,
+    ) -> Vec<f64> {
+        let layout = self.layout;
+        let mut atol = vec![tol * input.displacement_scale; layout.len()];
+        atol[ROCK_VELOCITY] = tol * input.velocity;
+        for j in 0..self.n {
+            atol[layout.modal_displacement(j)] = tol * (2.0 * energy_scale / self.k[j]).sqrt();
+            atol[layout.modal_velocity(j)] = tol * (2.0 * energy_scale / mass[(j, j)]).sqrt();
+        }
+        atol[layout.dissipated()] = tol * energy_scale;
+        atol[layout.work()] = tol * energy_scale;
+        atol
+    }
+
+    /// The linear functionals of the state as (index, coefficient) pairs: δ, w_mid, the
+    /// curvatures at the clamp and the midpoint, each with its rate.
+    fn functionals(&self) -> Functionals {
+        let layout = self.layout;
+        let n = self.n;
+        let on = |slot: fn(StateLayout, usize) -> usize, coef: &[f64], sign: f64| -> Functional {
+            (0..n).map(|j| (slot(layout, j), sign * coef[j])).collect()
+        };
+        let with = |head: usize, rest: Functional| -> Functional {
+            std::iter::once((head, 1.0)).chain(rest).collect()
+        };
+        Functionals {
+            delta: with(
+                ROCK_DISPLACEMENT,
+                on(StateLayout::modal_displacement, &self.phi, -1.0),
+            ),
+            delta_rate: with(
+                ROCK_VELOCITY,
+                on(StateLayout::modal_velocity, &self.phi, -1.0),
+            ),
+            wmid: on(StateLayout::modal_displacement, &self.phi, 1.0),
+            wmid_rate: on(StateLayout::modal_velocity, &self.phi, 1.0),
+            c0: on(StateLayout::modal_displacement, &self.curv0, 1.0),
+            c0_rate: on(StateLayout::modal_velocity, &self.curv0, 1.0),
+            cm: on(StateLayout::modal_displacement, &self.curvm, 1.0),
+            cm_rate: on(StateLayout::modal_velocity, &self.curvm, 1.0),
+        }
+    }
+
+    /// The column's kinetic ½ẇᵀMẇ and strain ½wᵀKw energies of state y, J.
+    fn column_energy(&self, mass: &DMatrix<f64>, y: &[f64]) -> (f64, f64) {
+        let layout = self.layout;
+        let wd = DVector::from_fn(self.n, |i, _| y[layout.modal_velocity(i)]);
+        let kin = 0.5 * wd.dot(&(mass * &wd));
+        let strain: f64 = (0..self.n)
+            .map(|j| {
+                let w = y[layout.modal_displacement(j)];
+                0.5 * self.k[j] * w * w
+            })
+            .sum();
+        (kin, strain)
+    }
+}
+
+/// The linear functionals of a run's state (see [`System::functionals`]).
+struct Functionals {
+    delta: Functional,
+    delta_rate: Functional,
+    wmid: Functional,
+    wmid_rate: Functional,
+    c0: Functional,
+    c0_rate: Functional,
+    cm: Functional,
+    cm_rate: Functional,
 }
 
 impl OdeSystem for System {
@@ -238,6 +360,59 @@ struct FreeFlight {
     h: f64,
     c: Vec<f64>,
     n: usize,
+    /// Largest modal damping rate (M⁻¹C)ᵢᵢ, 1/s.
+    damping_rate: f64,
+}
+
+/// Largest damping rate × time span (dimensionless) over which the free column is propagated by
+/// one block exponential (Van Loan) or by a Taylor series: the transposed block of Van Loan's
+/// form grows like e^{rate·τ}, so longer spans are built by doubling.
+const TAYLOR_DAMPING_LIMIT: f64 = 2.0;
+
+/// Φ = e^{Aτ} and the dissipation Gramian G(τ) = ∫₀^τ e^{Aᵀs} Q e^{As} ds (Q = diag(0, C)) of
+/// the free column z′ = Az, z = [w, ẇ], for any τ ≥ 0 and any damping.
+///
+/// Van Loan's block exponential exp([[−Aᵀ, Q], [0, A]]·τ₀) gives both at τ₀ = τ/2ˢ, with s the
+/// least such that rate·τ₀ ≤ 2 (`rate` the largest modal damping rate, 1/s); then s doublings
+/// Φ(2τ₀) = Φ(τ₀)², G(2τ₀) = G(τ₀) + Φ(τ₀)ᵀG(τ₀)Φ(τ₀). Every factor of the doublings decays, so
+/// a heavily damped column (rate·τ up to 10⁴ and beyond) never forms the growing e^{−Aᵀτ}
+/// whose product with a decaying factor would overflow or cancel. With s = 0 this is exactly
+/// the single block exponential.
+fn propagator_and_gramian(
+    a: &DMatrix<f64>,
+    c: &[f64],
+    rate: f64,
+    tau: f64,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let n = c.len();
+    let doublings = if rate * tau > TAYLOR_DAMPING_LIMIT {
+        (rate * tau / TAYLOR_DAMPING_LIMIT).log2().ceil().max(0.0) as i32
+    } else {
+        0
+    };
+    let h = tau / f64::powi(2.0, doublings);
+    let mut phi = (a * h).exp();
+    let mut big = DMatrix::zeros(4 * n, 4 * n);
+    for i in 0..2 * n {
+        for j in 0..2 * n {
+            big[(i, j)] = -a[(j, i)] * h;
+            big[(2 * n + i, 2 * n + j)] = a[(i, j)] * h;
+        }
+    }
+    for i in 0..n {
+        big[(n + i, 3 * n + i)] = c[i] * h;
+    }
+    let e = big.exp();
+    let f12 = e.view((0, 2 * n), (2 * n, 2 * n)).into_owned();
+    let f22 = e.view((2 * n, 2 * n), (2 * n, 2 * n)).into_owned();
+    let gram = f22.transpose() * f12;
+    let mut gram = (&gram + gram.transpose()) * 0.5;
+    for _ in 0..doublings {
+        let next = &gram + phi.transpose() * &gram * &phi;
+        gram = (&next + next.transpose()) * 0.5;
+        phi = &phi * &phi;
+    }
+    (phi, gram)
 }
 
 impl FreeFlight {
@@ -251,25 +426,12 @@ impl FreeFlight {
                 a[(n + i, n + j)] = -minv[(i, j)] * c[j];
             }
         }
-        // Eight steps per period of the highest mode (the caller uses this propagator only when
-        // the damping rate is below 2/h, so that the in-step Taylor series converge quickly).
+        let damping_rate = (0..n).map(|i| minv[(i, i)] * c[i]).fold(0.0f64, f64::max);
+        // Eight steps per period of the highest mode, whatever the damping: a heavily damped
+        // column ((M⁻¹C)ᵢᵢ·h > 2) has its propagator built by doubling and its in-step states
+        // from the same exact construction instead of the Taylor series.
         let h = 2.0 * std::f64::consts::PI / omega_max / 8.0;
-        let phi = (&a * h).exp();
-        let mut big = DMatrix::zeros(4 * n, 4 * n);
-        for i in 0..2 * n {
-            for j in 0..2 * n {
-                big[(i, j)] = -a[(j, i)] * h;
-                big[(2 * n + i, 2 * n + j)] = a[(i, j)] * h;
-            }
-        }
-        for i in 0..n {
-            big[(n + i, 3 * n + i)] = c[i] * h;
-        }
-        let e = big.exp();
-        let f12 = e.view((0, 2 * n), (2 * n, 2 * n)).into_owned();
-        let f22 = e.view((2 * n, 2 * n), (2 * n, 2 * n)).into_owned();
-        let gram = f22.transpose() * f12;
-        let gram = (&gram + gram.transpose()) * 0.5;
+        let (phi, gram) = propagator_and_gramian(&a, c, damping_rate, h);
         Self {
             a,
             phi,
@@ -277,11 +439,19 @@ impl FreeFlight {
             h,
             c: c.to_vec(),
             n,
+            damping_rate,
         }
     }
 
+    /// Whether the in-step Taylor series of e^{Aτ} is used at τ (damping rate·τ ≤ 2); above,
+    /// the exact propagator of [`propagator_and_gramian`] is built for that τ.
+    fn taylor_converges(&self, tau: f64) -> bool {
+        self.damping_rate * tau <= TAYLOR_DAMPING_LIMIT
+    }
+
     /// e^{Aτ}z into `out` without allocating (`term`, `next`: scratch of length 2n); stops when
-    /// the Taylor term is below 1e-17 of the sum in both halves (w and ẇ), at most 40 terms.
+    /// the Taylor term is below 1e-17 of the sum in both halves (w and ẇ), at most 40 terms
+    /// (when the damping rate·τ exceeds 2: Φ(τ)z from [`propagator_and_gramian`], allocating).
     fn propagate_into(
         &self,
         z: &[f64],
@@ -291,6 +461,12 @@ impl FreeFlight {
         next: &mut [f64],
     ) {
         let zl = 2 * self.n;
+        if !self.taylor_converges(tau) {
+            let (phi, _) = propagator_and_gramian(&self.a, &self.c, self.damping_rate, tau);
+            let zo = phi * DVector::from_column_slice(z);
+            out.copy_from_slice(zo.as_slice());
+            return;
+        }
         let a = self.a.as_slice();
         out.copy_from_slice(z);
         term.copy_from_slice(z);
@@ -322,10 +498,21 @@ impl FreeFlight {
         }
     }
 
-    /// e^{Aτ}z and (when `dissipation`) ∫₀^τ ẇᵀCẇ ds for 0 ≤ τ ≤ h, by 30 Taylor terms.
+    /// e^{Aτ}z and (when `dissipation`) ∫₀^τ ẇᵀCẇ ds for 0 ≤ τ ≤ h, by 30 Taylor terms (by
+    /// [`propagator_and_gramian`] when the damping rate·τ exceeds 2).
     fn taylor(&self, z: &[f64], tau: f64, dissipation: bool) -> (DVector<f64>, f64) {
         const TERMS: usize = 30;
         let n = self.n;
+        if !self.taylor_converges(tau) {
+            let (phi, gram) = propagator_and_gramian(&self.a, &self.c, self.damping_rate, tau);
+            let zv = DVector::from_column_slice(z);
+            let d = if dissipation {
+                zv.dot(&(&gram * &zv))
+            } else {
+                0.0
+            };
+            return (phi * zv, d);
+        }
         let mut terms: Vec<DVector<f64>> = Vec::with_capacity(TERMS);
         terms.push(DVector::from_column_slice(z));
         for k in 1..TERMS {
@@ -380,8 +567,9 @@ fn hermite(g0: f64, d0: f64, g1: f64, d1: f64, th: f64) -> f64 {
 /// In contact: Dormand–Prince 5(4) with dense output at relative tolerance `tolerance`. In
 /// flight (no contact force, a linear system): the exact propagator e^{Ah} at 1/8 of the
 /// shortest period, with the dissipated energy from Van Loan's Gramian; events there are
-/// detected on cubic Hermite interpolants and located on the Taylor series of e^{Aτ}. Heavily
-/// damped columns ((M⁻¹C)ᵢᵢ·h > 2) stay with the adaptive integrator in flight too.
+/// detected on cubic Hermite interpolants and located on the Taylor series of e^{Aτ} (on the
+/// exact propagator built for that span when the damping rate·τ exceeds 2: heavily damped
+/// columns, up to c = 1e9 N·s/m², are propagated exactly in flight too).
 ///
 /// # Special cases
 /// * The Hertz law has no capacity; the log laws stop at δ_cap.
@@ -442,17 +630,23 @@ const DOPRI5_STABILITY_LIMIT: f64 = 3.307;
 pub struct StepEstimate {
     /// Highest angular frequency ω_max of the active (symmetric) modes, rad/s.
     pub omega_max: f64,
-    /// A bound no pass goes below: T·ω_max/3.307. In flight the exact propagator steps at
-    /// ω_max·h = π/4, and in contact (or in flight with heavy damping) the explicit integrator
-    /// is stable only for |hλ| ≤ 3.307 with |λ| ≥ ω_max for the stiffest mode.
+    /// Largest modal damping rate (M⁻¹C)ᵢᵢ of the active modes, 1/s.
+    pub damping_rate: f64,
+    /// A bound no pass goes below: T·ω_max/3.307 over the window T, plus, while in contact (at
+    /// least half the rigid contact duration t_c), ½t_c·(rate − ω_max)/3.307 for a damping
+    /// rate above ω_max. In flight the exact propagator steps at ω_max·h = π/4 whatever the
+    /// damping; in contact the explicit integrator is stable only for |hλ| ≤ 3.307, with
+    /// |λ| ≥ ω_max for the stiffest mode and |λ| ≥ rate for the most damped one.
     pub lower_bound: f64,
     /// The expected count: 8 steps per period of the stiffest mode over the window (the flight
-    /// propagator's rate, which the contact phases take about as well), T·8·ω_max/(2π).
+    /// propagator's rate, which the contact phases take about as well), T·8·ω_max/(2π), plus
+    /// t_c·(rate − ω_max)/3.307 in contact when the damping rate is above ω_max.
     pub expected: f64,
 }
 
-/// Estimates the steps of one pass of [`solve_coupled`] from the stiffest active mode and the
-/// window length, without integrating.
+/// Estimates the steps of one pass of [`solve_coupled`] from the stiffest active mode, the
+/// largest damping rate, the window length and the rigid contact duration, without
+/// integrating.
 ///
 /// # Errors
 /// `Numerical` when the mass matrix is not positive definite.
@@ -461,12 +655,30 @@ pub struct StepEstimate {
 /// Hairer & Wanner, *Solving ODEs II*, §IV.2 (stability regions of explicit Runge–Kutta methods).
 pub fn estimate_steps(input: &CoupledInput) -> PhysicsResult<StepEstimate> {
     let omega_max = 2.0 * std::f64::consts::PI * highest_active_frequency(&input.galerkin)?;
+    let damping_rate = largest_damping_rate(&input.galerkin)?;
     let t = input.end_time;
+    let contact = input.time_scale.min(t);
+    let excess = (damping_rate - omega_max).max(0.0) / DOPRI5_STABILITY_LIMIT;
     Ok(StepEstimate {
         omega_max,
-        lower_bound: t * omega_max / DOPRI5_STABILITY_LIMIT,
-        expected: t * 8.0 * omega_max / (2.0 * std::f64::consts::PI),
+        damping_rate,
+        lower_bound: t * omega_max / DOPRI5_STABILITY_LIMIT + 0.5 * contact * excess,
+        expected: t * 8.0 * omega_max / (2.0 * std::f64::consts::PI) + contact * excess,
     })
+}
+
+/// Largest modal damping rate (M⁻¹C)ᵢᵢ of the active modes, 1/s.
+fn largest_damping_rate(g: &Galerkin) -> PhysicsResult<f64> {
+    let active = active_modes(g);
+    let n = active.len();
+    let mass = DMatrix::from_fn(n, n, |i, j| g.mass[(active[i], active[j])]);
+    let minv = mass
+        .cholesky()
+        .map(|c| c.inverse())
+        .ok_or_else(|| PhysicsError::Numerical("mass matrix not positive definite".into()))?;
+    Ok((0..n)
+        .map(|i| minv[(i, i)] * g.damping[(active[i], active[i])])
+        .fold(0.0f64, f64::max))
 }
 
 /// The symmetric modes (0-based even indices) of a Galerkin model: the antisymmetric ones have
@@ -556,90 +768,27 @@ fn run_pass(
     tol: f64,
     energy_scale: f64,
 ) -> PhysicsResult<CoupledResult> {
-    let g = &input.galerkin;
-    // Symmetric modes only: the others are never excited.
-    let active = active_modes(g);
-    let n = active.len();
-    let layout = StateLayout { n };
-    let l = input.column_length;
-    let mass = DMatrix::from_fn(n, n, |i, j| g.mass[(active[i], active[j])]);
-    let minv = mass
-        .clone()
-        .cholesky()
-        .map(|c| c.inverse())
-        .ok_or_else(|| PhysicsError::Numerical("mass matrix not positive definite".into()))?;
-    let sys = System {
-        m: input.rock_mass,
-        law: input.law,
-        phi: active.iter().map(|&i| g.midpoint[i]).collect(),
-        minv: (0..n * n).map(|k| minv[(k / n, k % n)]).collect(),
-        k: active.iter().map(|&i| g.stiffness[(i, i)]).collect(),
-        c: active.iter().map(|&i| g.damping[(i, i)]).collect(),
-        n,
-        layout,
-        in_contact: std::cell::Cell::new(true),
-    };
-    let curv0: Vec<f64> = active
-        .iter()
-        .map(|&i| g.modes[i].curvature(0.0) / (l * l))
-        .collect();
-    let curvm: Vec<f64> = active
-        .iter()
-        .map(|&i| g.modes[i].curvature(0.5) / (l * l))
-        .collect();
+    let (sys, mass, minv) = System::new(input)?;
+    let n = sys.n;
+    let layout = sys.layout;
     let dim = layout.len();
     let v = input.velocity;
-    let ke0 = 0.5 * input.rock_mass * v * v;
-    let ds = input.displacement_scale;
-    let mut atol = vec![tol * ds; dim];
-    atol[ROCK_VELOCITY] = tol * v;
-    for j in 0..n {
-        atol[layout.modal_displacement(j)] = tol * (2.0 * energy_scale / sys.k[j]).sqrt();
-        atol[layout.modal_velocity(j)] = tol * (2.0 * energy_scale / mass[(j, j)]).sqrt();
-    }
-    atol[layout.dissipated()] = tol * energy_scale;
-    atol[layout.work()] = tol * energy_scale;
+    let atol = sys.absolute_tolerances(input, &mass, tol, energy_scale);
     let t_end = input.end_time;
     let mut st = Dopri5::new(tol, atol, (input.time_scale * 1e-3).min(t_end));
     st.max_step = input.time_scale / 20.0;
 
-    // Linear functionals of the state.
-    let f_delta: Vec<(usize, f64)> = std::iter::once((ROCK_DISPLACEMENT, 1.0))
-        .chain((0..n).map(|j| (layout.modal_displacement(j), -sys.phi[j])))
-        .collect();
-    let f_delta_rate: Vec<(usize, f64)> = std::iter::once((ROCK_VELOCITY, 1.0))
-        .chain((0..n).map(|j| (layout.modal_velocity(j), -sys.phi[j])))
-        .collect();
-    let f_wmid: Vec<(usize, f64)> = (0..n)
-        .map(|j| (layout.modal_displacement(j), sys.phi[j]))
-        .collect();
-    let f_wmid_rate: Vec<(usize, f64)> = (0..n)
-        .map(|j| (layout.modal_velocity(j), sys.phi[j]))
-        .collect();
-    let f_c0: Vec<(usize, f64)> = (0..n)
-        .map(|j| (layout.modal_displacement(j), curv0[j]))
-        .collect();
-    let f_c0_rate: Vec<(usize, f64)> = (0..n)
-        .map(|j| (layout.modal_velocity(j), curv0[j]))
-        .collect();
-    let f_cm: Vec<(usize, f64)> = (0..n)
-        .map(|j| (layout.modal_displacement(j), curvm[j]))
-        .collect();
-    let f_cm_rate: Vec<(usize, f64)> = (0..n)
-        .map(|j| (layout.modal_velocity(j), curvm[j]))
-        .collect();
-    let apply = |f: &[(usize, f64)], y: &[f64]| f.iter().map(|&(i, a)| a * y[i]).sum::<f64>();
-
-    let column_energy = |y: &[f64]| {
-        let wd = DVector::from_fn(n, |i, _| y[layout.modal_velocity(i)]);
-        let kin = 0.5 * wd.dot(&(&mass * &wd));
-        let strain: f64 = (0..n)
-            .map(|j| {
-                0.5 * sys.k[j] * y[layout.modal_displacement(j)] * y[layout.modal_displacement(j)]
-            })
-            .sum();
-        (kin, strain)
+    let fs = sys.functionals();
+    let pass = Pass {
+        input,
+        sys: &sys,
+        mass: &mass,
+        fs: &fs,
     };
+    let (f_delta, f_wmid, f_c0, f_cm) = (&fs.delta, &fs.wmid, &fs.c0, &fs.cm);
+    let (f_wmid_rate, f_c0_rate, f_cm_rate) = (&fs.wmid_rate, &fs.c0_rate, &fs.cm_rate);
+
+    let column_energy = |y: &[f64]| sys.column_energy(&mass, y);
 
     let mut y = vec![0.0; dim];
     y[ROCK_VELOCITY] = v;
@@ -652,116 +801,23 @@ fn run_pass(
     let mut ytmp = vec![0.0; dim];
     let capacity_error = || capacity_exceeded(input);
 
-    // Records a history sample from state ys at time ts.
     let record = |res: &mut CoupledResult, ts: f64, ys: &[f64], in_contact: bool| {
-        let (kin, strain) = column_energy(ys);
-        let d = sys.delta(ys);
-        let (p, ec) = if in_contact {
-            (
-                input.law.force(d).unwrap_or(0.0),
-                contact_energy(&input.law, d).unwrap_or(0.0),
-            )
-        } else {
-            (0.0, 0.0)
-        };
-        let h = &mut res.history;
-        h.time.push(ts);
-        h.midpoint_displacement.push(apply(&f_wmid, ys));
-        h.kinetic_energy.push(kin);
-        h.strain_energy.push(strain);
-        h.dissipated_energy.push(ys[layout.dissipated()]);
-        h.rock_displacement.push(ys[ROCK_DISPLACEMENT]);
-        h.rock_kinetic_energy
-            .push(0.5 * input.rock_mass * ys[ROCK_VELOCITY] * ys[ROCK_VELOCITY]);
-        h.contact_force.push(p);
-        h.contact_energy.push(ec);
+        pass.record(res, ts, ys, in_contact)
     };
     while next_sample < samples.len() && samples[next_sample] <= 0.0 {
         record(&mut res, samples[next_sample], &y, true);
         next_sample += 1;
     }
 
-    // Non-terminal events and samples over the last accepted step, up to θ = 1.
-    let process = |st: &Dopri5,
-                   res: &mut CoupledResult,
-                   next_sample: &mut usize,
-                   y0: &[f64],
-                   y1: &[f64],
-                   in_contact: bool,
-                   ytmp: &mut [f64]|
-     -> PhysicsResult<()> {
-        let (t0, h) = st.last_step();
-        let sub = 4;
-        if in_contact {
-            let cr = st.functional(&f_delta_rate);
-            let cd = st.functional(&f_delta);
-            let g = |th: f64| Dopri5::eval_functional(&cr, th);
-            for th in find_roots(
-                g,
-                apply(&f_delta_rate, y0),
-                apply(&f_delta_rate, y1),
-                -1,
-                sub,
-                false,
-            ) {
-                let d = Dopri5::eval_functional(&cd, th);
-                if d > res.max_contact_deformation {
-                    res.max_contact_deformation = d;
-                    res.max_force = input.law.force(d).ok_or_else(capacity_error)?;
-                }
-            }
-        }
-        for (rate, val, slot) in [
-            (&f_wmid_rate, &f_wmid, 0usize),
-            (&f_c0_rate, &f_c0, 1),
-            (&f_cm_rate, &f_cm, 2),
-        ] {
-            let cr = st.functional(rate);
-            let g = |th: f64| Dopri5::eval_functional(&cr, th);
-            let mut best = apply(val, y1).abs();
-            let roots = find_roots(g, apply(rate, y0), apply(rate, y1), 0, sub, false);
-            if !roots.is_empty() {
-                let cv = st.functional(val);
-                for th in roots {
-                    best = best.max(Dopri5::eval_functional(&cv, th).abs());
-                }
-            }
-            let target = match slot {
-                0 => &mut res.max_midpoint_displacement,
-                1 => &mut res.max_curvature_clamp,
-                _ => &mut res.max_curvature_midpoint,
-            };
-            *target = target.max(best);
-        }
-        while *next_sample < samples.len() && samples[*next_sample] <= t0 + h {
-            let ts = samples[*next_sample];
-            st.dense_state(ts, ytmp);
-            if ts >= t0 + h {
-                ytmp.copy_from_slice(y1);
-            }
-            record(res, ts, ytmp, in_contact);
-            *next_sample += 1;
-        }
-        Ok(())
-    };
-
-    // A step-size underflow is the capacity only when the approach is close to δ_cap (the log
-    // law's force is unbounded there); anywhere else it is a numerical failure, never reported
-    // as a capacity with an energy parameter that contradicts it.
-    let map_ode = |e: OdeError, in_contact: bool, delta: f64| -> PhysicsError {
-        let near_cap = input
-            .law
-            .deformation_capacity()
-            .is_some_and(|cap| delta >= 0.9 * cap);
-        match (e, input.law) {
-            (OdeError::StepTooSmall { .. }, ForceLaw::Log { .. }) if in_contact && near_cap => {
-                capacity_error()
-            }
-            (OdeError::StepTooSmall { t }, _) => {
-                PhysicsError::Numerical(format!("step size underflow at t = {t:e} s"))
-            }
-        }
-    };
+    let process =
+        |st: &Dopri5,
+         res: &mut CoupledResult,
+         next_sample: &mut usize,
+         y0: &[f64],
+         y1: &[f64],
+         in_contact: bool,
+         ytmp: &mut [f64]| { pass.process(st, res, next_sample, y0, y1, in_contact, ytmp) };
+    let map_ode = |e: OdeError, in_contact: bool, delta: f64| pass.map_ode(e, in_contact, delta);
 
     let mut in_contact = true;
     let mut switches: u64 = 0;
@@ -778,14 +834,9 @@ fn run_pass(
     // φ(½)ᵀK⁻¹φ(½), m²/J: |w_mid| ≤ √(2·E_col·reach) for a column holding energy E_col
     // (Cauchy–Schwarz in the norm of K, and E_col ≥ ½wᵀKw).
     let reach: f64 = (0..n).map(|j| sys.phi[j] * sys.phi[j] / sys.k[j]).sum();
-    // The exact propagator steps at 1/8 of the shortest period; its in-step Taylor series need
-    // ‖Aτ‖ ≲ 1, so a damping rate (M⁻¹C)ᵢᵢ above 2/h (heavy damping) keeps the adaptive
-    // integrator in flight as well.
-    let damping_rate = (0..n)
-        .map(|i| minv[(i, i)] * sys.c[i])
-        .fold(0.0f64, f64::max);
-    let exact_flight =
-        omega_max > 0.0 && damping_rate * (2.0 * std::f64::consts::PI / omega_max / 8.0) <= 2.0;
+    // The exact propagator steps at 1/8 of the shortest period whatever the damping (a heavily
+    // damped column has its propagator built by doubling and its in-step states exactly).
+    let exact_flight = omega_max > 0.0;
     while t < t_end {
         if !in_contact && exact_flight {
             let ff = free.get_or_insert_with(|| FreeFlight::new(&minv, &sys.k, &sys.c, omega_max));
@@ -800,8 +851,8 @@ fn run_pass(
                 samples,
                 &record,
                 &apply,
-                &[&f_wmid, &f_c0, &f_cm],
-                &[&f_wmid_rate, &f_c0_rate, &f_cm_rate],
+                &[f_wmid, f_c0, f_cm],
+                &[f_wmid_rate, f_c0_rate, f_cm_rate],
                 &mut st,
                 control,
                 input.max_steps,
@@ -835,17 +886,10 @@ fn run_pass(
             .step(&sys, t, &mut y, t_end)
             .map_err(|e| map_ode(e, in_contact, sys.delta(&y)))?;
         // Terminal event: separation (δ ↓ 0) in contact, re-contact (δ ↑ 0) in flight.
-        let cd = st.functional(&f_delta);
+        let cd = st.functional(f_delta);
         let gd = |th: f64| Dopri5::eval_functional(&cd, th);
         let dir = if in_contact { -1 } else { 1 };
-        let hit = find_roots(
-            gd,
-            apply(&f_delta, &ysave),
-            apply(&f_delta, &y),
-            dir,
-            4,
-            true,
-        );
+        let hit = find_roots(gd, apply(f_delta, &ysave), apply(f_delta, &y), dir, 4, true);
         let (t0, h) = st.last_step();
         // An event must move time forward (a grazing δ ≈ 0 at the very start of a step would
         // otherwise switch back and forth without progress).
@@ -927,12 +971,166 @@ fn run_pass(
         record(&mut res, samples[next_sample], &y, in_contact);
         next_sample += 1;
     }
-    let (kin, strain) = column_energy(&y);
+    close_balances(
+        input,
+        &sys,
+        &mass,
+        &y,
+        in_contact,
+        first_separated,
+        &mut res,
+    );
+    res.steps = st.steps;
+    res.rejected_steps = st.rejected;
+    Ok(res)
+}
+
+/// What the contact integration of one pass shares: the input, the system, its mass matrix
+/// and the linear functionals of the state.
+struct Pass<'a> {
+    input: &'a CoupledInput,
+    sys: &'a System,
+    mass: &'a DMatrix<f64>,
+    fs: &'a Functionals,
+}
+
+impl Pass<'_> {
+    /// Records a history sample from state ys at time ts (s).
+    fn record(&self, res: &mut CoupledResult, ts: f64, ys: &[f64], in_contact: bool) {
+        let (input, layout) = (self.input, self.sys.layout);
+        let (kin, strain) = self.sys.column_energy(self.mass, ys);
+        let d = self.sys.delta(ys);
+        let (p, ec) = if in_contact {
+            (
+                input.law.force(d).unwrap_or(0.0),
+                contact_energy(&input.law, d).unwrap_or(0.0),
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        let h = &mut res.history;
+        h.time.push(ts);
+        h.midpoint_displacement.push(apply(&self.fs.wmid, ys));
+        h.kinetic_energy.push(kin);
+        h.strain_energy.push(strain);
+        h.dissipated_energy.push(ys[layout.dissipated()]);
+        h.rock_displacement.push(ys[ROCK_DISPLACEMENT]);
+        h.rock_kinetic_energy
+            .push(0.5 * input.rock_mass * ys[ROCK_VELOCITY] * ys[ROCK_VELOCITY]);
+        h.contact_force.push(p);
+        h.contact_energy.push(ec);
+    }
+
+    /// Non-terminal events (maxima of approach in contact, extrema of w_mid and of the
+    /// curvatures) and history samples over the last accepted step from y0 to y1, up to θ = 1.
+    #[allow(clippy::too_many_arguments)]
+    fn process(
+        &self,
+        st: &Dopri5,
+        res: &mut CoupledResult,
+        next_sample: &mut usize,
+        y0: &[f64],
+        y1: &[f64],
+        in_contact: bool,
+        ytmp: &mut [f64],
+    ) -> PhysicsResult<()> {
+        let fs = self.fs;
+        let samples = &self.input.sample_times;
+        let (t0, h) = st.last_step();
+        let sub = 4;
+        if in_contact {
+            let cr = st.functional(&fs.delta_rate);
+            let cd = st.functional(&fs.delta);
+            let g = |th: f64| Dopri5::eval_functional(&cr, th);
+            let (r0, r1) = (apply(&fs.delta_rate, y0), apply(&fs.delta_rate, y1));
+            for th in find_roots(g, r0, r1, -1, sub, false) {
+                let d = Dopri5::eval_functional(&cd, th);
+                if d > res.max_contact_deformation {
+                    res.max_contact_deformation = d;
+                    res.max_force = self
+                        .input
+                        .law
+                        .force(d)
+                        .ok_or_else(|| capacity_exceeded(self.input))?;
+                }
+            }
+        }
+        for (rate, val, slot) in [
+            (&fs.wmid_rate, &fs.wmid, 0usize),
+            (&fs.c0_rate, &fs.c0, 1),
+            (&fs.cm_rate, &fs.cm, 2),
+        ] {
+            let cr = st.functional(rate);
+            let g = |th: f64| Dopri5::eval_functional(&cr, th);
+            let mut best = apply(val, y1).abs();
+            let roots = find_roots(g, apply(rate, y0), apply(rate, y1), 0, sub, false);
+            if !roots.is_empty() {
+                let cv = st.functional(val);
+                for th in roots {
+                    best = best.max(Dopri5::eval_functional(&cv, th).abs());
+                }
+            }
+            let target = extremum_slot(res, slot);
+            *target = target.max(best);
+        }
+        while *next_sample < samples.len() && samples[*next_sample] <= t0 + h {
+            let ts = samples[*next_sample];
+            st.dense_state(ts, ytmp);
+            if ts >= t0 + h {
+                ytmp.copy_from_slice(y1);
+            }
+            self.record(res, ts, ytmp, in_contact);
+            *next_sample += 1;
+        }
+        Ok(())
+    }
+
+    /// The error of a failed integrator step. A step-size underflow is the capacity only when
+    /// the approach δ (m) is close to δ_cap (the log law's force is unbounded there); anywhere
+    /// else it is a numerical failure, never reported as a capacity with an energy parameter
+    /// that contradicts it.
+    fn map_ode(&self, e: OdeError, in_contact: bool, delta: f64) -> PhysicsError {
+        let law = self.input.law;
+        let near_cap = law
+            .deformation_capacity()
+            .is_some_and(|cap| delta >= 0.9 * cap);
+        match (e, law) {
+            (OdeError::StepTooSmall { .. }, ForceLaw::Log { .. }) if in_contact && near_cap => {
+                capacity_exceeded(self.input)
+            }
+            (OdeError::StepTooSmall { t }, _) => {
+                PhysicsError::Numerical(format!("step size underflow at t = {t:e} s"))
+            }
+        }
+    }
+}
+
+/// Applies a linear functional Σ aᵢ·y_{idxᵢ} to a state.
+fn apply(f: &[(usize, f64)], y: &[f64]) -> f64 {
+    f.iter().map(|&(i, a)| a * y[i]).sum::<f64>()
+}
+
+/// The end-of-window results and the energy balances of a pass ending in state y: the column
+/// and rock energies, the contact energy (when `in_contact`), the rebound values when no
+/// separation happened, the rock's balance relative to its initial kinetic energy and the
+/// column's E_col + D = W relative to the transferred energy.
+fn close_balances(
+    input: &CoupledInput,
+    sys: &System,
+    mass: &DMatrix<f64>,
+    y: &[f64],
+    in_contact: bool,
+    first_separated: bool,
+    res: &mut CoupledResult,
+) {
+    let layout = sys.layout;
+    let ke0 = 0.5 * input.rock_mass * input.velocity * input.velocity;
+    let (kin, strain) = sys.column_energy(mass, y);
     res.column_energy_end = kin + strain;
     res.rock_velocity_end = y[ROCK_VELOCITY];
     res.damping_energy = y[layout.dissipated()];
     res.contact_energy_end = if in_contact {
-        contact_energy(&input.law, sys.delta(&y)).unwrap_or(0.0)
+        contact_energy(&input.law, sys.delta(y)).unwrap_or(0.0)
     } else {
         0.0
     };
@@ -958,9 +1156,188 @@ fn run_pass(
         0.0
     };
     res.estimated_error = res.energy_residual.max(res.column_energy_residual);
-    res.steps = st.steps;
-    res.rejected_steps = st.rejected;
-    Ok(res)
+}
+
+/// z ← M x for a column-major square matrix M of side x.len() (no allocation).
+fn matvec_col_major(m: &[f64], x: &[f64], out: &mut [f64]) {
+    let zl = x.len();
+    out.fill(0.0);
+    for (j, &xj) in x.iter().enumerate() {
+        if xj != 0.0 {
+            for (o, &mij) in out.iter_mut().zip(&m[j * zl..(j + 1) * zl]) {
+                *o += mij * xj;
+            }
+        }
+    }
+}
+
+impl FreeFlight {
+    /// ẏ of the free system (u̇, 0, Az, 0, 0) into `d`: the slopes of the linear functionals.
+    fn derivative(&self, layout: StateLayout, y: &[f64], d: &mut [f64]) {
+        d[ROCK_DISPLACEMENT] = y[ROCK_VELOCITY];
+        d[ROCK_VELOCITY] = 0.0;
+        matvec_col_major(
+            self.a.as_slice(),
+            &y[layout.column()],
+            &mut d[layout.column()],
+        );
+        d[layout.dissipated()] = 0.0;
+        d[layout.work()] = 0.0;
+    }
+
+    /// The full state at θ ∈ [0, 1] of a flight step of size h (s) from y0, the dissipated
+    /// energy included when `dissipation`.
+    fn state_at(
+        &self,
+        layout: StateLayout,
+        y0: &[f64],
+        h: f64,
+        th: f64,
+        dissipation: bool,
+    ) -> Vec<f64> {
+        let (z, dd) = self.taylor(&y0[layout.column()], th * h, dissipation);
+        let mut out = y0.to_vec();
+        out[ROCK_DISPLACEMENT] = y0[ROCK_DISPLACEMENT] + y0[ROCK_VELOCITY] * th * h;
+        out[layout.column()].copy_from_slice(z.as_slice());
+        out[layout.dissipated()] = y0[layout.dissipated()] + dd;
+        out
+    }
+
+    /// One full step of the propagator (size `self.h`) from y0 into y1: z₁ = Φz₀ and the
+    /// dissipated energy z₀ᵀGz₀ (`gz`: scratch of length 2n).
+    fn step_exact(&self, layout: StateLayout, y0: &[f64], y1: &mut [f64], gz: &mut [f64]) {
+        let z0 = &y0[layout.column()];
+        y1[ROCK_DISPLACEMENT] = y0[ROCK_DISPLACEMENT] + y0[ROCK_VELOCITY] * self.h;
+        y1[ROCK_VELOCITY] = y0[ROCK_VELOCITY];
+        matvec_col_major(self.phi.as_slice(), z0, &mut y1[layout.column()]);
+        matvec_col_major(self.gram.as_slice(), z0, gz);
+        let dd: f64 = gz.iter().zip(z0).map(|(a, b)| a * b).sum();
+        y1[layout.dissipated()] = y0[layout.dissipated()] + dd;
+        y1[layout.work()] = y0[layout.work()];
+    }
+
+    /// The first re-contact (δ crossing 0 upward) within a flight step of size h from y0 to y1
+    /// (slopes dy0, dy1), as θ ∈ (0, 1]: detected on the cubic Hermite interpolant of δ,
+    /// located on the exact propagator.
+    #[allow(clippy::too_many_arguments)]
+    fn locate_recontact(
+        &self,
+        sys: &System,
+        y0: &[f64],
+        y1: &[f64],
+        dy0: &[f64],
+        dy1: &[f64],
+        h: f64,
+    ) -> Option<f64> {
+        let (g0, g1) = (sys.delta(y0), sys.delta(y1));
+        let (s0, s1) = (h * sys.delta(dy0), h * sys.delta(dy1));
+        let herm = |th: f64| hermite(g0, s0, g1, s1, th);
+        if find_roots(herm, g0, g1, 1, 4, true).is_empty() {
+            return None;
+        }
+        let exact = |th: f64| sys.delta(&self.state_at(sys.layout, y0, h, th, false));
+        find_roots(exact, g0, g1, 1, 8, true).first().copied()
+    }
+}
+
+/// Scratch vectors of the flight loop (no allocation per step).
+struct FlightScratch {
+    y0: Vec<f64>,
+    y1: Vec<f64>,
+    dy0: Vec<f64>,
+    dy1: Vec<f64>,
+    gz: Vec<f64>,
+    ye: Vec<f64>,
+    tb1: Vec<f64>,
+    tb2: Vec<f64>,
+}
+
+impl FlightScratch {
+    fn new(layout: StateLayout) -> Self {
+        let (dim, zl) = (layout.len(), 2 * layout.n);
+        Self {
+            y0: vec![0.0; dim],
+            y1: vec![0.0; dim],
+            dy0: vec![0.0; dim],
+            dy1: vec![0.0; dim],
+            gz: vec![0.0; zl],
+            ye: vec![0.0; dim],
+            tb1: vec![0.0; zl],
+            tb2: vec![0.0; zl],
+        }
+    }
+}
+
+/// The slot of result extremum k: 0 w_mid, 1 the clamp curvature, 2 the midpoint curvature.
+fn extremum_slot(res: &mut CoupledResult, k: usize) -> &mut f64 {
+    match k {
+        0 => &mut res.max_midpoint_displacement,
+        1 => &mut res.max_curvature_clamp,
+        _ => &mut res.max_curvature_midpoint,
+    }
+}
+
+/// Extrema of w_mid and of the curvatures within θ ∈ [0, th_end] of a flight step of size h
+/// (states and slopes in `s`): roots of the rates detected on cubic Hermite interpolants, the
+/// values taken on the exact propagator.
+#[allow(clippy::too_many_arguments)]
+fn flight_extrema(
+    ff: &FreeFlight,
+    layout: StateLayout,
+    res: &mut CoupledResult,
+    apply: &Apply,
+    values: &[&Functional; 3],
+    rates: &[&Functional; 3],
+    s: &mut FlightScratch,
+    h: f64,
+    th_end: f64,
+) {
+    for k in 0..3 {
+        let (r0, r1) = (apply(rates[k], &s.y0), apply(rates[k], &s.y1));
+        let (q0, q1) = (h * apply(rates[k], &s.dy0), h * apply(rates[k], &s.dy1));
+        let herm = |th: f64| hermite(r0, q0, r1, q1, th);
+        let mut best: f64 = 0.0;
+        for th in find_roots(herm, r0, r1, 0, 4, false) {
+            if th <= th_end {
+                ff.propagate_into(
+                    &s.y0[layout.column()],
+                    th * h,
+                    &mut s.ye[layout.column()],
+                    &mut s.tb1,
+                    &mut s.tb2,
+                );
+                best = best.max(apply(values[k], &s.ye).abs());
+            }
+        }
+        let target = extremum_slot(res, k);
+        *target = target.max(best);
+    }
+}
+
+/// Refuses a pass whose rock can no longer reach the column and whose remaining fixed flight
+/// steps exceed the limit. Once the rock recedes (u̇ ≤ 0) beyond the reach of the column's
+/// energy (u < −√(2·E_col·reach), E_col never grows in flight), it never touches the column
+/// again: the rest of the window is the propagator's fixed steps, counted exactly.
+fn refuse_unreachable(
+    ff: &FreeFlight,
+    y: &[f64],
+    t: f64,
+    t_end: f64,
+    steps: u64,
+    max_steps: u64,
+    amplitude_bound: &dyn Fn(&[f64]) -> f64,
+) -> PhysicsResult<()> {
+    if y[ROCK_VELOCITY] <= 0.0 && y[ROCK_DISPLACEMENT] < -amplitude_bound(y) * (1.0 + 1e-9) {
+        let remaining = ((t_end - t) / ff.h).ceil();
+        let total = steps as f64 + remaining;
+        if total > max_steps as f64 {
+            return Err(PhysicsError::TooManySteps {
+                estimated: total,
+                limit: max_steps as f64,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Free flight of the rock beside the freely vibrating column, from (t, y) until re-contact
@@ -984,75 +1361,17 @@ fn free_flight(
     max_steps: u64,
     amplitude_bound: &dyn Fn(&[f64]) -> f64,
 ) -> PhysicsResult<(bool, f64)> {
-    let n = ff.n;
-    let zl = 2 * n;
-    let layout = StateLayout { n };
-    let dim = y.len();
-    let delta = |yy: &[f64]| {
-        yy[ROCK_DISPLACEMENT]
-            - (0..n)
-                .map(|j| sys.phi[j] * yy[layout.modal_displacement(j)])
-                .sum::<f64>()
-    };
-    // y ← M x for a column-major zl × zl matrix.
-    let matvec = |m: &[f64], x: &[f64], out: &mut [f64]| {
-        out.fill(0.0);
-        for (j, &xj) in x.iter().enumerate() {
-            if xj != 0.0 {
-                for (o, &mij) in out.iter_mut().zip(&m[j * zl..(j + 1) * zl]) {
-                    *o += mij * xj;
-                }
-            }
-        }
-    };
-    // ẏ of the free system (u̇, 0, Az, ·): slopes of the linear functionals.
-    let deriv = |yy: &[f64], d: &mut [f64]| {
-        d[ROCK_DISPLACEMENT] = yy[ROCK_VELOCITY];
-        d[ROCK_VELOCITY] = 0.0;
-        matvec(
-            ff.a.as_slice(),
-            &yy[layout.column()],
-            &mut d[layout.column()],
-        );
-        d[layout.dissipated()] = 0.0;
-        d[layout.work()] = 0.0;
-    };
-    // State at θ of a step of size h from y0.
-    let at = |y0: &[f64], h: f64, th: f64, dissipation: bool| {
-        let (z, dd) = ff.taylor(&y0[layout.column()], th * h, dissipation);
-        let mut out = y0.to_vec();
-        out[ROCK_DISPLACEMENT] = y0[ROCK_DISPLACEMENT] + y0[ROCK_VELOCITY] * th * h;
-        out[layout.column()].copy_from_slice(z.as_slice());
-        out[layout.dissipated()] = y0[layout.dissipated()] + dd;
-        out
-    };
-    let (mut y0, mut y1) = (vec![0.0; dim], vec![0.0; dim]);
-    let (mut dy0, mut dy1) = (vec![0.0; dim], vec![0.0; dim]);
-    let mut gz = vec![0.0; zl];
-    let (mut ye, mut tb1, mut tb2) = (vec![0.0; dim], vec![0.0; zl], vec![0.0; zl]);
-    deriv(y, &mut dy0);
+    let layout = sys.layout;
+    let mut s = FlightScratch::new(layout);
+    ff.derivative(layout, y, &mut s.dy0);
     let mut steps_in_flight = 0u64;
     loop {
         if t >= t_end {
             return Ok((false, t));
         }
-        // Once the rock recedes (u̇ ≤ 0) beyond the reach of the column's energy
-        // (u < −√(2·E_col·reach), E_col never grows in flight), it never touches the column
-        // again: the rest of the window is this propagator's fixed steps, counted exactly, and
-        // a pass that cannot finish within the limit is refused now (checked on entry and
-        // every 64 steps).
-        if steps_in_flight.is_multiple_of(64)
-            && y[ROCK_VELOCITY] <= 0.0
-            && y[ROCK_DISPLACEMENT] < -amplitude_bound(y) * (1.0 + 1e-9)
-        {
-            let remaining = ((t_end - t) / ff.h).ceil();
-            let total = st.steps as f64 + remaining;
-            if total > max_steps as f64 {
-                return Err(PhysicsError::TooManySteps {
-                    estimated: total,
-                    limit: max_steps as f64,
-                });
-            }
+        // Checked on entry and every 64 steps.
+        if steps_in_flight.is_multiple_of(64) {
+            refuse_unreachable(ff, y, t, t_end, st.steps, max_steps, amplitude_bound)?;
         }
         steps_in_flight += 1;
         st.steps += 1;
@@ -1067,73 +1386,24 @@ fn free_flight(
         }
         let last = t + ff.h >= t_end;
         let h = if last { t_end - t } else { ff.h };
-        y0.copy_from_slice(y);
+        s.y0.copy_from_slice(y);
         if last {
-            y1.copy_from_slice(&at(&y0, h, 1.0, true));
+            s.y1.copy_from_slice(&ff.state_at(layout, &s.y0, h, 1.0, true));
         } else {
-            y1[ROCK_DISPLACEMENT] = y0[ROCK_DISPLACEMENT] + y0[ROCK_VELOCITY] * h;
-            y1[ROCK_VELOCITY] = y0[ROCK_VELOCITY];
-            matvec(
-                ff.phi.as_slice(),
-                &y0[layout.column()],
-                &mut y1[layout.column()],
-            );
-            matvec(ff.gram.as_slice(), &y0[layout.column()], &mut gz);
-            let dd: f64 = gz
-                .iter()
-                .zip(&y0[layout.column()])
-                .map(|(a, b)| a * b)
-                .sum();
-            y1[layout.dissipated()] = y0[layout.dissipated()] + dd;
-            y1[layout.work()] = y0[layout.work()];
+            ff.step_exact(layout, &s.y0, &mut s.y1, &mut s.gz);
         }
-        deriv(&y1, &mut dy1);
-        // Re-contact: δ crossing upward; Hermite to detect, the exact series to locate.
-        let (g0, g1) = (delta(&y0), delta(&y1));
-        let (s0, s1) = (h * delta(&dy0), h * delta(&dy1));
-        let herm = |th: f64| hermite(g0, s0, g1, s1, th);
-        let mut th_end = 1.0;
-        let mut recontact = false;
-        if !find_roots(herm, g0, g1, 1, 4, true).is_empty() {
-            let exact = |th: f64| delta(&at(&y0, h, th, false));
-            if let Some(&th) = find_roots(exact, g0, g1, 1, 8, true).first() {
-                th_end = th;
-                recontact = true;
-            }
-        }
-        // Extrema of w_mid and of the curvatures within [0, th_end].
-        for k in 0..3 {
-            let (r0, r1) = (apply(rates[k], &y0), apply(rates[k], &y1));
-            let (q0, q1) = (h * apply(rates[k], &dy0), h * apply(rates[k], &dy1));
-            let herm = |th: f64| hermite(r0, q0, r1, q1, th);
-            let mut best: f64 = 0.0;
-            for th in find_roots(herm, r0, r1, 0, 4, false) {
-                if th <= th_end {
-                    ff.propagate_into(
-                        &y0[layout.column()],
-                        th * h,
-                        &mut ye[layout.column()],
-                        &mut tb1,
-                        &mut tb2,
-                    );
-                    best = best.max(apply(values[k], &ye).abs());
-                }
-            }
-            let target = match k {
-                0 => &mut res.max_midpoint_displacement,
-                1 => &mut res.max_curvature_clamp,
-                _ => &mut res.max_curvature_midpoint,
-            };
-            *target = target.max(best);
-        }
+        ff.derivative(layout, &s.y1, &mut s.dy1);
+        let hit = ff.locate_recontact(sys, &s.y0, &s.y1, &s.dy0, &s.dy1, h);
+        let th_end = hit.unwrap_or(1.0);
+        flight_extrema(ff, layout, res, apply, values, rates, &mut s, h, th_end);
         let y_rc;
-        let y_end: &[f64] = if recontact {
-            y_rc = at(&y0, h, th_end, true);
+        let y_end: &[f64] = if hit.is_some() {
+            y_rc = ff.state_at(layout, &s.y0, h, th_end, true);
             &y_rc
         } else {
-            &y1
+            &s.y1
         };
-        let t_next = if recontact {
+        let t_next = if hit.is_some() {
             t + th_end * h
         } else if last {
             t_end
@@ -1145,26 +1415,22 @@ fn free_flight(
             let ys = if ts >= t_next {
                 y_end.to_vec()
             } else {
-                at(&y0, h, ((ts - t) / h).clamp(0.0, 1.0), true)
+                ff.state_at(layout, &s.y0, h, ((ts - t) / h).clamp(0.0, 1.0), true)
             };
             record(res, ts, &ys, false);
             *next_sample += 1;
         }
         for k in 0..3 {
             let v = apply(values[k], y_end).abs();
-            let target = match k {
-                0 => &mut res.max_midpoint_displacement,
-                1 => &mut res.max_curvature_clamp,
-                _ => &mut res.max_curvature_midpoint,
-            };
+            let target = extremum_slot(res, k);
             *target = target.max(v);
         }
         y.copy_from_slice(y_end);
         t = t_next;
-        if recontact {
+        if hit.is_some() {
             return Ok((true, t));
         }
-        std::mem::swap(&mut dy0, &mut dy1);
+        std::mem::swap(&mut s.dy0, &mut s.dy1);
     }
 }
 
@@ -1280,6 +1546,128 @@ mod tests {
         assert!(((y[6] - dis) / dis).abs() < 1e-9, "{} vs {dis}", y[6]);
     }
 
+    /// The heavily damped free column (c = 1e9 N·s/m², damping rate·τ up to ~4e3): the doubled
+    /// propagator against a tight Dormand–Prince integration of the same linear system, and its
+    /// Gramian against the energy the free column loses (E(0) − E(τ), an independent balance).
+    #[test]
+    fn doubled_propagator_of_a_heavily_damped_column_matches_integration_and_energy() {
+        use crate::physics::material::Column;
+        let col = Column::default();
+        for (c_coef, modes) in [(1e9, 3usize), (3e7, 5), (1e9, 9)] {
+            let g = Galerkin::new(&col, modes, c_coef, true).unwrap();
+            let act: Vec<usize> = (0..modes).step_by(2).collect();
+            let n = act.len();
+            let mass = DMatrix::from_fn(n, n, |i, j| g.mass[(act[i], act[j])]);
+            let minv = mass.clone().cholesky().unwrap().inverse();
+            let k: Vec<f64> = act.iter().map(|&i| g.stiffness[(i, i)]).collect();
+            let c: Vec<f64> = act.iter().map(|&i| g.damping[(i, i)]).collect();
+            let fmax = crate::physics::beam::generalized_frequencies(
+                &mass,
+                &DMatrix::from_diagonal(&DVector::from_column_slice(&k)),
+            )[n - 1];
+            let ff = FreeFlight::new(&minv, &k, &c, 2.0 * std::f64::consts::PI * fmax);
+            assert!(ff.damping_rate * ff.h > 2.0, "{c_coef}: not heavily damped");
+            let energy = |z: &DVector<f64>| {
+                let w = z.rows(0, n);
+                let wd = z.rows(n, n);
+                0.5 * wd.dot(&(&mass * wd)) + (0..n).map(|j| 0.5 * k[j] * w[j] * w[j]).sum::<f64>()
+            };
+            let mut z0 = DVector::zeros(2 * n);
+            for j in 0..n {
+                z0[j] = 1e-4 / (j + 1) as f64;
+                z0[n + j] = if j % 2 == 0 { 0.5 } else { -0.3 };
+            }
+            for tau in [ff.h, 0.37 * ff.h] {
+                let (z1, d) = ff.taylor(z0.as_slice(), tau, true);
+                let lost = energy(&z0) - energy(&z1);
+                assert!(d > 0.0 && z1.iter().all(|v| v.is_finite()));
+                assert!(((d - lost) / d).abs() < 1e-9, "{c_coef}: {d} vs {lost}");
+                let mut out = vec![0.0; 2 * n];
+                let (mut t1, mut t2) = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
+                ff.propagate_into(z0.as_slice(), tau, &mut out, &mut t1, &mut t2);
+                for i in 0..2 * n {
+                    assert_eq!(out[i], z1[i]);
+                }
+                struct Lin<'a>(&'a DMatrix<f64>, &'a [f64], usize);
+                impl OdeSystem for Lin<'_> {
+                    fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) -> bool {
+                        let m = 2 * self.2;
+                        let az = self.0 * DVector::from_column_slice(&y[..m]);
+                        dy[..m].copy_from_slice(az.as_slice());
+                        dy[m] = (0..self.2)
+                            .map(|i| self.1[i] * y[self.2 + i] * y[self.2 + i])
+                            .sum();
+                        true
+                    }
+                }
+                let mut y: Vec<f64> = z0.iter().copied().collect();
+                y.push(0.0);
+                let mut atol = vec![1e-16; n];
+                atol.extend(vec![1e-13; n]);
+                atol.push(1e-13);
+                let mut st = Dopri5::new(1e-12, atol, 1e-9);
+                let sys = Lin(&ff.a, &c, n);
+                let mut t = 0.0;
+                while t < tau {
+                    t = st.step(&sys, t, &mut y, tau).unwrap();
+                }
+                for i in 0..2 * n {
+                    assert!(
+                        (y[i] - z1[i]).abs() < 1e-8 * (z1[i].abs() + 1e-9),
+                        "{c_coef} {i}: {} vs {}",
+                        y[i],
+                        z1[i]
+                    );
+                }
+                assert!(((y[2 * n] - d) / d).abs() < 1e-8, "{} vs {d}", y[2 * n]);
+            }
+        }
+    }
+
+    /// Run time against error of the c = 1e9 N·s/m² column (3 modes, base case): the largest
+    /// relative error of Pmax, column energy after contact, first contact duration and max
+    /// |w_mid| against a run at tolerance 1e-12. A measurement printed for BENCHMARKS.md, not a
+    /// check: `cargo test --lib heavily_damped_time_against_error -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn heavily_damped_time_against_error() {
+        let input = |tol: f64| {
+            let mut i = base_input(3, tol);
+            i.galerkin =
+                Galerkin::new(&crate::physics::material::Column::default(), 3, 1e9, true).unwrap();
+            i
+        };
+        let key = |r: &CoupledResult| {
+            [
+                r.max_force,
+                r.column_energy_after_contact,
+                r.first_contact_duration.unwrap(),
+                r.max_midpoint_displacement,
+            ]
+        };
+        let reference = key(&solve_coupled(&input(1e-12), &Control::unlimited()).unwrap());
+        for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10] {
+            let inp = input(tol);
+            let reps = 5;
+            let t0 = std::time::Instant::now();
+            let mut r = None;
+            for _ in 0..reps {
+                r = Some(solve_coupled(&inp, &Control::unlimited()).unwrap());
+            }
+            let ms = t0.elapsed().as_secs_f64() * 1e3 / reps as f64;
+            let r = r.unwrap();
+            let err = key(&r)
+                .iter()
+                .zip(reference)
+                .map(|(g, e)| ((g - e) / e).abs())
+                .fold(0.0f64, f64::max);
+            println!(
+                "| {tol:e} | {} | {} | {} | {ms:.2} | {err:.2e} | {:.2e} |",
+                r.steps, r.rejected_steps, r.passes, r.estimated_error
+            );
+        }
+    }
+
     /// Contact energy closed form against Gauss–Legendre quadrature of P(δ).
     #[test]
     fn contact_energy_matches_quadrature() {
@@ -1339,11 +1727,22 @@ mod tests {
 
     /// The step estimate brackets what the integrator does: the lower bound is below the steps
     /// of every pass, and the expected count is within a factor 2 of the last pass's, for 1 to
-    /// 50 modes (flight dominates the default window of 50 contact durations).
+    /// 50 modes (flight dominates the default window of 50 contact durations), and for heavily
+    /// damped columns (c = 1e7 and 1e9 N·s/m², where the damping rate bounds the contact steps).
     #[test]
     fn step_estimate_brackets_the_steps_taken() {
-        for n in [1usize, 5, 20, 50] {
-            let input = base_input(n, 1e-9);
+        use crate::physics::material::Column;
+        for (n, c) in [
+            (1usize, 1.0),
+            (5, 1.0),
+            (20, 1.0),
+            (50, 1.0),
+            (3, 1e9),
+            (9, 1e9),
+            (5, 1e7),
+        ] {
+            let mut input = base_input(n, 1e-9);
+            input.galerkin = Galerkin::new(&Column::default(), n, c, true).unwrap();
             let e = estimate_steps(&input).unwrap();
             let r = solve_coupled(&input, &Control::unlimited()).unwrap();
             let steps = r.steps as f64;
@@ -1354,7 +1753,7 @@ mod tests {
             );
             assert!(
                 (0.5..2.0).contains(&(steps / e.expected)),
-                "{n} modes: {steps} steps, expected {}",
+                "{n} modes, c = {c:e}: {steps} steps, expected {}",
                 e.expected
             );
         }
