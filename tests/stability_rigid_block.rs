@@ -118,20 +118,24 @@ fn check(c: &MigrationCase, r: &MigrationResult) -> Result<(), TestCaseError> {
     // Mid-contact (a run may end there) the leapfrog's shadow energy differs from the true one
     // by O(ω Δt) of the elastic energy in the springs: half of it is allowed on top.
     let mid = 0.5 * e.stored;
-    // no energy gained: what remains never exceeds the start beyond the scheme's error
+    // the account closes to the scheme's accuracy: 0.2 % of the energy in play with the linear
+    // law (the largest seen over 364 cases of this seed: 6.6e-4); the Hertz law's step is set
+    // by the static load (physics.md §C.3), so hard impacts, which stiffen the contact further,
+    // are resolved more coarsely: 1 % (largest seen beyond the mid-contact allowance: 3.0e-3).
+    // (Before the shear springs' work was booked over their drifts and the change of
+    // |Fₛ|²/2kₛ with kₛ was booked, these were 2 % and 10 %.)
+    let tol = match c.rigid_block.contact_model {
+        ContactModel::Linear => 2e-3,
+        ContactModel::Hertz => 1e-2,
+    };
+    // no energy gained: what remains (KE + PE + stored, whatever the bookkeeping) never exceeds
+    // the start beyond the scheme's error
     let remaining = e.total_start - e.damping - e.friction + e.residual;
     prop_assert!(
-        remaining <= e.total_start + 2e-2 * scale + mid,
+        remaining <= e.total_start + tol * scale + mid,
         "{e:?} scale {scale}"
     );
-    // the account closes to the scheme's accuracy: 2 % of the energy in play with the linear
-    // law; the Hertz law's step is set by the static load (physics.md §C.3), so hard impacts,
-    // which stiffen the contact further, are resolved more coarsely, and its shear stiffness
-    // changes with the overlap (the stored shear energy is then path-dependent): 10 %
-    let tol = match c.rigid_block.contact_model {
-        ContactModel::Linear => 2e-2,
-        ContactModel::Hertz => 1e-1,
-    };
+
     prop_assert!(
         e.residual.abs() <= tol * scale + mid,
         "residual {} of scale {scale}: {e:?}",

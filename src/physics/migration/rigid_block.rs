@@ -39,10 +39,18 @@
 //!   vertex or the centre would leave the union of the coplanar triangles (a hole, the floor's
 //!   edge); the crease, bump or hole is then stepped. A fully flat grid costs what the plane
 //!   costs.
-//! * **Energy**: dashpot and local-damping work → damping; shear-spring work while the Coulomb
-//!   cap holds, and the shear energy a spring still holds when its contact opens → friction; the
-//!   elastic energy of the closed springs → stored. KE + PE + stored + damping + friction +
-//!   residual = the energy at release (with the springs' energy at release).
+//! * **Energy**: dashpot and local-damping work → damping, booked with the step's mean
+//!   velocities (the leapfrog's kinetic-energy change). A shear spring follows the drift of its
+//!   contact point since the last force evaluation; its work over that drift, with the
+//!   trapezoidal force, less the rise of its elastic energy → friction: zero while it sticks,
+//!   the Coulomb slip while capped, its energy when its contact opens, and (Hertz: kₛ depends
+//!   on the overlap, so |Fₛ|²/2kₛ has no potential) the change of that energy due to kₛ changing
+//!   under a held force, dissipated or, with a negative sign, supplied. The elastic energy of the
+//!   closed springs at the end position (the shear springs carried over the last drift) →
+//!   stored. The stepping starts with the velocities put half a step back and a flight starts
+//!   from them brought to the state's time, so no term of the account is first order in Δt.
+//!   KE + PE + stored + damping + friction + residual = the energy at release (with the
+//!   springs' energy at release).
 //!
 //! References: physics.md §C.1 (restitution of the spring–dashpot), §C.3; api.md
 //! `POST /v1/migration`.
@@ -235,6 +243,49 @@ struct State {
     v: Vector3<f64>,
     q: UnitQuaternion<f64>,
     w: Vector3<f64>,
+}
+
+/// The shear spring of one contact, as it was after the last force evaluation.
+#[derive(Debug, Clone, Copy)]
+struct Spring {
+    /// The contact's (block feature, floor feature) key.
+    key: u64,
+    /// Shear force on the block, N.
+    fs: Vector3<f64>,
+    /// Shear stiffness it was loaded with, N/m.
+    ks: f64,
+    /// Contact point relative to the centre (world frame), m.
+    rr: Vector3<f64>,
+    /// Contact normal.
+    n: Vector3<f64>,
+}
+
+impl Spring {
+    /// Elastic energy |Fₛ|²/2kₛ, J.
+    fn energy(&self) -> f64 {
+        if self.ks > 0.0 {
+            self.fs.norm_squared() / (2.0 * self.ks)
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Work a shear spring dissipates while its contact point moves by `d` (tangential
+/// displacement over one drift, m) and its force goes from `fs_old` (energy `es_old`, J) to
+/// `fs_new` (energy `es_new`): the trapezoidal work −(Fₛ,old + Fₛ,new)·d/2 done on it minus
+/// the rise of its elastic energy. Zero to rounding while it sticks with a constant kₛ (Fₛ,new =
+/// Fₛ,old − kₛ d); the Coulomb slip when it is capped; and, with an overlap-dependent kₛ
+/// (Hertz), the energy |Fₛ|²/2kₛ loses (booked as dissipated) or gains (as supplied, with a
+/// negative sign) because kₛ changed under a held force, which has no potential to store it.
+fn shear_work(
+    fs_old: &Vector3<f64>,
+    es_old: f64,
+    fs_new: &Vector3<f64>,
+    es_new: f64,
+    d: &Vector3<f64>,
+) -> f64 {
+    -0.5 * (fs_old + fs_new).dot(d) - (es_new - es_old)
 }
 
 /// Per-run outcome.
@@ -896,9 +947,8 @@ impl<'a> Model<'a> {
             q: self.q0,
             w: Vector3::zeros(),
         };
-        // (contact key, shear force, shear stiffness at the last step)
-        let mut springs: Vec<(u64, Vector3<f64>, f64)> = Vec::new();
-        let mut new_springs: Vec<(u64, Vector3<f64>, f64)> = Vec::new();
+        let mut springs: Vec<Spring> = Vec::new();
+        let mut new_springs: Vec<Spring> = Vec::new();
         let mut geos: Vec<Geo> = Vec::new();
         let mut tris: Vec<FloorTriangle> = Vec::new();
         let (mut damping, mut friction) = (0.0, 0.0);
@@ -917,7 +967,13 @@ impl<'a> Model<'a> {
                     Some(hz) => hz.k * gk.u * gk.u.sqrt(),
                 };
                 acc_prev += gk.n * (f_el / m);
-                springs.push((gk.key, Vector3::zeros(), self.ks));
+                springs.push(Spring {
+                    key: gk.key,
+                    fs: Vector3::zeros(),
+                    ks: self.ks,
+                    rr: gk.p - st.c,
+                    n: gk.n,
+                });
             }
         }
         let (k0, r0, p0) = self.energy(&st);
@@ -984,6 +1040,8 @@ impl<'a> Model<'a> {
         let mut patch_wait: Option<(Vector3<f64>, f64)> = None;
         // the velocities lag the positions by half of this step (leapfrog); None: in step
         let mut half_step: Option<f64> = None;
+        // time since the last force evaluation: the drift the shear springs have not yet seen
+        let mut drift_h = 0.0;
         loop {
             // sample the trajectory
             if let Some(r) = rec.as_mut()
@@ -1022,6 +1080,9 @@ impl<'a> Model<'a> {
                 if let Some(tau) = self.clear_time(&st.c, &st.v, margin, end_t - st.t)
                     && tau > 2.0 * dt
                 {
+                    // the flight starts from the velocities at the state's own time
+                    st = self.synced(&st, half_step, &acc_prev, &wacc_prev);
+                    half_step = None;
                     let t_target = st.t + tau;
                     // lower end inside the flight?
                     let cross = self.along_cross(&st, tau);
@@ -1062,7 +1123,7 @@ impl<'a> Model<'a> {
                         r.next += r.interval;
                     }
                     st = self.fly(&st, t_final - st.t);
-                    half_step = None;
+                    drift_h = 0.0;
                     acc_prev = gravity;
                     wacc_prev = Vector3::zeros();
                     if let Some((_, k)) = col {
@@ -1101,8 +1162,14 @@ impl<'a> Model<'a> {
             } else {
                 dt
             };
-            // contact forces at x(t) with the half-step velocities
             let r = self.rot(&st.q);
+            // stepping from a state with its velocities at its own time (release, end of a
+            // flight): put them half a step back, where the leapfrog keeps them
+            if half_step.is_none() {
+                st.v -= acc_prev * (0.5 * h);
+                st.w -= r.transpose() * wacc_prev * (0.5 * h);
+            }
+            // contact forces at x(t) with the half-step velocities
             self.contacts(&st.c, &r, &mut tris, &mut geos);
             let w_world = r * st.w;
             let v_t = st.v + acc_prev * (0.5 * h);
@@ -1111,7 +1178,7 @@ impl<'a> Model<'a> {
             let mut mom = Vector3::zeros();
             let mut fn_total = 0.0;
             let (mut f_damp, mut m_damp) = (Vector3::zeros(), Vector3::zeros());
-            let (mut f_slip, mut m_slip, mut es_slip) = (Vector3::zeros(), Vector3::zeros(), 0.0);
+            let mut f_slip = Vector3::zeros();
             let mut n_slip = 0usize;
             new_springs.clear();
             stored = 0.0;
@@ -1135,7 +1202,7 @@ impl<'a> Model<'a> {
                 // the last acceleration (second order; the lagged half-step velocity alone
                 // would err by O(β ω Δt) in the restitution)
                 let vn_t = gk.n.dot(&(v_t + w_t.cross(&rr)));
-                let old = springs.iter().find(|s| s.0 == gk.key).map(|s| s.1);
+                let old = springs.iter().find(|s| s.key == gk.key);
                 // A contact that has just closed touched U/|vₙ| ago, not half a step ago as the
                 // step's impulse assumes: correct the dashpot impulse by c(U − |vₙ|Δt/2) (else
                 // the restitution errs by O(Δt) with the random phase of the touch). Only for a
@@ -1153,21 +1220,18 @@ impl<'a> Model<'a> {
                 m_damp += rr.cross(&fd);
                 fn_total += fnm;
                 // shear spring: rotate the old one into the tangent plane
-                let mut fs = match old {
+                let (fs_old, es_old) = match old {
                     Some(o) => {
-                        let mag = o.norm();
-                        let pr = o - gk.n * gk.n.dot(&o);
+                        let mag = o.fs.norm();
+                        let pr = o.fs - gk.n * gk.n.dot(&o.fs);
                         let pn = pr.norm();
-                        if pn > 0.0 { pr * (mag / pn) } else { pr }
+                        (if pn > 0.0 { pr * (mag / pn) } else { pr }, o.energy())
                     }
-                    None => Vector3::zeros(),
+                    None => (Vector3::zeros(), 0.0),
                 };
-                let es_old = if ks > 0.0 {
-                    fs.norm_squared() / (2.0 * ks)
-                } else {
-                    0.0
-                };
-                fs -= vt * (ks * h);
+                // the spring follows the contact point's drift since the last step
+                let d = vt * drift_h;
+                let mut fs = fs_old - d * ks;
                 let cap = mu * f_el;
                 let fs_n = fs.norm();
                 let slipping = fs_n > cap;
@@ -1182,19 +1246,24 @@ impl<'a> Model<'a> {
                 };
                 if slipping {
                     f_slip += fs;
-                    m_slip += rr.cross(&fs);
-                    es_slip += es_new - es_old;
                 }
+                friction += shear_work(&fs_old, es_old, &fs, es_new, &d);
                 stored += self.normal_energy(gk.u) + es_new;
-                new_springs.push((gk.key, fs, ks));
+                new_springs.push(Spring {
+                    key: gk.key,
+                    fs,
+                    ks,
+                    rr,
+                    n: gk.n,
+                });
                 let fc = gk.n * fnm + fs;
                 f += fc;
                 mom += rr.cross(&fc);
             }
-            // springs of contacts that opened release their shear energy
-            for (k, fs, ks) in &springs {
-                if *ks > 0.0 && !new_springs.iter().any(|s| s.0 == *k) {
-                    friction += fs.norm_squared() / (2.0 * ks);
+            // springs of contacts that opened release their shear energy over the drift
+            for sp in &springs {
+                if !new_springs.iter().any(|s| s.key == sp.key) {
+                    friction += self.opened_spring_work(sp, &st, &w_world, drift_h);
                 }
             }
             std::mem::swap(&mut springs, &mut new_springs);
@@ -1235,8 +1304,8 @@ impl<'a> Model<'a> {
             let v_bar = (v_old + st.v) * 0.5;
             let w_bar = r * ((w0 + w1) * 0.5);
             damping -= (v_bar.dot(&f_damp) + w_bar.dot(&m_damp)) * h;
-            friction -= (v_bar.dot(&f_slip) + w_bar.dot(&m_slip)) * h + es_slip;
             st.c += st.v * h;
+            drift_h = h;
             st.q = UnitQuaternion::new_normalize(
                 (st.q * UnitQuaternion::from_scaled_axis(st.w * h)).into_inner(),
             );
@@ -1333,6 +1402,7 @@ impl<'a> Model<'a> {
                 ) {
                     st.t -= h - tc;
                     st.c = c_prev + st.v * tc;
+                    drift_h = tc;
                     hit = Some(k);
                     reason = StopReason::Support;
                     break;
@@ -1348,6 +1418,7 @@ impl<'a> Model<'a> {
                 };
                 st.t -= frac * dt;
                 st.c -= st.v * (frac * dt);
+                drift_h -= frac * dt;
                 reason = StopReason::LowerEnd;
                 break;
             }
@@ -1454,10 +1525,12 @@ impl<'a> Model<'a> {
             }
             let nf = n_skip as f64;
             // N leapfrog steps under the constant force, exactly: v ← v + N a h,
-            // x ← x + N h v + a h² N(N+1)/2; the dissipation with the steps' mean velocities
+            // x ← x + N h v + a h² N(N+1)/2; the damping with the steps' mean velocities (their
+            // kinetic-energy change), the slip over the drifts the springs see (one behind)
             let path = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * nf);
+            let drifts = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * (nf - 1.0));
             damping -= path.dot(&f_damp);
-            friction -= path.dot(&f_slip);
+            friction -= drifts.dot(&f_slip);
             st.c += v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * (nf + 1.0));
             st.v += a_t * (nf * dt);
             st.t += nf * dt;
@@ -1473,7 +1546,17 @@ impl<'a> Model<'a> {
             prev_along = self.mean.along(&st.c);
         }
         // the outputs and the energy account take the velocities at the end time (second order)
+        let lagged = st;
         st = self.synced(&st, half_step, &acc_prev, &wacc_prev);
+        // and the springs at the end position: the normal ones from its overlaps, the shear
+        // ones carried over the last drift (the slip on it booked)
+        let in_contact = !springs.is_empty();
+        if in_contact {
+            let (s, fr) =
+                self.stored_at_end(&lagged, &st, mu, &springs, drift_h, &mut tris, &mut geos);
+            stored = s;
+            friction += fr;
+        }
         if let Some(ep) = episode.take()
             && ep.impact
         {
@@ -1486,7 +1569,6 @@ impl<'a> Model<'a> {
             }
             (r, _) => r,
         };
-        let in_contact = !springs.is_empty();
         let phase = match reason {
             StopReason::AtRest => Phase::Stopped,
             _ if !in_contact => Phase::Flight,
@@ -1520,6 +1602,79 @@ impl<'a> Model<'a> {
             trajectory: rec.map(|r| r.tr),
             support: hit,
         })
+    }
+
+    /// Work the shear spring `sp` of a contact that opened dissipates over the drift `h` (s)
+    /// with the block's velocities in `st` (ω in the world frame `w_world`): its force falls to
+    /// zero along it (see [`shear_work`]).
+    fn opened_spring_work(&self, sp: &Spring, st: &State, w_world: &Vector3<f64>, h: f64) -> f64 {
+        let vrel = st.v + w_world.cross(&sp.rr);
+        let vt = vrel - sp.n * sp.n.dot(&vrel);
+        shear_work(&sp.fs, sp.energy(), &Vector3::zeros(), 0.0, &(vt * h))
+    }
+
+    /// Elastic energy held in the contacts at the end state `end` (J), and the shear work
+    /// dissipated on the way there: the springs as the last step left them are carried over
+    /// the drift `h` (s) since with the velocities of `lagged` (the leapfrog's half-step ones),
+    /// rotated into the end's tangent planes and capped at μ times the end's elastic force; a
+    /// spring whose contact is no longer closed releases its energy.
+    #[allow(clippy::too_many_arguments)]
+    fn stored_at_end(
+        &self,
+        lagged: &State,
+        end: &State,
+        mu: f64,
+        springs: &[Spring],
+        h: f64,
+        tris: &mut Vec<FloorTriangle>,
+        geos: &mut Vec<Geo>,
+    ) -> (f64, f64) {
+        let r = self.rot(&end.q);
+        self.contacts(&end.c, &r, tris, geos);
+        let w_world = r * lagged.w;
+        let (mut stored, mut friction) = (0.0, 0.0);
+        for gk in geos.iter() {
+            stored += self.normal_energy(gk.u);
+            let Some(old) = springs.iter().find(|s| s.key == gk.key) else {
+                continue;
+            };
+            let rr = gk.p - end.c;
+            let vrel = lagged.v + w_world.cross(&rr);
+            let vt = vrel - gk.n * gk.n.dot(&vrel);
+            let (f_el, ks) = self.elastic_and_shear(gk.u);
+            let mag = old.fs.norm();
+            let pr = old.fs - gk.n * gk.n.dot(&old.fs);
+            let pn = pr.norm();
+            let fs_old = if pn > 0.0 { pr * (mag / pn) } else { pr };
+            let d = vt * h;
+            let mut fs = fs_old - d * ks;
+            let cap = mu * f_el;
+            let fs_n = fs.norm();
+            if fs_n > cap {
+                fs *= if fs_n > 0.0 { cap / fs_n } else { 0.0 };
+            }
+            let es_new = if ks > 0.0 {
+                fs.norm_squared() / (2.0 * ks)
+            } else {
+                0.0
+            };
+            stored += es_new;
+            friction += shear_work(&fs_old, old.energy(), &fs, es_new, &d);
+        }
+        for sp in springs {
+            if !geos.iter().any(|g| g.key == sp.key) {
+                friction += self.opened_spring_work(sp, lagged, &w_world, h);
+            }
+        }
+        (stored, friction)
+    }
+
+    /// Elastic normal force (N) and shear stiffness (N/m) of a contact of overlap `u` (m).
+    fn elastic_and_shear(&self, u: f64) -> (f64, f64) {
+        match self.hertz {
+            None => (self.kn * u, self.ks),
+            Some(hz) => (hz.k * u * u.sqrt(), hz.kt * u.sqrt() * hz.shear_ratio),
+        }
     }
 
     fn normal_energy(&self, u: f64) -> f64 {
