@@ -418,6 +418,26 @@ mod tests {
     }
 
     #[test]
+    fn a_cancelled_migration_of_a_million_runs_runs_none_of_them() {
+        use crate::physics::migration::{run, run_part};
+        let case = MigrationCase {
+            monte_carlo: Some(MonteCarlo {
+                runs: 1_000_000,
+                ..MonteCarlo::default()
+            }),
+            ..MigrationCase::default()
+        };
+        let control = Control::unlimited();
+        control.cancel();
+        assert!(matches!(run(&case, &control), Err(PhysicsError::Cancelled)));
+        assert_eq!(control.progress().0, 0);
+        // the ensemble part alone (a shard's): stopped before its first run
+        let out = run_part(&case, 0..1_000_000, false, &control);
+        assert!(matches!(out, Err(PhysicsError::Cancelled)));
+        assert_eq!(control.progress().0, 0);
+    }
+
+    #[test]
     fn a_timed_out_ensemble_stops_like_a_cancelled_one() {
         let past = std::time::Instant::now() - std::time::Duration::from_millis(1);
         let control = Control::with_deadline(Some(past));
