@@ -251,7 +251,7 @@ impl RunRecords for [RunSummary] {
     }
 }
 
-/// Completes a nominal result (from [`run_part`]) with the ensemble's statistics, warnings and,
+/// Completes a nominal result (from [`run_part`](super::run_part)) with the ensemble's statistics, warnings and,
 /// when `runs_csv`, the per-run summaries: two passes over the records in run order and the
 /// order statistics of each column. The one way ensemble results are made, whether the records
 /// come from threads or from the parts of a sharded computation.

@@ -33,9 +33,9 @@ pub struct Arrival {
     pub kinetic_energy: f64,
     /// Rotational kinetic energy, J.
     pub rotational_energy: f64,
-    /// The support reached (index into [`MigrationCase::supports`]) when the run ended there.
+    /// The support reached (index into [`MigrationCase::supports`](super::MigrationCase::supports)) when the run ended there.
     pub support: Option<usize>,
-    /// Speed towards the support reached, m/s (see [`SupportStop`]).
+    /// Speed towards the support reached, m/s (see [`SupportStop`](super::SupportStop)).
     pub impact_speed: Option<f64>,
 }
 
@@ -129,7 +129,7 @@ pub struct RunSummary {
     pub steps: u64,
     /// Velocity along the mean plane's down-dip direction at the end, m/s.
     pub along_dip_velocity: f64,
-    /// The support reached (index into [`MigrationCase::supports`]), if the run ended there.
+    /// The support reached (index into [`MigrationCase::supports`](super::MigrationCase::supports)), if the run ended there.
     pub support: Option<usize>,
     /// Speed towards the support reached, m/s (0 when none was).
     pub impact_speed: f64,
