@@ -646,3 +646,48 @@ async fn a_physics_rule_broken_in_the_column_stage_names_the_scene_field() {
         "{line}"
     );
 }
+
+/// A refused field of the scene's output objects is named where the scene holds it
+/// (`/migration_output/…`, `/column_output/…`), never at a standalone request's `/output/…`, and
+/// beside a refused support column each is named exactly.
+#[tokio::test]
+async fn a_refused_output_field_names_the_scene_output_object() {
+    let app = common::app();
+    let cases = [
+        (
+            json!({"migration_output": {"sample_interval_s": 0}}),
+            vec!["/migration_output/sample_interval_s"],
+        ),
+        (
+            json!({"column_output": {"duration_s": -1, "samples": 1}}),
+            vec!["/column_output/duration_s", "/column_output/samples"],
+        ),
+        (
+            json!({"column_output": {"times_s": [0.0, 2e6]}}),
+            vec!["/column_output/times_s/1"],
+        ),
+        (
+            json!({"column_output": {"times_s": [0.0], "duration_s": 1.0}}),
+            vec!["/column_output/times_s"],
+        ),
+        (
+            json!({"supports": [{"along_dip_m": 10}, {"along_dip_m": 20, "column": {"length_m": 0.1}}],
+                   "column_output": {"duration_s": -1}}),
+            vec!["/supports/1/column/length_m", "/column_output/duration_s"],
+        ),
+    ];
+    for (body, fields) in cases {
+        let r = post(&app, "/v1/scene", &body).await;
+        let p = common::assert_problem(&r, 422, "invalid_input");
+        let mut got: Vec<&str> = p["errors"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| e["field"].as_str().unwrap())
+            .collect();
+        got.sort_unstable();
+        let mut want = fields.clone();
+        want.sort_unstable();
+        assert_eq!(got, want, "{body}: {p}");
+    }
+}

@@ -17,8 +17,6 @@
 //! of a sharded computation). The statistics sum in run order, the summation order of the
 //! contract, so any split of the runs gives the same bits.
 
-use rayon::prelude::*;
-
 use super::column::{self, ColumnCase, ColumnDetail, ColumnModel, ColumnResult};
 use super::contact::{self, ImpactResult};
 use super::control::Control;
@@ -948,6 +946,7 @@ fn ensemble(
         return Ok(Vec::new());
     }
     // the floor depends on the face only, which no draw changes: built once for every run
+    control.check()?;
     let floor = migration::build_floor(&case.migration)?;
     let one = |i: u64| -> SceneResult<SceneRun> {
         let (mut m, rock, _, mass) = run_case(case, mc.seed, i)?;
@@ -971,27 +970,7 @@ fn ensemble(
             exceeded: ch.iter().map(|c| c.exceeded).collect(),
         })
     };
-    let mut all: Vec<Option<SceneRun>> = vec![None; n];
-    let chunks: Vec<SceneResult<()>> = all
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .map(|(c, out)| {
-            control.check()?;
-            let start = range.start + (c * CHUNK) as u64;
-            for (i, slot) in (start..).zip(out.iter_mut()) {
-                *slot = Some(one(i)?);
-            }
-            control.add_done(out.len() as u64);
-            Ok(())
-        })
-        .collect();
-    for c in chunks {
-        c?;
-    }
-    Ok(all
-        .into_iter()
-        .map(|r| r.expect("every run is filled"))
-        .collect())
+    migration::run_in_chunks(range, CHUNK, control, one)
 }
 
 /// The outcomes of runs.

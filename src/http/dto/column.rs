@@ -9,8 +9,10 @@ use super::common::{
     VELOCITY, Warning, non_null, number_schemas, velocity_schema,
 };
 use super::impact::resolve_impact_case;
+use super::param::Layout;
 use crate::config::Config;
 use crate::http::error::ApiError;
+use crate::physics::Param;
 use crate::physics::beam::ModeShapes;
 use crate::physics::column::{
     ColumnCase, ColumnDetail, ColumnHistory, ColumnModel, ColumnResult, HistoryRequest,
@@ -166,6 +168,12 @@ impl Default for ColumnRequest {
 impl ColumnRequest {
     /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
     pub fn resolve(&mut self, config: &Config) -> Result<ColumnCase, ApiError> {
+        self.resolve_in(config, Layout::Request)
+    }
+
+    /// [`Self::resolve`] with the history fields named as in `layout` (a scene checks its
+    /// `column_output` here).
+    pub fn resolve_in(&mut self, config: &Config, layout: Layout) -> Result<ColumnCase, ApiError> {
         let mut checker = Checker::new();
         let impact = resolve_impact_case(
             self.velocity_m_s,
@@ -234,28 +242,40 @@ impl ColumnRequest {
             None => HistoryRequest::None,
             Some(o) => {
                 if let Some(d) = o.duration_s {
-                    checker.open_closed("/output/duration_s", d, 0.0, 1e6, "s");
+                    checker.open_closed(&layout.pointer(Param::HistoryDuration), d, 0.0, 1e6, "s");
                 }
                 if let Some(n) = o.samples {
-                    checker.count("/output/samples", n, 2, max_samples, "samples");
+                    checker.count(
+                        &layout.pointer(Param::HistorySamples),
+                        n,
+                        2,
+                        max_samples,
+                        "samples",
+                    );
                 }
                 match (&o.times_s, o.duration_s, o.samples) {
                     (Some(t), None, None) => {
                         if t.len() as u64 > max_samples {
                             checker.push(
-                                "/output/times_s",
+                                layout.pointer(Param::HistoryTimes),
                                 json!(t.len()),
                                 format!("at most {max_samples} times"),
                             );
                         }
                         for (i, &ti) in t.iter().enumerate() {
-                            checker.closed(&format!("/output/times_s/{i}"), ti, 0.0, 1e6, "s");
+                            checker.closed(
+                                &layout.pointer(Param::HistoryTime(i)),
+                                ti,
+                                0.0,
+                                1e6,
+                                "s",
+                            );
                         }
                         HistoryRequest::Times(t.clone())
                     }
                     (Some(_), _, _) => {
                         checker.push(
-                            "/output/times_s",
+                            layout.pointer(Param::HistoryTimes),
                             Value::Null,
                             "give either times_s or duration_s (with samples), not both",
                         );
@@ -263,7 +283,7 @@ impl ColumnRequest {
                     }
                     (None, None, _) if !coupled => {
                         checker.push(
-                            "/output/duration_s",
+                            layout.pointer(Param::HistoryDuration),
                             Value::Null,
                             "the decoupled history needs times_s or duration_s in (0, 1e6] s",
                         );

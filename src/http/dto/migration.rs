@@ -10,8 +10,10 @@ use super::common::{
     Checker, FieldDefault, Meta, NumberField, PlanStep, RockDto, Warning, number_schemas, some,
 };
 use super::floor::{self as formats, Sorted};
+use super::param::Layout;
 use crate::config::Config;
 use crate::http::error::{ApiError, num};
+use crate::physics::Param;
 use crate::physics::migration::{
     self, ContactModel, ContourLine, Distribution, EventKind, Face, FloorSpec, LumpedMassOptions,
     MapFrame, Method, MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase,
@@ -1251,6 +1253,16 @@ fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> Fl
 impl MigrationRequest {
     /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
     pub fn resolve(&mut self, config: &Config) -> Result<MigrationCase, ApiError> {
+        self.resolve_in(config, Layout::Request)
+    }
+
+    /// [`Self::resolve`] with the output fields named as in `layout` (a scene checks its
+    /// `migration_output` here).
+    pub fn resolve_in(
+        &mut self,
+        config: &Config,
+        layout: Layout,
+    ) -> Result<MigrationCase, ApiError> {
         let mut ck = Checker::new();
         let rigid = self.method == MethodDto::RigidBlock;
         GRAVITY.check(&mut ck, "/gravity_m_s2", self.gravity_m_s2);
@@ -1335,7 +1347,11 @@ impl MigrationRequest {
             MIGRATION_END_TIME.check(&mut ck, "/end_time_s", t);
         }
         let o = &self.output;
-        SAMPLE_INTERVAL.check(&mut ck, "/output/sample_interval_s", o.sample_interval_s);
+        SAMPLE_INTERVAL.check(
+            &mut ck,
+            &layout.pointer(Param::TrajectorySampleInterval),
+            o.sample_interval_s,
+        );
         let monte_carlo = self.monte_carlo.as_ref().map(|mc| {
             ck.count("/monte_carlo/runs", mc.runs, 1, config.max_runs, "runs");
             MonteCarlo {
@@ -1387,7 +1403,7 @@ impl MigrationRequest {
         }
         if o.runs_csv && monte_carlo.is_none() {
             ck.push(
-                "/output/runs_csv",
+                layout.migration_output("runs_csv"),
                 json!(true),
                 "per-run summaries need monte_carlo",
             );

@@ -109,6 +109,38 @@ pub fn scene_pointer(param: Param, support: Option<&str>) -> String {
     }
 }
 
+/// The request whose layout the pointers of a shared check follow: `/v1/migration` and
+/// `/v1/column` check their output objects at `/output`, a scene checks the same objects at
+/// `/migration_output` and `/column_output`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layout {
+    /// A standalone request (`/v1/impact`, `/v1/column`, `/v1/migration`, a batch item's).
+    Request,
+    /// A `/v1/scene` request.
+    Scene,
+}
+
+impl Layout {
+    /// The JSON Pointer of `param` in this layout (a scene's column: the first support's).
+    #[must_use]
+    pub fn pointer(self, param: Param) -> String {
+        match self {
+            Self::Request => request_pointer(param),
+            Self::Scene => scene_pointer(param, None),
+        }
+    }
+
+    /// The JSON Pointer of the migration output option `field` (no physics parameter names it,
+    /// e.g. `runs_csv`): `/output/{field}` or `/migration_output/{field}`.
+    #[must_use]
+    pub fn migration_output(self, field: &str) -> String {
+        match self {
+            Self::Request => format!("/output/{field}"),
+            Self::Scene => format!("/migration_output/{field}"),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,5 +162,21 @@ mod tests {
         assert_eq!(request_pointer(Param::HistoryTime(4)), "/output/times_s/4");
         assert_eq!(request_pointer(Param::RockDensity), "/rock/density_kg_m3");
         assert_eq!(request_pointer(Param::CoupledWindow), "/end_time_s");
+    }
+
+    #[test]
+    fn the_output_objects_are_named_by_the_layout() {
+        let (r, s) = (Layout::Request, Layout::Scene);
+        assert_eq!(r.pointer(Param::HistoryDuration), "/output/duration_s");
+        assert_eq!(
+            s.pointer(Param::HistoryDuration),
+            "/column_output/duration_s"
+        );
+        assert_eq!(
+            s.pointer(Param::TrajectorySampleInterval),
+            "/migration_output/sample_interval_s"
+        );
+        assert_eq!(r.migration_output("runs_csv"), "/output/runs_csv");
+        assert_eq!(s.migration_output("runs_csv"), "/migration_output/runs_csv");
     }
 }

@@ -12,7 +12,7 @@ use super::migration::{
     DistributionDto, FaceDto, LumpedMassDto, MethodDto, MigrationOutputDto, MigrationRequest,
     MigrationResponse, MonteCarloDto, ReleaseDto, RigidBlockDto, SummaryDto,
 };
-use super::param::scene_pointer;
+use super::param::{Layout, scene_pointer};
 use crate::config::Config;
 use crate::http::error::{ApiError, FieldError, num};
 use crate::http::runner::to_json_bytes;
@@ -246,27 +246,6 @@ impl Default for SceneRequest {
     }
 }
 
-/// Renames the pointer prefix `from` to `to` in every field of an error.
-fn rename(e: ApiError, from: &str, to: &str) -> ApiError {
-    if !e.errors().iter().any(|f| f.field.starts_with(from)) {
-        return e;
-    }
-    let errors: Vec<FieldError> = e
-        .errors()
-        .iter()
-        .map(|f| {
-            let mut f = f.clone();
-            if let Some(rest) = f.field.strip_prefix(from)
-                && (rest.is_empty() || rest.starts_with('/'))
-            {
-                f.field = format!("{to}{rest}");
-            }
-            f
-        })
-        .collect();
-    ApiError::from_field_errors(e.code(), errors)
-}
-
 /// What the DTO keeps to build the response and to name fields.
 #[derive(Debug, Clone)]
 pub struct SceneContext {
@@ -299,9 +278,7 @@ impl SceneRequest {
             monte_carlo: mc,
             output: self.migration_output,
         };
-        let migration = mreq
-            .resolve(config)
-            .map_err(|e| rename(e, "/output", "/migration_output"))?;
+        let migration = mreq.resolve_in(config, Layout::Scene)?;
         self.face = mreq.face.clone();
         self.rock = mreq.rock.clone();
         let mut ck = Checker::new();
@@ -461,9 +438,7 @@ impl SceneRequest {
             end_time_s: None,
             output: self.column_output.clone(),
         };
-        let column_case = template
-            .resolve(config)
-            .map_err(|e| rename(e, "/output", "/column_output"));
+        let column_case = template.resolve_in(config, Layout::Scene);
         let column_case = match column_case {
             Ok(c) => c,
             Err(e) => {

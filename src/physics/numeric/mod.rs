@@ -7,6 +7,7 @@ pub mod double_double;
 pub mod elliptic;
 pub mod lambert;
 pub mod ode;
+pub mod polynomial;
 pub mod quadrature;
 pub mod roots;
 pub mod series;

@@ -1,0 +1,256 @@
+//! The migration case: the face and its floor, the release, the method's options, the Monte Carlo
+//! ensemble, the output options and the supports that stop a run (api.md `POST /v1/migration`,
+//! `POST /v1/scene`), SI units, with their defaults.
+
+use super::lumped_mass::Motion;
+use super::monte_carlo::Distribution;
+use super::rigid_block::RigidBlockOptions;
+use super::terrain::{ContourLine, MapFrame};
+use crate::physics::material::Rock;
+
+/// Migration method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// Point mass, energy tracking method (physics.md §C.2).
+    #[default]
+    LumpedMass,
+    /// Rigid polyhedral block, DEM (physics.md §C.3); not available yet.
+    RigidBlock,
+}
+
+/// Floor of the face.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum FloorSpec {
+    /// The plane z = −x tan θ (from `dip_deg` and `length_m`).
+    #[default]
+    Plane,
+    /// Height grid: `heights[i][j]` is z at (x₀ + j d, y₀ + i d), m; NaN marks a node without
+    /// data (the facets touching it are removed: a hole).
+    Grid {
+        /// [x₀, y₀], m (default [0, 0]).
+        origin: [f64; 2],
+        /// Spacing d, m.
+        spacing: f64,
+        /// Rows of heights, m (row i at y₀ + i d).
+        heights: Vec<Vec<f64>>,
+    },
+    /// Contour polylines, resampled at most `resolution` apart and Delaunay-triangulated.
+    Contours {
+        /// The contour lines.
+        contours: Vec<ContourLine>,
+        /// Largest spacing of resampled points, m (default 1).
+        resolution: f64,
+    },
+    /// A grid or contour floor given in map coordinates, placed on the face by a rigid transform.
+    Mapped {
+        /// The floor in map coordinates (a grid or contours).
+        floor: Box<FloorSpec>,
+        /// Where the face's origin is and where its down-dip axis points.
+        map: MapFrame,
+    },
+}
+
+/// The working face.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Face {
+    /// Dip θ, degrees (default 45).
+    pub dip_deg: f64,
+    /// Face length along dip S, m (default 120).
+    pub length: f64,
+    /// Floor (default plane).
+    pub floor: FloorSpec,
+    /// Coulomb friction μ (default 0.2).
+    pub friction_coefficient: f64,
+    /// Normal restitution e_n (default 0.3).
+    pub restitution_normal: f64,
+    /// Tangential restitution e_t (default 0.8).
+    pub restitution_tangential: f64,
+}
+
+impl Default for Face {
+    fn default() -> Self {
+        Self {
+            dip_deg: 45.0,
+            length: 120.0,
+            floor: FloorSpec::Plane,
+            friction_coefficient: 0.2,
+            restitution_normal: 0.3,
+            restitution_tangential: 0.8,
+        }
+    }
+}
+
+/// Where and how the rock is released.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Release {
+    /// Vertical lift above the floor point, m (default 3.27).
+    pub drop_height: f64,
+    /// Along-dip position of the floor point, m (default 0).
+    pub along_dip: f64,
+    /// Across-face position y of the floor point, m (default 0).
+    pub across: f64,
+    /// Initial speed along the floor's down-dip direction, m/s (default 0).
+    pub speed: f64,
+}
+
+impl Default for Release {
+    fn default() -> Self {
+        Self {
+            drop_height: 3.27,
+            along_dip: 0.0,
+            across: 0.0,
+            speed: 0.0,
+        }
+    }
+}
+
+/// Options of the lumped-mass method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LumpedMassOptions {
+    /// Ground motion (default slide).
+    pub motion: Motion,
+    /// Normal rebound speed below which the ground phase starts, m/s (default 0.5).
+    pub stop_normal_speed: f64,
+}
+
+impl Default for LumpedMassOptions {
+    fn default() -> Self {
+        Self {
+            motion: Motion::Slide,
+            stop_normal_speed: 0.5,
+        }
+    }
+}
+
+/// A seeded Monte Carlo ensemble.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MonteCarlo {
+    /// Number of runs (default 200).
+    pub runs: u64,
+    /// Seed (default 42).
+    pub seed: u64,
+    /// e_n, drawn at every impact and clipped to [0, 1] (default U[0.2, 0.4]).
+    pub restitution_normal: Distribution,
+    /// e_t, drawn at every impact after e_n and clipped to [0, 1] (default U[0.7, 0.9]).
+    pub restitution_tangential: Distribution,
+    /// μ, drawn once per run and clipped to [0, 2], counted in a `friction_clipped` warning
+    /// (default: the face's μ for every run).
+    pub friction_coefficient: Option<Distribution>,
+}
+
+impl Default for MonteCarlo {
+    fn default() -> Self {
+        Self {
+            runs: 200,
+            seed: 42,
+            restitution_normal: Distribution::Uniform { min: 0.2, max: 0.4 },
+            restitution_tangential: Distribution::Uniform { min: 0.7, max: 0.9 },
+            friction_coefficient: None,
+        }
+    }
+}
+
+/// What to report besides the arrival.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputOptions {
+    /// Sample the nominal trajectory (default false).
+    pub trajectory: bool,
+    /// Sample interval, s (default 0.01).
+    pub sample_interval: f64,
+    /// Report the nominal run's events (default true).
+    pub events: bool,
+    /// Per-run summaries and their CSV (Monte Carlo; default false).
+    pub runs_csv: bool,
+    /// Largest number of trajectory samples (the service's limit, default 1 000 000).
+    pub max_samples: usize,
+}
+
+impl Default for OutputOptions {
+    fn default() -> Self {
+        Self {
+            trajectory: false,
+            sample_interval: 0.01,
+            events: true,
+            runs_csv: false,
+            max_samples: 1_000_000,
+        }
+    }
+}
+
+/// A migration request (api.md `POST /v1/migration`), SI units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MigrationCase {
+    /// Method (default lumped mass).
+    pub method: Method,
+    /// Gravity g, m/s² (default 9.81).
+    pub gravity: f64,
+    /// The face.
+    pub face: Face,
+    /// The rock (its shape's own mass is used).
+    pub rock: Rock,
+    /// The release.
+    pub release: Release,
+    /// Lumped-mass options.
+    pub lumped_mass: LumpedMassOptions,
+    /// Rigid-block options (contact law, time step, β distribution).
+    pub rigid_block: RigidBlockOptions,
+    /// Stop at this time instead of the lower end, s (default none).
+    pub end_time: Option<f64>,
+    /// Monte Carlo ensemble (default none).
+    pub monte_carlo: Option<MonteCarlo>,
+    /// Output options.
+    pub output: OutputOptions,
+    /// Largest number of events (flights, impacts, slide pieces) per run (default 1e7).
+    pub max_steps_per_run: u64,
+    /// Supports that end a run when reached (api.md `POST /v1/scene`; default none).
+    pub supports: Vec<SupportStop>,
+}
+
+/// A support that ends a run when the rock reaches it (api.md `POST /v1/scene`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SupportStop {
+    /// Along-dip position in the mean plane, m.
+    pub along_dip: f64,
+    /// Across position y of a column's axis in the mean plane, m (None: spans the face).
+    pub across: Option<f64>,
+    /// Column: distance from the axis at which the rock reaches it (outer radius + the rock's
+    /// bounding radius), m.
+    pub reach: f64,
+}
+
+impl MigrationCase {
+    /// Along-dip position where a run ends at the latest (the face length, or the nearest
+    /// spanning support at or below the release), m, and that support's index.
+    #[must_use]
+    pub fn stop_length(&self) -> (f64, Option<usize>) {
+        let mut best = (self.face.length, None);
+        for (i, s) in self.supports.iter().enumerate() {
+            if s.across.is_none()
+                && s.along_dip >= self.release.along_dip
+                && (s.along_dip < best.0 || (s.along_dip == best.0 && best.1.is_none()))
+            {
+                best = (s.along_dip, Some(i));
+            }
+        }
+        best
+    }
+}
+
+impl Default for MigrationCase {
+    fn default() -> Self {
+        Self {
+            method: Method::LumpedMass,
+            gravity: 9.81,
+            face: Face::default(),
+            rock: Rock::default(),
+            release: Release::default(),
+            lumped_mass: LumpedMassOptions::default(),
+            rigid_block: RigidBlockOptions::default(),
+            end_time: None,
+            monte_carlo: None,
+            output: OutputOptions::default(),
+            max_steps_per_run: 10_000_000,
+            supports: Vec::new(),
+        }
+    }
+}

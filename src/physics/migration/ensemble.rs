@@ -1,0 +1,481 @@
+//! The ensemble runner: the runs of a Monte Carlo ensemble on the thread pool, in run order,
+//! generic over the per-run function (a lumped-mass run, a rigid-block run, a scene's migration
+//! and strike), so a method plugs in without touching it.
+//!
+//! Cancellation: the [`Control`] is polled before anything is allocated and before every run, so
+//! a cancelled or timed-out ensemble stops within one run per thread of the flag. The records
+//! are allocated per chunk as the runs are done, never up front for the whole range.
+
+use std::ops::Range;
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use super::lumped_mass::{Setup, simulate};
+use super::release::{Prepared, lumped_mass_setup, prepare_on};
+use super::terrain::Floor;
+use super::trajectory::{robust_norm, support_impact_speed};
+use super::{
+    Method, MigrationCase, MigrationResult, MonteCarlo, RunSummary, Statistics, StopReason,
+    Warning, monte_carlo, rigid_block, stats,
+};
+use crate::physics::control::Control;
+use crate::physics::error::{PhysicsError, PhysicsResult};
+
+/// Runs `one(i)` for the global run indices i in `range` on the thread pool, `chunk` runs at a
+/// time (each chunk on one thread), and returns the results in run order.
+///
+/// `control` is checked first (a cancelled ensemble allocates nothing) and before every run;
+/// progress is reported after each chunk. The first error in run order among the chunks that
+/// ran wins, so the result does not depend on the thread count, nor on how 0..runs is split into
+/// ranges (shards). Shared by every migration method's ensemble and by the scene's.
+///
+/// Errors: [`PhysicsError::Cancelled`] or [`PhysicsError::TimedOut`] from `control`, or the
+/// first error of `one`.
+pub(crate) fn run_in_chunks<T, E>(
+    range: Range<u64>,
+    chunk: usize,
+    control: &Control,
+    one: impl Fn(u64) -> Result<T, E> + Sync,
+) -> Result<Vec<T>, E>
+where
+    T: Send,
+    E: From<PhysicsError> + Send,
+{
+    control.check()?;
+    let runs = range.end.saturating_sub(range.start);
+    let chunk = chunk.max(1) as u64;
+    let chunks = usize::try_from(runs.div_ceil(chunk)).expect("the chunk count fits in usize");
+    let parts: Vec<Result<Vec<T>, E>> = (0..chunks)
+        .into_par_iter()
+        .map(|c| {
+            let start = range.start + c as u64 * chunk;
+            let end = (start + chunk).min(range.end);
+            let mut out = Vec::new();
+            for i in start..end {
+                control.check()?;
+                out.push(one(i)?);
+            }
+            control.add_done(end - start);
+            Ok(out)
+        })
+        .collect();
+    // every chunk ran: only now is the whole record allocated, each part freed as it is copied
+    let mut all = Vec::new();
+    for part in parts {
+        let part = part?;
+        if all.is_empty() {
+            all.reserve_exact(runs as usize);
+        }
+        all.extend(part);
+    }
+    Ok(all)
+}
+
+/// Largest friction coefficient of the face's range [0, 2]; drawn values are clipped to it.
+pub(super) const MU_MAX: f64 = 2.0;
+
+pub(super) fn ensemble(
+    case: &MigrationCase,
+    pr: &Prepared,
+    mc: &MonteCarlo,
+    range: std::ops::Range<u64>,
+    control: &Control,
+) -> PhysicsResult<Vec<RunSummary>> {
+    const CHUNK: u64 = 256;
+    let setup = lumped_mass_setup(case, pr);
+    control.set_total(range.end - range.start);
+    let one = |i: u64| lumped_one(case, pr, &setup, mc, i, control);
+    run_in_chunks(range, CHUNK as usize, control, one)
+}
+
+/// Run `i` of a lumped-mass ensemble: μ then (e_n, e_t) at every impact from the run's stream.
+pub(super) fn lumped_one(
+    case: &MigrationCase,
+    pr: &Prepared,
+    setup: &Setup<'_>,
+    mc: &MonteCarlo,
+    i: u64,
+    control: &Control,
+) -> PhysicsResult<RunSummary> {
+    let mean = pr.floor.mean;
+    let m = pr.mass;
+    let mut rng = monte_carlo::run_stream(mc.seed, i);
+    let mu = match &mc.friction_coefficient {
+        Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, MU_MAX),
+        None => case.face.friction_coefficient,
+    };
+    let mut draw = || {
+        let en = monte_carlo::sample(&mc.restitution_normal, &mut rng).clamp(0.0, 1.0);
+        let et = monte_carlo::sample(&mc.restitution_tangential, &mut rng).clamp(0.0, 1.0);
+        (en, et)
+    };
+    let o = simulate(setup, mu, &mut draw, None, Some(control))?;
+    Ok(RunSummary {
+        time: o.t,
+        speed: robust_norm(&o.v),
+        kinetic_energy: m * (0.5 * o.v.norm_squared() + o.e_rot),
+        impact_count: o.impacts,
+        runout: mean.along(&o.p) - pr.release_along,
+        max_bounce_height: o.max_bounce,
+        stop_reason: o.reason,
+        steps: o.steps,
+        along_dip_velocity: o.v.dot(&mean.dip_dir()),
+        support: o.support,
+        impact_speed: o.support.map_or(0.0, |k| {
+            support_impact_speed(&mean, &case.supports[k], &o.p, &o.v)
+        }),
+    })
+}
+
+/// Run `index` of the ensemble `mc` of `case`, alone: the summary `/v1/migration`'s ensemble of
+/// the same case gives for that run (same streams). A caller may change the release, the rock or
+/// the supports between runs (api.md `POST /v1/scene`), never the face: `floor` is
+/// [`build_floor`] of the case's face, built once for all runs.
+///
+/// Errors: as [`run`].
+pub(crate) fn ensemble_run(
+    case: &MigrationCase,
+    floor: &Arc<Floor>,
+    mc: &MonteCarlo,
+    index: u64,
+    control: &Control,
+) -> PhysicsResult<RunSummary> {
+    if case.method == Method::RigidBlock {
+        return rigid_block::ensemble_run(case, floor, mc, index, control);
+    }
+    let pr = prepare_on(case, Arc::clone(floor))?;
+    let setup = lumped_mass_setup(case, &pr);
+    lumped_one(case, &pr, &setup, mc, index, control)
+}
+
+/// Warnings of an ensemble, whatever the method: friction draws clipped to [0, 2] (μ is the first
+/// draw of each run's stream), a single run (no standard deviation), no run at the lower end.
+pub(super) fn ensemble_warnings(mc: &MonteCarlo, runs: u64, st: &Statistics) -> Vec<Warning> {
+    let mut warnings = Vec::new();
+    if let Some(d) = &mc.friction_coefficient {
+        // μ is the first draw of each run's stream: count the draws outside [0, 2]
+        let clipped = (0..mc.runs)
+            .filter(|&i| {
+                let mu = monte_carlo::sample(d, &mut monte_carlo::run_stream(mc.seed, i));
+                !(0.0..=MU_MAX).contains(&mu)
+            })
+            .count();
+        if clipped > 0 {
+            warnings.push(Warning {
+                code: "friction_clipped",
+                message: format!(
+                    "{clipped} of {} drawn friction coefficients fell outside [0, 2] and \
+                     were clipped to it (a normal distribution has unbounded tails; use \
+                     truncated_normal to resample instead)",
+                    mc.runs
+                ),
+            });
+        }
+    }
+    if runs < 2 {
+        warnings.push(Warning {
+            code: "single_run",
+            message: "an ensemble of one run has no sample standard deviation: every \
+                      std is null; ask for runs ≥ 2"
+                .into(),
+        });
+    }
+    if st.speed.is_none() {
+        warnings.push(Warning {
+            code: "no_run_reached_lower_end",
+            message: "no run reached the lower end: speed, kinetic energy and time \
+                      statistics are null"
+                .into(),
+        });
+    }
+    warnings
+}
+
+/// Number of statistics columns of an ensemble (see [`run_columns`]).
+pub const STATISTICS_COLUMNS: usize = 7;
+
+/// The statistics columns of one run, in the order of [`Statistics`]: arrival speed, down-dip
+/// velocity, kinetic energy and time (None for a run that did not reach the lower end), impact count, runout, largest
+/// bounce height.
+#[must_use]
+pub fn run_columns(r: &RunSummary) -> [Option<f64>; STATISTICS_COLUMNS] {
+    let reached = r.stop_reason == StopReason::LowerEnd;
+    [
+        reached.then_some(r.speed),
+        reached.then_some(r.along_dip_velocity),
+        reached.then_some(r.kinetic_energy),
+        reached.then_some(r.time),
+        Some(r.impact_count as f64),
+        Some(r.runout),
+        Some(r.max_bounce_height),
+    ]
+}
+
+/// An ensemble's run records: readable in run order as often as needed (sums are taken in run
+/// order, the summation order of the contract), with the order statistics of each column. Held
+/// in memory by the service; read from part files by a sharded computation's merge.
+pub trait RunRecords {
+    /// Error of reading the records (none in memory).
+    type Error;
+    /// Number of runs.
+    fn runs(&self) -> u64;
+    /// Calls `f` with every run record in run order.
+    fn for_each_run(&self, f: &mut dyn FnMut(&RunSummary)) -> Result<(), Self::Error>;
+    /// The values at the 0-based `ranks` (ascending) of column `col` of [`run_columns`] (its
+    /// present values only) sorted by `f64::total_cmp`.
+    fn order_values(&self, col: usize, ranks: &[u64]) -> Result<Vec<f64>, Self::Error>;
+}
+
+impl RunRecords for [RunSummary] {
+    type Error = std::convert::Infallible;
+
+    fn runs(&self) -> u64 {
+        self.len() as u64
+    }
+
+    fn for_each_run(&self, f: &mut dyn FnMut(&RunSummary)) -> Result<(), Self::Error> {
+        self.iter().for_each(f);
+        Ok(())
+    }
+
+    fn order_values(&self, col: usize, ranks: &[u64]) -> Result<Vec<f64>, Self::Error> {
+        let mut work: Vec<f64> = self.iter().filter_map(|r| run_columns(r)[col]).collect();
+        // selection (O(n)) of the ranks asked for, in ascending order
+        let mut start = 0;
+        for &k in ranks {
+            work[start..].select_nth_unstable_by(k as usize - start, f64::total_cmp);
+            start = k as usize + 1;
+        }
+        Ok(ranks.iter().map(|&k| work[k as usize]).collect())
+    }
+}
+
+/// Completes a nominal result (from [`run_part`](super::run_part)) with the ensemble's statistics, warnings and,
+/// when `runs_csv`, the per-run summaries: two passes over the records in run order and the
+/// order statistics of each column. The one way ensemble results are made, whether the records
+/// come from threads or from the parts of a sharded computation.
+///
+/// Errors: those of reading the records.
+pub fn attach_ensemble<R: RunRecords + ?Sized>(
+    r: &mut MigrationResult,
+    mc: &MonteCarlo,
+    runs_csv: bool,
+    records: &R,
+) -> Result<(), R::Error> {
+    let st = statistics_of(mc, records)?;
+    r.warnings
+        .extend(ensemble_warnings(mc, records.runs(), &st));
+    if runs_csv {
+        let mut runs = Vec::with_capacity(records.runs() as usize);
+        records.for_each_run(&mut |x| runs.push(*x))?;
+        r.runs = Some(runs);
+    }
+    r.statistics = Some(st);
+    Ok(())
+}
+
+pub(super) fn statistics_of<R: RunRecords + ?Sized>(
+    mc: &MonteCarlo,
+    records: &R,
+) -> Result<Statistics, R::Error> {
+    let mut first = [stats::FirstPass::default(); STATISTICS_COLUMNS];
+    let mut reached = 0u64;
+    records.for_each_run(&mut |r| {
+        reached += u64::from(r.stop_reason == StopReason::LowerEnd);
+        for (p, x) in first.iter_mut().zip(run_columns(r)) {
+            if let Some(x) = x {
+                p.push(x);
+            }
+        }
+    })?;
+    let mut second = first.map(|p| p.second_pass());
+    records.for_each_run(&mut |r| {
+        for (p, x) in second.iter_mut().zip(run_columns(r)) {
+            if let (Some(p), Some(x)) = (p, x) {
+                p.push(x);
+            }
+        }
+    })?;
+    let mut summaries = Vec::with_capacity(STATISTICS_COLUMNS);
+    for (col, (p, f)) in second.iter().zip(&first).enumerate() {
+        summaries.push(match p {
+            Some(p) => Some(p.finish(&records.order_values(col, &stats::order_ranks(f.count()))?)),
+            None => None,
+        });
+    }
+    let mut s = summaries.into_iter();
+    let mut next = || s.next().flatten();
+    let n = records.runs();
+    let (speed, along_dip_velocity, kinetic_energy, time) = (next(), next(), next(), next());
+    let all = "an ensemble has at least one run";
+    Ok(Statistics {
+        runs: n,
+        seed: mc.seed,
+        reached_fraction: reached as f64 / n.max(1) as f64,
+        speed,
+        along_dip_velocity,
+        kinetic_energy,
+        time,
+        impact_count: next().expect(all),
+        runout: next().expect(all),
+        max_bounce_height: next().expect(all),
+    })
+}
+
+/// An ensemble's records in memory, read under a [`Control`]: the statistics of a large
+/// ensemble (two passes and a selection per column) stop at a cancel or timeout like its runs.
+pub(super) struct Polled<'a> {
+    /// The records, in run order.
+    pub(super) runs: &'a [RunSummary],
+    /// Polled every 4096 records and before each selection.
+    pub(super) control: &'a Control,
+}
+
+impl RunRecords for Polled<'_> {
+    type Error = PhysicsError;
+
+    fn runs(&self) -> u64 {
+        self.runs.runs()
+    }
+
+    fn for_each_run(&self, f: &mut dyn FnMut(&RunSummary)) -> Result<(), PhysicsError> {
+        for block in self.runs.chunks(4096) {
+            self.control.check()?;
+            block.iter().for_each(&mut *f);
+        }
+        Ok(())
+    }
+
+    fn order_values(&self, col: usize, ranks: &[u64]) -> Result<Vec<f64>, PhysicsError> {
+        self.control.check()?;
+        let Ok(values) = self.runs.order_values(col, ranks);
+        Ok(values)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The runner stops at its control's flag: nothing runs (and nothing is allocated for the
+    //! records) when the control is cancelled before it starts, and no run starts after the flag
+    //! is seen, however long the chunks.
+
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    use super::*;
+
+    fn pool(threads: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a test pool")
+    }
+
+    #[test]
+    fn an_ensemble_cancelled_before_it_starts_runs_nothing() {
+        let control = Control::unlimited();
+        control.cancel();
+        let ran = AtomicU64::new(0);
+        let out = run_in_chunks(0..1_000_000, 256, &control, |i| {
+            ran.fetch_add(1, Ordering::Relaxed);
+            Ok::<u64, PhysicsError>(i)
+        });
+        assert!(matches!(out, Err(PhysicsError::Cancelled)));
+        assert_eq!(ran.load(Ordering::Relaxed), 0);
+        assert_eq!(control.progress().0, 0);
+    }
+
+    #[test]
+    fn no_run_starts_after_the_cancel_flag_inside_a_long_chunk() {
+        // one chunk of the whole range per thread: the old per-chunk check would finish it
+        for threads in [1, 2, 4] {
+            let control = Control::unlimited();
+            let (ran, after) = (AtomicU64::new(0), AtomicU64::new(0));
+            let out = pool(threads).install(|| {
+                run_in_chunks(0..100_000, 50_000, &control, |i| {
+                    if control.is_cancelled() {
+                        after.fetch_add(1, Ordering::Relaxed);
+                    }
+                    if ran.fetch_add(1, Ordering::Relaxed) == 1_000 {
+                        control.cancel();
+                    }
+                    Ok::<u64, PhysicsError>(i)
+                })
+            });
+            assert!(
+                matches!(out, Err(PhysicsError::Cancelled)),
+                "{threads} threads"
+            );
+            // a run that passed its check just before the flag was set may still start
+            let after = after.load(Ordering::Relaxed);
+            assert!(
+                after < threads as u64,
+                "{after} runs started after the cancel"
+            );
+            // the old check before each chunk finished at least one chunk of 50 000 runs
+            assert!(ran.load(Ordering::Relaxed) < 50_000);
+        }
+    }
+
+    #[test]
+    fn a_cancelled_migration_of_a_million_runs_runs_none_of_them() {
+        use crate::physics::migration::{run, run_part};
+        let case = MigrationCase {
+            monte_carlo: Some(MonteCarlo {
+                runs: 1_000_000,
+                ..MonteCarlo::default()
+            }),
+            ..MigrationCase::default()
+        };
+        let control = Control::unlimited();
+        control.cancel();
+        assert!(matches!(run(&case, &control), Err(PhysicsError::Cancelled)));
+        assert_eq!(control.progress().0, 0);
+        // the ensemble part alone (a shard's): stopped before its first run
+        let out = run_part(&case, 0..1_000_000, false, &control);
+        assert!(matches!(out, Err(PhysicsError::Cancelled)));
+        assert_eq!(control.progress().0, 0);
+    }
+
+    #[test]
+    fn a_timed_out_ensemble_stops_like_a_cancelled_one() {
+        let past = std::time::Instant::now() - std::time::Duration::from_millis(1);
+        let control = Control::with_deadline(Some(past));
+        let ran = AtomicU64::new(0);
+        let out = run_in_chunks(0..10_000, 256, &control, |i| {
+            ran.fetch_add(1, Ordering::Relaxed);
+            Ok::<u64, PhysicsError>(i)
+        });
+        assert!(matches!(out, Err(PhysicsError::TimedOut)));
+        assert_eq!(ran.load(Ordering::Relaxed), 0);
+    }
+
+    #[test]
+    fn results_come_in_run_order_and_the_first_error_in_run_order_wins() {
+        let control = Control::unlimited();
+        for threads in [1, 3] {
+            let out = pool(threads)
+                .install(|| run_in_chunks(10..1_010, 7, &control, Ok::<u64, PhysicsError>));
+            assert_eq!(out.ok(), Some((10..1_010).collect::<Vec<_>>()));
+            let out = pool(threads).install(|| {
+                run_in_chunks(0..1_000, 7, &Control::unlimited(), |i| {
+                    if i == 500 || i == 900 {
+                        Err(PhysicsError::TooManySteps {
+                            estimated: i as f64,
+                            limit: 0.0,
+                        })
+                    } else {
+                        Ok(i)
+                    }
+                })
+            });
+            assert!(
+                matches!(out, Err(PhysicsError::TooManySteps { estimated, .. }) if estimated == 500.0)
+            );
+        }
+        assert_eq!(
+            run_in_chunks(5..5, 7, &control, Ok::<u64, PhysicsError>).ok(),
+            Some(vec![])
+        );
+    }
+}
