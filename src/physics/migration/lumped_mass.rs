@@ -384,7 +384,12 @@ fn trap_length(floor: &Floor) -> f64 {
 /// (1e-9 of its coordinates' magnitude) under the floor is a solver defect, reported as a
 /// numerical failure rather than as an answer.
 pub(crate) fn check_above_floor(floor: &Floor, p: &Vector3<f64>, t: f64) -> PhysicsResult<()> {
-    if let Some(z) = floor.height_at(p.x, p.y) {
+    check_above_height(floor.height_at(p.x, p.y), p, t)
+}
+
+/// [`check_above_floor`] with the floor's height under p (None: off the floor) given.
+fn check_above_height(z: Option<f64>, p: &Vector3<f64>, t: f64) -> PhysicsResult<()> {
+    if let Some(z) = z {
         let tol = 1e-9 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()).max(z.abs()));
         if p.z < z - tol || p.z.is_nan() {
             return Err(PhysicsError::Numerical(format!(
@@ -780,8 +785,9 @@ impl<'a, 'r> Run<'a, 'r> {
     /// ground off the floor.
     fn check_invariants(&self) -> PhysicsResult<()> {
         let s = &self.s;
-        check_above_floor(self.floor, &s.p, s.t)?;
-        if s.ground.is_some() && self.floor.height_at(s.p.x, s.p.y).is_none() {
+        let z = self.floor.height_at(s.p.x, s.p.y);
+        check_above_height(z, &s.p, s.t)?;
+        if s.ground.is_some() && z.is_none() {
             return Err(PhysicsError::Numerical(format!(
                 "lumped mass: the rock is on the ground off the floor at t = {} s: invariant \
                  violated",
@@ -795,11 +801,11 @@ impl<'a, 'r> Run<'a, 'r> {
     /// slides in place shrink geometrically and would never end).
     fn is_caught_in_place(&mut self) -> bool {
         let (c, p) = (&mut self.catch, self.s.p);
-        let moved = (p - c.p_last).norm();
-        if moved > c.len {
+        // squared distances against squared lengths: no square roots
+        if (p - c.p_last).norm_squared() > c.len * c.len {
             c.hops = 0;
         }
-        if (p - c.still_at).norm() > 1e3 * c.len {
+        if (p - c.still_at).norm_squared() > (1e3 * c.len) * (1e3 * c.len) {
             c.still = 0;
             c.still_at = p;
         } else {
@@ -1194,7 +1200,8 @@ impl<'a, 'r> Run<'a, 'r> {
             s.undecelerated = a.dot(&s.v) >= 0.0;
         }
         t_max = t_max.min(stop_at).min(turn_at);
-        let mut exit = floor.slide_exit(f, &s.p, &s.v, &a, t_max);
+        // on a coplanar patch of a grid, one piece to the patch's boundary
+        let mut exit = floor.slide_exit_merged(f, &s.p, &s.v, &a, t_max);
         let mut dt = exit.map_or(t_max, |e| e.0);
         let col = self.column_reach(&self.s.v, &a, dt);
         if let Some((tc, _)) = col {
@@ -1227,6 +1234,17 @@ impl<'a, 'r> Run<'a, 'r> {
             self.zero_steps += 1;
         } else {
             self.zero_steps = 0;
+        }
+        if exit.is_none() && floor.in_patch(f) {
+            // a piece across a coplanar patch that ends inside it: on the facet under the rock
+            // (to rounding, its plane is f's)
+            if let Some(fq) = floor.locate(s.p.x, s.p.y, s.v.x, s.v.y)
+                && fq != f
+            {
+                s.ground = Some(fq);
+                let z = floor.facet_plane(fq).z(s.p.x, s.p.y);
+                set_floor_height(s, floor, z, g, ke_factor);
+            }
         }
         if let Some((_, k)) = col {
             self.hit = Some(k);
@@ -1445,6 +1463,246 @@ mod tests {
     //! keeps KE + PE + the transition term unchanged whether or not the kinetic energy pays.
     use super::*;
     use proptest::prelude::*;
+
+    const G: f64 = 9.81;
+
+    /// A sliding rock's fixed inputs on `floor`: released at `p0` with velocity `v0`, on the
+    /// floor's facet `on_floor` (None: in flight), stop speed 0.1 m/s, no support, no end time.
+    fn setup(
+        floor: &Floor,
+        p0: Vector3<f64>,
+        v0: Vector3<f64>,
+        on_floor: Option<Facet>,
+    ) -> Setup<'_> {
+        let z = floor.height_at(p0.x, p0.y).expect("release over the floor");
+        let base = Vector3::new(p0.x, p0.y, z);
+        Setup {
+            floor,
+            g: G,
+            motion: Motion::Slide,
+            v_stop: 0.1,
+            radius: 0.1,
+            length: 1e3,
+            span_support: None,
+            supports: &[],
+            end_time: None,
+            max_steps: 1000,
+            p0,
+            v0,
+            on_floor,
+            base: (base, floor.mean.along(&base)),
+        }
+    }
+
+    /// KE + PE + the losses of the run so far, J/kg (sliding: KE = ½ v²).
+    fn energy(run: &Run<'_, '_>) -> f64 {
+        let s = &run.s;
+        0.5 * s.v.norm_squared() + G * s.p.z + s.e_imp + s.e_fric + s.e_trans
+    }
+
+    fn close(a: f64, b: f64, tol: f64) -> bool {
+        (a - b).abs() <= tol * b.abs().max(1.0)
+    }
+
+    /// One flight step on the plane of dip 30°: the parabola's strike is the root of the
+    /// height above the plane, h₀ + ḣ t − ½ g t² = 0 (vertical height, ḣ = v_z − v_x tan θ);
+    /// the impact applies e_n to the normal and e_t to the tangential velocity and books
+    /// ½[(1 − e_n²) v_n² + (1 − e_t²) |v_t|²]; KE + PE + losses is unchanged.
+    #[test]
+    fn flight_step_strikes_the_plane_at_the_root_and_applies_the_restitution() {
+        let th = 30f64.to_radians();
+        let floor = Floor::plane(th);
+        let (p0, v0) = (Vector3::new(1.0, 0.5, 2.0), Vector3::new(1.5, -0.4, 0.8));
+        let su = setup(&floor, p0, v0, None);
+        let mut run = Run::new(&su, 0.3, None);
+        let e0 = energy(&run);
+        let (en, et) = (0.35, 0.8);
+        let end = run.step(&mut || (en, et), None).unwrap();
+        assert_eq!(end, None);
+        let h0 = p0.z + p0.x * th.tan();
+        let hd = v0.z + v0.x * th.tan();
+        let t = (hd + (hd * hd + 2.0 * G * h0).sqrt()) / G;
+        assert!(close(run.s.t, t, 1e-14), "{} vs {t}", run.s.t);
+        let q = p0 + v0 * t + Vector3::new(0.0, 0.0, -0.5 * G * t * t);
+        assert!(
+            (run.s.p - q).norm() <= 1e-13 * q.norm(),
+            "{:?} vs {q:?}",
+            run.s.p
+        );
+        assert!((run.s.p.z + run.s.p.x * th.tan()).abs() <= 1e-14 * q.norm());
+        let vs = v0 + Vector3::new(0.0, 0.0, -G * t);
+        let n = Vector3::new(th.sin(), 0.0, th.cos());
+        let (vn, vt) = (vs.dot(&n), vs - n * vs.dot(&n));
+        let rebound = vt * et - n * (en * vn);
+        assert!(
+            (run.s.v - rebound).norm() <= 1e-13 * vs.norm(),
+            "{:?}",
+            run.s.v
+        );
+        let lost = 0.5 * ((1.0 - en * en) * vn * vn + (1.0 - et * et) * vt.norm_squared());
+        assert!(close(run.s.e_imp, lost, 1e-13), "{} vs {lost}", run.s.e_imp);
+        assert_eq!(run.s.impacts, 1);
+        assert_eq!(run.s.ground, None);
+        assert!(close(energy(&run), e0, 1e-13));
+    }
+
+    /// A rebound slower than the stop speed starts the ground phase on the struck facet, its
+    /// normal energy ½ r² booked as a transition loss.
+    #[test]
+    fn flight_step_with_a_rebound_below_the_stop_speed_lands() {
+        let th = 30f64.to_radians();
+        let floor = Floor::plane(th);
+        let (p0, v0) = (Vector3::new(0.0, 0.0, 0.2), Vector3::zeros());
+        let su = setup(&floor, p0, v0, None);
+        let mut run = Run::new(&su, 0.3, None);
+        let e0 = energy(&run);
+        // r = e_n |v_n| = 1e-3 · √(2 g 0.2) cos θ < 0.1 m/s
+        assert_eq!(run.step(&mut || (1e-3, 0.8), None).unwrap(), None);
+        assert_eq!(run.s.ground, Some(0));
+        let n = Vector3::new(th.sin(), 0.0, th.cos());
+        assert!(run.s.v.dot(&n).abs() <= 1e-15);
+        assert!(run.s.e_trans > 0.0);
+        assert!(close(energy(&run), e0, 1e-13));
+    }
+
+    /// One ground step from rest straight down the plane (the friction direction never turns)
+    /// reaches the lower end in closed form: t = √(2L/a), a = g(sin θ − μ cos θ), speed a t,
+    /// friction work μ g cos θ L.
+    #[test]
+    fn ground_step_down_the_plane_reaches_the_lower_end_in_one_piece() {
+        let (th, mu) = (40f64.to_radians(), 0.3);
+        let floor = Floor::plane(th);
+        let p0 = Vector3::new(0.0, 0.0, 0.0);
+        let su = setup(&floor, p0, Vector3::zeros(), Some(0));
+        let mut run = Run::new(&su, mu, None);
+        let e0 = energy(&run);
+        let end = run.step(&mut || unreachable!("no impact"), None).unwrap();
+        assert_eq!(end, Some((Phase::Slide, StopReason::LowerEnd)));
+        assert_eq!(run.steps, 1);
+        let l = su.length;
+        let a = G * (th.sin() - mu * th.cos());
+        let t = (2.0 * l / a).sqrt();
+        assert!(close(run.s.t, t, 1e-13), "{} vs {t}", run.s.t);
+        assert!(close(run.s.v.norm(), a * t, 1e-13));
+        assert!(close(run.s.e_fric, mu * G * th.cos() * l, 1e-13));
+        assert!(close(floor.mean.along(&run.s.p), l, 1e-13));
+        assert!(close(energy(&run), e0, 1e-12));
+    }
+
+    /// Sliding up the plane, the rock decelerates at g(sin θ + μ cos θ) and the piece ends
+    /// where the speed is zero: t = v₀/a, distance v₀²/(2a).
+    #[test]
+    fn ground_step_up_the_plane_stops_at_the_closed_form_point() {
+        let (th, mu) = (20f64.to_radians(), 0.5);
+        let floor = Floor::plane(th);
+        let v0 = 3.0;
+        let p0 = Vector3::new(10.0 * th.cos(), 0.0, -10.0 * th.sin());
+        let up = Vector3::new(-th.cos(), 0.0, th.sin());
+        let su = setup(&floor, p0, up * v0, Some(0));
+        let mut run = Run::new(&su, mu, None);
+        let e0 = energy(&run);
+        assert_eq!(run.step(&mut || unreachable!(), None).unwrap(), None);
+        let a = G * (th.sin() + mu * th.cos());
+        assert!(close(run.s.t, v0 / a, 1e-13), "{}", run.s.t);
+        assert!(run.s.v.norm() <= 1e-13 * v0, "{:?}", run.s.v);
+        let moved = (run.s.p - p0).dot(&up);
+        assert!(close(moved, v0 * v0 / (2.0 * a), 1e-13), "{moved}");
+        assert!(close(energy(&run), e0, 1e-12));
+        // μ ≥ tan θ: the next step leaves it at rest
+        assert_eq!(
+            run.step(&mut || unreachable!(), None).unwrap(),
+            Some((Phase::Stopped, StopReason::AtRest))
+        );
+    }
+
+    /// A grid folded along x = 1 (slope tan θ₁ for x < 1, tan θ₂ beyond) with the rock
+    /// sliding down the upper part without friction.
+    fn folded(t1: f64, t2: f64) -> Floor {
+        let z = |x: f64| {
+            if x <= 1.0 {
+                -x * t1
+            } else {
+                -t1 - (x - 1.0) * t2
+            }
+        };
+        let heights = vec![vec![z(0.0), z(1.0), z(2.0)]; 3];
+        Floor::grid(t1.atan(), [0.0, -1.0], 1.0, &heights).unwrap()
+    }
+
+    /// The speed at the fold after sliding from x = 0.5 with speed v₀, without friction:
+    /// √(v₀² + 2 g · 0.5 tan θ₁), along (cos θ₁, 0, −sin θ₁).
+    fn velocity_at_the_fold(th1: f64, v0: f64) -> Vector3<f64> {
+        let sp = (v0 * v0 + 2.0 * G * 0.5 * th1.tan()).sqrt();
+        Vector3::new(th1.cos(), 0.0, -th1.sin()) * sp
+    }
+
+    /// At a concave fold (the lower part less steep) the rock stays on the floor: its velocity
+    /// is projected onto the new facet and the normal part's energy ½ (v·n₂)² is booked as a
+    /// transition loss; the facets of the upper part are crossed in one piece.
+    #[test]
+    fn edge_transition_at_a_concave_fold_projects_the_velocity() {
+        let (th1, th2) = (40f64.to_radians(), 15f64.to_radians());
+        let floor = folded(th1.tan(), th2.tan());
+        let v0 = 1.2;
+        let p0 = Vector3::new(0.5, -0.3, -0.5 * th1.tan());
+        let vel = Vector3::new(th1.cos(), 0.0, -th1.sin()) * v0;
+        let f0 = floor.locate(p0.x, p0.y, 1.0, 0.0).unwrap();
+        let su = setup(&floor, p0, vel, Some(f0));
+        let mut run = Run::new(&su, 0.0, None);
+        let e0 = energy(&run);
+        assert_eq!(run.step(&mut || unreachable!(), None).unwrap(), None);
+        let fb = run.s.ground.expect("stays on the floor");
+        assert!(
+            floor
+                .facet_corners(fb)
+                .unwrap()
+                .0
+                .iter()
+                .all(|c| c[0] >= 1.0)
+        );
+        assert!((run.s.p.x - 1.0).abs() <= 1e-14, "{:?}", run.s.p);
+        let v = velocity_at_the_fold(th1, v0);
+        let n2 = Vector3::new(th2.sin(), 0.0, th2.cos());
+        let vp = v - n2 * v.dot(&n2);
+        assert!(
+            (run.s.v - vp).norm() <= 1e-13 * v.norm(),
+            "{:?} vs {vp:?}",
+            run.s.v
+        );
+        let lost = 0.5 * v.dot(&n2).powi(2);
+        assert!(
+            close(run.s.e_trans, lost, 1e-12),
+            "{} vs {lost}",
+            run.s.e_trans
+        );
+        assert!(close(energy(&run), e0, 1e-13));
+        assert_eq!(run.steps, 1);
+    }
+
+    /// At a convex fold (the lower part steeper) the rock takes off with its velocity
+    /// unchanged, nothing booked.
+    #[test]
+    fn edge_transition_at_a_convex_fold_takes_off() {
+        let (th1, th2) = (20f64.to_radians(), 50f64.to_radians());
+        let floor = folded(th1.tan(), th2.tan());
+        let v0 = 0.7;
+        let p0 = Vector3::new(0.5, -0.3, -0.5 * th1.tan());
+        let vel = Vector3::new(th1.cos(), 0.0, -th1.sin()) * v0;
+        let f0 = floor.locate(p0.x, p0.y, 1.0, 0.0).unwrap();
+        let su = setup(&floor, p0, vel, Some(f0));
+        let mut run = Run::new(&su, 0.0, None);
+        let e0 = energy(&run);
+        assert_eq!(run.step(&mut || unreachable!(), None).unwrap(), None);
+        assert_eq!(run.s.ground, None);
+        let v = velocity_at_the_fold(th1, v0);
+        assert!(
+            (run.s.v - v).norm() <= 1e-13 * v.norm(),
+            "{:?} vs {v:?}",
+            run.s.v
+        );
+        assert!(run.s.e_trans.abs() <= 1e-15, "{}", run.s.e_trans);
+        assert!(close(energy(&run), e0, 1e-13));
+    }
 
     #[test]
     fn reach_time_limits() {
