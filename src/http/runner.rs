@@ -1,5 +1,6 @@
-//! Runs solvers off the async workers: a solver slot (admission below), `spawn_blocking` inside
-//! the ensemble thread pool, and a [`Control`] whose deadline and cancel flag the solver polls.
+//! Runs solvers off the async workers: a solver slot (admission below), a job on the solver thread
+//! pool (which also runs the ensembles' parallel parts), and a [`Control`] whose deadline and
+//! cancel flag the solver polls.
 //! Dropping the request (client gone) or passing the time limit stops the work.
 //!
 //! Admission: a request that finds every slot busy queues for one instead of being refused. It is
@@ -198,10 +199,10 @@ impl Drop for CancelOnDrop {
     }
 }
 
-/// A started computation: its control handle and the blocking task.
+/// A started computation: its control handle and the channel its answer comes back on.
 struct Running<T> {
     control: Control,
-    handle: tokio::task::JoinHandle<Result<T, ApiError>>,
+    answer: tokio::sync::oneshot::Receiver<Result<T, ApiError>>,
 }
 
 async fn start<T, F>(
@@ -219,14 +220,30 @@ where
     let c = control.clone();
     let pool = state.pool.clone();
     let admission = state.admission.clone();
-    let handle = tokio::task::spawn_blocking(move || {
-        let _permit = permit;
+    let (send, answer) = tokio::sync::oneshot::channel();
+    // The solve runs as a job of the solver pool itself (one hand-over each way, no blocking-pool
+    // thread in between); its parallel parts (ensembles) run on the same pool.
+    pool.spawn(move || {
         let t0 = Instant::now();
-        let out = pool.install(|| solve(&c));
+        let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| solve(&c)))
+            .unwrap_or_else(|panic| Err(ApiError::internal(panic_message(panic.as_ref()))));
         admission.record(t0.elapsed());
-        out
+        // The slot is free before the answer is seen, as a finished task's would be.
+        drop(permit);
+        // The receiver is gone when the request was dropped; the answer is then not needed.
+        let _ = send.send(out);
     });
-    Ok(Running { control, handle })
+    Ok(Running { control, answer })
+}
+
+/// The text of a solver's panic, for the 500 `internal` problem.
+fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
+    let text = panic
+        .downcast_ref::<&str>()
+        .map(|s| (*s).to_owned())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "no message".to_owned());
+    format!("solver task failed: {text}")
 }
 
 async fn finish<T>(limit: Option<Duration>, run: Running<T>) -> Result<T, ApiError> {
@@ -234,9 +251,9 @@ async fn finish<T>(limit: Option<Duration>, run: Running<T>) -> Result<T, ApiErr
     // The solver polls its deadline; the outer timeout is a backstop for one that does not.
     let grace = Duration::from_secs(2);
     let backstop = limit.map_or(Duration::MAX, |l| l.saturating_add(grace));
-    let out = match tokio::time::timeout(backstop, run.handle).await {
+    let out = match tokio::time::timeout(backstop, run.answer).await {
         Ok(Ok(result)) => result,
-        Ok(Err(join)) => Err(ApiError::internal(format!("solver task failed: {join}"))),
+        Ok(Err(_)) => Err(ApiError::internal("solver task ended without an answer")),
         Err(_) => {
             run.control.cancel();
             Err(ApiError::new(
