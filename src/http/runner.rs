@@ -660,6 +660,19 @@ mod tests {
     }
 
     #[tokio::test]
+    async fn a_panicking_solver_answers_internal_and_frees_its_slot() {
+        let s = state(60.0, 1);
+        let r = run_solver(&s, |_c: &Control| -> Result<u8, ApiError> {
+            panic!("deliberate panic of a solver")
+        })
+        .await;
+        assert_eq!(r.unwrap_err().code(), "internal");
+        // the only slot is free again and the pool still answers
+        let r = run_solver(&s, |_c: &Control| -> Result<u8, ApiError> { Ok(7) }).await;
+        assert_eq!(r.unwrap(), 7);
+    }
+
+    #[tokio::test]
     async fn physics_errors_pass_through() {
         let s = state(60.0, 2);
         let r = run_solver(&s, |_c: &Control| -> Result<u8, ApiError> {
