@@ -1472,6 +1472,28 @@ mod tests_support {
 mod tests {
     use super::tests_support::*;
 
+    /// The free flight of the symmetric (odd-numbered) modes among the first `modes` of `col`
+    /// with damping `c_coef`: their mass matrix, stiffnesses, dampings and propagator.
+    fn odd_mode_flight(
+        col: &crate::physics::material::Column,
+        modes: usize,
+        c_coef: f64,
+    ) -> (DMatrix<f64>, Vec<f64>, Vec<f64>, FreeFlight) {
+        let g = Galerkin::new(col, modes, c_coef, true).unwrap();
+        let act: Vec<usize> = (0..modes).step_by(2).collect();
+        let n = act.len();
+        let mass = DMatrix::from_fn(n, n, |i, j| g.mass[(act[i], act[j])]);
+        let minv = mass.clone().cholesky().unwrap().inverse();
+        let k: Vec<f64> = act.iter().map(|&i| g.stiffness[(i, i)]).collect();
+        let c: Vec<f64> = act.iter().map(|&i| g.damping[(i, i)]).collect();
+        let fmax = crate::physics::beam::generalized_frequencies(
+            &mass,
+            &DMatrix::from_diagonal(&DVector::from_column_slice(&k)),
+        )[n - 1];
+        let ff = FreeFlight::new(&minv, &k, &c, 2.0 * std::f64::consts::PI * fmax);
+        (mass, k, c, ff)
+    }
+
     /// The free-flight propagator: Φ and the Gramian against the Taylor series at τ = h, and
     /// against a tight Dormand–Prince integration of the same linear system over 200 steps.
     #[test]
@@ -1481,17 +1503,7 @@ mod tests {
             damping: Damping::Coefficient(2e4),
             ..Column::default()
         };
-        let g = Galerkin::new(&col, 5, 2e4, true).unwrap();
-        let act = [0usize, 2, 4];
-        let mass = DMatrix::from_fn(3, 3, |i, j| g.mass[(act[i], act[j])]);
-        let minv = mass.clone().cholesky().unwrap().inverse();
-        let k: Vec<f64> = act.iter().map(|&i| g.stiffness[(i, i)]).collect();
-        let c: Vec<f64> = act.iter().map(|&i| g.damping[(i, i)]).collect();
-        let fmax = crate::physics::beam::generalized_frequencies(
-            &mass,
-            &DMatrix::from_diagonal(&DVector::from_column_slice(&k)),
-        )[2];
-        let ff = FreeFlight::new(&minv, &k, &c, 2.0 * std::f64::consts::PI * fmax);
+        let (_, _, c, ff) = odd_mode_flight(&col, 5, 2e4);
         let z0 = [1e-3, -2e-4, 5e-5, 0.3, 1.0, -2.0];
         let (zt, dt) = ff.taylor(&z0, ff.h, true);
         let zp = &ff.phi * DVector::from_column_slice(&z0);
@@ -1554,18 +1566,8 @@ mod tests {
         use crate::physics::material::Column;
         let col = Column::default();
         for (c_coef, modes) in [(1e9, 3usize), (3e7, 5), (1e9, 9)] {
-            let g = Galerkin::new(&col, modes, c_coef, true).unwrap();
-            let act: Vec<usize> = (0..modes).step_by(2).collect();
-            let n = act.len();
-            let mass = DMatrix::from_fn(n, n, |i, j| g.mass[(act[i], act[j])]);
-            let minv = mass.clone().cholesky().unwrap().inverse();
-            let k: Vec<f64> = act.iter().map(|&i| g.stiffness[(i, i)]).collect();
-            let c: Vec<f64> = act.iter().map(|&i| g.damping[(i, i)]).collect();
-            let fmax = crate::physics::beam::generalized_frequencies(
-                &mass,
-                &DMatrix::from_diagonal(&DVector::from_column_slice(&k)),
-            )[n - 1];
-            let ff = FreeFlight::new(&minv, &k, &c, 2.0 * std::f64::consts::PI * fmax);
+            let (mass, k, c, ff) = odd_mode_flight(&col, modes, c_coef);
+            let n = k.len();
             assert!(ff.damping_rate * ff.h > 2.0, "{c_coef}: not heavily damped");
             let energy = |z: &DVector<f64>| {
                 let w = z.rows(0, n);

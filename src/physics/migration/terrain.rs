@@ -1353,28 +1353,23 @@ impl Floor {
                 // refuses a point farther than (1 + √2) tol beyond it (the same holds for the
                 // other sides), so the cells skipped here are those it would refuse
                 let margin = 4.0 * tol;
-                let (xl, yl) = (c.x0 + ci as f64 * c.d, c.y0 + cj as f64 * c.d);
-                let (xr, yr) = (c.x0 + (ci + 1) as f64 * c.d, c.y0 + (cj + 1) as f64 * c.d);
-                let i0 = if x - xl > margin {
-                    ci
-                } else {
-                    ci.saturating_sub(1)
+                // the cells along one axis: cell k, and a neighbour only within the margin
+                let span = |u: f64, origin: f64, k: usize, n: usize| {
+                    let (lo, hi) = (origin + k as f64 * c.d, origin + (k + 1) as f64 * c.d);
+                    let first = if u - lo > margin {
+                        k
+                    } else {
+                        k.saturating_sub(1)
+                    };
+                    let last = if hi - u > margin {
+                        k
+                    } else {
+                        (k + 1).min(n - 1)
+                    };
+                    (first, last)
                 };
-                let i1 = if xr - x > margin {
-                    ci
-                } else {
-                    (ci + 1).min(c.ncx - 1)
-                };
-                let j0 = if y - yl > margin {
-                    cj
-                } else {
-                    cj.saturating_sub(1)
-                };
-                let j1 = if yr - y > margin {
-                    cj
-                } else {
-                    (cj + 1).min(c.ncy - 1)
-                };
+                let (i0, i1) = span(x, c.x0, ci, c.ncx);
+                let (j0, j1) = span(y, c.y0, cj, c.ncy);
                 for nj in j0..=j1 {
                     for ni in i0..=i1 {
                         for half in 0..2 {

@@ -7,18 +7,22 @@ pub(crate) fn poly_eval(c: &[f64], t: f64) -> f64 {
     c.iter().rev().fold(0.0, |acc, &x| acc * t + x)
 }
 
+/// Coefficients (ascending) of the derivative of the polynomial `c`.
+fn derivative(c: &[f64]) -> Vec<f64> {
+    c.iter()
+        .enumerate()
+        .skip(1)
+        .map(|(i, &x)| x * i as f64)
+        .collect()
+}
+
 /// Real roots of the polynomial `c` (ascending coefficients) in (lo, hi), sorted, found by
 /// isolating them between the roots of its derivative (monotone pieces) and bisecting.
 pub(crate) fn poly_roots(c: &[f64], lo: f64, hi: f64) -> Vec<f64> {
     if c.len() < 2 {
         return Vec::new();
     }
-    let d: Vec<f64> = c
-        .iter()
-        .enumerate()
-        .skip(1)
-        .map(|(i, &x)| x * i as f64)
-        .collect();
+    let d = derivative(c);
     let mut pts = vec![lo];
     pts.extend(poly_roots(&d, lo, hi));
     pts.push(hi);
@@ -61,12 +65,7 @@ pub(crate) fn first_root_nonpositive(c: &[f64], t1: f64) -> Option<f64> {
     if t1.is_nan() || t1 <= 0.0 {
         return None;
     }
-    let d: Vec<f64> = c
-        .iter()
-        .enumerate()
-        .skip(1)
-        .map(|(i, &x)| x * i as f64)
-        .collect();
+    let d = derivative(c);
     let mut pts = vec![0.0];
     pts.extend(poly_roots(&d, 0.0, t1));
     pts.push(t1);
