@@ -354,9 +354,18 @@ fn reach_time(s: f64, b: f64, c: f64) -> f64 {
         }
         disc.sqrt()
     };
-    if b + sq > 0.0 {
-        // root with the well-conditioned form; it is the smallest positive one
-        2.0 * s / (b + sq)
+    if b >= 0.0 {
+        // the smallest positive root, in the form without cancellation for b ≥ 0
+        if b + sq > 0.0 {
+            2.0 * s / (b + sq)
+        } else {
+            f64::INFINITY
+        }
+    } else if c > 0.0 {
+        // moving away (b < 0), turned back: the positive root (√(b² + 2cs) − b)/c, a sum of
+        // two positive terms (2s/(b + √…) cancels: with s = 1e-12, b = −48 it gave 140.7 s for
+        // 161.6 s)
+        (sq - b) / c
     } else {
         f64::INFINITY
     }
@@ -1713,6 +1722,10 @@ mod tests {
         // decelerating short of the distance: ½·(−1)t² + t reaches at most ½
         assert_eq!(reach_time(0.6, 1.0, -1.0), f64::INFINITY);
         assert!((reach_time(0.5, 1.0, -1.0) - 1.0).abs() < 1e-7);
+        // moving away from a point 1e-12 ahead, turned back by c: about 2|b|/c, not a
+        // cancelled 2s/(b + √(b² + 2cs))
+        let t = reach_time(1e-12, -47.973_241_626_730_555, 0.593_719_326_964_338_2);
+        assert!((t / (2.0 * 47.973_241_626_730_555 / 0.593_719_326_964_338_2) - 1.0).abs() < 1e-12);
         // a subnormal distance from rest: t = √(2s/c), with no underflow to 0
         let t = reach_time(5e-324, 0.0, 9.81);
         assert!(
