@@ -14,3 +14,9 @@ pub mod physics;
 pub mod shard;
 
 pub use http::app;
+
+/// The memory allocator of the service, its tests and its benches: mimalloc keeps freed pages
+/// mapped for reuse, where the system allocator returns them and every large answer (a sampled
+/// history, a trajectory, a CSV) pays for zero-filling fresh pages again (BENCHMARKS.md).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
