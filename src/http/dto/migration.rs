@@ -814,439 +814,576 @@ fn check_floor_memory(
     }
 }
 
-fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> FloorSpec {
-    let base = "/face/floor";
-    let p = |x: &str| format!("{base}/{x}");
-    // the value sent is echoed (a grid's heights as [rows, columns], contours as their count)
-    let stray = |ck: &mut Checker, name: &str, sent: Option<Value>, kind: &str| {
-        if let Some(v) = sent {
-            ck.push(p(name), v, format!("not a field of {kind}"));
+/// JSON Pointer of the floor's field `name`.
+fn floor_pointer(name: &str) -> String {
+    format!("/face/floor/{name}")
+}
+
+/// The values a floor request sent, as an error echoes them (a grid's heights as
+/// [rows, columns], contours as their count, long texts as their length).
+struct SentFloor {
+    origin: Option<Value>,
+    spacing: Option<Value>,
+    heights: Option<Value>,
+    contours: Option<Value>,
+    resolution: Option<Value>,
+    esri: Option<Value>,
+    geojson: Option<Value>,
+    property: Option<Value>,
+    map: Option<Value>,
+}
+
+impl SentFloor {
+    /// The echoes of the fields `f` sent.
+    fn of(f: &FloorDto) -> Self {
+        Self {
+            origin: f.origin_m.map(|o| json!(o)),
+            spacing: f.spacing_m.map(num),
+            heights: f
+                .heights_m
+                .as_ref()
+                .map(|h| json!([h.len(), h.first().map_or(0, Vec::len)])),
+            contours: f.contours.as_ref().map(|c| json!(c.len())),
+            resolution: f.resolution_m.map(num),
+            esri: f
+                .esri_ascii
+                .as_ref()
+                .map(|t| json!(format!("{} characters", t.len()))),
+            geojson: f.geojson.as_ref().map(|_| json!("a GeoJSON object")),
+            property: f.elevation_property.as_ref().map(|s| json!(s)),
+            map: f.map.map(|m| json!(m)),
         }
-    };
-    let origin_v = f.origin_m.map(|o| json!(o));
-    let spacing_v = f.spacing_m.map(num);
-    let heights_v = f
-        .heights_m
-        .as_ref()
-        .map(|h| json!([h.len(), h.first().map_or(0, Vec::len)]));
-    let contours_v = f.contours.as_ref().map(|c| json!(c.len()));
-    let resolution_v = f.resolution_m.map(num);
-    let esri_v = f
-        .esri_ascii
-        .as_ref()
-        .map(|t| json!(format!("{} characters", t.len())));
-    let geojson_v = f.geojson.as_ref().map(|_| json!("a GeoJSON object"));
-    let property_v = f.elevation_property.as_ref().map(|s| json!(s));
-    let map_v = f.map.map(|m| json!(m));
+    }
+}
+
+/// The checks of one floor request: its checker, what it sent, its map frame (map
+/// coordinates) and the memory limit, bytes.
+struct FloorCheck<'a> {
+    ck: &'a mut Checker,
+    sent: SentFloor,
+    map: Option<MapFrame>,
+    max_floor_bytes: u64,
+}
+
+/// Contour lines with the pointers to each one's points and elevation.
+type PointedLines = (Vec<ContourDto>, Vec<(String, String)>);
+
+impl FloorCheck<'_> {
+    /// Refuses a field `name` that the floor's kind does not take.
+    fn stray(&mut self, name: &str, sent: Option<Value>, kind: &str) {
+        if let Some(v) = sent {
+            self.ck
+                .push(floor_pointer(name), v, format!("not a field of {kind}"));
+        }
+    }
+
+    /// Offset (m) of the map frame's origin from the floor's coordinates' origin.
+    fn shift(&self) -> [f64; 2] {
+        self.map.map_or([0.0, 0.0], |m| m.origin)
+    }
+
+    /// The floor in map coordinates, when a map frame was given.
+    fn wrap(&self, spec: FloorSpec) -> FloorSpec {
+        match self.map {
+            Some(map) => FloorSpec::Mapped {
+                floor: Box::new(spec),
+                map,
+            },
+            None => spec,
+        }
+    }
+
+    /// The plane: no other field allowed.
+    fn plane(&mut self) -> FloorSpec {
+        let s = &mut self.sent;
+        let sent = [
+            ("origin_m", s.origin.take()),
+            ("spacing_m", s.spacing.take()),
+            ("heights_m", s.heights.take()),
+            ("esri_ascii", s.esri.take()),
+            ("contours", s.contours.take()),
+            ("geojson", s.geojson.take()),
+            ("elevation_property", s.property.take()),
+            ("resolution_m", s.resolution.take()),
+            ("map", s.map.take()),
+        ];
+        for (name, v) in sent {
+            self.stray(name, v, "a plane floor");
+        }
+        FloorSpec::Plane
+    }
+
+    /// A grid floor, from an ESRI ASCII text or from its heights.
+    fn grid(&mut self, f: &mut FloorDto) -> FloorSpec {
+        let s = &mut self.sent;
+        let sent = [
+            ("contours", s.contours.take()),
+            ("geojson", s.geojson.take()),
+            ("elevation_property", s.property.take()),
+            ("resolution_m", s.resolution.take()),
+        ];
+        for (name, v) in sent {
+            self.stray(name, v, "a grid floor");
+        }
+        if f.esri_ascii.is_some() {
+            self.esri_grid(f)
+        } else {
+            self.heights_grid(f)
+        }
+    }
+
+    /// Estimated memory of a grid of `rows` × `cols` nodes, bytes: a rotated grid becomes a
+    /// mesh, with its nodes, triangles and buckets besides the grid.
+    fn grid_bytes(&self, rows: usize, cols: usize) -> f64 {
+        let rotated = self.map.is_some_and(|m| m.dip_direction_deg != 90.0);
+        migration::grid_bytes(rows, cols)
+            + if rotated {
+                rows as f64 * cols as f64 * migration::CONTOUR_BYTES_PER_POINT
+            } else {
+                0.0
+            }
+    }
+
+    /// A grid given as an ESRI ASCII text: its header gives origin and spacing; the work and
+    /// memory are estimated from the header before the data are read.
+    fn esri_grid(&mut self, f: &mut FloorDto) -> FloorSpec {
+        let s = &mut self.sent;
+        let sent = [
+            ("origin_m", s.origin.take()),
+            ("spacing_m", s.spacing.take()),
+            ("heights_m", s.heights.take()),
+        ];
+        for (name, v) in sent {
+            self.stray(name, v, "an ESRI ASCII grid (its header gives them)");
+        }
+        f.sha256 = Some(f.digest());
+        let Some(text) = &f.esri_ascii else {
+            return FloorSpec::Plane;
+        };
+        let field = floor_pointer("esri_ascii");
+        let line_v = |line: usize| {
+            let l = text.lines().nth(line.saturating_sub(1)).unwrap_or("");
+            json!(l.chars().take(80).collect::<String>())
+        };
+        let header = match formats::esri_header(text) {
+            Ok(h) => h,
+            Err(e) => {
+                self.ck.push(field, line_v(e.line), e.message);
+                return FloorSpec::Plane;
+            }
+        };
+        let origin = [header.x_center, header.y_center];
+        let shift = self.shift();
+        for (i, o) in origin.iter().enumerate() {
+            let rel = o - shift[i];
+            if !(-1e6..=1e6).contains(&rel) {
+                self.ck.push(
+                    field,
+                    num(*o),
+                    format!(
+                        "the grid's first cell centre {} = {o} m{} must lie in [−1e6, 1e6] m",
+                        ["x", "y"][i],
+                        if self.map.is_some() {
+                            " minus map.origin_m"
+                        } else {
+                            " (give map.origin_m for map coordinates)"
+                        }
+                    ),
+                );
+                return FloorSpec::Plane;
+            }
+        }
+        let (rows, cols) = (header.nrows, header.ncols);
+        let need = self.grid_bytes(rows, cols);
+        if need > self.max_floor_bytes as f64 {
+            check_floor_memory(
+                self.ck,
+                field,
+                json!([rows, cols]),
+                &format!("an ESRI ASCII grid of {rows} × {cols} cells"),
+                need,
+                self.max_floor_bytes,
+            );
+            return FloorSpec::Plane;
+        }
+        let heights = match formats::esri_heights(text, &header, 1e6) {
+            Ok((z, nodata)) => {
+                if nodata == rows * cols {
+                    self.ck.push(field, json!(nodata), "every cell is NODATA");
+                    return FloorSpec::Plane;
+                }
+                z
+            }
+            Err(e) => {
+                self.ck.push(field, line_v(e.line), e.message);
+                return FloorSpec::Plane;
+            }
+        };
+        self.wrap(FloorSpec::Grid {
+            origin,
+            spacing: header.cellsize,
+            heights,
+        })
+    }
+
+    /// A grid given by its origin, spacing and rows of heights.
+    fn heights_grid(&mut self, f: &mut FloorDto) -> FloorSpec {
+        let origin = *f.origin_m.get_or_insert([0.0, 0.0]);
+        let shift = self.shift();
+        for (i, o) in origin.iter().enumerate() {
+            if self.map.is_some() {
+                let rel = o - shift[i];
+                if !(-1e6..=1e6).contains(&rel) {
+                    self.ck.push(
+                        floor_pointer(&format!("origin_m/{i}")),
+                        num(*o),
+                        "must lie within 1e6 m of map.origin_m",
+                    );
+                }
+            } else if !(-1e6..=1e6).contains(o) {
+                self.ck.push(
+                    floor_pointer(&format!("origin_m/{i}")),
+                    num(*o),
+                    "must be in [−1e6, 1e6] m (give map.origin_m for map coordinates such \
+                     as UTM)",
+                );
+            }
+        }
+        let spacing = match f.spacing_m {
+            Some(d) => {
+                FLOOR_SPACING.check(self.ck, &floor_pointer("spacing_m"), d);
+                d
+            }
+            None => {
+                self.ck.push(
+                    floor_pointer("spacing_m"),
+                    Value::Null,
+                    "a grid floor needs spacing_m in [0.01, 100] m",
+                );
+                1.0
+            }
+        };
+        // The echo needs only the hash: hash the floor as received, then move its heights
+        // into the case rather than copying up to 16 M values.
+        f.sha256 = Some(f.digest());
+        let heights = f.heights_m.take().unwrap_or_default();
+        self.check_heights(&heights);
+        self.wrap(FloorSpec::Grid {
+            origin,
+            spacing,
+            heights,
+        })
+    }
+
+    /// A grid's rows of heights: 2 to 4096 rows of as many heights each, within 1e6 m, and
+    /// within the memory limit.
+    fn check_heights(&mut self, heights: &[Vec<f64>]) {
+        let rows = heights.len();
+        let cols = heights.first().map_or(0, Vec::len);
+        if !(2..=4096).contains(&rows) || !(2..=4096).contains(&cols) {
+            self.ck.push(
+                floor_pointer("heights_m"),
+                json!([rows, cols]),
+                "needs 2 to 4096 rows of 2 to 4096 heights each",
+            );
+        } else if let Some(i) = heights.iter().position(|r| r.len() != cols) {
+            self.ck.push(
+                floor_pointer(&format!("heights_m/{i}")),
+                json!(heights[i].len()),
+                format!("every row needs {cols} heights, like row 0"),
+            );
+        } else if let Some((i, j)) = heights
+            .iter()
+            .enumerate()
+            .find_map(|(i, r)| r.iter().position(|z| z.abs() > 1e6).map(|j| (i, j)))
+        {
+            self.ck.push(
+                floor_pointer(&format!("heights_m/{i}/{j}")),
+                num(heights[i][j]),
+                "heights must lie in [−1e6, 1e6] m",
+            );
+        } else {
+            check_floor_memory(
+                self.ck,
+                floor_pointer("heights_m"),
+                json!([rows, cols]),
+                &format!("a grid of {rows} × {cols} heights"),
+                self.grid_bytes(rows, cols),
+                self.max_floor_bytes,
+            );
+        }
+    }
+
+    /// A contour floor, from GeoJSON or from contour lines: the lines' points and elevations,
+    /// one elevation per plan point, no crossing, and the resampled floor's memory.
+    fn contours(&mut self, f: &mut FloorDto) -> FloorSpec {
+        let s = &mut self.sent;
+        let sent = [
+            ("origin_m", s.origin.take()),
+            ("spacing_m", s.spacing.take()),
+            ("heights_m", s.heights.take()),
+            ("esri_ascii", s.esri.take()),
+        ];
+        for (name, v) in sent {
+            self.stray(name, v, "a contour floor");
+        }
+        let resolution = *f.resolution_m.get_or_insert(FLOOR_RESOLUTION.value());
+        let resolution_ok =
+            FLOOR_RESOLUTION.check(self.ck, &floor_pointer("resolution_m"), resolution);
+        let Some((lines, paths)) = self.contour_lines(f) else {
+            return FloorSpec::Plane;
+        };
+        if f.geojson.is_some() {
+            // the lines hold their own copy: the GeoJSON is not needed any more
+            f.geojson = Some(Value::Null);
+        }
+        if lines.is_empty() {
+            self.ck.push(
+                if f.geojson.is_some() {
+                    floor_pointer("geojson/features")
+                } else {
+                    floor_pointer("contours")
+                },
+                Value::Null,
+                "a contour floor needs at least one contour line",
+            );
+        }
+        let total = self.check_contour_points(&lines, &paths);
+        if total > 4_000_000 {
+            self.ck.push(
+                floor_pointer("contours"),
+                json!(total),
+                "at most 4 000 000 points in all",
+            );
+        }
+        let dup = self.check_one_elevation_per_point(&lines, &paths);
+        if !dup && total <= 4_000_000 {
+            self.check_crossing(&lines, &paths);
+        }
+        let contours: Vec<ContourLine> = lines
+            .into_iter()
+            .map(|c| ContourLine {
+                elevation: c.elevation_m,
+                points: c.points_m,
+            })
+            .collect();
+        if total <= 4_000_000 && resolution_ok {
+            // estimated before resampling: the work and memory grow with length / resolution
+            let points = migration::contour_points(&contours, resolution);
+            check_floor_memory(
+                self.ck,
+                floor_pointer("resolution_m"),
+                num(resolution),
+                &format!(
+                    "the contours resampled every {resolution} m have about {points:.3e} \
+                     points and"
+                ),
+                points * migration::CONTOUR_BYTES_PER_POINT,
+                self.max_floor_bytes,
+            );
+        }
+        self.wrap(FloorSpec::Contours {
+            contours,
+            resolution,
+        })
+    }
+
+    /// The contour lines with the pointers to each one's points and elevation: read from the
+    /// GeoJSON (None when it is malformed) or moved out of `contours`.
+    fn contour_lines(&mut self, f: &mut FloorDto) -> Option<PointedLines> {
+        let Some(g) = &f.geojson else {
+            let sent = self.sent.property.take();
+            self.stray(
+                "elevation_property",
+                sent,
+                "contours given as contours (it names a GeoJSON property)",
+            );
+            f.sha256 = Some(f.digest());
+            let lines = f.contours.take().unwrap_or_default();
+            let paths = (0..lines.len())
+                .map(|i| {
+                    (
+                        floor_pointer(&format!("contours/{i}/points_m")),
+                        floor_pointer(&format!("contours/{i}/elevation_m")),
+                    )
+                })
+                .collect();
+            return Some((lines, paths));
+        };
+        let sent = self.sent.contours.take();
+        self.stray("contours", sent, "GeoJSON contours (give one or the other)");
+        let prop = f
+            .elevation_property
+            .get_or_insert_with(|| ELEVATION_PROPERTY.into())
+            .clone();
+        f.sha256 = Some(f.digest());
+        let gp = floor_pointer("geojson");
+        match formats::geojson_lines(g, &prop) {
+            Ok(ls) => {
+                f.geographic = self.map.is_none()
+                    && ls.iter().all(|l| {
+                        l.points
+                            .iter()
+                            .all(|q| q[0].abs() <= 180.0 && q[1].abs() <= 90.0)
+                    });
+                Some(
+                    ls.into_iter()
+                        .map(|l| {
+                            (
+                                ContourDto {
+                                    elevation_m: l.elevation,
+                                    points_m: l.points,
+                                },
+                                (
+                                    format!("{gp}{}", l.points_pointer),
+                                    format!("{gp}{}", l.elevation_pointer),
+                                ),
+                            )
+                        })
+                        .unzip(),
+                )
+            }
+            Err(e) => {
+                self.ck
+                    .push(format!("{gp}{}", e.pointer), e.value, e.message);
+                None
+            }
+        }
+    }
+
+    /// Each line's elevation within 1e6 m and its points (one at least) within 1e6 m of the
+    /// origin (the map's, in map coordinates); returns the number of points in all.
+    fn check_contour_points(&mut self, lines: &[ContourDto], paths: &[(String, String)]) -> usize {
+        let shift = self.shift();
+        let mut total = 0usize;
+        for (c, (pts, elev)) in lines.iter().zip(paths) {
+            self.ck.closed(elev, c.elevation_m, -1e6, 1e6, "m");
+            if c.points_m.is_empty() {
+                self.ck
+                    .push(pts.clone(), json!(0), "needs at least one point");
+            }
+            if let Some(j) = c
+                .points_m
+                .iter()
+                .position(|q| !((q[0] - shift[0]).abs() <= 1e6 && (q[1] - shift[1]).abs() <= 1e6))
+            {
+                self.ck.push(
+                    format!("{pts}/{j}"),
+                    json!(c.points_m[j]),
+                    if self.map.is_some() {
+                        "coordinates must lie within 1e6 m of map.origin_m"
+                    } else {
+                        "coordinates must lie in [−1e6, 1e6] m (give map.origin_m for map \
+                         coordinates)"
+                    },
+                );
+            }
+            total += c.points_m.len();
+        }
+        total
+    }
+
+    /// One plan point on two elevations would make the floor a vertical wall there: refuses
+    /// the first such point; true if there was one.
+    fn check_one_elevation_per_point(
+        &mut self,
+        lines: &[ContourDto],
+        paths: &[(String, String)],
+    ) -> bool {
+        let mut seen: std::collections::HashMap<(u64, u64), (usize, f64)> =
+            std::collections::HashMap::new();
+        for (i, c) in lines.iter().enumerate() {
+            for (j, q) in c.points_m.iter().enumerate() {
+                let key = ((q[0] + 0.0).to_bits(), (q[1] + 0.0).to_bits());
+                match seen.get(&key) {
+                    Some(&(k, z)) if z != c.elevation_m => {
+                        self.ck.push(
+                            format!("{}/{j}", paths[i].0),
+                            json!(q),
+                            format!(
+                                "this point also lies on the line at {} (elevation {z} m): \
+                                 one point cannot have two elevations",
+                                paths[k].0
+                            ),
+                        );
+                        return true;
+                    }
+                    Some(_) => {}
+                    None => {
+                        seen.insert(key, (i, c.elevation_m));
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    /// Crossing contours have no single height where they cross: refuses the first crossing.
+    fn check_crossing(&mut self, lines: &[ContourDto], paths: &[(String, String)]) {
+        let Some(x) = find_crossing(lines) else {
+            return;
+        };
+        let (i, k) = x.later;
+        let (i2, k2) = x.earlier;
+        let what = if lines[i].elevation_m == lines[i2].elevation_m {
+            "crosses"
+        } else {
+            "meets"
+        };
+        self.ck.push(
+            format!("{}/{k}", paths[i].0),
+            json!(lines[i].points_m[k]),
+            format!(
+                "the segment from this point to point {} {what} the segment {}/{k2}–{} \
+                 (elevation {} m) near [{}, {}]: contours must not cross (touching at a \
+                 point at the same elevation is allowed)",
+                k + 1,
+                paths[i2].0,
+                k2 + 1,
+                lines[i2].elevation_m,
+                x.at[0],
+                x.at[1]
+            ),
+        );
+    }
+}
+
+/// The floor case of a request's `face.floor`, its fields checked into `ck` (the floor's
+/// hash set for the echo; large inputs moved, not copied); the map frame first, as the
+/// floor's own ranges are relative to it.
+fn resolve_floor(f: &mut FloorDto, ck: &mut Checker, max_floor_bytes: u64) -> FloorSpec {
+    let sent = SentFloor::of(f);
     // map coordinates: checked first, the floor's own ranges are checked relative to them
     let map = f.map.map(|m| {
         for (i, o) in m.origin_m.iter().enumerate() {
-            ck.closed(&p(&format!("map/origin_m/{i}")), *o, -1e8, 1e8, "m");
+            ck.closed(
+                &floor_pointer(&format!("map/origin_m/{i}")),
+                *o,
+                -1e8,
+                1e8,
+                "m",
+            );
         }
-        MAP_DIP_DIRECTION.check(ck, &p("map/dip_direction_deg"), m.dip_direction_deg);
+        MAP_DIP_DIRECTION.check(
+            ck,
+            &floor_pointer("map/dip_direction_deg"),
+            m.dip_direction_deg,
+        );
         MapFrame {
             origin: m.origin_m,
             dip_direction_deg: m.dip_direction_deg,
         }
     });
-    let shift = map.map_or([0.0, 0.0], |m| m.origin);
-    let rotated = map.is_some_and(|m| m.dip_direction_deg != 90.0);
-    let wrap = |spec: FloorSpec| match map {
-        Some(map) => FloorSpec::Mapped {
-            floor: Box::new(spec),
-            map,
-        },
-        None => spec,
+    let mut check = FloorCheck {
+        ck,
+        sent,
+        map,
+        max_floor_bytes,
     };
     match f.kind {
-        FloorKind::Plane => {
-            for (name, v) in [
-                ("origin_m", origin_v),
-                ("spacing_m", spacing_v),
-                ("heights_m", heights_v),
-                ("esri_ascii", esri_v),
-                ("contours", contours_v),
-                ("geojson", geojson_v),
-                ("elevation_property", property_v),
-                ("resolution_m", resolution_v),
-                ("map", map_v),
-            ] {
-                stray(ck, name, v, "a plane floor");
-            }
-            FloorSpec::Plane
-        }
-        FloorKind::Grid => {
-            for (name, v) in [
-                ("contours", contours_v),
-                ("geojson", geojson_v),
-                ("elevation_property", property_v),
-                ("resolution_m", resolution_v),
-            ] {
-                stray(ck, name, v, "a grid floor");
-            }
-            // a rotated grid becomes a mesh: its nodes, triangles and buckets besides the grid
-            let bytes = |rows: usize, cols: usize| {
-                migration::grid_bytes(rows, cols)
-                    + if rotated {
-                        rows as f64 * cols as f64 * migration::CONTOUR_BYTES_PER_POINT
-                    } else {
-                        0.0
-                    }
-            };
-            if let Some(text) = &f.esri_ascii {
-                for (name, v) in [
-                    ("origin_m", origin_v),
-                    ("spacing_m", spacing_v),
-                    ("heights_m", heights_v),
-                ] {
-                    stray(ck, name, v, "an ESRI ASCII grid (its header gives them)");
-                }
-                f.sha256 = Some(f.digest());
-                let field = p("esri_ascii");
-                let line_v = |line: usize| {
-                    let l = text.lines().nth(line.saturating_sub(1)).unwrap_or("");
-                    json!(l.chars().take(80).collect::<String>())
-                };
-                let header = match formats::esri_header(text) {
-                    Ok(h) => h,
-                    Err(e) => {
-                        ck.push(field, line_v(e.line), e.message);
-                        return FloorSpec::Plane;
-                    }
-                };
-                let origin = [header.x_center, header.y_center];
-                for (i, o) in origin.iter().enumerate() {
-                    let rel = o - shift[i];
-                    if !(-1e6..=1e6).contains(&rel) {
-                        ck.push(
-                            field,
-                            num(*o),
-                            format!(
-                                "the grid's first cell centre {} = {o} m{} must lie in [−1e6, 1e6] m",
-                                ["x", "y"][i],
-                                if map.is_some() {
-                                    " minus map.origin_m"
-                                } else {
-                                    " (give map.origin_m for map coordinates)"
-                                }
-                            ),
-                        );
-                        return FloorSpec::Plane;
-                    }
-                }
-                // the work and memory are estimated from the header, before the data are read
-                let (rows, cols) = (header.nrows, header.ncols);
-                let need = bytes(rows, cols);
-                if need > max_floor_bytes as f64 {
-                    check_floor_memory(
-                        ck,
-                        field,
-                        json!([rows, cols]),
-                        &format!("an ESRI ASCII grid of {rows} × {cols} cells"),
-                        need,
-                        max_floor_bytes,
-                    );
-                    return FloorSpec::Plane;
-                }
-                let heights = match formats::esri_heights(text, &header, 1e6) {
-                    Ok((z, nodata)) => {
-                        if nodata == rows * cols {
-                            ck.push(field, json!(nodata), "every cell is NODATA");
-                            return FloorSpec::Plane;
-                        }
-                        z
-                    }
-                    Err(e) => {
-                        ck.push(field, line_v(e.line), e.message);
-                        return FloorSpec::Plane;
-                    }
-                };
-                return wrap(FloorSpec::Grid {
-                    origin,
-                    spacing: header.cellsize,
-                    heights,
-                });
-            }
-            let origin = *f.origin_m.get_or_insert([0.0, 0.0]);
-            for (i, o) in origin.iter().enumerate() {
-                if map.is_some() {
-                    let rel = o - shift[i];
-                    if !(-1e6..=1e6).contains(&rel) {
-                        ck.push(
-                            p(&format!("origin_m/{i}")),
-                            num(*o),
-                            "must lie within 1e6 m of map.origin_m",
-                        );
-                    }
-                } else if !(-1e6..=1e6).contains(o) {
-                    ck.push(
-                        p(&format!("origin_m/{i}")),
-                        num(*o),
-                        "must be in [−1e6, 1e6] m (give map.origin_m for map coordinates such \
-                         as UTM)",
-                    );
-                }
-            }
-            let spacing = match f.spacing_m {
-                Some(d) => {
-                    FLOOR_SPACING.check(ck, &p("spacing_m"), d);
-                    d
-                }
-                None => {
-                    ck.push(
-                        p("spacing_m"),
-                        Value::Null,
-                        "a grid floor needs spacing_m in [0.01, 100] m",
-                    );
-                    1.0
-                }
-            };
-            // The echo needs only the hash: hash the floor as received, then move its heights
-            // into the case rather than copying up to 16 M values.
-            f.sha256 = Some(f.digest());
-            let heights = f.heights_m.take().unwrap_or_default();
-            let rows = heights.len();
-            let cols = heights.first().map_or(0, Vec::len);
-            if !(2..=4096).contains(&rows) || !(2..=4096).contains(&cols) {
-                ck.push(
-                    p("heights_m"),
-                    json!([rows, cols]),
-                    "needs 2 to 4096 rows of 2 to 4096 heights each",
-                );
-            } else if let Some(i) = heights.iter().position(|r| r.len() != cols) {
-                ck.push(
-                    p(&format!("heights_m/{i}")),
-                    json!(heights[i].len()),
-                    format!("every row needs {cols} heights, like row 0"),
-                );
-            } else if let Some((i, j)) = heights
-                .iter()
-                .enumerate()
-                .find_map(|(i, r)| r.iter().position(|z| z.abs() > 1e6).map(|j| (i, j)))
-            {
-                ck.push(
-                    p(&format!("heights_m/{i}/{j}")),
-                    num(heights[i][j]),
-                    "heights must lie in [−1e6, 1e6] m",
-                );
-            } else {
-                check_floor_memory(
-                    ck,
-                    p("heights_m"),
-                    json!([rows, cols]),
-                    &format!("a grid of {rows} × {cols} heights"),
-                    bytes(rows, cols),
-                    max_floor_bytes,
-                );
-            }
-            wrap(FloorSpec::Grid {
-                origin,
-                spacing,
-                heights,
-            })
-        }
-        FloorKind::Contours => {
-            for (name, v) in [
-                ("origin_m", origin_v),
-                ("spacing_m", spacing_v),
-                ("heights_m", heights_v),
-                ("esri_ascii", esri_v),
-            ] {
-                stray(ck, name, v, "a contour floor");
-            }
-            let resolution = *f.resolution_m.get_or_insert(FLOOR_RESOLUTION.value());
-            let resolution_ok = FLOOR_RESOLUTION.check(ck, &p("resolution_m"), resolution);
-            // the lines with pointers to each one's points and elevation
-            let (lines, paths): (Vec<ContourDto>, Vec<(String, String)>) =
-                if let Some(g) = &f.geojson {
-                    stray(
-                        ck,
-                        "contours",
-                        contours_v,
-                        "GeoJSON contours (give one or the other)",
-                    );
-                    let prop = f
-                        .elevation_property
-                        .get_or_insert_with(|| ELEVATION_PROPERTY.into())
-                        .clone();
-                    f.sha256 = Some(f.digest());
-                    let gp = p("geojson");
-                    match formats::geojson_lines(g, &prop) {
-                        Ok(ls) => {
-                            f.geographic = map.is_none()
-                                && ls.iter().all(|l| {
-                                    l.points
-                                        .iter()
-                                        .all(|q| q[0].abs() <= 180.0 && q[1].abs() <= 90.0)
-                                });
-                            ls.into_iter()
-                                .map(|l| {
-                                    (
-                                        ContourDto {
-                                            elevation_m: l.elevation,
-                                            points_m: l.points,
-                                        },
-                                        (
-                                            format!("{gp}{}", l.points_pointer),
-                                            format!("{gp}{}", l.elevation_pointer),
-                                        ),
-                                    )
-                                })
-                                .unzip()
-                        }
-                        Err(e) => {
-                            ck.push(format!("{gp}{}", e.pointer), e.value, e.message);
-                            return FloorSpec::Plane;
-                        }
-                    }
-                } else {
-                    stray(
-                        ck,
-                        "elevation_property",
-                        property_v,
-                        "contours given as contours (it names a GeoJSON property)",
-                    );
-                    f.sha256 = Some(f.digest());
-                    let lines = f.contours.take().unwrap_or_default();
-                    let paths = (0..lines.len())
-                        .map(|i| {
-                            (
-                                p(&format!("contours/{i}/points_m")),
-                                p(&format!("contours/{i}/elevation_m")),
-                            )
-                        })
-                        .collect();
-                    (lines, paths)
-                };
-            if f.geojson.is_some() {
-                // the lines hold their own copy: the GeoJSON is not needed any more
-                f.geojson = Some(Value::Null);
-            }
-            if lines.is_empty() {
-                ck.push(
-                    if f.geojson.is_some() {
-                        p("geojson/features")
-                    } else {
-                        p("contours")
-                    },
-                    Value::Null,
-                    "a contour floor needs at least one contour line",
-                );
-            }
-            let mut total = 0usize;
-            for (i, c) in lines.iter().enumerate() {
-                let (pts, elev) = &paths[i];
-                ck.closed(elev, c.elevation_m, -1e6, 1e6, "m");
-                if c.points_m.is_empty() {
-                    ck.push(pts.clone(), json!(0), "needs at least one point");
-                }
-                if let Some(j) = c.points_m.iter().position(|q| {
-                    !((q[0] - shift[0]).abs() <= 1e6 && (q[1] - shift[1]).abs() <= 1e6)
-                }) {
-                    ck.push(
-                        format!("{pts}/{j}"),
-                        json!(c.points_m[j]),
-                        if map.is_some() {
-                            "coordinates must lie within 1e6 m of map.origin_m"
-                        } else {
-                            "coordinates must lie in [−1e6, 1e6] m (give map.origin_m for map \
-                             coordinates)"
-                        },
-                    );
-                }
-                total += c.points_m.len();
-            }
-            if total > 4_000_000 {
-                ck.push(
-                    p("contours"),
-                    json!(total),
-                    "at most 4 000 000 points in all",
-                );
-            }
-            // one plan point on two elevations: the floor would be a vertical wall there
-            let mut seen: std::collections::HashMap<(u64, u64), (usize, f64)> =
-                std::collections::HashMap::new();
-            let mut dup = false;
-            'dup: for (i, c) in lines.iter().enumerate() {
-                for (j, q) in c.points_m.iter().enumerate() {
-                    let key = ((q[0] + 0.0).to_bits(), (q[1] + 0.0).to_bits());
-                    match seen.get(&key) {
-                        Some(&(k, z)) if z != c.elevation_m => {
-                            ck.push(
-                                format!("{}/{j}", paths[i].0),
-                                json!(q),
-                                format!(
-                                    "this point also lies on the line at {} (elevation {z} m): \
-                                     one point cannot have two elevations",
-                                    paths[k].0
-                                ),
-                            );
-                            dup = true;
-                            break 'dup;
-                        }
-                        Some(_) => {}
-                        None => {
-                            seen.insert(key, (i, c.elevation_m));
-                        }
-                    }
-                }
-            }
-            drop(seen);
-            // crossing contours: no single height where they cross
-            if !dup
-                && total <= 4_000_000
-                && let Some(x) = find_crossing(&lines)
-            {
-                let (i, k) = x.later;
-                let (i2, k2) = x.earlier;
-                let what = if lines[i].elevation_m == lines[i2].elevation_m {
-                    "crosses"
-                } else {
-                    "meets"
-                };
-                ck.push(
-                    format!("{}/{k}", paths[i].0),
-                    json!(lines[i].points_m[k]),
-                    format!(
-                        "the segment from this point to point {} {what} the segment {}/{k2}–{} \
-                         (elevation {} m) near [{}, {}]: contours must not cross (touching at a \
-                         point at the same elevation is allowed)",
-                        k + 1,
-                        paths[i2].0,
-                        k2 + 1,
-                        lines[i2].elevation_m,
-                        x.at[0],
-                        x.at[1]
-                    ),
-                );
-            }
-            let contours: Vec<ContourLine> = lines
-                .into_iter()
-                .map(|c| ContourLine {
-                    elevation: c.elevation_m,
-                    points: c.points_m,
-                })
-                .collect();
-            if total <= 4_000_000 && resolution_ok {
-                // estimated before resampling: the work and memory grow with length / resolution
-                let points = migration::contour_points(&contours, resolution);
-                check_floor_memory(
-                    ck,
-                    p("resolution_m"),
-                    num(resolution),
-                    &format!(
-                        "the contours resampled every {resolution} m have about {points:.3e} \
-                         points and"
-                    ),
-                    points * migration::CONTOUR_BYTES_PER_POINT,
-                    max_floor_bytes,
-                );
-            }
-            wrap(FloorSpec::Contours {
-                contours,
-                resolution,
-            })
-        }
+        FloorKind::Plane => check.plane(),
+        FloorKind::Grid => check.grid(f),
+        FloorKind::Contours => check.contours(f),
     }
 }
 
@@ -1266,142 +1403,12 @@ impl MigrationRequest {
         let mut ck = Checker::new();
         let rigid = self.method == MethodDto::RigidBlock;
         GRAVITY.check(&mut ck, "/gravity_m_s2", self.gravity_m_s2);
-        let f = &mut self.face;
-        for (field, pointer, v) in [
-            (FACE_DIP, "/face/dip_deg", f.dip_deg),
-            (FACE_LENGTH, "/face/length_m", f.length_m),
-            (
-                FACE_FRICTION,
-                "/face/friction_coefficient",
-                f.friction_coefficient,
-            ),
-            (
-                FACE_RESTITUTION_NORMAL,
-                "/face/restitution_normal",
-                f.restitution_normal,
-            ),
-            (
-                FACE_RESTITUTION_TANGENTIAL,
-                "/face/restitution_tangential",
-                f.restitution_tangential,
-            ),
-            (
-                FACE_NORMAL_STIFFNESS,
-                "/face/normal_stiffness_n_m",
-                f.normal_stiffness_n_m,
-            ),
-            (
-                FACE_SHEAR_STIFFNESS,
-                "/face/shear_stiffness_n_m",
-                f.shear_stiffness_n_m,
-            ),
-            (
-                FACE_CRITICAL_DAMPING,
-                "/face/critical_damping_ratio",
-                f.critical_damping_ratio,
-            ),
-            (FACE_LOCAL_DAMPING, "/face/local_damping", f.local_damping),
-        ] {
-            field.check(&mut ck, pointer, v);
-        }
-        let floor = resolve_floor(&mut f.floor, &mut ck, config.max_floor_bytes);
+        self.check_face(&mut ck);
+        let floor = resolve_floor(&mut self.face.floor, &mut ck, config.max_floor_bytes);
         let rock = self.rock.resolve("/rock", false, &mut ck);
-        if !rigid
-            && matches!(
-                self.rock.shape,
-                super::common::ShapeKind::Polyhedron | super::common::ShapeKind::RandomPolyhedron
-            )
-        {
-            ck.push(
-                "/rock/shape",
-                json!(self.rock.shape),
-                "polyhedra belong to the rigid-block method; the lumped mass takes cube, sphere or cuboid",
-            );
-        }
-        let r = &self.release;
-        RELEASE_DROP_HEIGHT.check(&mut ck, "/release/drop_height_m", r.drop_height_m);
-        // The documented maximum is the longest face's; the bound enforced is below length_m.
-        ck.range(
-            "/release/along_dip_m",
-            r.along_dip_m,
-            RELEASE_ALONG_DIP.lo,
-            Open(self.face.length_m),
-            RELEASE_ALONG_DIP.unit,
-        );
-        RELEASE_ACROSS.check(&mut ck, "/release/across_m", r.across_m);
-        RELEASE_SPEED.check(&mut ck, "/release/speed_m_s", r.speed_m_s);
-        STOP_NORMAL_SPEED.check(
-            &mut ck,
-            "/lumped_mass/stop_normal_speed_m_s",
-            self.lumped_mass.stop_normal_speed_m_s,
-        );
-        if let Some(dt) = self.rigid_block.time_step_s {
-            TIME_STEP.check(&mut ck, "/rigid_block/time_step_s", dt);
-        }
-        TIME_STEP_SAFETY.check(
-            &mut ck,
-            "/rigid_block/time_step_safety",
-            self.rigid_block.time_step_safety,
-        );
-        if let Some(t) = self.end_time_s {
-            MIGRATION_END_TIME.check(&mut ck, "/end_time_s", t);
-        }
-        let o = &self.output;
-        SAMPLE_INTERVAL.check(
-            &mut ck,
-            &layout.pointer(Param::TrajectorySampleInterval),
-            o.sample_interval_s,
-        );
-        let monte_carlo = self.monte_carlo.as_ref().map(|mc| {
-            ck.count("/monte_carlo/runs", mc.runs, 1, config.max_runs, "runs");
-            MonteCarlo {
-                runs: mc.runs,
-                seed: mc.seed,
-                restitution_normal: mc.restitution_normal.value.resolve(
-                    "/monte_carlo/restitution_normal",
-                    0.0,
-                    1.0,
-                    &mut ck,
-                ),
-                restitution_tangential: mc.restitution_tangential.value.resolve(
-                    "/monte_carlo/restitution_tangential",
-                    0.0,
-                    1.0,
-                    &mut ck,
-                ),
-                friction_coefficient: mc
-                    .friction_coefficient
-                    .map(|d| d.resolve("/monte_carlo/friction_coefficient", 0.0, 2.0, &mut ck)),
-            }
-        });
-        let damping_distribution = self.monte_carlo.as_ref().and_then(|mc| {
-            let d = mc.critical_damping_ratio.as_ref()?;
-            if !rigid {
-                ck.push(
-                    "/monte_carlo/critical_damping_ratio",
-                    serde_json::to_value(d).unwrap_or(Value::Null),
-                    "the critical damping ratio belongs to the rigid-block method",
-                );
-            }
-            Some(d.resolve("/monte_carlo/critical_damping_ratio", 0.0, 0.999, &mut ck))
-        });
-        if rigid && let Some(mc) = &self.monte_carlo {
-            // api.md: restitution distributions given explicitly with the rigid block are 422,
-            // even when equal to their defaults (which apply to the lumped mass only)
-            for (name, d) in [
-                ("restitution_normal", &mc.restitution_normal),
-                ("restitution_tangential", &mc.restitution_tangential),
-            ] {
-                if d.sent {
-                    ck.push(
-                        format!("/monte_carlo/{name}"),
-                        serde_json::to_value(d.value).unwrap_or(Value::Null),
-                        "the rigid block has no restitution: its ensemble varies friction_coefficient and critical_damping_ratio",
-                    );
-                }
-            }
-        }
-        if o.runs_csv && monte_carlo.is_none() {
+        self.check_motion(rigid, layout, &mut ck);
+        let (monte_carlo, damping_distribution) = self.resolve_monte_carlo(config, rigid, &mut ck);
+        if self.output.runs_csv && monte_carlo.is_none() {
             ck.push(
                 layout.migration_output("runs_csv"),
                 json!(true),
@@ -1424,6 +1431,7 @@ impl MigrationRequest {
             critical_damping_ratio_distribution: damping_distribution,
             max_steps: config.max_rigid_steps,
         };
+        let o = &self.output;
         Ok(MigrationCase {
             method: if rigid {
                 Method::RigidBlock
@@ -1465,6 +1473,158 @@ impl MigrationRequest {
             },
             ..MigrationCase::default()
         })
+    }
+
+    /// The face's numbers, each in its documented range.
+    fn check_face(&self, ck: &mut Checker) {
+        let f = &self.face;
+        for (field, pointer, v) in [
+            (FACE_DIP, "/face/dip_deg", f.dip_deg),
+            (FACE_LENGTH, "/face/length_m", f.length_m),
+            (
+                FACE_FRICTION,
+                "/face/friction_coefficient",
+                f.friction_coefficient,
+            ),
+            (
+                FACE_RESTITUTION_NORMAL,
+                "/face/restitution_normal",
+                f.restitution_normal,
+            ),
+            (
+                FACE_RESTITUTION_TANGENTIAL,
+                "/face/restitution_tangential",
+                f.restitution_tangential,
+            ),
+            (
+                FACE_NORMAL_STIFFNESS,
+                "/face/normal_stiffness_n_m",
+                f.normal_stiffness_n_m,
+            ),
+            (
+                FACE_SHEAR_STIFFNESS,
+                "/face/shear_stiffness_n_m",
+                f.shear_stiffness_n_m,
+            ),
+            (
+                FACE_CRITICAL_DAMPING,
+                "/face/critical_damping_ratio",
+                f.critical_damping_ratio,
+            ),
+            (FACE_LOCAL_DAMPING, "/face/local_damping", f.local_damping),
+        ] {
+            field.check(ck, pointer, v);
+        }
+    }
+
+    /// The rock's shape for the method, the release (its along-dip position below the face
+    /// length), the methods' options, the end time and the trajectory's sample interval.
+    fn check_motion(&self, rigid: bool, layout: Layout, ck: &mut Checker) {
+        if !rigid
+            && matches!(
+                self.rock.shape,
+                super::common::ShapeKind::Polyhedron | super::common::ShapeKind::RandomPolyhedron
+            )
+        {
+            ck.push(
+                "/rock/shape",
+                json!(self.rock.shape),
+                "polyhedra belong to the rigid-block method; the lumped mass takes cube, sphere or cuboid",
+            );
+        }
+        let r = &self.release;
+        RELEASE_DROP_HEIGHT.check(ck, "/release/drop_height_m", r.drop_height_m);
+        // The documented maximum is the longest face's; the bound enforced is below length_m.
+        ck.range(
+            "/release/along_dip_m",
+            r.along_dip_m,
+            RELEASE_ALONG_DIP.lo,
+            Open(self.face.length_m),
+            RELEASE_ALONG_DIP.unit,
+        );
+        RELEASE_ACROSS.check(ck, "/release/across_m", r.across_m);
+        RELEASE_SPEED.check(ck, "/release/speed_m_s", r.speed_m_s);
+        STOP_NORMAL_SPEED.check(
+            ck,
+            "/lumped_mass/stop_normal_speed_m_s",
+            self.lumped_mass.stop_normal_speed_m_s,
+        );
+        if let Some(dt) = self.rigid_block.time_step_s {
+            TIME_STEP.check(ck, "/rigid_block/time_step_s", dt);
+        }
+        TIME_STEP_SAFETY.check(
+            ck,
+            "/rigid_block/time_step_safety",
+            self.rigid_block.time_step_safety,
+        );
+        if let Some(t) = self.end_time_s {
+            MIGRATION_END_TIME.check(ck, "/end_time_s", t);
+        }
+        SAMPLE_INTERVAL.check(
+            ck,
+            &layout.pointer(Param::TrajectorySampleInterval),
+            self.output.sample_interval_s,
+        );
+    }
+
+    /// The ensemble (runs, seed, the lumped mass's restitution draws, friction) and the rigid
+    /// block's damping-ratio draw; each method refuses the other's draws.
+    fn resolve_monte_carlo(
+        &self,
+        config: &Config,
+        rigid: bool,
+        ck: &mut Checker,
+    ) -> (Option<MonteCarlo>, Option<Distribution>) {
+        let Some(mc) = &self.monte_carlo else {
+            return (None, None);
+        };
+        ck.count("/monte_carlo/runs", mc.runs, 1, config.max_runs, "runs");
+        let monte_carlo = MonteCarlo {
+            runs: mc.runs,
+            seed: mc.seed,
+            restitution_normal: mc.restitution_normal.value.resolve(
+                "/monte_carlo/restitution_normal",
+                0.0,
+                1.0,
+                ck,
+            ),
+            restitution_tangential: mc.restitution_tangential.value.resolve(
+                "/monte_carlo/restitution_tangential",
+                0.0,
+                1.0,
+                ck,
+            ),
+            friction_coefficient: mc
+                .friction_coefficient
+                .map(|d| d.resolve("/monte_carlo/friction_coefficient", 0.0, 2.0, ck)),
+        };
+        let damping_distribution = mc.critical_damping_ratio.as_ref().map(|d| {
+            if !rigid {
+                ck.push(
+                    "/monte_carlo/critical_damping_ratio",
+                    serde_json::to_value(d).unwrap_or(Value::Null),
+                    "the critical damping ratio belongs to the rigid-block method",
+                );
+            }
+            d.resolve("/monte_carlo/critical_damping_ratio", 0.0, 0.999, ck)
+        });
+        if rigid {
+            // api.md: restitution distributions given explicitly with the rigid block are 422,
+            // even when equal to their defaults (which apply to the lumped mass only)
+            for (name, d) in [
+                ("restitution_normal", &mc.restitution_normal),
+                ("restitution_tangential", &mc.restitution_tangential),
+            ] {
+                if d.sent {
+                    ck.push(
+                        format!("/monte_carlo/{name}"),
+                        serde_json::to_value(d.value).unwrap_or(Value::Null),
+                        "the rigid block has no restitution: its ensemble varies friction_coefficient and critical_damping_ratio",
+                    );
+                }
+            }
+        }
+        (Some(monte_carlo), damping_distribution)
     }
 }
 

@@ -261,141 +261,210 @@ pub struct SceneContext {
     pub galerkin: GalerkinDto,
 }
 
+/// A scene's supports as entries, with each entry's support pointer and column as sent.
+#[derive(Default)]
+struct Supports {
+    entries: Vec<SupportEntry>,
+    pointers: Vec<String>,
+    columns: Vec<ColumnDto>,
+}
+
+/// The rows of supports `rows` (face length `length`, m) as entries, row after row.
+fn support_rows(rows: &mut SupportRowsDto, length: f64, ck: &mut Checker) -> Supports {
+    let mut out = Supports::default();
+    ck.closed(
+        "/support_rows/lowest_along_dip_m",
+        rows.lowest_along_dip_m,
+        0.0,
+        length,
+        "m (within the face)",
+    );
+    ck.open_closed("/support_rows/spacing_m", rows.spacing_m, 0.0, 1e4, "m");
+    ck.count(
+        "/support_rows/count",
+        u64::from(rows.count),
+        1,
+        10_000,
+        "supports",
+    );
+    if !(1..=16).contains(&rows.across_m.len()) {
+        ck.push(
+            "/support_rows/across_m",
+            json!(rows.across_m),
+            "must hold 1 to 16 across positions",
+        );
+    }
+    for (j, y) in rows.across_m.iter().enumerate() {
+        ck.closed(
+            &format!("/support_rows/across_m/{j}"),
+            *y,
+            -1000.0,
+            1000.0,
+            "m",
+        );
+    }
+    let column = rows.column.resolve("/support_rows/column", ck);
+    if ck.is_ok() {
+        let top = rows.lowest_along_dip_m - f64::from(rows.count - 1) * rows.spacing_m;
+        if top < 0.0 {
+            ck.push(
+                "/support_rows/count",
+                json!(rows.count),
+                format!(
+                    "support #{} would stand at {top} m, above the face's upper end: \
+                     every support must lie in [0, length_m]",
+                    rows.count
+                ),
+            );
+        }
+    }
+    if ck.is_ok() {
+        for k in 1..=rows.count {
+            let s = rows.lowest_along_dip_m - f64::from(k - 1) * rows.spacing_m;
+            for (j, y) in rows.across_m.iter().enumerate() {
+                out.entries.push(SupportEntry {
+                    support: k,
+                    column_index: j as u32,
+                    along_dip: s,
+                    across: Some(*y),
+                    column: column.clone(),
+                });
+                out.pointers.push("/support_rows".to_string());
+                out.columns.push(rows.column.clone());
+            }
+        }
+    }
+    out
+}
+
+/// The listed supports as entries (a support without a position stands at the lower end,
+/// `length`, m).
+fn support_list(list: &mut [SupportDto], length: f64, ck: &mut Checker) -> Supports {
+    let mut out = Supports::default();
+    if list.is_empty() || list.len() > 10_000 {
+        ck.push(
+            "/supports",
+            json!(list.len()),
+            "must hold 1 to 10000 supports",
+        );
+    }
+    for (i, s) in list.iter_mut().enumerate() {
+        let at = format!("/supports/{i}");
+        let a = *s.along_dip_m.get_or_insert(length);
+        ck.closed(
+            &format!("{at}/along_dip_m"),
+            a,
+            0.0,
+            length,
+            "m (within the face, [0, length_m])",
+        );
+        if let Some(y) = s.across_m {
+            ck.closed(&format!("{at}/across_m"), y, -1000.0, 1000.0, "m");
+        }
+        let column = s.column.resolve(&format!("{at}/column"), ck);
+        out.entries.push(SupportEntry {
+            support: i as u32 + 1,
+            column_index: 0,
+            along_dip: a,
+            across: s.across_m,
+            column,
+        });
+        out.pointers.push(at);
+        out.columns.push(s.column.clone());
+    }
+    out
+}
+
+/// Refuses a column shorter than the contact length `side_max` (m) of the largest rock that
+/// can strike it, once per support object.
+fn check_contact_lengths(supports: &Supports, side_max: f64, ck: &mut Checker) {
+    let pointers = &supports.pointers;
+    for (k, e) in supports.entries.iter().enumerate() {
+        if e.column.length < side_max && (k == 0 || pointers[k] != pointers[k - 1]) {
+            ck.push(
+                format!("{}/column/length_m", pointers[k]),
+                num(e.column.length),
+                format!(
+                    "must be at least the contact length L = {side_max} m of the largest rock \
+                     that can strike it"
+                ),
+            );
+        }
+    }
+}
+
+/// Given release zones on a face of `length` (m): each within the face, `to` not below
+/// `from`, a weight in [0, 1e9] and one weight at least > 0.
+fn release_zone_list(z: &[ReleaseZoneDto], length: f64, ck: &mut Checker) -> Vec<ReleaseZone> {
+    if z.is_empty() || z.len() > 1000 {
+        ck.push(
+            "/release_zones",
+            json!(z.len()),
+            "must hold 1 to 1000 zones",
+        );
+    }
+    for (i, zone) in z.iter().enumerate() {
+        let at = format!("/release_zones/{i}");
+        ck.closed_open(
+            &format!("{at}/from_along_dip_m"),
+            zone.from_along_dip_m,
+            0.0,
+            length,
+            "m (below length_m)",
+        );
+        if ck.closed(
+            &format!("{at}/to_along_dip_m"),
+            zone.to_along_dip_m,
+            0.0,
+            length,
+            "m",
+        ) && zone.to_along_dip_m < zone.from_along_dip_m
+        {
+            ck.push(
+                format!("{at}/to_along_dip_m"),
+                num(zone.to_along_dip_m),
+                format!(
+                    "must be at least from_along_dip_m = {}",
+                    zone.from_along_dip_m
+                ),
+            );
+        }
+        ck.closed(&format!("{at}/weight"), zone.weight, 0.0, 1e9, "");
+    }
+    if !z.is_empty() && z.iter().all(|x| x.weight == 0.0) {
+        ck.push(
+            "/release_zones/0/weight",
+            json!(0.0),
+            "at least one weight must be > 0",
+        );
+    }
+    z.iter()
+        .map(|x| ReleaseZone {
+            from: x.from_along_dip_m,
+            to: x.to_along_dip_m,
+            weight: x.weight,
+        })
+        .collect()
+}
+
 impl SceneRequest {
     /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
     pub fn resolve(&mut self, config: &Config) -> Result<(SceneCase, SceneContext), ApiError> {
         // the migration part, checked by /v1/migration's own rules and pointers
-        let mc = self.monte_carlo.as_ref().map(MonteCarloDto::from);
-        let mut mreq = MigrationRequest {
-            method: self.method,
-            gravity_m_s2: self.gravity_m_s2,
-            face: self.face.clone(),
-            rock: self.rock.clone(),
-            release: self.release,
-            lumped_mass: self.lumped_mass,
-            rigid_block: self.rigid_block,
-            end_time_s: self.end_time_s,
-            monte_carlo: mc,
-            output: self.migration_output,
-        };
+        let mut mreq = self.migration_request();
         let migration = mreq.resolve_in(config, Layout::Scene)?;
         self.face = mreq.face.clone();
         self.rock = mreq.rock.clone();
         let mut ck = Checker::new();
         let length = self.face.length_m;
-        // supports
-        let mut entries = Vec::new();
-        let mut pointers = Vec::new();
-        let mut columns = Vec::new();
-        let in_face = |ck: &mut Checker, f: &str, v: f64| {
-            ck.closed(f, v, 0.0, length, "m (within the face, [0, length_m])")
-        };
-        match (&mut self.supports, &mut self.support_rows) {
-            (Some(_), Some(_)) => ck.push(
-                "/support_rows",
-                Value::Null,
-                "give supports or support_rows, not both",
-            ),
-            (None, Some(rows)) => {
-                ck.closed(
-                    "/support_rows/lowest_along_dip_m",
-                    rows.lowest_along_dip_m,
-                    0.0,
-                    length,
-                    "m (within the face)",
-                );
-                ck.open_closed("/support_rows/spacing_m", rows.spacing_m, 0.0, 1e4, "m");
-                ck.count(
-                    "/support_rows/count",
-                    u64::from(rows.count),
-                    1,
-                    10_000,
-                    "supports",
-                );
-                if !(1..=16).contains(&rows.across_m.len()) {
-                    ck.push(
-                        "/support_rows/across_m",
-                        json!(rows.across_m),
-                        "must hold 1 to 16 across positions",
-                    );
-                }
-                for (j, y) in rows.across_m.iter().enumerate() {
-                    ck.closed(
-                        &format!("/support_rows/across_m/{j}"),
-                        *y,
-                        -1000.0,
-                        1000.0,
-                        "m",
-                    );
-                }
-                let column = rows.column.resolve("/support_rows/column", &mut ck);
-                if ck.is_ok() {
-                    let top = rows.lowest_along_dip_m - f64::from(rows.count - 1) * rows.spacing_m;
-                    if top < 0.0 {
-                        ck.push(
-                            "/support_rows/count",
-                            json!(rows.count),
-                            format!(
-                                "support #{} would stand at {top} m, above the face's upper end: \
-                                 every support must lie in [0, length_m]",
-                                rows.count
-                            ),
-                        );
-                    }
-                }
-                if ck.is_ok() {
-                    for k in 1..=rows.count {
-                        let s = rows.lowest_along_dip_m - f64::from(k - 1) * rows.spacing_m;
-                        for (j, y) in rows.across_m.iter().enumerate() {
-                            entries.push(SupportEntry {
-                                support: k,
-                                column_index: j as u32,
-                                along_dip: s,
-                                across: Some(*y),
-                                column: column.clone(),
-                            });
-                            pointers.push("/support_rows".to_string());
-                            columns.push(rows.column.clone());
-                        }
-                    }
-                }
-            }
-            (list, None) => {
-                let list = list.get_or_insert_with(|| vec![SupportDto::default()]);
-                if list.is_empty() || list.len() > 10_000 {
-                    ck.push(
-                        "/supports",
-                        json!(list.len()),
-                        "must hold 1 to 10000 supports",
-                    );
-                }
-                for (i, s) in list.iter_mut().enumerate() {
-                    let at = format!("/supports/{i}");
-                    let a = *s.along_dip_m.get_or_insert(length);
-                    in_face(&mut ck, &format!("{at}/along_dip_m"), a);
-                    if let Some(y) = s.across_m {
-                        ck.closed(&format!("{at}/across_m"), y, -1000.0, 1000.0, "m");
-                    }
-                    let column = s.column.resolve(&format!("{at}/column"), &mut ck);
-                    entries.push(SupportEntry {
-                        support: i as u32 + 1,
-                        column_index: 0,
-                        along_dip: a,
-                        across: s.across_m,
-                        column,
-                    });
-                    pointers.push(at);
-                    columns.push(s.column.clone());
-                }
-            }
-        }
+        let supports = self.resolve_supports(length, &mut ck);
         // the impact rock: the cube itself, or the cube of equal mass and density
         let hertz = self.contact.law == LawDto::HertzPoint;
-        let (mass, cube_side) = match scene::rock_extent(&migration.rock) {
-            Ok((_, m)) => (m, scene::impact_rock(&migration.rock, m).side_length),
+        let cube_side = match scene::rock_extent(&migration.rock) {
+            Ok((_, m)) => scene::impact_rock(&migration.rock, m).side_length,
             Err(e) => return Err(ApiError::from(e)),
         };
-        let mut impact_rock = RockDto {
+        let impact_rock = RockDto {
             shape: ShapeKind::Cube,
             side_length_m: cube_side,
             radius_m: None,
@@ -408,28 +477,109 @@ impl SceneRequest {
         if hertz && self.rock.shape == ShapeKind::Cube {
             self.rock.clone().resolve("/rock", true, &mut ck);
         }
-        let _ = mass;
-        if let Some(v) = self.impact_velocity_m_s {
-            ck.open_closed("/impact_velocity_m_s", v, 0.0, 1000.0, "m/s");
-            if self.monte_carlo.is_some() {
+        self.check_impact_velocity(&mut ck);
+        let (column_case, impact_rock) = self.resolve_column_stage(config, impact_rock, &mut ck);
+        // contact lengths: each column at least the side of the cube that strikes it
+        let side_max = self
+            .monte_carlo
+            .as_ref()
+            .and_then(|m| m.side_length_m)
+            .map_or(cube_side, |d| d.max.unwrap_or(cube_side).max(cube_side));
+        check_contact_lengths(&supports, side_max, &mut ck);
+        let release_zones = self.resolve_release_zones(length, &mut ck);
+        let draws = self.resolve_draws(&mut ck);
+        let limits = self.resolve_design_limits(&mut ck);
+        ck.finish()?;
+        let case = SceneCase {
+            migration,
+            supports: supports.entries,
+            column: column_case,
+            impact_velocity: self.impact_velocity_m_s,
+            release_zones,
+            draws,
+            limits,
+            compare_methods: self.compare_methods,
+        };
+        let ctx = SceneContext {
+            migration: mreq,
+            entry_pointer: supports.pointers,
+            entry_column: supports.columns,
+            impact_rock,
+            galerkin: self.galerkin,
+        };
+        Ok((case, ctx))
+    }
+
+    /// The migration part of the scene as a `/v1/migration` request.
+    fn migration_request(&self) -> MigrationRequest {
+        MigrationRequest {
+            method: self.method,
+            gravity_m_s2: self.gravity_m_s2,
+            face: self.face.clone(),
+            rock: self.rock.clone(),
+            release: self.release,
+            lumped_mass: self.lumped_mass,
+            rigid_block: self.rigid_block,
+            end_time_s: self.end_time_s,
+            monte_carlo: self.monte_carlo.as_ref().map(MonteCarloDto::from),
+            output: self.migration_output,
+        }
+    }
+
+    /// The supports, listed or in rows (one form only; by default one support at the lower
+    /// end of a face of `length`, m).
+    fn resolve_supports(&mut self, length: f64, ck: &mut Checker) -> Supports {
+        match (&mut self.supports, &mut self.support_rows) {
+            (Some(_), Some(_)) => {
                 ck.push(
-                    "/monte_carlo",
+                    "/support_rows",
                     Value::Null,
-                    "with impact_velocity_m_s there is no migration to draw an ensemble of",
+                    "give supports or support_rows, not both",
                 );
+                Supports::default()
             }
-            if self.compare_methods {
-                ck.push(
-                    "/compare_methods",
-                    json!(true),
-                    "with impact_velocity_m_s there is no migration to compare",
-                );
+            (None, Some(rows)) => support_rows(rows, length, ck),
+            (list, None) => {
+                let list = list.get_or_insert_with(|| vec![SupportDto::default()]);
+                support_list(list, length, ck)
             }
         }
-        // the column stage, checked by /v1/column's rules on a template impact
+    }
+
+    /// A given impact velocity, m/s, in (0, 1000]: no migration, so no ensemble and no
+    /// comparison of methods.
+    fn check_impact_velocity(&self, ck: &mut Checker) {
+        let Some(v) = self.impact_velocity_m_s else {
+            return;
+        };
+        ck.open_closed("/impact_velocity_m_s", v, 0.0, 1000.0, "m/s");
+        if self.monte_carlo.is_some() {
+            ck.push(
+                "/monte_carlo",
+                Value::Null,
+                "with impact_velocity_m_s there is no migration to draw an ensemble of",
+            );
+        }
+        if self.compare_methods {
+            ck.push(
+                "/compare_methods",
+                json!(true),
+                "with impact_velocity_m_s there is no migration to compare",
+            );
+        }
+    }
+
+    /// The column stage, checked by `/v1/column`'s rules on a template impact of
+    /// `impact_rock`: the column case and the impact rock as resolved.
+    fn resolve_column_stage(
+        &mut self,
+        config: &Config,
+        impact_rock: RockDto,
+        ck: &mut Checker,
+    ) -> (crate::physics::column::ColumnCase, RockDto) {
         let mut template = ColumnRequest {
             velocity_m_s: 5.0,
-            rock: impact_rock.clone(),
+            rock: impact_rock,
             column: ColumnDto::default(),
             contact: self.contact,
             model: self.column_model,
@@ -438,8 +588,7 @@ impl SceneRequest {
             end_time_s: None,
             output: self.column_output.clone(),
         };
-        let column_case = template.resolve_in(config, Layout::Scene);
-        let column_case = match column_case {
+        let column_case = match template.resolve_in(config, Layout::Scene) {
             Ok(c) => c,
             Err(e) => {
                 // the template's own column is the default: report the request's errors only
@@ -456,26 +605,12 @@ impl SceneRequest {
             }
         };
         self.galerkin = template.galerkin;
-        impact_rock = template.rock;
-        // contact lengths: each column at least the side of the cube that strikes it
-        let side_max = self
-            .monte_carlo
-            .as_ref()
-            .and_then(|m| m.side_length_m)
-            .map_or(cube_side, |d| d.max.unwrap_or(cube_side).max(cube_side));
-        for (k, e) in entries.iter().enumerate() {
-            if e.column.length < side_max && (k == 0 || pointers[k] != pointers[k - 1]) {
-                ck.push(
-                    format!("{}/column/length_m", pointers[k]),
-                    num(e.column.length),
-                    format!(
-                        "must be at least the contact length L = {side_max} m of the largest rock \
-                         that can strike it"
-                    ),
-                );
-            }
-        }
-        // release zones
+        (column_case, template.rock)
+    }
+
+    /// The release zones (Table 1's thirds or given zones) on a face of `length` (m); they
+    /// need an ensemble to be drawn from.
+    fn resolve_release_zones(&self, length: f64, ck: &mut Checker) -> Option<Vec<ReleaseZone>> {
         let release_zones = match &self.release_zones {
             None => None,
             Some(ReleaseZonesDto::Named(ReleaseZonesName::Table1)) => {
@@ -490,59 +625,7 @@ impl SceneRequest {
                     .to_vec(),
                 )
             }
-            Some(ReleaseZonesDto::Zones(z)) => {
-                if z.is_empty() || z.len() > 1000 {
-                    ck.push(
-                        "/release_zones",
-                        json!(z.len()),
-                        "must hold 1 to 1000 zones",
-                    );
-                }
-                for (i, zone) in z.iter().enumerate() {
-                    let at = format!("/release_zones/{i}");
-                    ck.closed_open(
-                        &format!("{at}/from_along_dip_m"),
-                        zone.from_along_dip_m,
-                        0.0,
-                        length,
-                        "m (below length_m)",
-                    );
-                    if ck.closed(
-                        &format!("{at}/to_along_dip_m"),
-                        zone.to_along_dip_m,
-                        0.0,
-                        length,
-                        "m",
-                    ) && zone.to_along_dip_m < zone.from_along_dip_m
-                    {
-                        ck.push(
-                            format!("{at}/to_along_dip_m"),
-                            num(zone.to_along_dip_m),
-                            format!(
-                                "must be at least from_along_dip_m = {}",
-                                zone.from_along_dip_m
-                            ),
-                        );
-                    }
-                    ck.closed(&format!("{at}/weight"), zone.weight, 0.0, 1e9, "");
-                }
-                if !z.is_empty() && z.iter().all(|x| x.weight == 0.0) {
-                    ck.push(
-                        "/release_zones/0/weight",
-                        json!(0.0),
-                        "at least one weight must be > 0",
-                    );
-                }
-                Some(
-                    z.iter()
-                        .map(|x| ReleaseZone {
-                            from: x.from_along_dip_m,
-                            to: x.to_along_dip_m,
-                            weight: x.weight,
-                        })
-                        .collect(),
-                )
-            }
+            Some(ReleaseZonesDto::Zones(z)) => Some(release_zone_list(z, length, ck)),
         };
         if release_zones.is_some() && self.monte_carlo.is_none() {
             ck.push(
@@ -551,18 +634,24 @@ impl SceneRequest {
                 "release zones are drawn from: they need monte_carlo",
             );
         }
+        release_zones
+    }
+
+    /// The scene-only draws of the ensemble (side length, density, release across), bounded
+    /// distributions only; the side length for a cube, sphere or cuboid rock only.
+    fn resolve_draws(&self, ck: &mut Checker) -> SceneDraws {
         let draws = match &self.monte_carlo {
             None => SceneDraws::default(),
             Some(m) => SceneDraws {
                 side_length: m
                     .side_length_m
-                    .map(|d| d.resolve("/monte_carlo/side_length_m", 0.01, 5.0, &mut ck)),
+                    .map(|d| d.resolve("/monte_carlo/side_length_m", 0.01, 5.0, ck)),
                 density: m
                     .density_kg_m3
-                    .map(|d| d.resolve("/monte_carlo/density_kg_m3", 100.0, 20000.0, &mut ck)),
+                    .map(|d| d.resolve("/monte_carlo/density_kg_m3", 100.0, 20000.0, ck)),
                 release_across: m
                     .release_across_m
-                    .map(|d| d.resolve("/monte_carlo/release_across_m", -1000.0, 1000.0, &mut ck)),
+                    .map(|d| d.resolve("/monte_carlo/release_across_m", -1000.0, 1000.0, ck)),
             },
         };
         for (f, d) in [
@@ -593,6 +682,12 @@ impl SceneRequest {
                 "the side length is drawn for a cube, sphere or cuboid rock only",
             );
         }
+        draws
+    }
+
+    /// The design limits: utilisation in (0, 100], force (N) and energy (J) in (0, 1e12],
+    /// acceptable probability in [0, 1].
+    fn resolve_design_limits(&self, ck: &mut Checker) -> DesignLimits {
         let dl = &self.design_limits;
         if let Some(v) = dl.stress_utilisation {
             ck.open_closed("/design_limits/stress_utilisation", v, 0.0, 100.0, "");
@@ -610,31 +705,12 @@ impl SceneRequest {
             1.0,
             "",
         );
-        ck.finish()?;
-        let limits = DesignLimits {
+        DesignLimits {
             stress_utilisation: dl.stress_utilisation,
             max_force: dl.max_force_n,
             absorbed_energy: dl.absorbed_energy_j,
             acceptable_probability: dl.acceptable_probability,
-        };
-        let case = SceneCase {
-            migration,
-            supports: entries,
-            column: column_case,
-            impact_velocity: self.impact_velocity_m_s,
-            release_zones,
-            draws,
-            limits,
-            compare_methods: self.compare_methods,
-        };
-        let ctx = SceneContext {
-            migration: mreq,
-            entry_pointer: pointers,
-            entry_column: columns,
-            impact_rock,
-            galerkin: self.galerkin,
-        };
-        Ok((case, ctx))
+        }
     }
 }
 

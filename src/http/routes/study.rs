@@ -18,8 +18,8 @@ use crate::http::dto::column::{ColumnModelDto, ColumnRequest};
 use crate::http::dto::common::{LawDto, Meta, PlanStep, ShapeKind, Warning};
 use crate::http::dto::study::{
     CANONICAL, EnergyProportionDto, MeasuresDto, OrderedMap, OrderingDto, OutputSensitivityDto,
-    PaperComparisonDto, StudyGrid, StudyGridDto, StudyRequest, StudyResponse, default_outputs,
-    paper_parameters, pointer_of, set_pointer, study_outputs,
+    PaperComparisonDto, StudyGrid, StudyGridDto, StudyParameterDto, StudyRequest, StudyResponse,
+    default_outputs, paper_parameters, pointer_of, set_pointer, study_outputs,
 };
 use crate::http::error::{ApiError, FieldError};
 use crate::http::json::{AppJson, from_value};
@@ -217,7 +217,58 @@ pub fn plan(config: &Config, mut req: StudyRequest) -> Result<StudyPlan, ApiErro
     let base_case = base_resolved.resolve(config).map_err(|e| e.nest("/base"))?;
     let base_resolved_json = serde_json::to_value(&base_resolved).map_err(ApiError::internal)?;
     let coupled = base_resolved.model == ColumnModelDto::Coupled;
+    let outputs = check_request(config, &mut req, coupled)?;
 
+    // Each parameter: its range ends must resolve, and its base value.
+    let base = StudyBase {
+        config,
+        json: &base_json,
+        resolved: &base_resolved,
+        resolved_json: &base_resolved_json,
+        case: &base_case,
+        coupled,
+        corner_given: req.base.rock.corner_radius_m.is_some(),
+        initial_given: req.base.initial_midpoint_displacement_m.is_some(),
+    };
+    let mut params = Vec::with_capacity(req.parameters.len());
+    for (i, p) in req.parameters.iter().enumerate() {
+        params.push(base.param(i, p, &req.x_values, &outputs, &mut warnings)?);
+    }
+
+    // The points.
+    let n = req.points as usize;
+    let np = params.len();
+    let values = sweep_values(&params, n);
+    let pairs: Vec<(usize, usize)> = if req.grid == StudyGrid::Pairs {
+        (0..np)
+            .flat_map(|a| ((a + 1)..np).map(move |b| (a, b)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let slots = study_slots(&params, pairs.len(), n, req.x_values.len());
+    Ok(StudyPlan {
+        req,
+        base_json,
+        base_resolved,
+        coupled,
+        outputs,
+        params,
+        values,
+        pairs,
+        slots,
+        warnings,
+    })
+}
+
+/// The study's own fields: points, parameters (distinct dotted paths, finite min < max),
+/// x values in (0, 1], outputs of the column model (filled in by default); returns the
+/// outputs.
+fn check_request(
+    config: &Config,
+    req: &mut StudyRequest,
+    coupled: bool,
+) -> Result<Vec<String>, ApiError> {
     let mut ck = crate::http::dto::common::Checker::new();
     ck.count(
         "/points",
@@ -290,73 +341,49 @@ pub fn plan(config: &Config, mut req: StudyRequest) -> Result<StudyPlan, ApiErro
         }
     }
     ck.finish()?;
+    Ok(outputs)
+}
 
-    // Each parameter: its range ends must resolve, and its base value.
-    let hertz = base_resolved.contact.law == LawDto::HertzPoint;
-    let corner_given = req.base.rock.corner_radius_m.is_some();
-    let mut params = Vec::with_capacity(req.parameters.len());
-    for (i, p) in req.parameters.iter().enumerate() {
+/// What a study's parameters are resolved against: the base column request (as sent, as
+/// resolved, its case) and what it left to its defaults.
+struct StudyBase<'a> {
+    config: &'a Config,
+    /// The base request as sent.
+    json: &'a Value,
+    /// The base request as resolved.
+    resolved: &'a ColumnRequest,
+    /// The resolved base request as JSON (the parameters' base values).
+    resolved_json: &'a Value,
+    /// The base case.
+    case: &'a crate::physics::column::ColumnCase,
+    /// The coupled column model.
+    coupled: bool,
+    /// The base request gave the rock's corner radius.
+    corner_given: bool,
+    /// The base request gave an initial midpoint displacement.
+    initial_given: bool,
+}
+
+impl StudyBase<'_> {
+    /// Parameter `i` (`p`): its range ends and x·max values checked, its base value, its
+    /// rank in the canonical order, its analytic elasticities and, where an output needs
+    /// them, its central-difference points (or a warning why there are none).
+    fn param(
+        &self,
+        i: usize,
+        p: &StudyParameterDto,
+        x_values: &[f64],
+        outputs: &[String],
+        warnings: &mut Vec<Warning>,
+    ) -> Result<Param, ApiError> {
         let pointer = pointer_of(&p.name);
-        for (end, x) in [("min", p.min), ("max", p.max)] {
-            if let Err(e) = resolve_point(config, &point_json(&base_json, &[(&pointer, x)])) {
-                let field = if matches!(e.code(), "unknown_field" | "invalid_type") {
-                    format!("/parameters/{i}/name")
-                } else {
-                    format!("/parameters/{i}/{end}")
-                };
-                return Err(blame(
-                    &e,
-                    &field,
-                    &format!("{} = {x} is not a valid column request", p.name),
-                ));
-            }
-        }
-        for (k, &x) in req.x_values.iter().enumerate() {
-            let v = x * p.max;
-            if let Err(e) = resolve_point(config, &point_json(&base_json, &[(&pointer, v)])) {
-                return Err(blame(
-                    &e,
-                    &format!("/x_values/{k}"),
-                    &format!("{} = x·max = {v}", p.name),
-                ));
-            }
-        }
-        let base = base_resolved_json.pointer(&pointer).and_then(Value::as_f64);
+        self.check_sweep(i, p, &pointer, x_values)?;
+        let base = self.resolved_json.pointer(&pointer).and_then(Value::as_f64);
         let rank = CANONICAL
             .iter()
             .position(|c| *c == p.name)
             .unwrap_or(CANONICAL.len() + i);
-        let which = match p.name.as_str() {
-            "velocity_m_s" => Some(ImpactParameter::Velocity),
-            "rock.side_length_m" => Some(ImpactParameter::SideLength),
-            "rock.density_kg_m3" => Some(ImpactParameter::Density),
-            "rock.elastic_modulus_pa" => Some(ImpactParameter::RockModulus),
-            _ => None,
-        };
-        let side_moves_corner = hertz
-            && which == Some(ImpactParameter::SideLength)
-            && !(corner_given || base_resolved.rock.side_length_m / 2.0 > 0.02);
-        let analytic = match which {
-            Some(w)
-                if !coupled
-                    && base_resolved.initial_midpoint_displacement_m.is_none()
-                    && req.base.initial_midpoint_displacement_m.is_none()
-                    && base_resolved.rock.shape == ShapeKind::Cube
-                    && !side_moves_corner =>
-            {
-                impact_elasticities(&base_case.impact, w)?.filter(|e| {
-                    [
-                        e.max_deformation,
-                        e.max_force,
-                        e.absorbed_energy,
-                        e.energy_ratio,
-                    ]
-                    .iter()
-                    .all(|x| x.is_finite())
-                })
-            }
-            _ => None,
-        };
+        let analytic = self.analytic(&p.name)?;
         let needs_fd = outputs.iter().any(|o| {
             analytic.is_none()
                 || !matches!(
@@ -367,7 +394,7 @@ pub fn plan(config: &Config, mut req: StudyRequest) -> Result<StudyPlan, ApiErro
         let fd = if needs_fd {
             let pts = base.and_then(richardson_points).filter(|pts| {
                 pts.iter().all(|&x| {
-                    resolve_point(config, &point_json(&base_json, &[(&pointer, x)])).is_ok()
+                    resolve_point(self.config, &point_json(self.json, &[(&pointer, x)])).is_ok()
                 })
             });
             if pts.is_none() {
@@ -384,7 +411,7 @@ pub fn plan(config: &Config, mut req: StudyRequest) -> Result<StudyPlan, ApiErro
         } else {
             None
         };
-        params.push(Param {
+        Ok(Param {
             name: p.name.clone(),
             pointer,
             min: p.min,
@@ -393,13 +420,91 @@ pub fn plan(config: &Config, mut req: StudyRequest) -> Result<StudyPlan, ApiErro
             base,
             fd,
             analytic,
-        });
+        })
     }
 
-    // The points.
-    let n = req.points as usize;
-    let np = params.len();
-    let values: Vec<Vec<f64>> = params
+    /// The base request with parameter `i` (`p`, at `pointer`) set to its range ends and to
+    /// each x·max must be a valid column request.
+    fn check_sweep(
+        &self,
+        i: usize,
+        p: &StudyParameterDto,
+        pointer: &str,
+        x_values: &[f64],
+    ) -> Result<(), ApiError> {
+        for (end, x) in [("min", p.min), ("max", p.max)] {
+            if let Err(e) = resolve_point(self.config, &point_json(self.json, &[(pointer, x)])) {
+                let field = if matches!(e.code(), "unknown_field" | "invalid_type") {
+                    format!("/parameters/{i}/name")
+                } else {
+                    format!("/parameters/{i}/{end}")
+                };
+                return Err(blame(
+                    &e,
+                    &field,
+                    &format!("{} = {x} is not a valid column request", p.name),
+                ));
+            }
+        }
+        for (k, &x) in x_values.iter().enumerate() {
+            let v = x * p.max;
+            if let Err(e) = resolve_point(self.config, &point_json(self.json, &[(pointer, v)])) {
+                return Err(blame(
+                    &e,
+                    &format!("/x_values/{k}"),
+                    &format!("{} = x·max = {v}", p.name),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The analytic elasticities of the impact (physics.md §D.2) for the parameter `name`:
+    /// v, L, ρ or E of a cube on the decoupled model from rest (not L when it moves the
+    /// Hertz corner radius), all finite; None otherwise.
+    fn analytic(
+        &self,
+        name: &str,
+    ) -> Result<Option<crate::physics::study::ImpactElasticities>, ApiError> {
+        let which = match name {
+            "velocity_m_s" => Some(ImpactParameter::Velocity),
+            "rock.side_length_m" => Some(ImpactParameter::SideLength),
+            "rock.density_kg_m3" => Some(ImpactParameter::Density),
+            "rock.elastic_modulus_pa" => Some(ImpactParameter::RockModulus),
+            _ => None,
+        };
+        let resolved = self.resolved;
+        let hertz = resolved.contact.law == LawDto::HertzPoint;
+        let side_moves_corner = hertz
+            && which == Some(ImpactParameter::SideLength)
+            && !(self.corner_given || resolved.rock.side_length_m / 2.0 > 0.02);
+        Ok(match which {
+            Some(w)
+                if !self.coupled
+                    && resolved.initial_midpoint_displacement_m.is_none()
+                    && !self.initial_given
+                    && resolved.rock.shape == ShapeKind::Cube
+                    && !side_moves_corner =>
+            {
+                impact_elasticities(&self.case.impact, w)?.filter(|e| {
+                    [
+                        e.max_deformation,
+                        e.max_force,
+                        e.absorbed_energy,
+                        e.energy_ratio,
+                    ]
+                    .iter()
+                    .all(|x| x.is_finite())
+                })
+            }
+            _ => None,
+        })
+    }
+}
+
+/// The swept values of each parameter: `n` evenly spaced from min, the last exactly max.
+fn sweep_values(params: &[Param], n: usize) -> Vec<Vec<f64>> {
+    params
         .iter()
         .map(|p| {
             (0..n)
@@ -412,41 +517,29 @@ pub fn plan(config: &Config, mut req: StudyRequest) -> Result<StudyPlan, ApiErro
                 })
                 .collect()
         })
-        .collect();
-    let pairs: Vec<(usize, usize)> = if req.grid == StudyGrid::Pairs {
-        (0..np)
-            .flat_map(|a| ((a + 1)..np).map(move |b| (a, b)))
-            .collect()
-    } else {
-        Vec::new()
-    };
+        .collect()
+}
+
+/// The study's points in response order: the base, each parameter's curve of `n`, each of
+/// the `grids` pair grids of n × n, then per parameter its `nx` energy proportions and its
+/// four central-difference points.
+fn study_slots(params: &[Param], grids: usize, n: usize, nx: usize) -> Vec<Slot> {
     let mut slots = vec![Slot::Base];
-    for i in 0..np {
+    for i in 0..params.len() {
         slots.extend((0..n).map(|k| Slot::Curve(i, k)));
     }
-    for (g, _) in pairs.iter().enumerate() {
+    for g in 0..grids {
         for yi in 0..n {
             slots.extend((0..n).map(|xi| Slot::Grid(g, yi, xi)));
         }
     }
     for (i, p) in params.iter().enumerate() {
-        slots.extend((0..req.x_values.len()).map(|k| Slot::Proportion(i, k)));
+        slots.extend((0..nx).map(|k| Slot::Proportion(i, k)));
         if p.fd.is_some() {
             slots.extend((0..4).map(|j| Slot::Difference(i, j)));
         }
     }
-    Ok(StudyPlan {
-        req,
-        base_json,
-        base_resolved,
-        coupled,
-        outputs,
-        params,
-        values,
-        pairs,
-        slots,
-        warnings,
-    })
+    slots
 }
 
 impl StudyPlan {
@@ -554,6 +647,51 @@ impl StudyPlan {
     }
 }
 
+/// Each point's outputs, placed where the response lists them.
+struct Assembled {
+    /// The base point's outputs, then its energy ratio.
+    base: Vec<f64>,
+    /// The curves: [parameter][output][point].
+    curves: Vec<Vec<Vec<f64>>>,
+    /// The pair grids: [pair][output][y point][x point].
+    grids: Vec<Vec<Vec<Vec<f64>>>>,
+    /// The energy ratio at each x·max: [parameter][x].
+    proportions: Vec<Vec<f64>>,
+    /// The four central-difference points' outputs: [parameter][output].
+    differences: Vec<Vec<[f64; 4]>>,
+}
+
+/// Places the outputs `results` of the points `slots` (`no` outputs then the energy ratio
+/// each) for `np` parameters of `n` points, `n_pairs` pair grids and `nx` x values.
+fn assemble(
+    slots: &[Slot],
+    results: Vec<Vec<f64>>,
+    no: usize,
+    np: usize,
+    n: usize,
+    n_pairs: usize,
+    nx: usize,
+) -> Assembled {
+    let ie = no; // index of energy_ratio in each result
+    let mut y = Assembled {
+        base: Vec::new(),
+        curves: vec![vec![vec![0.0; n]; no]; np],
+        grids: vec![vec![vec![vec![0.0; n]; n]; no]; n_pairs],
+        proportions: vec![vec![0.0; nx]; np],
+        differences: vec![vec![[0.0; 4]; no]; np],
+    };
+    for (slot, r) in slots.iter().zip(results) {
+        match *slot {
+            Slot::Base => y.base = r,
+            Slot::Curve(i, k) => (0..no).for_each(|o| y.curves[i][o][k] = r[o]),
+            Slot::Grid(g, yi, xi) => (0..no).for_each(|o| y.grids[g][o][yi][xi] = r[o]),
+            Slot::Proportion(i, k) => y.proportions[i][k] = r[ie],
+            Slot::Difference(i, j) => (0..no).for_each(|o| y.differences[i][o][j] = r[o]),
+        }
+    }
+    y
+}
+
 #[allow(clippy::too_many_arguments)]
 fn finish_study(
     mut req: StudyRequest,
@@ -569,23 +707,9 @@ fn finish_study(
     np: usize,
     results: Vec<Vec<f64>>,
 ) -> Result<StudyResponse, ApiError> {
-    // Assemble.
     let no = outputs.len();
     let ie = no; // index of energy_ratio in each result
-    let mut base_y = Vec::new();
-    let mut curve_y = vec![vec![vec![0.0; n]; no]; np];
-    let mut grid_y = vec![vec![vec![vec![0.0; n]; n]; no]; pairs.len()];
-    let mut prop = vec![vec![0.0; req.x_values.len()]; np];
-    let mut diff = vec![vec![[0.0; 4]; no]; np];
-    for (slot, r) in slots.iter().zip(results) {
-        match *slot {
-            Slot::Base => base_y = r,
-            Slot::Curve(i, k) => (0..no).for_each(|o| curve_y[i][o][k] = r[o]),
-            Slot::Grid(g, yi, xi) => (0..no).for_each(|o| grid_y[g][o][yi][xi] = r[o]),
-            Slot::Proportion(i, k) => prop[i][k] = r[ie],
-            Slot::Difference(i, j) => (0..no).for_each(|o| diff[i][o][j] = r[o]),
-        }
-    }
+    let y = assemble(slots, results, no, np, n, pairs.len(), req.x_values.len());
     let curves = OrderedMap(
         params
             .iter()
@@ -596,7 +720,7 @@ fn finish_study(
                     outputs
                         .iter()
                         .enumerate()
-                        .map(|(o, name)| (name.clone(), curve_y[i][o].clone())),
+                        .map(|(o, name)| (name.clone(), y.curves[i][o].clone())),
                 );
                 (p.name.clone(), OrderedMap(m))
             })
@@ -615,7 +739,7 @@ fn finish_study(
                     outputs
                         .iter()
                         .enumerate()
-                        .map(|(o, name)| (name.clone(), grid_y[g][o].clone()))
+                        .map(|(o, name)| (name.clone(), y.grids[g][o].clone()))
                         .collect(),
                 ),
             })
@@ -625,90 +749,13 @@ fn finish_study(
     let mut sensitivity = Vec::new();
     let mut groups_by_output = Vec::new();
     for (o, name) in outputs.iter().enumerate() {
-        let y0 = base_y[o];
-        let mut any_numeric = false;
-        let measures: Vec<MeasuresDto> = params
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let (low, high) = (curve_y[i][o][0], curve_y[i][o][n - 1]);
-                let analytic = p.analytic.and_then(|e| match name.as_str() {
-                    "max_deformation_m" => Some(e.max_deformation),
-                    "max_force_n" => Some(e.max_force),
-                    "absorbed_energy_j" => Some(e.absorbed_energy),
-                    "energy_ratio" => Some(e.energy_ratio),
-                    _ => None,
-                });
-                let elasticity = analytic.or_else(|| {
-                    any_numeric = true;
-                    match (p.base, p.fd) {
-                        (Some(b), Some(x)) => richardson_elasticity(b, y0, x, diff[i][o]),
-                        _ => None,
-                    }
-                });
-                MeasuresDto {
-                    low,
-                    high,
-                    span_over_base: span_over_base(low, high, y0),
-                    ratio: ratio(low, high),
-                    elasticity,
-                }
-            })
-            .collect();
-        for (p, m) in params.iter().zip(&measures) {
-            for (what, v) in [
-                ("span_over_base", m.span_over_base),
-                ("ratio", m.ratio),
-                ("elasticity", m.elasticity),
-            ] {
-                if v.is_none() && !(what == "elasticity" && p.fd.is_none() && p.analytic.is_none())
-                {
-                    warnings.push(Warning::new(
-                        "measure_undefined",
-                        format!(
-                            "{name}, {}: {what} is null (zero base output, or outputs of opposite sign or zero at the range ends); left out of the ordering",
-                            p.name
-                        ),
-                    ));
-                }
-            }
-        }
-        let by = |f: fn(&MeasuresDto) -> Option<f64>, tol: f64| {
-            order_groups(&measures.iter().map(f).collect::<Vec<_>>(), &ranks, tol)
-        };
-        let g_span = by(|m| m.span_over_base, TIE_REL);
-        let g_ratio = by(|m| m.ratio, TIE_REL);
-        let g_el = by(
-            |m| m.elasticity,
-            if any_numeric {
-                TIE_REL_NUMERIC
-            } else {
-                TIE_REL
-            },
-        );
-        sensitivity.push((
-            name.clone(),
-            OutputSensitivityDto {
-                base: y0,
-                parameters: OrderedMap(
-                    params
-                        .iter()
-                        .zip(&measures)
-                        .map(|(p, m)| (p.name.clone(), *m))
-                        .collect(),
-                ),
-                ordering: OrderingDto {
-                    span_over_base: ordering_names(&g_span, params),
-                    ratio: ordering_names(&g_ratio, params),
-                    elasticity: ordering_names(&g_el, params),
-                },
-            },
-        ));
-        groups_by_output.push((name.clone(), [g_span, g_ratio, g_el]));
+        let (dto, groups) = output_sensitivity(o, name, params, &ranks, &y, n, &mut warnings);
+        sensitivity.push((name.clone(), dto));
+        groups_by_output.push((name.clone(), groups));
     }
     let prop_groups: Vec<Vec<Vec<usize>>> = (0..req.x_values.len())
         .map(|k| {
-            let m: Vec<Option<f64>> = (0..np).map(|i| Some(prop[i][k])).collect();
+            let m: Vec<Option<f64>> = (0..np).map(|i| Some(y.proportions[i][k])).collect();
             order_groups(&m, &ranks, TIE_REL)
         })
         .collect();
@@ -719,7 +766,7 @@ fn finish_study(
             params
                 .iter()
                 .enumerate()
-                .map(|(i, p)| (p.name.clone(), prop[i].clone()))
+                .map(|(i, p)| (p.name.clone(), y.proportions[i].clone()))
                 .collect(),
         ),
         orderings: prop_groups
@@ -733,7 +780,7 @@ fn finish_study(
         coupled,
         &groups_by_output,
         &prop_groups,
-        base_y[ie],
+        y.base[ie],
     );
     if paper_comparison.is_empty() {
         warnings.push(Warning::new(
@@ -741,17 +788,137 @@ fn finish_study(
             "paper_comparison is empty: it needs the paper's four parameters with the paper's ranges (physics.md §D.1)",
         ));
     }
+    let mut meta = Meta::new(study_plan_steps(
+        params,
+        slots.len(),
+        coupled,
+        pairs.len(),
+        n,
+    ));
+    meta.warnings = warnings;
+    req.base = base_resolved;
+    Ok(StudyResponse {
+        curves,
+        grids,
+        sensitivity: OrderedMap(sensitivity),
+        energy_proportion,
+        paper_comparison,
+        warnings: meta.warnings,
+        plan: meta.plan,
+        inputs: req,
+        model_version: meta.model_version,
+    })
+}
+
+/// The sensitivity of output `o` (`name`) to each parameter: its measures (a warning for
+/// each that is undefined) and its three orderings (span over base, ratio, elasticity).
+fn output_sensitivity(
+    o: usize,
+    name: &str,
+    params: &[Param],
+    ranks: &[usize],
+    y: &Assembled,
+    n: usize,
+    warnings: &mut Vec<Warning>,
+) -> (OutputSensitivityDto, [Vec<Vec<usize>>; 3]) {
+    let y0 = y.base[o];
+    let mut any_numeric = false;
+    let measures: Vec<MeasuresDto> = params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let (low, high) = (y.curves[i][o][0], y.curves[i][o][n - 1]);
+            let analytic = p.analytic.and_then(|e| match name {
+                "max_deformation_m" => Some(e.max_deformation),
+                "max_force_n" => Some(e.max_force),
+                "absorbed_energy_j" => Some(e.absorbed_energy),
+                "energy_ratio" => Some(e.energy_ratio),
+                _ => None,
+            });
+            let elasticity = analytic.or_else(|| {
+                any_numeric = true;
+                match (p.base, p.fd) {
+                    (Some(b), Some(x)) => richardson_elasticity(b, y0, x, y.differences[i][o]),
+                    _ => None,
+                }
+            });
+            MeasuresDto {
+                low,
+                high,
+                span_over_base: span_over_base(low, high, y0),
+                ratio: ratio(low, high),
+                elasticity,
+            }
+        })
+        .collect();
+    for (p, m) in params.iter().zip(&measures) {
+        for (what, v) in [
+            ("span_over_base", m.span_over_base),
+            ("ratio", m.ratio),
+            ("elasticity", m.elasticity),
+        ] {
+            if v.is_none() && !(what == "elasticity" && p.fd.is_none() && p.analytic.is_none()) {
+                warnings.push(Warning::new(
+                    "measure_undefined",
+                    format!(
+                        "{name}, {}: {what} is null (zero base output, or outputs of opposite sign or zero at the range ends); left out of the ordering",
+                        p.name
+                    ),
+                ));
+            }
+        }
+    }
+    let by = |f: fn(&MeasuresDto) -> Option<f64>, tol: f64| {
+        order_groups(&measures.iter().map(f).collect::<Vec<_>>(), ranks, tol)
+    };
+    let g_span = by(|m| m.span_over_base, TIE_REL);
+    let g_ratio = by(|m| m.ratio, TIE_REL);
+    let g_el = by(
+        |m| m.elasticity,
+        if any_numeric {
+            TIE_REL_NUMERIC
+        } else {
+            TIE_REL
+        },
+    );
+    let dto = OutputSensitivityDto {
+        base: y0,
+        parameters: OrderedMap(
+            params
+                .iter()
+                .zip(&measures)
+                .map(|(p, m)| (p.name.clone(), *m))
+                .collect(),
+        ),
+        ordering: OrderingDto {
+            span_over_base: ordering_names(&g_span, params),
+            ratio: ordering_names(&g_ratio, params),
+            elasticity: ordering_names(&g_el, params),
+        },
+    };
+    (dto, [g_span, g_ratio, g_el])
+}
+
+/// The study's plan: `points` column solutions, the analytic elasticities (or why none),
+/// the `n_pairs` pair grids of n × n (or why none).
+fn study_plan_steps(
+    params: &[Param],
+    points: usize,
+    coupled: bool,
+    n_pairs: usize,
+    n: usize,
+) -> Vec<PlanStep> {
     let analytic_names: Vec<&str> = params
         .iter()
         .filter(|p| p.analytic.is_some())
         .map(|p| p.name.as_str())
         .collect();
-    let mut meta = Meta::new(vec![
+    vec![
         PlanStep::ran(
             "points",
             format!(
                 "{} column solutions ({} model), the same code as POST /v1/column",
-                slots.len(),
+                points,
                 if coupled { "coupled" } else { "decoupled" }
             ),
         ),
@@ -769,25 +936,12 @@ fn finish_study(
                 ),
             )
         },
-        if pairs.is_empty() {
+        if n_pairs == 0 {
             PlanStep::skipped("grids", "grid = one_at_a_time")
         } else {
-            PlanStep::ran("grids", format!("{} pair grids of {n}×{n}", pairs.len()))
+            PlanStep::ran("grids", format!("{n_pairs} pair grids of {n}×{n}"))
         },
-    ]);
-    meta.warnings = warnings;
-    req.base = base_resolved;
-    Ok(StudyResponse {
-        curves,
-        grids,
-        sensitivity: OrderedMap(sensitivity),
-        energy_proportion,
-        paper_comparison,
-        warnings: meta.warnings,
-        plan: meta.plan,
-        inputs: req,
-        model_version: meta.model_version,
-    })
+    ]
 }
 
 const MEASURES: [&str; 3] = ["span_over_base", "ratio", "elasticity"];

@@ -320,6 +320,164 @@ fn v3(v: &Vector3<f64>) -> [f64; 3] {
     [v.x, v.y, v.z]
 }
 
+/// What stays fixed through one run.
+#[derive(Debug, Clone, Copy)]
+struct RunSettings {
+    /// Friction coefficient of the run.
+    mu: f64,
+    /// Critical damping ratio of the contacts' dashpots.
+    beta: f64,
+    /// End time, s (∞ without one).
+    end_t: f64,
+    /// A support has a column the block may reach.
+    has_columns: bool,
+    /// The floor's normal when the floor is the plane.
+    plane_normal: Option<Vector3<f64>>,
+    /// Keep the event log.
+    log_events: bool,
+}
+
+/// How an attempt at a free flight ended.
+enum Flight {
+    /// The block is not clear of the floor: it steps.
+    Grounded,
+    /// Flown to the floor's approach or the end time.
+    Flew,
+    /// The run stops inside the flight.
+    Stopped(StopReason),
+}
+
+/// The forces of one step (world frame).
+#[derive(Debug, Clone, Copy)]
+struct Forces {
+    /// Total force on the block, gravity included, N.
+    force: Vector3<f64>,
+    /// Moment about the centre, N·m.
+    moment: Vector3<f64>,
+    /// Sum of the normal contact forces, N.
+    normal_total: f64,
+    /// The dashpots' and the local damping's share of the force, N.
+    damping_force: Vector3<f64>,
+    /// The dashpots' and the local damping's share of the moment, N·m.
+    damping_moment: Vector3<f64>,
+    /// Sum of the shear forces of the slipping contacts, N.
+    slip_force: Vector3<f64>,
+    /// Number of slipping contacts.
+    slipping: usize,
+}
+
+/// One leapfrog step taken.
+#[derive(Debug, Clone, Copy)]
+struct Step {
+    /// Its length, s.
+    h: f64,
+    /// Speed of the centre before it (half-step velocity), m/s.
+    speed_before: f64,
+    /// The forces it applied.
+    forces: Forces,
+}
+
+/// One run in progress: the block, its contacts and the books kept on them.
+struct Run {
+    /// The block; its velocities lag by half a step while `half_step` is set.
+    st: State,
+    /// The shear springs as the last force evaluation left them.
+    springs: Vec<Spring>,
+    /// Scratch for the springs of the next force evaluation.
+    new_springs: Vec<Spring>,
+    /// The contacts of the current configuration.
+    contacts: Vec<Geo>,
+    /// Scratch for the floor triangles near the block.
+    tris: Vec<FloorTriangle>,
+    /// Energy dissipated by the dashpots and the local damping, J.
+    damping: f64,
+    /// Energy dissipated by the shear springs (slip), J.
+    friction: f64,
+    /// Elastic energy held in the contacts, J.
+    stored: f64,
+    /// Acceleration of the centre at the last step, m/s².
+    acc: Vector3<f64>,
+    /// Angular acceleration at the last step (world frame), rad/s².
+    ang_acc: Vector3<f64>,
+    /// The trajectory's recorder, if sampled.
+    rec: Option<Recorder>,
+    /// The event log.
+    events: Vec<Event>,
+    /// Impacts so far.
+    impacts: u64,
+    /// Along-dip position where the ground phase began, m.
+    slide_start: Option<f64>,
+    /// Highest centre above its resting height after the first impact, m.
+    max_bounce: f64,
+    /// Leapfrog steps taken.
+    steps: u64,
+    /// Deepest contact overlap, m.
+    max_overlap: f64,
+    /// The block has touched the floor.
+    had_contact: bool,
+    /// Time of the last step in contact, s.
+    last_contact_t: f64,
+    /// The current contact episode.
+    episode: Option<Episode>,
+    /// The first impact has happened (bounce heights count from it).
+    first_impact_done: bool,
+    /// Since when the block is slower than the rest speed, s.
+    still_since: Option<f64>,
+    /// Start (time, centre, orientation) of the current window of uninterrupted contact.
+    quiet_window: Option<(f64, Vector3<f64>, UnitQuaternion<f64>)>,
+    /// Fastest tangential slip of a contact at the last step, m/s.
+    slip_max: f64,
+    /// Along-dip position of the centre at the last step, m.
+    prev_along: f64,
+    /// The support whose column stopped the block.
+    support: Option<usize>,
+    /// Since when the slide has been settled, s.
+    steady_since: Option<f64>,
+    /// (centre, distance): a settled slide that met the edge of its flat patch tries again
+    /// only once the centre has moved that far.
+    patch_wait: Option<(Vector3<f64>, f64)>,
+    /// The half step (s) the velocities lag the positions by (leapfrog); None: in step.
+    half_step: Option<f64>,
+    /// Time since the last force evaluation: the drift the shear springs have not yet seen, s.
+    drift_h: f64,
+}
+
+/// The shear spring of a contact of normal `n` after its point drifted by `d` (m): the old
+/// spring `old` turned into the tangent plane, loaded by −kₛ d (`ks`, N/m) and capped at
+/// `cap` (N). Returns its force (N), its energy (J), whether it slips and the work it
+/// dissipated (J, see [`shear_work`]).
+fn shear_spring(
+    n: &Vector3<f64>,
+    old: Option<&Spring>,
+    d: &Vector3<f64>,
+    ks: f64,
+    cap: f64,
+) -> (Vector3<f64>, f64, bool, f64) {
+    // rotate the old spring into the tangent plane
+    let (fs_old, es_old) = match old {
+        Some(o) => {
+            let mag = o.fs.norm();
+            let pr = o.fs - n * n.dot(&o.fs);
+            let pn = pr.norm();
+            (if pn > 0.0 { pr * (mag / pn) } else { pr }, o.energy())
+        }
+        None => (Vector3::zeros(), 0.0),
+    };
+    let mut fs = fs_old - d * ks;
+    let fs_n = fs.norm();
+    let slipping = fs_n > cap;
+    if slipping {
+        fs *= if fs_n > 0.0 { cap / fs_n } else { 0.0 };
+    }
+    let es_new = if ks > 0.0 {
+        fs.norm_squared() / (2.0 * ks)
+    } else {
+        0.0
+    };
+    let work = shear_work(&fs_old, es_old, &fs, es_new, d);
+    (fs, es_new, slipping, work)
+}
+
 impl<'a> Model<'a> {
     /// Builds the model of a case on its floor; `pr` gives the release point.
     fn new(case: &MigrationCase, pr: &'a super::Prepared) -> PhysicsResult<Self> {
@@ -565,6 +723,9 @@ impl<'a> Model<'a> {
         }
     }
 
+    /// Contacts of the block (centre `c`, orientation `r`) with a mesh floor: vertex–face,
+    /// and, unless the floor under the block is one flat patch, face–vertex (floor peaks) and
+    /// edge–edge (convex creases); `tris` is scratch for the floor triangles near the block.
     fn contacts_mesh(
         &self,
         c: &Vector3<f64>,
@@ -585,22 +746,7 @@ impl<'a> Model<'a> {
             return;
         }
         let world: Vec<Vector3<f64>> = sh.vertices.iter().map(|b| c + r * b).collect();
-        // vertex–face
-        for (i, p) in world.iter().enumerate() {
-            if let Some(f) = fl.locate(p.x, p.y, 0.0, 0.0) {
-                let pl = fl.facet_plane(f);
-                let n = pl.normal();
-                let d = pl.height(p) * n.z;
-                if d < 0.0 {
-                    out.push(Geo {
-                        key: i as u64,
-                        p: *p,
-                        n,
-                        u: -d,
-                    });
-                }
-            }
-        }
+        self.vertex_face_contacts(&world, out);
         // floor features inside the block's plan box (padded)
         let (mut x0, mut x1, mut y0, mut y1) = (
             f64::INFINITY,
@@ -619,24 +765,12 @@ impl<'a> Model<'a> {
         tris.clear();
         let pad = 1e-9 * (1.0 + sh.r_max);
         fl.triangles_in([x0 - pad, x1 + pad, y0 - pad, y1 + pad], tris);
-        if tris.is_empty() {
-            return;
-        }
         // a flat patch has no floor peak and no convex crease: its contacts are the vertex–face
         // ones found above (this skips the quadratic searches below on planar floor regions)
-        let normal_of = |t: &FloorTriangle| {
-            (t.corners[1] - t.corners[0])
-                .cross(&(t.corners[2] - t.corners[0]))
-                .normalize()
-        };
-        let (n0, o0) = (normal_of(&tris[0]), tris[0].corners[0]);
-        let tol = 1e-12 * (1.0 + sh.r_max + o0.norm());
-        if tris.iter().all(|t| {
-            normal_of(t).dot(&n0) >= 1.0 - 1e-12
-                && t.corners.iter().all(|x| n0.dot(&(x - o0)).abs() <= tol)
-        }) {
+        if tris.is_empty() || one_flat_patch(tris, sh.r_max) {
             return;
         }
+        // the block's faces in the world frame: (outward normal, offset)
         let faces_w: Vec<(Vector3<f64>, f64)> = sh
             .faces
             .iter()
@@ -645,60 +779,42 @@ impl<'a> Model<'a> {
                 (n, f.offset + n.dot(c))
             })
             .collect();
-        let inside_depth = |x: &Vector3<f64>| -> Option<(f64, usize)> {
-            let mut best = (f64::INFINITY, 0usize);
-            for (k, (n, off)) in faces_w.iter().enumerate() {
-                let d = off - n.dot(x);
-                if d <= 0.0 {
-                    return None;
-                }
-                if d < best.0 {
-                    best = (d, k);
-                }
-            }
-            Some(best)
-        };
-        // face–vertex: floor vertices inside the block that poke towards the nearest face
-        let mut done: Vec<u32> = Vec::new();
-        for t in tris.iter() {
-            for k in 0..3 {
-                let id = t.ids[k];
-                let x = t.corners[k];
-                if x.z < z_min || done.contains(&id) {
-                    continue;
-                }
-                done.push(id);
-                let Some((depth, face)) = inside_depth(&x) else {
-                    continue;
-                };
-                let nf = faces_w[face].0;
-                // a peak towards the face: every neighbour lower along the face normal
-                let mut peak = true;
-                let mut any = false;
-                for t2 in tris.iter() {
-                    for k2 in 0..3 {
-                        if t2.ids[k2] == id {
-                            for y in [t2.corners[(k2 + 1) % 3], t2.corners[(k2 + 2) % 3]] {
-                                any = true;
-                                let e = x - y;
-                                if (-nf).dot(&e) <= 1e-6 * e.norm() {
-                                    peak = false;
-                                }
-                            }
-                        }
-                    }
-                }
-                if peak && any {
+        floor_peak_contacts(tris, z_min, &faces_w, out);
+        self.crease_contacts(tris, &world, &faces_w, out);
+    }
+
+    /// Vertex–face contacts: each block vertex (`world`: their positions) below the facet
+    /// under it, overlap measured along the facet's normal.
+    fn vertex_face_contacts(&self, world: &[Vector3<f64>], out: &mut Vec<Geo>) {
+        let fl = self.floor;
+        for (i, p) in world.iter().enumerate() {
+            if let Some(f) = fl.locate(p.x, p.y, 0.0, 0.0) {
+                let pl = fl.facet_plane(f);
+                let n = pl.normal();
+                let d = pl.height(p) * n.z;
+                if d < 0.0 {
                     out.push(Geo {
-                        key: (1 << 62) | u64::from(id),
-                        p: x,
-                        n: -nf,
-                        u: depth,
+                        key: i as u64,
+                        p: *p,
+                        n,
+                        u: -d,
                     });
                 }
             }
         }
-        // edge–edge: convex floor creases crossed by block edges
+    }
+
+    /// Edge–edge contacts: block edges (vertices at `world`) crossed by the convex floor
+    /// creases of `tris` (a crease whose far vertex lies below the other facet's plane).
+    fn crease_contacts(
+        &self,
+        tris: &[FloorTriangle],
+        world: &[Vector3<f64>],
+        faces_w: &[(Vector3<f64>, f64)],
+        out: &mut Vec<Geo>,
+    ) {
+        let sh = &self.shape;
+        let inside = |x: &Vector3<f64>| inside_depth(faces_w, x);
         let mut seen: Vec<(u32, u32)> = Vec::new();
         for (ti, t) in tris.iter().enumerate() {
             for k in 0..3 {
@@ -718,12 +834,8 @@ impl<'a> Model<'a> {
                 };
                 seen.push(key);
                 let (pa, pb) = (t.corners[k], t.corners[(k + 1) % 3]);
-                let n1 = (t.corners[1] - t.corners[0])
-                    .cross(&(t.corners[2] - t.corners[0]))
-                    .normalize();
-                let n2 = (t2.corners[1] - t2.corners[0])
-                    .cross(&(t2.corners[2] - t2.corners[0]))
-                    .normalize();
+                let n1 = triangle_normal(t);
+                let n2 = triangle_normal(t2);
                 // convex crease: the far vertex of t2 lies below t's plane
                 let far = (0..3)
                     .find(|&j| t2.ids[j] != a && t2.ids[j] != b)
@@ -736,7 +848,7 @@ impl<'a> Model<'a> {
                     let (qa, qb) = (world[e[0]], world[e[1]]);
                     let [fa, fb] = sh.edge_faces[ei];
                     let cones = [n1, n2, faces_w[fa].0, faces_w[fb].0];
-                    if let Some(geo) = edge_contact(&qa, &qb, &pa, &pb, &cones, &inside_depth) {
+                    if let Some(geo) = edge_contact(&qa, &qb, &pa, &pb, &cones, &inside) {
                         let h = (u64::from(key.0).wrapping_mul(0x9E37_79B9_7F4A_7C15)
                             ^ u64::from(key.1))
                             & ((1 << 40) - 1);
@@ -929,7 +1041,9 @@ impl<'a> Model<'a> {
         (ke_t, ke_r, pe)
     }
 
-    /// Runs one trajectory with friction μ and damping ratio β.
+    /// Runs the block from its release to its stop with the friction coefficient `mu` and
+    /// the critical damping ratio `beta`; `record`: (sample interval s, most samples) of the
+    /// trajectory; `events`: keep the event log; `control`: polled for cancellation.
     fn simulate(
         &self,
         mu: f64,
@@ -938,633 +1052,810 @@ impl<'a> Model<'a> {
         events: bool,
         control: Option<&Control>,
     ) -> PhysicsResult<RunOut> {
-        let m = self.m;
-        let dt = self.dt;
-        let mut st = State {
+        let cfg = RunSettings {
+            mu,
+            beta,
+            end_t: self.end_time.unwrap_or(f64::INFINITY),
+            has_columns: self.supports.iter().any(|c| c.across.is_some()),
+            plane_normal: match &self.floor.kind {
+                FloorKind::Plane(pl) => Some(pl.normal()),
+                _ => None,
+            },
+            log_events: events,
+        };
+        let (mut run, e_start) = self.release(record);
+        let reason = loop {
+            if let Some(reason) = self.stop_before_step(&mut run, &cfg)? {
+                break reason;
+            }
+            match self.try_flight(&mut run, &cfg)? {
+                Flight::Stopped(reason) => break reason,
+                Flight::Flew => continue,
+                Flight::Grounded => {}
+            }
+            self.check_budget(&run, control)?;
+            let step = self.leapfrog_step(&mut run, &cfg)?;
+            let in_contact = !run.contacts.is_empty();
+            self.book_episode(&mut run, &step, in_contact, events);
+            if !in_contact && run.first_impact_done {
+                run.max_bounce = run.max_bounce.max(self.height_of_centre(&run.st.c));
+            }
+            if let Some(reason) = self.reach_in_step(&mut run, step.h, &cfg) {
+                break reason;
+            }
+            if self.at_rest(&mut run, in_contact) {
+                break StopReason::AtRest;
+            }
+            self.skip_settled_slide(&mut run, &step.forces, &cfg);
+        };
+        self.finish(run, reason, e_start, &cfg)
+    }
+
+    /// The run at release, with the energy at the start (J): a block released on the floor
+    /// has its contacts closed already (with unloaded shear springs) and the acceleration of
+    /// their elastic forces.
+    fn release(&self, record: Option<(f64, usize)>) -> (Run, f64) {
+        let st = State {
             t: 0.0,
             c: self.c0,
             v: self.v0,
             q: self.q0,
             w: Vector3::zeros(),
         };
-        let mut springs: Vec<Spring> = Vec::new();
-        let mut new_springs: Vec<Spring> = Vec::new();
-        let mut geos: Vec<Geo> = Vec::new();
-        let mut tris: Vec<FloorTriangle> = Vec::new();
-        let (mut damping, mut friction) = (0.0, 0.0);
-        let mut stored;
-        // springs at release: the contacts of a block released on the floor exist already
-        // (with unloaded shear springs), and its acceleration is that of its elastic forces
-        let gravity = Vector3::new(0.0, 0.0, -self.g);
-        let mut acc_prev = gravity;
-        {
-            let r = self.rot(&st.q);
-            self.contacts(&st.c, &r, &mut tris, &mut geos);
-            stored = geos.iter().map(|g| self.normal_energy(g.u)).sum::<f64>();
-            for gk in &geos {
-                let f_el = match self.hertz {
-                    None => self.kn * gk.u,
-                    Some(hz) => hz.k * gk.u * gk.u.sqrt(),
-                };
-                acc_prev += gk.n * (f_el / m);
-                springs.push(Spring {
-                    key: gk.key,
-                    fs: Vector3::zeros(),
-                    ks: self.ks,
-                    rr: gk.p - st.c,
-                    n: gk.n,
-                });
-            }
+        let mut springs = Vec::new();
+        let mut contacts = Vec::new();
+        let mut tris = Vec::new();
+        let mut acc = Vector3::new(0.0, 0.0, -self.g);
+        let r = self.rot(&st.q);
+        self.contacts(&st.c, &r, &mut tris, &mut contacts);
+        let stored = contacts
+            .iter()
+            .map(|g| self.normal_energy(g.u))
+            .sum::<f64>();
+        for gk in &contacts {
+            let f_el = match self.hertz {
+                None => self.kn * gk.u,
+                Some(hz) => hz.k * gk.u * gk.u.sqrt(),
+            };
+            acc += gk.n * (f_el / self.m);
+            springs.push(Spring {
+                key: gk.key,
+                fs: Vector3::zeros(),
+                ks: self.ks,
+                rr: gk.p - st.c,
+                n: gk.n,
+            });
         }
         let (k0, r0, p0) = self.energy(&st);
         let e_start = k0 + r0 + p0 + stored;
-        let mut rec = record.map(|(interval, max)| Recorder {
-            interval,
-            next: 0.0,
-            max,
-            tr: Trajectory::default(),
+        let on_floor = self.on_floor_at_start;
+        let episode = on_floor.then(|| Episode {
+            t0: 0.0,
+            speed_before: st.v.norm(),
+            diss_before: 0.0,
+            peak: 0.0,
+            p: st.c,
+            ground: true,
+            impact: false,
+            last_speed: st.v.norm(),
+            last_p: st.c,
+            last_diss: 0.0,
+            last_t: 0.0,
         });
-        let mut evs: Vec<Event> = Vec::new();
-        let mut impacts = 0u64;
-        let mut slide_start: Option<f64> = None;
-        let mut max_bounce: f64 = 0.0;
-        let mut steps = 0u64;
-        let mut max_overlap = 0.0f64;
-        let mut wacc_prev = Vector3::zeros();
-        // contact episode bookkeeping
-        let mut had_contact = self.on_floor_at_start;
-        let mut last_contact_t = if self.on_floor_at_start {
-            0.0
-        } else {
-            f64::NEG_INFINITY
+        let run = Run {
+            st,
+            springs,
+            new_springs: Vec::new(),
+            contacts,
+            tris,
+            damping: 0.0,
+            friction: 0.0,
+            stored,
+            acc,
+            ang_acc: Vector3::zeros(),
+            rec: record.map(|(interval, max)| Recorder {
+                interval,
+                next: 0.0,
+                max,
+                tr: Trajectory::default(),
+            }),
+            events: Vec::new(),
+            impacts: 0,
+            slide_start: on_floor.then(|| self.mean.along(&st.c)),
+            max_bounce: 0.0,
+            steps: 0,
+            max_overlap: 0.0,
+            had_contact: on_floor,
+            last_contact_t: if on_floor { 0.0 } else { f64::NEG_INFINITY },
+            episode,
+            first_impact_done: false,
+            still_since: None,
+            quiet_window: None,
+            slip_max: 0.0,
+            prev_along: self.mean.along(&st.c),
+            support: None,
+            steady_since: None,
+            patch_wait: None,
+            half_step: None,
+            drift_h: 0.0,
         };
-        let mut episode: Option<Episode> = if self.on_floor_at_start {
-            Some(Episode {
-                t0: 0.0,
-                speed_before: st.v.norm(),
-                diss_before: 0.0,
+        (run, e_start)
+    }
+
+    /// Before a step: records the trajectory sample due; stops at the end time or off the
+    /// floor's extent; closes an episode whose contact ended more than the gap ago.
+    fn stop_before_step(
+        &self,
+        run: &mut Run,
+        cfg: &RunSettings,
+    ) -> PhysicsResult<Option<StopReason>> {
+        if let Some(r) = run.rec.as_mut()
+            && run.st.t >= r.next
+        {
+            let diss = run.damping + run.friction;
+            let s = self.synced(&run.st, run.half_step, &run.acc, &run.ang_acc);
+            self.sample(r, &s, diss, run.stored)?;
+            while r.next <= run.st.t {
+                r.next += r.interval;
+            }
+        }
+        if run.st.t >= cfg.end_t * (1.0 - 1e-12) {
+            return Ok(Some(StopReason::EndTime));
+        }
+        if !matches!(self.floor.kind, FloorKind::Plane(_))
+            && self
+                .floor
+                .locate(run.st.c.x, run.st.c.y, 0.0, 0.0)
+                .is_none()
+        {
+            return Ok(Some(StopReason::LeftFloor));
+        }
+        if run.springs.is_empty()
+            && run.st.t - run.last_contact_t > self.gap
+            && let Some(ep) = run.episode.take()
+        {
+            self.close_episode(ep, true, &mut run.events, cfg.log_events);
+        }
+        Ok(None)
+    }
+
+    /// Free flight in closed form, when the block has been off the floor for longer than the
+    /// gap and stays clear of it for more than two steps: the parabola to the floor's
+    /// approach, a column, the lower end or the end time, with the bounce's apex and the
+    /// trajectory samples inside it.
+    fn try_flight(&self, run: &mut Run, cfg: &RunSettings) -> PhysicsResult<Flight> {
+        let dt = self.dt;
+        if !(run.springs.is_empty() && run.st.t - run.last_contact_t > self.gap.max(dt)) {
+            return Ok(Flight::Grounded);
+        }
+        let st = run.st;
+        let margin = 2.0 * (st.v.norm() + st.w.norm() * self.shape.r_max + self.g * dt) * dt
+            + 1e-9 * self.shape.r_max;
+        let Some(tau) = self
+            .clear_time(&st.c, &st.v, margin, cfg.end_t - st.t)
+            .filter(|&tau| tau > 2.0 * dt)
+        else {
+            return Ok(Flight::Grounded);
+        };
+        // the flight starts from the velocities at the state's own time
+        let st = self.synced(&st, run.half_step, &run.acc, &run.ang_acc);
+        run.half_step = None;
+        let t_target = st.t + tau;
+        let gravity = Vector3::new(0.0, 0.0, -self.g);
+        // lower end inside the flight?
+        let cross = self.along_cross(&st, tau);
+        // a column reached inside the flight ends it there
+        let column = if cfg.has_columns {
+            super::first_column_reach(
+                &self.mean,
+                &self.supports,
+                &st.c,
+                &st.v,
+                &gravity,
+                cross.unwrap_or(tau),
+            )
+        } else {
+            None
+        };
+        let cross = if column.is_some() { None } else { cross };
+        let t_stop = column.map(|c| st.t + c.0).or(cross.map(|tc| st.t + tc));
+        let t_final = t_stop.unwrap_or(t_target);
+        if run.first_impact_done {
+            run.max_bounce = run.max_bounce.max(self.apex_height(&st, t_final));
+        }
+        // samples inside the flight
+        while let Some(r) = run.rec.as_mut()
+            && r.next < t_final
+        {
+            let s = self.fly(&st, r.next - st.t);
+            self.sample(r, &s, run.damping + run.friction, run.stored)?;
+            r.next += r.interval;
+        }
+        run.st = self.fly(&st, t_final - st.t);
+        run.drift_h = 0.0;
+        run.acc = gravity;
+        run.ang_acc = Vector3::zeros();
+        if let Some((_, k)) = column {
+            run.support = Some(k);
+            return Ok(Flight::Stopped(StopReason::Support));
+        }
+        if t_stop.is_some() {
+            return Ok(Flight::Stopped(StopReason::LowerEnd));
+        }
+        if let Some(te) = self.end_time
+            && t_target >= te * (1.0 - 1e-12)
+        {
+            run.st.t = te;
+            return Ok(Flight::Flew);
+        }
+        run.prev_along = self.mean.along(&run.st.c);
+        Ok(Flight::Flew)
+    }
+
+    /// Height of the centre above its resting height (m) at the apex of the flight from `st`
+    /// that ends at `t_final` (s): the highest point along the mean plane's normal.
+    fn apex_height(&self, st: &State, t_final: f64) -> f64 {
+        let nrm = self.mean.normal();
+        let (b, a) = (nrm.dot(&st.v), -self.g * nrm.z);
+        let ta = if a < 0.0 {
+            (-b / a).clamp(0.0, t_final - st.t)
+        } else {
+            0.0
+        };
+        let ca = st.c + st.v * ta + Vector3::new(0.0, 0.0, -0.5 * self.g * ta * ta);
+        self.height_of_centre(&ca)
+    }
+
+    /// Refuses a run past its step budget; polls the control every 4096 steps.
+    fn check_budget(&self, run: &Run, control: Option<&Control>) -> PhysicsResult<()> {
+        if run.steps as f64 >= self.max_steps {
+            return Err(PhysicsError::TooManySteps {
+                estimated: run.steps as f64,
+                limit: self.max_steps,
+            });
+        }
+        if run.steps & 0xFFF == 0
+            && let Some(c) = control
+        {
+            c.check()?;
+        }
+        Ok(())
+    }
+
+    /// One leapfrog step of Δt (shortened to end exactly at the end time): the contact forces
+    /// at x(t), the local damping, then Newton–Euler; refuses a non-finite state.
+    fn leapfrog_step(&self, run: &mut Run, cfg: &RunSettings) -> PhysicsResult<Step> {
+        let dt = self.dt;
+        let h = if cfg.end_t - run.st.t < dt * (1.0 + 1e-9) {
+            cfg.end_t - run.st.t
+        } else {
+            dt
+        };
+        let r = self.rot(&run.st.q);
+        // stepping from a state with its velocities at its own time (release, end of a
+        // flight): put them half a step back, where the leapfrog keeps them
+        if run.half_step.is_none() {
+            run.st.v -= run.acc * (0.5 * h);
+            run.st.w -= r.transpose() * run.ang_acc * (0.5 * h);
+        }
+        let w_world = r * run.st.w;
+        let mut forces = self.contact_forces(run, &r, &w_world, h, cfg);
+        self.local_damping(&mut forces, &run.st.v, &w_world);
+        let speed_before = run.st.v.norm();
+        self.newton_euler(run, &r, &forces, h);
+        let st = &run.st;
+        if !st.c.iter().chain(st.v.iter()).all(|x| x.is_finite()) {
+            return Err(PhysicsError::Numerical(format!(
+                "the block's state became non-finite at t = {:.6} s",
+                st.t
+            )));
+        }
+        Ok(Step {
+            h,
+            speed_before,
+            forces,
+        })
+    }
+
+    /// The forces at x(t) with the half-step velocities (ω in the world frame `w_world`):
+    /// gravity and, per contact, the normal spring–dashpot and the capped shear spring. Books
+    /// the shear springs' work (those of opened contacts too), the elastic energy stored, the
+    /// deepest overlap and the fastest slip.
+    fn contact_forces(
+        &self,
+        run: &mut Run,
+        r: &Matrix3<f64>,
+        w_world: &Vector3<f64>,
+        h: f64,
+        cfg: &RunSettings,
+    ) -> Forces {
+        self.contacts(&run.st.c, r, &mut run.tris, &mut run.contacts);
+        // the velocities at x(t), predicted from the half step with the last accelerations
+        let v_t = run.st.v + run.acc * (0.5 * h);
+        let w_t = w_world + run.ang_acc * (0.5 * h);
+        let mut fo = Forces {
+            force: Vector3::new(0.0, 0.0, -self.m * self.g),
+            moment: Vector3::zeros(),
+            normal_total: 0.0,
+            damping_force: Vector3::zeros(),
+            damping_moment: Vector3::zeros(),
+            slip_force: Vector3::zeros(),
+            slipping: 0,
+        };
+        run.new_springs.clear();
+        run.stored = 0.0;
+        run.slip_max = 0.0;
+        for gk in &run.contacts {
+            run.max_overlap = run.max_overlap.max(gk.u);
+            let rr = gk.p - run.st.c;
+            let vrel = run.st.v + w_world.cross(&rr);
+            let vn = gk.n.dot(&vrel);
+            let vt = vrel - gk.n * vn;
+            run.slip_max = run.slip_max.max(vt.norm());
+            let old = run.springs.iter().find(|s| s.key == gk.key);
+            let (f_el, fnm, ks) =
+                self.normal_force(gk, &rr, &v_t, &w_t, h, old.is_none(), cfg.beta);
+            // dashpot work (and the clipped spring's share)
+            let fd = gk.n * (fnm - f_el);
+            fo.damping_force += fd;
+            fo.damping_moment += rr.cross(&fd);
+            fo.normal_total += fnm;
+            // the spring follows the contact point's drift since the last step
+            let d = vt * run.drift_h;
+            let (fs, es_new, slipping, work) = shear_spring(&gk.n, old, &d, ks, cfg.mu * f_el);
+            fo.slipping += usize::from(slipping);
+            if slipping {
+                fo.slip_force += fs;
+            }
+            run.friction += work;
+            run.stored += self.normal_energy(gk.u) + es_new;
+            run.new_springs.push(Spring {
+                key: gk.key,
+                fs,
+                ks,
+                rr,
+                n: gk.n,
+            });
+            let fc = gk.n * fnm + fs;
+            fo.force += fc;
+            fo.moment += rr.cross(&fc);
+        }
+        // springs of contacts that opened release their shear energy over the drift
+        for sp in &run.springs {
+            if !run.new_springs.iter().any(|s| s.key == sp.key) {
+                run.friction += self.opened_spring_work(sp, &run.st, w_world, run.drift_h);
+            }
+        }
+        std::mem::swap(&mut run.springs, &mut run.new_springs);
+        fo
+    }
+
+    /// Normal force of the contact `gk` (arm `rr` from the centre, m) over a step h (s):
+    /// (elastic force N, spring–dashpot force N ≥ 0, shear stiffness N/m), the dashpot taking
+    /// the velocity at x(t) from `v_t` and `w_t` (world frame); `fresh`: a contact that has
+    /// just closed, whose dashpot impulse is corrected for the time since its touch.
+    #[allow(clippy::too_many_arguments)]
+    fn normal_force(
+        &self,
+        gk: &Geo,
+        rr: &Vector3<f64>,
+        v_t: &Vector3<f64>,
+        w_t: &Vector3<f64>,
+        h: f64,
+        fresh: bool,
+        beta: f64,
+    ) -> (f64, f64, f64) {
+        let (f_el, kt, ks) = match self.hertz {
+            None => (self.kn * gk.u, self.kn, self.ks),
+            Some(hz) => {
+                let kt = hz.kt * gk.u.sqrt();
+                (hz.k * gk.u * gk.u.sqrt(), kt, kt * hz.shear_ratio)
+            }
+        };
+        let cn = 2.0 * beta * (self.m * kt).sqrt();
+        // the dashpot takes the velocity at x(t), predicted from the half step with the last
+        // acceleration (second order; the lagged half-step velocity alone would err by
+        // O(β ω Δt) in the restitution)
+        let vn_t = gk.n.dot(&(v_t + w_t.cross(rr)));
+        // A contact that has just closed touched U/|vₙ| ago, not half a step ago as the step's
+        // impulse assumes: correct the dashpot impulse by c(U − |vₙ|Δt/2) (else the
+        // restitution errs by O(Δt) with the random phase of the touch). Only for a fresh
+        // touch (U within the step's approach), never for a contact that appears deep (a new
+        // floor feature under a block already in contact).
+        let onset = if fresh && vn_t < 0.0 && gk.u <= -1.5 * vn_t * h {
+            cn * (gk.u / h + 0.5 * vn_t)
+        } else {
+            0.0
+        };
+        (f_el, (f_el - cn * vn_t + onset).max(0.0), ks)
+    }
+
+    /// Local damping: each component of the force and of the moment (world frame) loses α
+    /// times its size against the sign of its velocity `v` (of ω `w_world`); booked with the
+    /// dashpots.
+    fn local_damping(&self, fo: &mut Forces, v: &Vector3<f64>, w_world: &Vector3<f64>) {
+        if self.alpha > 0.0 {
+            for i in 0..3 {
+                let d = self.alpha * fo.force[i].abs() * v[i].signum();
+                if v[i] != 0.0 {
+                    fo.force[i] -= d;
+                    fo.damping_force[i] -= d;
+                }
+                let dm = self.alpha * fo.moment[i].abs() * w_world[i].signum();
+                if w_world[i] != 0.0 {
+                    fo.moment[i] -= dm;
+                    fo.damping_moment[i] -= dm;
+                }
+            }
+        }
+    }
+
+    /// Newton–Euler over h (s) under the forces `fo` (orientation `r`): the half-step
+    /// velocity, Euler's equations in the body frame (implicit midpoint for an anisotropic
+    /// block), the dashpots' work with the step's mean velocities, then position and turn.
+    fn newton_euler(&self, run: &mut Run, r: &Matrix3<f64>, fo: &Forces, h: f64) {
+        let m = self.m;
+        let st = &mut run.st;
+        let v_old = st.v;
+        run.acc = fo.force / m;
+        st.v += fo.force * (h / m);
+        let torque_body = r.transpose() * fo.moment;
+        let i = self.inertia;
+        let w0 = st.w;
+        let mut w1 = w0 + (torque_body - w0.cross(&w0.component_mul(&i))).component_div(&i) * h;
+        if !self.isotropic {
+            for _ in 0..3 {
+                let wm = (w0 + w1) * 0.5;
+                w1 = w0 + (torque_body - wm.cross(&wm.component_mul(&i))).component_div(&i) * h;
+            }
+        }
+        run.ang_acc = r * ((w1 - w0) / h);
+        st.w = w1;
+        // Dissipation is booked with the step's mean velocities, the ones whose product
+        // with a force gives the leapfrog's kinetic-energy change.
+        let v_bar = (v_old + st.v) * 0.5;
+        let w_bar = r * ((w0 + w1) * 0.5);
+        run.damping -= (v_bar.dot(&fo.damping_force) + w_bar.dot(&fo.damping_moment)) * h;
+        st.c += st.v * h;
+        run.drift_h = h;
+        st.q = UnitQuaternion::new_normalize(
+            (st.q * UnitQuaternion::from_scaled_axis(st.w * h)).into_inner(),
+        );
+        st.t += h;
+        run.steps += 1;
+        run.half_step = Some(h);
+    }
+
+    /// Contact episodes after a step: contact after more than the gap is a new impact (the
+    /// last episode closed); an episode that lasts five contact times becomes the ground phase
+    /// and the slide's start; one whose contact stays open for the gap is over.
+    fn book_episode(&self, run: &mut Run, step: &Step, in_contact: bool, events: bool) {
+        let t = run.st.t;
+        if !in_contact {
+            if let Some(ep) = run.episode
+                && t - run.last_contact_t > self.gap
+            {
+                run.episode = None;
+                self.close_episode(ep, true, &mut run.events, events);
+            }
+            return;
+        }
+        if !run.had_contact || t - run.last_contact_t > self.gap {
+            // a new impact (the previous episode, if any, is closed here)
+            if let Some(ep) = run.episode.take() {
+                self.close_episode(ep, true, &mut run.events, events);
+            }
+            run.impacts += 1;
+            run.first_impact_done = true;
+            run.episode = Some(Episode {
+                t0: t - step.h,
+                speed_before: step.speed_before,
+                diss_before: run.damping + run.friction,
                 peak: 0.0,
-                p: st.c,
-                ground: true,
-                impact: false,
-                last_speed: st.v.norm(),
-                last_p: st.c,
-                last_diss: 0.0,
-                last_t: 0.0,
+                p: run.st.c,
+                ground: false,
+                impact: true,
+                last_speed: run.st.v.norm(),
+                last_p: run.st.c,
+                last_diss: run.damping + run.friction,
+                last_t: t,
+            });
+        }
+        run.had_contact = true;
+        run.last_contact_t = t;
+        let Some(ep) = run.episode.as_mut() else {
+            return;
+        };
+        ep.peak = ep.peak.max(step.forces.normal_total);
+        ep.last_speed = run.st.v.norm();
+        ep.last_p = run.st.c;
+        ep.last_diss = run.damping + run.friction;
+        ep.last_t = t;
+        let became_ground = !ep.ground && t - ep.t0 > 5.0 * self.t_contact;
+        if !became_ground {
+            return;
+        }
+        ep.ground = true;
+        if run.slide_start.is_some() {
+            return;
+        }
+        run.slide_start = Some(self.mean.along(&run.st.c));
+        if events {
+            let speed = run.st.v.norm();
+            // the impact that became the ground phase
+            run.events.push(self.event(
+                ep.t0,
+                EventKind::Impact,
+                &ep.p,
+                ep.speed_before,
+                speed,
+                run.damping + run.friction - ep.diss_before,
+                Some(ep.peak),
+            ));
+            ep.impact = false;
+            run.events.push(self.event(
+                t,
+                EventKind::SlideStart,
+                &run.st.c,
+                speed,
+                speed,
+                0.0,
+                None,
+            ));
+        }
+    }
+
+    /// A column reached inside the step h (s; the centre moved by v h along a line) or the
+    /// lower end passed: the block put back to where it happened.
+    fn reach_in_step(&self, run: &mut Run, h: f64, cfg: &RunSettings) -> Option<StopReason> {
+        let dt = self.dt;
+        let st = &mut run.st;
+        if cfg.has_columns {
+            let c_prev = st.c - st.v * h;
+            if let Some((tc, k)) = super::first_column_reach(
+                &self.mean,
+                &self.supports,
+                &c_prev,
+                &st.v,
+                &Vector3::zeros(),
+                h,
+            ) {
+                st.t -= h - tc;
+                st.c = c_prev + st.v * tc;
+                run.drift_h = tc;
+                run.support = Some(k);
+                return Some(StopReason::Support);
+            }
+        }
+        let along = self.mean.along(&st.c);
+        if along >= self.length {
+            let frac = if along > run.prev_along {
+                (along - self.length) / (along - run.prev_along)
+            } else {
+                0.0
+            };
+            st.t -= frac * dt;
+            st.c -= st.v * (frac * dt);
+            run.drift_h -= frac * dt;
+            return Some(StopReason::LowerEnd);
+        }
+        run.prev_along = along;
+        None
+    }
+
+    /// At rest: in contact, slower than REST_SPEED_M_S (centre and farthest point) for
+    /// REST_TIME_S; or, over REST_TIME_S of unbroken contact, centre and farthest point moved
+    /// less than REST_SPEED_M_S·REST_TIME_S (a block held by its stuck shear springs may keep
+    /// an elastic vibration that no dashpot damps, its speeds above the threshold while it
+    /// goes nowhere).
+    fn at_rest(&self, run: &mut Run, in_contact: bool) -> bool {
+        let st = &run.st;
+        let still = st.v.norm() < REST_SPEED_M_S
+            && st.w.norm() * self.shape.r_max < REST_SPEED_M_S
+            && in_contact;
+        if still {
+            let since = *run.still_since.get_or_insert(st.t);
+            if st.t - since >= REST_TIME_S {
+                return true;
+            }
+        } else {
+            run.still_since = None;
+        }
+        if !in_contact {
+            run.quiet_window = None;
+            return false;
+        }
+        let (t0, c0, q0) = *run.quiet_window.get_or_insert((st.t, st.c, st.q));
+        if st.t - t0 >= REST_TIME_S {
+            let reach = REST_SPEED_M_S * REST_TIME_S;
+            if (st.c - c0).norm() < reach && q0.angle_to(&st.q) * self.shape.r_max < reach {
+                return true;
+            }
+            run.quiet_window = Some((st.t, st.c, st.q));
+        }
+        false
+    }
+
+    /// A settled slide on the plane, or on a flat patch of a mesh floor, skipped in closed
+    /// form: N leapfrog steps under the constant force `fo`, exactly, with the dashpots' and
+    /// the slip's work over them.
+    fn skip_settled_slide(&self, run: &mut Run, fo: &Forces, cfg: &RunSettings) {
+        let dt = self.dt;
+        let Some((v_t, a_t)) = self.settled_slide(run, fo, cfg) else {
+            return;
+        };
+        let mut n_skip = self.steady_steps(
+            &run.st,
+            &v_t,
+            &a_t,
+            cfg.end_t,
+            run.rec.as_ref().map(|r| r.next),
+        );
+        if n_skip < 8 {
+            return;
+        }
+        // on a mesh floor, only as far as the footprint stays on the flat patch
+        if cfg.plane_normal.is_none() {
+            match self.steps_on_patch(run, n_skip, &v_t, &a_t) {
+                Some(n) => n_skip = n,
+                None => return,
+            }
+        }
+        let nf = n_skip as f64;
+        // N leapfrog steps under the constant force, exactly: v ← v + N a h,
+        // x ← x + N h v + a h² N(N+1)/2; the damping with the steps' mean velocities (their
+        // kinetic-energy change), the slip over the drifts the springs see (one behind)
+        let path = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * nf);
+        let drifts = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * (nf - 1.0));
+        run.damping -= path.dot(&fo.damping_force);
+        run.friction -= drifts.dot(&fo.slip_force);
+        let st = &mut run.st;
+        st.c += v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * (nf + 1.0));
+        st.v += a_t * (nf * dt);
+        st.t += nf * dt;
+        run.acc = a_t;
+        run.half_step = Some(dt);
+        run.last_contact_t = st.t;
+        if let Some(ep) = run.episode.as_mut() {
+            ep.last_speed = st.v.norm();
+            ep.last_p = st.c;
+            ep.last_diss = run.damping + run.friction;
+            ep.last_t = st.t;
+        }
+        run.prev_along = self.mean.along(&st.c);
+    }
+
+    /// The tangential velocity and acceleration (m/s, m/s²) of a slide settled for two
+    /// contact times: every contact (three or more) slipping on one plane (the floor's, or a
+    /// flat patch's with vertex–face contacts only), no local damping and no column to meet,
+    /// no normal motion, no spin, and the acceleration along the velocity, all within
+    /// STEADY_TOLERANCE.
+    fn settled_slide(
+        &self,
+        run: &mut Run,
+        fo: &Forces,
+        cfg: &RunSettings,
+    ) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        let contacts = &run.contacts;
+        let one_plane = if self.skip_slides
+            && self.alpha == 0.0
+            && !cfg.has_columns
+            && contacts.len() >= 3
+            && fo.slipping == contacts.len()
+        {
+            cfg.plane_normal.or_else(|| {
+                let n = contacts[0].n;
+                contacts
+                    .iter()
+                    .all(|g| g.key < (1 << 62) && g.n.dot(&n) >= 1.0 - 1e-12)
+                    .then_some(n)
             })
         } else {
             None
         };
-        if self.on_floor_at_start {
-            slide_start = Some(self.mean.along(&st.c));
-        }
-        let mut first_impact_done = false;
-        let mut still_since: Option<f64> = None;
-        // Start (time, centre, orientation) of the current window of uninterrupted contact.
-        let mut quiet_window: Option<(f64, Vector3<f64>, UnitQuaternion<f64>)> = None;
-        let mut slip_max = 0.0f64;
-        let end_t = self.end_time.unwrap_or(f64::INFINITY);
-        let reason;
-        let along_start = self.mean.along(&st.c);
-        let _ = along_start;
-        let mut prev_along = self.mean.along(&st.c);
-        let has_columns = self.supports.iter().any(|c| c.across.is_some());
-        let mut hit: Option<usize> = None;
-        let plane_normal = match &self.floor.kind {
-            FloorKind::Plane(pl) => Some(pl.normal()),
-            _ => None,
+        let Some(nrm) = one_plane else {
+            run.steady_since = None;
+            return None;
         };
-        let mut steady_since: Option<f64> = None;
-        // (centre, distance): a settled slide that met the edge of its flat patch tries again
-        // only once the centre has moved that far
-        let mut patch_wait: Option<(Vector3<f64>, f64)> = None;
-        // the velocities lag the positions by half of this step (leapfrog); None: in step
-        let mut half_step: Option<f64> = None;
-        // time since the last force evaluation: the drift the shear springs have not yet seen
-        let mut drift_h = 0.0;
-        loop {
-            // sample the trajectory
-            if let Some(r) = rec.as_mut()
-                && st.t >= r.next
-            {
-                let diss = damping + friction;
-                let s = self.synced(&st, half_step, &acc_prev, &wacc_prev);
-                self.sample(r, &s, diss, stored)?;
-                while r.next <= st.t {
-                    r.next += r.interval;
-                }
-            }
-            if st.t >= end_t * (1.0 - 1e-12) {
-                reason = StopReason::EndTime;
-                break;
-            }
-            // leave the floor's extent
-            if !matches!(self.floor.kind, FloorKind::Plane(_))
-                && self.floor.locate(st.c.x, st.c.y, 0.0, 0.0).is_none()
-            {
-                reason = StopReason::LeftFloor;
-                break;
-            }
-            // an episode whose contact ended more than the gap ago is over
-            if springs.is_empty()
-                && st.t - last_contact_t > self.gap
-                && let Some(ep) = episode.take()
-            {
-                self.close_episode(ep, true, &mut evs, events);
-            }
-            // free flight in closed form
-            if springs.is_empty() && st.t - last_contact_t > self.gap.max(dt) {
-                let margin =
-                    2.0 * (st.v.norm() + st.w.norm() * self.shape.r_max + self.g * dt) * dt
-                        + 1e-9 * self.shape.r_max;
-                if let Some(tau) = self.clear_time(&st.c, &st.v, margin, end_t - st.t)
-                    && tau > 2.0 * dt
-                {
-                    // the flight starts from the velocities at the state's own time
-                    st = self.synced(&st, half_step, &acc_prev, &wacc_prev);
-                    half_step = None;
-                    let t_target = st.t + tau;
-                    // lower end inside the flight?
-                    let cross = self.along_cross(&st, tau);
-                    // a column reached inside the flight ends it there
-                    let col = if has_columns {
-                        super::first_column_reach(
-                            &self.mean,
-                            &self.supports,
-                            &st.c,
-                            &st.v,
-                            &gravity,
-                            cross.unwrap_or(tau),
-                        )
-                    } else {
-                        None
-                    };
-                    let cross = if col.is_some() { None } else { cross };
-                    let t_stop = col.map(|c| st.t + c.0).or(cross.map(|tc| st.t + tc));
-                    let t_final = t_stop.unwrap_or(t_target);
-                    // apex for the bounce height (centre above its resting height)
-                    if first_impact_done {
-                        let nrm = self.mean.normal();
-                        let (b, a) = (nrm.dot(&st.v), -self.g * nrm.z);
-                        let ta = if a < 0.0 {
-                            (-b / a).clamp(0.0, t_final - st.t)
-                        } else {
-                            0.0
-                        };
-                        let ca = st.c + st.v * ta + Vector3::new(0.0, 0.0, -0.5 * self.g * ta * ta);
-                        max_bounce = max_bounce.max(self.height_of_centre(&ca));
-                    }
-                    // samples inside the flight
-                    while let Some(r) = rec.as_mut()
-                        && r.next < t_final
-                    {
-                        let s = self.fly(&st, r.next - st.t);
-                        self.sample(r, &s, damping + friction, stored)?;
-                        r.next += r.interval;
-                    }
-                    st = self.fly(&st, t_final - st.t);
-                    drift_h = 0.0;
-                    acc_prev = gravity;
-                    wacc_prev = Vector3::zeros();
-                    if let Some((_, k)) = col {
-                        hit = Some(k);
-                        reason = StopReason::Support;
-                        break;
-                    }
-                    if t_stop.is_some() {
-                        reason = StopReason::LowerEnd;
-                        break;
-                    }
-                    if let Some(te) = self.end_time
-                        && t_target >= te * (1.0 - 1e-12)
-                    {
-                        st.t = te;
-                        continue;
-                    }
-                    prev_along = self.mean.along(&st.c);
-                    continue;
-                }
-            }
-            if steps as f64 >= self.max_steps {
-                return Err(PhysicsError::TooManySteps {
-                    estimated: steps as f64,
-                    limit: self.max_steps,
-                });
-            }
-            if steps & 0xFFF == 0
-                && let Some(c) = control
-            {
-                c.check()?;
-            }
-            // the last step may be shortened to end exactly at end_time
-            let h = if end_t - st.t < dt * (1.0 + 1e-9) {
-                end_t - st.t
-            } else {
-                dt
-            };
-            let r = self.rot(&st.q);
-            // stepping from a state with its velocities at its own time (release, end of a
-            // flight): put them half a step back, where the leapfrog keeps them
-            if half_step.is_none() {
-                st.v -= acc_prev * (0.5 * h);
-                st.w -= r.transpose() * wacc_prev * (0.5 * h);
-            }
-            // contact forces at x(t) with the half-step velocities
-            self.contacts(&st.c, &r, &mut tris, &mut geos);
-            let w_world = r * st.w;
-            let v_t = st.v + acc_prev * (0.5 * h);
-            let w_t = w_world + wacc_prev * (0.5 * h);
-            let mut f = Vector3::new(0.0, 0.0, -m * self.g);
-            let mut mom = Vector3::zeros();
-            let mut fn_total = 0.0;
-            let (mut f_damp, mut m_damp) = (Vector3::zeros(), Vector3::zeros());
-            let mut f_slip = Vector3::zeros();
-            let mut n_slip = 0usize;
-            new_springs.clear();
-            stored = 0.0;
-            slip_max = 0.0;
-            for gk in &geos {
-                max_overlap = max_overlap.max(gk.u);
-                let rr = gk.p - st.c;
-                let vrel = st.v + w_world.cross(&rr);
-                let vn = gk.n.dot(&vrel);
-                let vt = vrel - gk.n * vn;
-                slip_max = slip_max.max(vt.norm());
-                let (f_el, kt, ks) = match self.hertz {
-                    None => (self.kn * gk.u, self.kn, self.ks),
-                    Some(hz) => {
-                        let kt = hz.kt * gk.u.sqrt();
-                        (hz.k * gk.u * gk.u.sqrt(), kt, kt * hz.shear_ratio)
-                    }
-                };
-                let cn = 2.0 * beta * (m * kt).sqrt();
-                // the dashpot takes the velocity at x(t), predicted from the half step with
-                // the last acceleration (second order; the lagged half-step velocity alone
-                // would err by O(β ω Δt) in the restitution)
-                let vn_t = gk.n.dot(&(v_t + w_t.cross(&rr)));
-                let old = springs.iter().find(|s| s.key == gk.key);
-                // A contact that has just closed touched U/|vₙ| ago, not half a step ago as the
-                // step's impulse assumes: correct the dashpot impulse by c(U − |vₙ|Δt/2) (else
-                // the restitution errs by O(Δt) with the random phase of the touch). Only for a
-                // fresh touch (U within the step's approach), never for a contact that appears
-                // deep (a new floor feature under a block already in contact).
-                let onset = if old.is_none() && vn_t < 0.0 && gk.u <= -1.5 * vn_t * h {
-                    cn * (gk.u / h + 0.5 * vn_t)
-                } else {
-                    0.0
-                };
-                let fnm = (f_el - cn * vn_t + onset).max(0.0);
-                // dashpot work (and the clipped spring's share)
-                let fd = gk.n * (fnm - f_el);
-                f_damp += fd;
-                m_damp += rr.cross(&fd);
-                fn_total += fnm;
-                // shear spring: rotate the old one into the tangent plane
-                let (fs_old, es_old) = match old {
-                    Some(o) => {
-                        let mag = o.fs.norm();
-                        let pr = o.fs - gk.n * gk.n.dot(&o.fs);
-                        let pn = pr.norm();
-                        (if pn > 0.0 { pr * (mag / pn) } else { pr }, o.energy())
-                    }
-                    None => (Vector3::zeros(), 0.0),
-                };
-                // the spring follows the contact point's drift since the last step
-                let d = vt * drift_h;
-                let mut fs = fs_old - d * ks;
-                let cap = mu * f_el;
-                let fs_n = fs.norm();
-                let slipping = fs_n > cap;
-                n_slip += usize::from(slipping);
-                if slipping {
-                    fs *= if fs_n > 0.0 { cap / fs_n } else { 0.0 };
-                }
-                let es_new = if ks > 0.0 {
-                    fs.norm_squared() / (2.0 * ks)
-                } else {
-                    0.0
-                };
-                if slipping {
-                    f_slip += fs;
-                }
-                friction += shear_work(&fs_old, es_old, &fs, es_new, &d);
-                stored += self.normal_energy(gk.u) + es_new;
-                new_springs.push(Spring {
-                    key: gk.key,
-                    fs,
-                    ks,
-                    rr,
-                    n: gk.n,
-                });
-                let fc = gk.n * fnm + fs;
-                f += fc;
-                mom += rr.cross(&fc);
-            }
-            // springs of contacts that opened release their shear energy over the drift
-            for sp in &springs {
-                if !new_springs.iter().any(|s| s.key == sp.key) {
-                    friction += self.opened_spring_work(sp, &st, &w_world, drift_h);
-                }
-            }
-            std::mem::swap(&mut springs, &mut new_springs);
-            // local damping
-            if self.alpha > 0.0 {
-                for i in 0..3 {
-                    let d = self.alpha * f[i].abs() * st.v[i].signum();
-                    if st.v[i] != 0.0 {
-                        f[i] -= d;
-                        f_damp[i] -= d;
-                    }
-                    let dm = self.alpha * mom[i].abs() * w_world[i].signum();
-                    if w_world[i] != 0.0 {
-                        mom[i] -= dm;
-                        m_damp[i] -= dm;
-                    }
-                }
-            }
-            // Newton–Euler
-            let speed_before = st.v.norm();
-            let v_old = st.v;
-            acc_prev = f / m;
-            st.v += f * (h / m);
-            let mb = r.transpose() * mom;
-            let i = self.inertia;
-            let w0 = st.w;
-            let mut w1 = w0 + (mb - w0.cross(&w0.component_mul(&i))).component_div(&i) * h;
-            if !self.isotropic {
-                for _ in 0..3 {
-                    let wm = (w0 + w1) * 0.5;
-                    w1 = w0 + (mb - wm.cross(&wm.component_mul(&i))).component_div(&i) * h;
-                }
-            }
-            wacc_prev = r * ((w1 - w0) / h);
-            st.w = w1;
-            // Dissipation is booked with the step's mean velocities, the ones whose product
-            // with a force gives the leapfrog's kinetic-energy change.
-            let v_bar = (v_old + st.v) * 0.5;
-            let w_bar = r * ((w0 + w1) * 0.5);
-            damping -= (v_bar.dot(&f_damp) + w_bar.dot(&m_damp)) * h;
-            st.c += st.v * h;
-            drift_h = h;
-            st.q = UnitQuaternion::new_normalize(
-                (st.q * UnitQuaternion::from_scaled_axis(st.w * h)).into_inner(),
-            );
-            st.t += h;
-            steps += 1;
-            half_step = Some(h);
-            if !st.c.iter().chain(st.v.iter()).all(|x| x.is_finite()) {
-                return Err(PhysicsError::Numerical(format!(
-                    "the block's state became non-finite at t = {:.6} s",
-                    st.t
-                )));
-            }
-            // episodes and events
-            let in_contact = !geos.is_empty();
-            if in_contact {
-                if !had_contact || st.t - last_contact_t > self.gap {
-                    // a new impact (the previous episode, if any, is closed below)
-                    if let Some(ep) = episode.take() {
-                        self.close_episode(ep, true, &mut evs, events);
-                    }
-                    impacts += 1;
-                    first_impact_done = true;
-                    episode = Some(Episode {
-                        t0: st.t - h,
-                        speed_before,
-                        diss_before: damping + friction,
-                        peak: 0.0,
-                        p: st.c,
-                        ground: false,
-                        impact: true,
-                        last_speed: st.v.norm(),
-                        last_p: st.c,
-                        last_diss: damping + friction,
-                        last_t: st.t,
-                    });
-                }
-                had_contact = true;
-                last_contact_t = st.t;
-                if let Some(ep) = episode.as_mut() {
-                    ep.peak = ep.peak.max(fn_total);
-                    ep.last_speed = st.v.norm();
-                    ep.last_p = st.c;
-                    ep.last_diss = damping + friction;
-                    ep.last_t = st.t;
-                    if !ep.ground && st.t - ep.t0 > 5.0 * self.t_contact {
-                        ep.ground = true;
-                        if slide_start.is_none() {
-                            slide_start = Some(self.mean.along(&st.c));
-                            if events {
-                                // the impact that became the ground phase
-                                evs.push(self.event(
-                                    ep.t0,
-                                    EventKind::Impact,
-                                    &ep.p,
-                                    ep.speed_before,
-                                    st.v.norm(),
-                                    damping + friction - ep.diss_before,
-                                    Some(ep.peak),
-                                ));
-                                ep.impact = false;
-                                evs.push(self.event(
-                                    st.t,
-                                    EventKind::SlideStart,
-                                    &st.c,
-                                    st.v.norm(),
-                                    st.v.norm(),
-                                    0.0,
-                                    None,
-                                ));
-                            }
-                        }
-                    }
-                }
-            } else if let Some(ep) = episode.as_ref()
-                && st.t - last_contact_t > self.gap
-            {
-                let ep = *ep;
-                episode = None;
-                self.close_episode(ep, true, &mut evs, events);
-            }
-            if !in_contact && first_impact_done {
-                max_bounce = max_bounce.max(self.height_of_centre(&st.c));
-            }
-            // a column reached inside the step (the centre moved by v h along a line)
-            if has_columns {
-                let c_prev = st.c - st.v * h;
-                if let Some((tc, k)) = super::first_column_reach(
-                    &self.mean,
-                    &self.supports,
-                    &c_prev,
-                    &st.v,
-                    &Vector3::zeros(),
-                    h,
-                ) {
-                    st.t -= h - tc;
-                    st.c = c_prev + st.v * tc;
-                    drift_h = tc;
-                    hit = Some(k);
-                    reason = StopReason::Support;
-                    break;
-                }
-            }
-            // lower end
-            let along = self.mean.along(&st.c);
-            if along >= self.length {
-                let frac = if along > prev_along {
-                    (along - self.length) / (along - prev_along)
-                } else {
-                    0.0
-                };
-                st.t -= frac * dt;
-                st.c -= st.v * (frac * dt);
-                drift_h -= frac * dt;
-                reason = StopReason::LowerEnd;
-                break;
-            }
-            prev_along = along;
-            // at rest
-            let still = st.v.norm() < REST_SPEED_M_S
-                && st.w.norm() * self.shape.r_max < REST_SPEED_M_S
-                && in_contact;
-            if still {
-                let since = *still_since.get_or_insert(st.t);
-                if st.t - since >= REST_TIME_S {
-                    reason = StopReason::AtRest;
-                    break;
-                }
-            } else {
-                still_since = None;
-            }
-            // A block held by its stuck shear springs may keep an elastic vibration that no
-            // dashpot damps (the shear springs have none): its speeds stay above the threshold
-            // while it goes nowhere. At rest too when, over REST_TIME_S of unbroken contact, its
-            // centre and its farthest point moved less than REST_SPEED_M_S·REST_TIME_S.
-            if in_contact {
-                let (t0, c0, q0) = *quiet_window.get_or_insert((st.t, st.c, st.q));
-                if st.t - t0 >= REST_TIME_S {
-                    let reach = REST_SPEED_M_S * REST_TIME_S;
-                    if (st.c - c0).norm() < reach && q0.angle_to(&st.q) * self.shape.r_max < reach {
-                        reason = StopReason::AtRest;
-                        break;
-                    }
-                    quiet_window = Some((st.t, st.c, st.q));
-                }
-            } else {
-                quiet_window = None;
-            }
-            // a steady slide on the plane, or on a flat patch of a mesh floor (vertex–face
-            // contacts only, all on one plane), is skipped in closed form
-            let steady = if self.skip_slides
-                && self.alpha == 0.0
-                && !has_columns
-                && geos.len() >= 3
-                && n_slip == geos.len()
-            {
-                plane_normal.or_else(|| {
-                    let n = geos[0].n;
-                    geos.iter()
-                        .all(|g| g.key < (1 << 62) && g.n.dot(&n) >= 1.0 - 1e-12)
-                        .then_some(n)
-                })
-            } else {
-                None
-            };
-            let Some(nrm) = steady else {
-                steady_since = None;
-                continue;
-            };
-            let acc = f / m;
-            let a_t = acc - nrm * nrm.dot(&acc);
-            let v_t = st.v - nrm * nrm.dot(&st.v);
-            let vs = v_t.norm();
-            let tol_a = STEADY_TOLERANCE * self.g;
-            let settled = vs > 0.0
-                && nrm.dot(&acc).abs() <= tol_a
-                && nrm.dot(&st.v).abs() <= STEADY_TOLERANCE * vs.max(1.0)
-                && wacc_prev.norm() * self.shape.r_max <= tol_a
-                && st.w.norm() * self.shape.r_max <= STEADY_TOLERANCE * vs.max(1.0)
-                && (a_t - v_t * (a_t.dot(&v_t) / (vs * vs))).norm() <= tol_a;
-            if !settled {
-                steady_since = None;
-                continue;
-            }
-            let since = *steady_since.get_or_insert(st.t);
-            if st.t - since < 2.0 * self.t_contact {
-                continue;
-            }
-            let mut n_skip =
-                self.steady_steps(&st, &v_t, &a_t, end_t, rec.as_ref().map(|r| r.next));
-            if n_skip < 8 {
-                continue;
-            }
-            // on a mesh floor, only as far as the footprint stays on the flat patch
-            if plane_normal.is_none() {
-                if patch_wait.is_some_and(|(c, d)| (st.c - c).norm() < d) {
-                    continue;
-                }
-                patch_wait = None;
-                let e = v_t / vs;
-                let (b, c2) = (e.dot(&v_t) * dt, 0.5 * e.dot(&a_t) * dt * dt);
-                let nf = n_skip as f64;
-                let want = b * nf + c2 * nf * (nf + 1.0);
-                let r = self.rot(&st.q);
-                let (run, wait) = self.flat_patch_run(&st.c, &r, &geos, &e, want, &mut tris);
-                if run < want {
-                    let n_patch = steps_to_travel(b, c2, run).floor() - 2.0;
-                    n_skip = if n_patch > 0.0 {
-                        n_skip.min(n_patch as u64)
-                    } else {
-                        0
-                    };
-                    if n_skip < 8 {
-                        patch_wait = Some((st.c, wait));
-                        continue;
-                    }
-                }
-            }
-            let nf = n_skip as f64;
-            // N leapfrog steps under the constant force, exactly: v ← v + N a h,
-            // x ← x + N h v + a h² N(N+1)/2; the damping with the steps' mean velocities (their
-            // kinetic-energy change), the slip over the drifts the springs see (one behind)
-            let path = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * nf);
-            let drifts = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * (nf - 1.0));
-            damping -= path.dot(&f_damp);
-            friction -= drifts.dot(&f_slip);
-            st.c += v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * (nf + 1.0));
-            st.v += a_t * (nf * dt);
-            st.t += nf * dt;
-            acc_prev = a_t;
-            half_step = Some(dt);
-            last_contact_t = st.t;
-            if let Some(ep) = episode.as_mut() {
-                ep.last_speed = st.v.norm();
-                ep.last_p = st.c;
-                ep.last_diss = damping + friction;
-                ep.last_t = st.t;
-            }
-            prev_along = self.mean.along(&st.c);
+        let st = &run.st;
+        let acc = fo.force / self.m;
+        let a_t = acc - nrm * nrm.dot(&acc);
+        let v_t = st.v - nrm * nrm.dot(&st.v);
+        let vs = v_t.norm();
+        let tol_a = STEADY_TOLERANCE * self.g;
+        let settled = vs > 0.0
+            && nrm.dot(&acc).abs() <= tol_a
+            && nrm.dot(&st.v).abs() <= STEADY_TOLERANCE * vs.max(1.0)
+            && run.ang_acc.norm() * self.shape.r_max <= tol_a
+            && st.w.norm() * self.shape.r_max <= STEADY_TOLERANCE * vs.max(1.0)
+            && (a_t - v_t * (a_t.dot(&v_t) / (vs * vs))).norm() <= tol_a;
+        if !settled {
+            run.steady_since = None;
+            return None;
         }
-        // the outputs and the energy account take the velocities at the end time (second order)
-        let lagged = st;
-        st = self.synced(&st, half_step, &acc_prev, &wacc_prev);
-        // and the springs at the end position: the normal ones from its overlaps, the shear
-        // ones carried over the last drift (the slip on it booked)
-        let in_contact = !springs.is_empty();
+        let since = *run.steady_since.get_or_insert(st.t);
+        if st.t - since < 2.0 * self.t_contact {
+            return None;
+        }
+        Some((v_t, a_t))
+    }
+
+    /// How many of `n_skip` steps a settled slide (`v_t`, `a_t`) on a mesh floor may skip
+    /// with its footprint on the flat patch: None (and wait until the centre has moved on)
+    /// when fewer than eight.
+    fn steps_on_patch(
+        &self,
+        run: &mut Run,
+        n_skip: u64,
+        v_t: &Vector3<f64>,
+        a_t: &Vector3<f64>,
+    ) -> Option<u64> {
+        let dt = self.dt;
+        if run
+            .patch_wait
+            .is_some_and(|(c, d)| (run.st.c - c).norm() < d)
+        {
+            return None;
+        }
+        run.patch_wait = None;
+        let e = v_t / v_t.norm();
+        let (b, c2) = (e.dot(v_t) * dt, 0.5 * e.dot(a_t) * dt * dt);
+        let nf = n_skip as f64;
+        let want = b * nf + c2 * nf * (nf + 1.0);
+        let r = self.rot(&run.st.q);
+        let (on_patch, wait) =
+            self.flat_patch_run(&run.st.c, &r, &run.contacts, &e, want, &mut run.tris);
+        if on_patch < want {
+            let n_patch = steps_to_travel(b, c2, on_patch).floor() - 2.0;
+            let n = if n_patch > 0.0 {
+                n_skip.min(n_patch as u64)
+            } else {
+                0
+            };
+            if n < 8 {
+                run.patch_wait = Some((run.st.c, wait));
+                return None;
+            }
+            return Some(n);
+        }
+        Some(n_skip)
+    }
+
+    /// The run's report: the velocities brought to the end time and the springs to the end
+    /// position (second order), the last episode closed, the phase and the stop event.
+    fn finish(
+        &self,
+        mut run: Run,
+        reason: StopReason,
+        e_start: f64,
+        cfg: &RunSettings,
+    ) -> PhysicsResult<RunOut> {
+        let lagged = run.st;
+        let st = self.synced(&run.st, run.half_step, &run.acc, &run.ang_acc);
+        // the springs at the end position: the normal ones from its overlaps, the shear ones
+        // carried over the last drift (the slip on it booked)
+        let in_contact = !run.springs.is_empty();
         if in_contact {
-            let (s, fr) =
-                self.stored_at_end(&lagged, &st, mu, &springs, drift_h, &mut tris, &mut geos);
-            stored = s;
-            friction += fr;
+            let (stored, slip) = self.stored_at_end(
+                &lagged,
+                &st,
+                cfg.mu,
+                &run.springs,
+                run.drift_h,
+                &mut run.tris,
+                &mut run.contacts,
+            );
+            run.stored = stored;
+            run.friction += slip;
         }
-        if let Some(ep) = episode.take()
+        if let Some(ep) = run.episode.take()
             && ep.impact
         {
-            self.close_episode(ep, false, &mut evs, events);
+            self.close_episode(ep, false, &mut run.events, cfg.log_events);
         }
         let reason = match (reason, self.span_support) {
             (StopReason::LowerEnd, Some(k)) => {
-                hit = Some(k);
+                run.support = Some(k);
                 StopReason::Support
             }
             (r, _) => r,
@@ -1572,35 +1863,36 @@ impl<'a> Model<'a> {
         let phase = match reason {
             StopReason::AtRest => Phase::Stopped,
             _ if !in_contact => Phase::Flight,
-            _ if slip_max < 1e-3 * st.v.norm() => Phase::Roll,
+            _ if run.slip_max < 1e-3 * st.v.norm() => Phase::Roll,
             _ => Phase::Slide,
         };
         let stop_along = (reason == StopReason::AtRest).then(|| self.mean.along(&st.c));
-        if events && reason == StopReason::AtRest {
-            evs.push(self.event(st.t, EventKind::Stop, &st.c, st.v.norm(), 0.0, 0.0, None));
+        if cfg.log_events && reason == StopReason::AtRest {
+            run.events
+                .push(self.event(st.t, EventKind::Stop, &st.c, st.v.norm(), 0.0, 0.0, None));
         }
-        if let Some(r) = rec.as_mut()
+        if let Some(r) = run.rec.as_mut()
             && r.tr.time.last().is_none_or(|&t| t < st.t)
         {
-            self.sample(r, &st, damping + friction, stored)?;
+            self.sample(r, &st, run.damping + run.friction, run.stored)?;
         }
         Ok(RunOut {
             st,
             reason,
             phase,
-            impacts,
-            slide_start,
+            impacts: run.impacts,
+            slide_start: run.slide_start,
             stop_along,
-            max_bounce,
-            damping,
-            friction,
-            stored,
+            max_bounce: run.max_bounce,
+            damping: run.damping,
+            friction: run.friction,
+            stored: run.stored,
             e_start,
-            steps,
-            max_overlap,
-            events: evs,
-            trajectory: rec.map(|r| r.tr),
-            support: hit,
+            steps: run.steps,
+            max_overlap: run.max_overlap,
+            events: run.events,
+            trajectory: run.rec.map(|r| r.tr),
+            support: run.support,
         })
     }
 
@@ -2033,6 +2325,90 @@ struct Episode {
 
 /// Depth inside the block and nearest face of a point, or None outside.
 type InsideFn<'a> = dyn Fn(&Vector3<f64>) -> Option<(f64, usize)> + 'a;
+
+/// Unit normal of a floor triangle, oriented by the order of its corners.
+fn triangle_normal(t: &FloorTriangle) -> Vector3<f64> {
+    (t.corners[1] - t.corners[0])
+        .cross(&(t.corners[2] - t.corners[0]))
+        .normalize()
+}
+
+/// True when the triangles `tris` lie on one plane (to rounding, for a block of bounding
+/// radius `r_max`, m): a flat patch with no peak and no crease.
+fn one_flat_patch(tris: &[FloorTriangle], r_max: f64) -> bool {
+    let (n0, o0) = (triangle_normal(&tris[0]), tris[0].corners[0]);
+    let tol = 1e-12 * (1.0 + r_max + o0.norm());
+    tris.iter().all(|t| {
+        triangle_normal(t).dot(&n0) >= 1.0 - 1e-12
+            && t.corners.iter().all(|x| n0.dot(&(x - o0)).abs() <= tol)
+    })
+}
+
+/// Depth (m) of the point `x` inside the block of world-frame faces `faces_w` (outward
+/// normal, offset) and its nearest face, or None outside.
+fn inside_depth(faces_w: &[(Vector3<f64>, f64)], x: &Vector3<f64>) -> Option<(f64, usize)> {
+    let mut best = (f64::INFINITY, 0usize);
+    for (k, (n, off)) in faces_w.iter().enumerate() {
+        let d = off - n.dot(x);
+        if d <= 0.0 {
+            return None;
+        }
+        if d < best.0 {
+            best = (d, k);
+        }
+    }
+    Some(best)
+}
+
+/// Face–vertex contacts: floor vertices of `tris` (not below the block's lowest vertex at
+/// `z_min`, m) inside the block (faces `faces_w`) that poke towards its nearest face (every
+/// neighbour lower along that face's normal).
+fn floor_peak_contacts(
+    tris: &[FloorTriangle],
+    z_min: f64,
+    faces_w: &[(Vector3<f64>, f64)],
+    out: &mut Vec<Geo>,
+) {
+    let mut done: Vec<u32> = Vec::new();
+    for t in tris {
+        for k in 0..3 {
+            let id = t.ids[k];
+            let x = t.corners[k];
+            if x.z < z_min || done.contains(&id) {
+                continue;
+            }
+            done.push(id);
+            let Some((depth, face)) = inside_depth(faces_w, &x) else {
+                continue;
+            };
+            let nf = faces_w[face].0;
+            // a peak towards the face: every neighbour lower along the face normal
+            let mut peak = true;
+            let mut any = false;
+            for t2 in tris {
+                for k2 in 0..3 {
+                    if t2.ids[k2] == id {
+                        for y in [t2.corners[(k2 + 1) % 3], t2.corners[(k2 + 2) % 3]] {
+                            any = true;
+                            let e = x - y;
+                            if (-nf).dot(&e) <= 1e-6 * e.norm() {
+                                peak = false;
+                            }
+                        }
+                    }
+                }
+            }
+            if peak && any {
+                out.push(Geo {
+                    key: (1 << 62) | u64::from(id),
+                    p: x,
+                    n: -nf,
+                    u: depth,
+                });
+            }
+        }
+    }
+}
 
 /// Edge–edge contact of block edge (qa, qb) with floor crease (pa, pb): the common
 /// perpendicular when both closest points are interior, the floor point inside the block and
