@@ -192,6 +192,10 @@ struct St {
     /// A floor point (m) and its `along_dip` (m): the last point where the rock was on the floor.
     r: Vector3<f64>,
     s_r: f64,
+    /// The last position (m) put on or above the floor's surface ([`floor_surface_above`]):
+    /// the check at a flight's start is skipped there (the floor does not change, so it would
+    /// find nothing to correct).
+    on_surface: Option<Vector3<f64>>,
 }
 
 impl St {
@@ -216,6 +220,7 @@ impl St {
             crease: None,
             r: base.0,
             s_r: base.1,
+            on_surface: None,
         }
     }
 }
@@ -334,6 +339,7 @@ fn set_floor_height(s: &mut St, floor: &Floor, z: f64, g: f64, ke_factor: f64) {
     if let Some(top) = floor_surface_above(floor, &s.p) {
         set_height(s, top, g, ke_factor);
     }
+    s.on_surface = Some(s.p);
 }
 
 /// Smallest positive root of ½ c t² + b t − s = 0 (s > 0), or +∞.
@@ -765,6 +771,7 @@ impl<'a, 'r> Run<'a, 'r> {
         }
         // a flight starts on or above every plane it could strike
         if s.ground.is_none()
+            && s.on_surface != Some(s.p)
             && let Some(top) = floor_surface_above(self.floor, &s.p)
         {
             set_height(s, top, self.g, 1.0);
@@ -989,6 +996,7 @@ impl<'a, 'r> Run<'a, 'r> {
         if let Some(top) = floor_surface_above(floor, &s.p) {
             set_height(s, top, g, 1.0);
         }
+        s.on_surface = Some(s.p);
         if (s.p - p_start).norm() <= self.catch.len {
             self.catch.hops += 1;
         } else {
