@@ -1718,47 +1718,51 @@ mod tests {
         }
     }
 
-    /// Run time against error of the c = 1e9 N·s/m² column (3 modes, base case): the largest
-    /// relative error of Pmax, column energy after contact, first contact duration and max
-    /// |w_mid| against a run at tolerance 1e-12. A measurement printed for BENCHMARKS.md, not a
+    /// Run time against error of the c = 1e9 N·s/m² column (3 and 9 modes, base case): the
+    /// largest relative error of Pmax, column energy after contact, first contact duration and
+    /// max |w_mid| against a run at tolerance 1e-12. A measurement printed for BENCHMARKS.md, not a
     /// check: `cargo test --lib heavily_damped_time_against_error -- --ignored --nocapture`.
     #[test]
     #[ignore]
     fn heavily_damped_time_against_error() {
-        let input = |tol: f64| {
-            let mut i = base_input(3, tol);
-            i.galerkin =
-                Galerkin::new(&crate::physics::material::Column::default(), 3, 1e9, true).unwrap();
-            i
-        };
-        let key = |r: &CoupledResult| {
-            [
-                r.max_force,
-                r.column_energy_after_contact,
-                r.first_contact_duration.unwrap(),
-                r.max_midpoint_displacement,
-            ]
-        };
-        let reference = key(&solve_coupled(&input(1e-12), &Control::unlimited()).unwrap());
-        for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10] {
-            let inp = input(tol);
-            let reps = 5;
-            let t0 = std::time::Instant::now();
-            let mut r = None;
-            for _ in 0..reps {
-                r = Some(solve_coupled(&inp, &Control::unlimited()).unwrap());
+        for n in [3usize, 9] {
+            let input = |tol: f64| {
+                let mut i = base_input(n, tol);
+                i.galerkin =
+                    Galerkin::new(&crate::physics::material::Column::default(), n, 1e9, true)
+                        .unwrap();
+                i
+            };
+            let key = |r: &CoupledResult| {
+                [
+                    r.max_force,
+                    r.column_energy_after_contact,
+                    r.first_contact_duration.unwrap(),
+                    r.max_midpoint_displacement,
+                ]
+            };
+            let reference = key(&solve_coupled(&input(1e-12), &Control::unlimited()).unwrap());
+            println!("{n} modes, c = 1e9 N·s/m²");
+            for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10] {
+                let inp = input(tol);
+                let reps = 5;
+                let t0 = std::time::Instant::now();
+                let mut r = None;
+                for _ in 0..reps {
+                    r = Some(solve_coupled(&inp, &Control::unlimited()).unwrap());
+                }
+                let ms = t0.elapsed().as_secs_f64() * 1e3 / reps as f64;
+                let r = r.unwrap();
+                let err = key(&r)
+                    .iter()
+                    .zip(reference)
+                    .map(|(g, e)| ((g - e) / e).abs())
+                    .fold(0.0f64, f64::max);
+                println!(
+                    "| {tol:e} | {} | {} | {} | {ms:.2} | {err:.2e} | {:.2e} |",
+                    r.steps, r.rejected_steps, r.passes, r.estimated_error
+                );
             }
-            let ms = t0.elapsed().as_secs_f64() * 1e3 / reps as f64;
-            let r = r.unwrap();
-            let err = key(&r)
-                .iter()
-                .zip(reference)
-                .map(|(g, e)| ((g - e) / e).abs())
-                .fold(0.0f64, f64::max);
-            println!(
-                "| {tol:e} | {} | {} | {} | {ms:.2} | {err:.2e} | {:.2e} |",
-                r.steps, r.rejected_steps, r.passes, r.estimated_error
-            );
         }
     }
 
@@ -1913,19 +1917,25 @@ mod tests {
     }
 
     /// A limit below the lower bound is refused before any step (no `TimedOut` from an
-    /// expired deadline, which the first 1000 steps would meet).
+    /// expired deadline, which the first 1000 steps would meet): 50 lightly damped modes
+    /// (Dormand–Prince contacts) and 3 modes at c = 1e9 N·s/m² (exponential contacts, whose
+    /// bound no longer carries the ~3 700 stability-limited steps of the explicit integrator).
     #[test]
     fn step_limit_below_the_estimate_is_refused_at_once() {
-        let mut input = base_input(50, 1e-9);
-        let e = estimate_steps(&input).unwrap();
-        input.max_steps = (0.9 * e.lower_bound) as u64;
-        let expired = Control::with_deadline(Some(std::time::Instant::now()));
-        match solve_coupled(&input, &expired) {
-            Err(PhysicsError::TooManySteps { estimated, limit }) => {
-                assert_eq!(estimated, e.expected);
-                assert_eq!(limit, input.max_steps as f64);
+        use crate::physics::material::Column;
+        let mut damped = base_input(3, 1e-9);
+        damped.galerkin = Galerkin::new(&Column::default(), 3, 1e9, true).unwrap();
+        for mut input in [base_input(50, 1e-9), damped] {
+            let e = estimate_steps(&input).unwrap();
+            input.max_steps = (0.9 * e.lower_bound) as u64;
+            let expired = Control::with_deadline(Some(std::time::Instant::now()));
+            match solve_coupled(&input, &expired) {
+                Err(PhysicsError::TooManySteps { estimated, limit }) => {
+                    assert_eq!(estimated, e.expected);
+                    assert_eq!(limit, input.max_steps as f64);
+                }
+                other => panic!("expected TooManySteps, got {other:?}"),
             }
-            other => panic!("expected TooManySteps, got {other:?}"),
         }
     }
 
