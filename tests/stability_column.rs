@@ -331,6 +331,59 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+
+    /// Energy is never created and the balances close over random damping across the whole
+    /// range (c log-uniform over 1..1e9 N·s/m², and both ends 0 and 1e9) and 1 to 50 modes,
+    /// where heavily damped columns take their contacts with the exponential integrator. The
+    /// window is 3 rigid contact durations (the free flight of 50 modes costs 8 steps per
+    /// period of mode 49, so the window is kept short for speed). Physical expectation: at
+    /// every history sample the rock's kinetic energy, the contact energy, the column's energies
+    /// and the dissipated energy add up to at most the initial kinetic energy (within the
+    /// integrator's tolerance), the dissipated energy never decreases, and the run's own error
+    /// estimate (the rock's balance and the column's E_col + D = W) is within the 1e-5
+    /// accuracy target. Longer:
+    /// `PROPTEST_CASES=200 cargo test --test stability_column balances_close_for_up_to_fifty`.
+    #[test]
+    fn balances_close_for_up_to_fifty_modes_over_the_whole_damping_range(
+        v in 0.5f64..20.0, x in 0.0f64..1.0, end in prop_oneof![Just(0usize), Just(1), 2usize..5],
+        n in 1usize..=50, hertz in any::<bool>(),
+    ) {
+        let c = match end { 0 => 0.0, 1 => 1e9, _ => 10f64.powf(9.0 * x) };
+        let law = if hertz { ContactLaw::HertzPoint } else { ContactLaw::Paper };
+        let case = impact_case(v, 0.3, 2500.0, 1e10, 0.25, 0.94, 1.31, 208e9, 7850.0, 0.125,
+                               Damping::Coefficient(c), law);
+        let Some(imp) = impact_of(&case) else { return Ok(()) };
+        let cc = ColumnCase {
+            impact: case,
+            model: ColumnModel::Coupled,
+            modes: Some(n),
+            end_time: Some(3.0 * imp.contact_duration),
+            output: HistoryRequest::Uniform { duration: None, samples: Some(60) },
+            tolerance: 1e-6,
+            ..ColumnCase::default()
+        };
+        let res = solve_column_with_impact(&cc, &imp, &Control::unlimited()).unwrap();
+        prop_assert!(all_finite(&res));
+        let ColumnDetail::Coupled(d) = res.detail else { panic!() };
+        let ke = res.kinetic_energy;
+        prop_assert!(d.estimated_error < 1e-5, "c = {c:e}, {n} modes: estimated error {}",
+                     d.estimated_error);
+        prop_assert!(d.column_energy_after_contact <= ke * (1.0 + 1e-6));
+        let h = res.history.unwrap();
+        let rock = h.rock.unwrap();
+        for i in 0..h.time.len() {
+            let total = rock.rock_kinetic_energy[i] + rock.contact_energy[i] + h.kinetic_energy[i]
+                + h.strain_energy[i] + h.dissipated_energy[i];
+            prop_assert!(total <= ke * (1.0 + 1e-5),
+                         "c = {c:e}, {n} modes, t = {}: {total} > {ke}", h.time[i]);
+            prop_assert!(h.dissipated_energy[i] >= 0.0);
+        }
+        for w in h.dissipated_energy.windows(2) { prop_assert!(w[1] >= w[0] - 1e-6 * ke) }
+    }
+}
+
 /// An approach that reaches δ_cap is `CapacityExceeded`, not a panic or a hang.
 #[test]
 fn coupled_capacity_is_an_error() {
