@@ -848,42 +848,18 @@ fn run_pass(
         mass: &mass,
         fs: &fs,
     };
-    let (f_delta, f_wmid, f_c0, f_cm) = (&fs.delta, &fs.wmid, &fs.c0, &fs.cm);
-    let (f_wmid_rate, f_c0_rate, f_cm_rate) = (&fs.wmid_rate, &fs.c0_rate, &fs.cm_rate);
 
     let column_energy = |y: &[f64]| sys.column_energy(&mass, y);
-
-    let mut y = vec![0.0; dim];
-    y[ROCK_VELOCITY] = v;
-    let mut t = 0.0;
-    let mut res = CoupledResult::at_start(v, t_end, tol);
-    let mut first_separated = false;
-    let mut next_sample = 0usize;
+    let mut walk = Walk::new(v, t_end, tol, dim);
     let samples = &input.sample_times;
-    let mut ysave = vec![0.0; dim];
-    let mut ytmp = vec![0.0; dim];
-    let capacity_error = || capacity_exceeded(input);
-
     let record = |res: &mut CoupledResult, ts: f64, ys: &[f64], in_contact: bool| {
         pass.record(res, ts, ys, in_contact)
     };
-    while next_sample < samples.len() && samples[next_sample] <= 0.0 {
-        record(&mut res, samples[next_sample], &y, true);
-        next_sample += 1;
+    while walk.next_sample < samples.len() && samples[walk.next_sample] <= 0.0 {
+        record(&mut walk.res, samples[walk.next_sample], &walk.y, true);
+        walk.next_sample += 1;
     }
 
-    let process =
-        |st: &Dopri5,
-         res: &mut CoupledResult,
-         next_sample: &mut usize,
-         y0: &[f64],
-         y1: &[f64],
-         in_contact: bool,
-         ytmp: &mut [f64]| { pass.process(st, res, next_sample, y0, y1, in_contact, ytmp) };
-    let map_ode = |e: OdeError, in_contact: bool, delta: f64| pass.map_ode(e, in_contact, delta);
-
-    let mut in_contact = true;
-    let mut switches: u64 = 0;
     let omega_max = 2.0
         * std::f64::consts::PI
         * super::beam::generalized_frequencies(
@@ -900,22 +876,22 @@ fn run_pass(
     // The exact propagator steps at 1/8 of the shortest period whatever the damping (a heavily
     // damped column has its propagator built by doubling and its in-step states exactly).
     let exact_flight = omega_max > 0.0;
-    while t < t_end {
-        if !in_contact && exact_flight {
+    while walk.t < t_end {
+        if !walk.in_contact && exact_flight {
             let ff = free.get_or_insert_with(|| FreeFlight::new(&minv, &sys.k, &sys.c, omega_max));
             let (recontact, t_new) = free_flight(
                 ff,
                 &sys,
-                &mut y,
-                t,
+                &mut walk.y,
+                walk.t,
                 t_end,
-                &mut res,
-                &mut next_sample,
+                &mut walk.res,
+                &mut walk.next_sample,
                 samples,
                 &record,
                 &apply,
-                &[f_wmid, f_c0, f_cm],
-                &[f_wmid_rate, f_c0_rate, f_cm_rate],
+                &[&fs.wmid, &fs.c0, &fs.cm],
+                &[&fs.wmid_rate, &fs.c0_rate, &fs.cm_rate],
                 &mut st,
                 control,
                 input.max_steps,
@@ -924,157 +900,235 @@ fn run_pass(
                     (2.0 * (kin + strain) * reach).sqrt()
                 },
             )?;
-            t = t_new;
+            walk.t = t_new;
             if recontact {
-                res.contact_count += 1;
-                in_contact = true;
-                sys.in_contact.set(true);
-                st.reset();
-                st.h = st.h.max(input.time_scale * 1e-6);
+                walk.switch(&pass, &mut st, t_new);
             }
             continue;
         }
-        if let (true, Some(es)) = (in_contact, exp_contact.as_mut()) {
+        if let (true, Some(es)) = (walk.in_contact, exp_contact.as_mut()) {
             let (steps, rejected) = (es.steps, es.rejected);
             let (separated, t_new) = exponential::exponential_contact(
                 es,
                 &pass,
-                &mut y,
-                t,
-                &mut res,
-                &mut next_sample,
+                &mut walk.y,
+                walk.t,
+                &mut walk.res,
+                &mut walk.next_sample,
                 control,
                 st.steps,
             )?;
             st.steps += es.steps - steps;
             st.rejected += es.rejected - rejected;
-            t = t_new;
+            walk.t = t_new;
             if separated {
-                if !first_separated {
-                    first_separated = true;
-                    res.first_contact_duration = Some(t);
-                    res.rebound_velocity = y[ROCK_VELOCITY];
-                    let (kin, strain) = column_energy(&y);
-                    res.column_energy_after_contact = kin + strain;
-                }
-                in_contact = false;
+                walk.separate_first(&pass, t_new);
+                walk.in_contact = false;
                 sys.in_contact.set(false);
                 st.reset();
             }
             continue;
         }
-        if st.steps % 1000 == 999 {
-            control.check()?;
-        }
-        if st.steps >= input.max_steps {
-            return Err(PhysicsError::TooManySteps {
-                estimated: st.steps as f64 * t_end / t.max(f64::MIN_POSITIVE),
-                limit: input.max_steps as f64,
-            });
-        }
-        ysave.copy_from_slice(&y);
-        let t_save = t;
-        let t1 = st
-            .step(&sys, t, &mut y, t_end)
-            .map_err(|e| map_ode(e, in_contact, sys.delta(&y)))?;
-        // Terminal event: separation (δ ↓ 0) in contact, re-contact (δ ↑ 0) in flight.
-        let cd = st.functional(f_delta);
-        let gd = |th: f64| Dopri5::eval_functional(&cd, th);
-        let dir = if in_contact { -1 } else { 1 };
-        let hit = find_roots(gd, apply(f_delta, &ysave), apply(f_delta, &y), dir, 4, true);
-        let (t0, h) = st.last_step();
-        // An event must move time forward (a grazing δ ≈ 0 at the very start of a step would
-        // otherwise switch back and forth without progress).
-        let event = hit
-            .first()
-            .map(|&th| t0 + th * h)
-            .filter(|&te| te > t_save + 1e-13 * h.max(t_save.abs() * 1e-3));
-        if let Some(te) = event {
-            switches += 1;
-            if switches.is_multiple_of(64) {
-                control.check()?;
-            }
-            if switches > input.max_steps {
-                return Err(PhysicsError::TooManySteps {
-                    estimated: switches as f64 * t_end / t_save.max(f64::MIN_POSITIVE),
-                    limit: input.max_steps as f64,
-                });
-            }
-            // Redo the integration from the start of the step to the event exactly.
-            y.copy_from_slice(&ysave);
-            t = t_save;
-            st.reset();
-            st.h = (te - t_save).max(f64::MIN_POSITIVE);
-            while t < te {
-                ytmp.copy_from_slice(&y);
-                let y0 = ytmp.clone();
-                t = st
-                    .step(&sys, t, &mut y, te)
-                    .map_err(|e| map_ode(e, in_contact, sys.delta(&y)))?;
-                let mut scratch = vec![0.0; dim];
-                process(
-                    &st,
-                    &mut res,
-                    &mut next_sample,
-                    &y0,
-                    &y,
-                    in_contact,
-                    &mut scratch,
-                )?;
-            }
-            if in_contact {
-                if !first_separated {
-                    first_separated = true;
-                    res.first_contact_duration = Some(te);
-                    res.rebound_velocity = y[ROCK_VELOCITY];
-                    let (kin, strain) = column_energy(&y);
-                    res.column_energy_after_contact = kin + strain;
-                }
-            } else {
-                res.contact_count += 1;
-            }
-            in_contact = !in_contact;
-            sys.in_contact.set(in_contact);
-            st.reset();
-            st.h = st.h.max(input.time_scale * 1e-6);
-            continue;
-        }
-        process(
-            &st,
-            &mut res,
-            &mut next_sample,
-            &ysave,
-            &y,
-            in_contact,
-            &mut ytmp,
-        )?;
-        if in_contact {
-            let d = sys.delta(&y);
-            if let Some(cap) = input.law.deformation_capacity()
-                && d >= cap
-            {
-                return Err(capacity_error());
-            }
-        }
-        t = t1;
+        explicit_step(&pass, &mut walk, &mut st, control)?;
     }
     // Samples at exactly the end (rounding).
-    while next_sample < samples.len() {
-        record(&mut res, samples[next_sample], &y, in_contact);
-        next_sample += 1;
+    while walk.next_sample < samples.len() {
+        record(
+            &mut walk.res,
+            samples[walk.next_sample],
+            &walk.y,
+            walk.in_contact,
+        );
+        walk.next_sample += 1;
     }
+    let mut res = walk.res;
     close_balances(
         input,
         &sys,
         &mass,
-        &y,
-        in_contact,
-        first_separated,
+        &walk.y,
+        walk.in_contact,
+        walk.first_separated,
         &mut res,
     );
     res.steps = st.steps;
     res.rejected_steps = st.rejected;
     Ok(res)
+}
+
+/// The mutable state of one pass's walk over the window: the state vector and its two scratch
+/// copies, the time (s), the results so far, the next history sample, the phase, whether the
+/// first contact has ended and the number of phase switches.
+struct Walk {
+    y: Vec<f64>,
+    ysave: Vec<f64>,
+    ytmp: Vec<f64>,
+    t: f64,
+    res: CoupledResult,
+    next_sample: usize,
+    in_contact: bool,
+    first_separated: bool,
+    switches: u64,
+}
+
+impl Walk {
+    /// The start: the rock at speed `v` (m/s) touching the column at rest, in contact.
+    fn new(v: f64, t_end: f64, tol: f64, dim: usize) -> Self {
+        let mut y = vec![0.0; dim];
+        y[ROCK_VELOCITY] = v;
+        Walk {
+            y,
+            ysave: vec![0.0; dim],
+            ytmp: vec![0.0; dim],
+            t: 0.0,
+            res: CoupledResult::at_start(v, t_end, tol),
+            next_sample: 0,
+            in_contact: true,
+            first_separated: false,
+            switches: 0,
+        }
+    }
+
+    /// Books the end of the first contact at `te` (s), once: its duration, the rebound
+    /// velocity and the column's energy then.
+    fn separate_first(&mut self, pass: &Pass<'_>, te: f64) {
+        if !self.first_separated {
+            self.first_separated = true;
+            self.res.first_contact_duration = Some(te);
+            self.res.rebound_velocity = self.y[ROCK_VELOCITY];
+            let (kin, strain) = pass.sys.column_energy(pass.mass, &self.y);
+            self.res.column_energy_after_contact = kin + strain;
+        }
+    }
+
+    /// Switches between contact and flight at the current state, an event at `te` (s): a
+    /// separation or a re-contact; counts the contacts and restarts the explicit integrator.
+    fn switch(&mut self, pass: &Pass<'_>, st: &mut Dopri5, te: f64) {
+        if self.in_contact {
+            self.separate_first(pass, te);
+        } else {
+            self.res.contact_count += 1;
+        }
+        self.in_contact = !self.in_contact;
+        pass.sys.in_contact.set(self.in_contact);
+        st.reset();
+        st.h = st.h.max(pass.input.time_scale * 1e-6);
+    }
+}
+
+/// One explicit Dormand–Prince step in contact or in flight (without the exact propagator).
+/// A separation or re-contact inside the step is located on the dense output, the step redone
+/// from its start to the event exactly, and the phase switched; otherwise the step's events and
+/// samples are processed and the capacity of the contact law checked.
+fn explicit_step(
+    pass: &Pass<'_>,
+    w: &mut Walk,
+    st: &mut Dopri5,
+    control: &Control,
+) -> PhysicsResult<()> {
+    let (input, sys) = (pass.input, pass.sys);
+    let f_delta = &pass.fs.delta;
+    let t_end = input.end_time;
+    if st.steps % 1000 == 999 {
+        control.check()?;
+    }
+    if st.steps >= input.max_steps {
+        return Err(PhysicsError::TooManySteps {
+            estimated: st.steps as f64 * t_end / w.t.max(f64::MIN_POSITIVE),
+            limit: input.max_steps as f64,
+        });
+    }
+    w.ysave.copy_from_slice(&w.y);
+    let t_save = w.t;
+    let in_contact = w.in_contact;
+    let t1 = st
+        .step(sys, w.t, &mut w.y, t_end)
+        .map_err(|e| pass.map_ode(e, in_contact, sys.delta(&w.y)))?;
+    // Terminal event: separation (δ ↓ 0) in contact, re-contact (δ ↑ 0) in flight.
+    let cd = st.functional(f_delta);
+    let gd = |th: f64| Dopri5::eval_functional(&cd, th);
+    let dir = if in_contact { -1 } else { 1 };
+    let hit = find_roots(
+        gd,
+        apply(f_delta, &w.ysave),
+        apply(f_delta, &w.y),
+        dir,
+        4,
+        true,
+    );
+    let (t0, h) = st.last_step();
+    // An event must move time forward (a grazing δ ≈ 0 at the very start of a step would
+    // otherwise switch back and forth without progress).
+    let event = hit
+        .first()
+        .map(|&th| t0 + th * h)
+        .filter(|&te| te > t_save + 1e-13 * h.max(t_save.abs() * 1e-3));
+    if let Some(te) = event {
+        w.switches += 1;
+        if w.switches.is_multiple_of(64) {
+            control.check()?;
+        }
+        if w.switches > input.max_steps {
+            return Err(PhysicsError::TooManySteps {
+                estimated: w.switches as f64 * t_end / t_save.max(f64::MIN_POSITIVE),
+                limit: input.max_steps as f64,
+            });
+        }
+        redo_to_event(pass, w, st, t_save, te)?;
+        w.switch(pass, st, te);
+        return Ok(());
+    }
+    pass.process(
+        st,
+        &mut w.res,
+        &mut w.next_sample,
+        &w.ysave,
+        &w.y,
+        in_contact,
+        &mut w.ytmp,
+    )?;
+    if in_contact
+        && let Some(cap) = input.law.deformation_capacity()
+        && sys.delta(&w.y) >= cap
+    {
+        return Err(capacity_exceeded(input));
+    }
+    w.t = t1;
+    Ok(())
+}
+
+/// Integrates again from the start of a step (state `ysave` at `t_save`, s) to the event at
+/// `te` (s) exactly, processing the events and samples of each piece.
+fn redo_to_event(
+    pass: &Pass<'_>,
+    w: &mut Walk,
+    st: &mut Dopri5,
+    t_save: f64,
+    te: f64,
+) -> PhysicsResult<()> {
+    let sys = pass.sys;
+    let in_contact = w.in_contact;
+    w.y.copy_from_slice(&w.ysave);
+    w.t = t_save;
+    st.reset();
+    st.h = (te - t_save).max(f64::MIN_POSITIVE);
+    let mut scratch = vec![0.0; w.y.len()];
+    while w.t < te {
+        w.ytmp.copy_from_slice(&w.y);
+        w.t = st
+            .step(sys, w.t, &mut w.y, te)
+            .map_err(|e| pass.map_ode(e, in_contact, sys.delta(&w.y)))?;
+        pass.process(
+            st,
+            &mut w.res,
+            &mut w.next_sample,
+            &w.ytmp,
+            &w.y,
+            in_contact,
+            &mut scratch,
+        )?;
+    }
+    Ok(())
 }
 
 /// What the contact integration of one pass shares: the input, the system, its mass matrix
