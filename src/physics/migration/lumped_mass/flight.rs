@@ -1,0 +1,158 @@
+//! Flight: the closed-form parabola to the first strike, the lower end, the end time or a
+//! support, and the impact (restitution, landing, the rebound's apex).
+
+use super::*;
+
+impl Run<'_, '_> {
+    /// One flight: the parabola up to its first strike of the floor, the lower end, the end
+    /// time, a column or the floor's edge; a strike is an impact.
+    pub(super) fn flight_step(
+        &mut self,
+        draw: &mut impl FnMut() -> (f64, f64),
+        t_left: f64,
+        s_left: f64,
+        diss0: f64,
+    ) -> StepEnd {
+        let (floor, g, gv, dip, su) = (self.floor, self.g, self.gv, self.dip, self.su);
+        let s = &self.s;
+        let t_s = reach_time(s_left, s.v.dot(&dip), gv.dot(&dip));
+        let t_lim = t_s.min(t_left);
+        // t_s is formed from the whole flight; whether a strike comes before the lower
+        // end is decided by its point, measured from the last floor point (local terms)
+        let t_q = if t_s < t_left {
+            (t_s * (1.0 + 1e-9)).min(t_left)
+        } else {
+            t_lim
+        };
+        let mut past_end = None;
+        let end = match floor.flight(&s.p, &s.v, g, t_q) {
+            FlightEnd::Hit { t, facet } => {
+                let q = s.p + s.v * t + gv * (0.5 * t * t);
+                let zq = floor.facet_plane(facet).z(q.x, q.y);
+                let dq = Vector3::new(q.x - s.r.x, q.y - s.r.y, zq - s.r.z);
+                if s.s_r + dq.dot(&dip) < su.length {
+                    FlightEnd::Hit { t, facet }
+                } else {
+                    past_end = Some(t);
+                    FlightEnd::Clear
+                }
+            }
+            FlightEnd::Leaves { t } if t > t_lim => FlightEnd::Clear,
+            e => e,
+        };
+        let dt = match end {
+            FlightEnd::Hit { t, .. } | FlightEnd::Leaves { t } => t,
+            FlightEnd::Clear => past_end.map_or(t_lim, |t| t.min(t_lim)),
+        };
+        // a column reached inside the flight ends it there
+        let col = self.column_reach(&s.v, &gv, dt);
+        let dt = col.map_or(dt, |c| c.0);
+        let p_start = s.p;
+        self.push_segment(Segment {
+            t0: s.t,
+            dt,
+            p0: s.p,
+            v0: s.v,
+            a: gv,
+            fric: Vector3::zeros(),
+            diss0,
+            rolling: None,
+            spin: s.spin,
+            on_floor: false,
+        });
+        let s = &mut self.s;
+        s.p += s.v * dt + gv * (0.5 * dt * dt);
+        s.v += gv * dt;
+        s.t += dt;
+        // the rebound's apex counts only when this flight lasted until it
+        if let Some((h, t_apex)) = s.apex.take()
+            && s.t >= t_apex
+        {
+            s.max_bounce = s.max_bounce.max(h);
+        }
+        if let Some((_, k)) = col {
+            self.hit = Some(k);
+            return Some((Phase::Flight, StopReason::Support));
+        }
+        match end {
+            FlightEnd::Leaves { .. } => Some((Phase::Flight, StopReason::LeftFloor)),
+            FlightEnd::Clear => {
+                if t_s <= t_left || past_end.is_some() {
+                    return Some((Phase::Flight, StopReason::LowerEnd));
+                }
+                Some((Phase::Flight, StopReason::EndTime))
+            }
+            FlightEnd::Hit { facet, .. } => {
+                self.impact(facet, p_start, draw);
+                None
+            }
+        }
+    }
+
+    /// An impact on `facet` at the end of a flight from `p_start`: the rock is put on the floor,
+    /// the restitution (e_n, e_t) drawn and applied in the facet's frame, and a rebound slower
+    /// than the stop speed starts the ground phase.
+    pub(super) fn impact(
+        &mut self,
+        facet: Facet,
+        p_start: Vector3<f64>,
+        draw: &mut impl FnMut() -> (f64, f64),
+    ) {
+        let (floor, g, dip, su) = (self.floor, self.g, self.dip, self.su);
+        let s = &mut self.s;
+        let pl = floor.facet_plane(facet);
+        let n = pl.normal();
+        let z = pl.z(s.p.x, s.p.y);
+        set_height(s, z, g, 1.0);
+        // on the floor's surface itself: a strike accepted a rounding
+        // tolerance outside the struck facet may lie under a neighbour's plane
+        if let Some(top) = floor_surface_above(floor, &s.p) {
+            set_height(s, top, g, 1.0);
+        }
+        s.on_surface = Some(s.p);
+        if (s.p - p_start).norm() <= self.catch.len {
+            self.catch.hops += 1;
+        } else {
+            self.catch.hops = 0;
+        }
+        s.s_r += (s.p - s.r).dot(&dip);
+        s.r = s.p;
+        let vn = s.v.dot(&n);
+        let vt = s.v - n * vn;
+        let (en, et) = draw();
+        s.impacts += 1;
+        let speed_before = s.v.norm();
+        let lost =
+            0.5 * ((1.0 - en * en) * vn * vn + (1.0 - et * et) * vt.norm_squared()) + s.spin.0;
+        s.e_imp += lost;
+        s.spin = (0.0, Vector3::zeros());
+        let r = -en * vn;
+        let rebound = vt * et + n * r;
+        let ev = EventRec {
+            t: s.t,
+            kind: EventKind::Impact,
+            p: s.p,
+            speed_before,
+            speed_after: rebound.norm(),
+            lost,
+        };
+        self.push_event(ev);
+        let s = &mut self.s;
+        if r < su.v_stop || r < MIN_REBOUND {
+            s.rebound_cutoff |= r >= su.v_stop;
+            s.e_trans += 0.5 * r * r;
+            s.v = vt * et;
+            let ke_before = rebound.norm();
+            self.enter_ground(facet);
+            if let Some(rr) = self.rec.as_deref_mut()
+                && let Some(ev) = rr.events.last_mut()
+            {
+                ev.speed_before = ke_before;
+                ev.lost += 0.5 * r * r;
+            }
+        } else {
+            s.v = rebound;
+            s.apex = Some((r * r / (2.0 * g * n.z), s.t + r / (g * n.z)));
+        }
+    }
+}
