@@ -51,6 +51,19 @@
 //!   from them brought to the state's time, so no term of the account is first order in Δt.
 //!   KE + PE + stored + damping + friction + residual = the energy at release (with the
 //!   springs' energy at release).
+//! * **Floor edges and holes.** A block vertex off the floor (beyond its extent or over a
+//!   hole) has no contact; once it is below the floor's level there (a hole's surface filled
+//!   in from the data around it, the nearest facet's plane continued beyond a grid's edge) the
+//!   block has left the floor, and the run stops (`left_floor`) in the state the step started
+//!   from, as a point mass stops where it leaves the floor. Carried on, the vertex would come
+//!   back over the floor already deep, its ½kₙU² created from nothing (a block landing across
+//!   a grid's upper edge was thrown off at 143 m/s). A sphere touches a floor's boundary edge
+//!   like any other, and stops when its centre leaves the floor.
+//! * **Energy never created** is checked at the start of every free flight and at the end:
+//!   KE + PE + stored + dissipated may exceed the energy at release by at most 1 % (linear
+//!   law) or 5 % (Hertz) of the energy in play (m g (|Δs| + |Δz| + drop) + ½ m v₀² and the
+//!   springs' scale) plus half the stored energy, five times the property tests' bounds on the
+//!   residual; beyond that the run fails as a numerical error instead of answering.
 //!
 //! References: physics.md §C.1 (restitution of the spring–dashpot), §C.3; api.md
 //! `POST /v1/migration`.
