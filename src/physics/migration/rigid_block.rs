@@ -51,6 +51,19 @@
 //!   from them brought to the state's time, so no term of the account is first order in Δt.
 //!   KE + PE + stored + damping + friction + residual = the energy at release (with the
 //!   springs' energy at release).
+//! * **Floor edges and holes.** A block vertex off the floor (beyond its extent or over a
+//!   hole) has no contact; once it is below the floor's level there (a hole's surface filled
+//!   in from the data around it, the nearest facet's plane continued beyond a grid's edge) the
+//!   block has left the floor, and the run stops (`left_floor`) in the state the step started
+//!   from, as a point mass stops where it leaves the floor. Carried on, the vertex would come
+//!   back over the floor already deep, its ½kₙU² created from nothing (a block landing across
+//!   a grid's upper edge was thrown off at 143 m/s). A sphere touches a floor's boundary edge
+//!   like any other, and stops when its centre leaves the floor.
+//! * **Energy never created** is checked at the start of every free flight and at the end:
+//!   KE + PE + stored + dissipated may exceed the energy at release by at most 1 % (linear
+//!   law) or 5 % (Hertz) of the energy in play (m g (|Δs| + |Δz| + drop) + ½ m v₀² and the
+//!   springs' scale) plus half the stored energy, five times the property tests' bounds on the
+//!   residual; beyond that the run fails as a numerical error instead of answering.
 //!
 //! References: physics.md §C.1 (restitution of the spring–dashpot), §C.3; api.md
 //! `POST /v1/migration`.
@@ -81,6 +94,12 @@ pub const REST_TIME_S: f64 = 0.1;
 /// below this fraction of the sliding speed (of 1 m/s below it), and the acceleration is along
 /// the velocity to this fraction of g, for two contact times.
 const STEADY_TOLERANCE: f64 = 1e-9;
+/// Energy a run may appear to gain (KE + PE + stored + dissipated − start) with the linear law,
+/// as a fraction of the energy in play, before it fails as a numerical error: five times the
+/// 0.2 % its property tests bound the residual to.
+const ENERGY_TOLERANCE_LINEAR: f64 = 1e-2;
+/// The same with the Hertz law (five times its property tests' 1 %).
+const ENERGY_TOLERANCE_HERTZ: f64 = 5e-2;
 
 /// Normal contact law of the rigid block.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -230,9 +249,15 @@ struct Model<'a> {
     /// Skip settled slides on the plane and flat mesh patches in closed form (off only to test
     /// the skip).
     skip_slides: bool,
+    /// Stop a block whose vertex is off the floor below its level (off only to test the energy
+    /// invariant on what it prevents).
+    stop_off_floor: bool,
     isotropic: bool,
     static_overlap: f64,
     on_floor_at_start: bool,
+    /// The energy in play before any travel, J: m g (drop + ten static overlaps and ten static
+    /// shear displacements) + ½ m v₀² (the scale of [`Model::check_energy`] at the release).
+    energy_in_play: f64,
 }
 
 /// State of the block: centre, velocity (half step), orientation, body angular velocity.
@@ -440,6 +465,10 @@ struct Run {
     half_step: Option<f64>,
     /// Time since the last force evaluation: the drift the shear springs have not yet seen, s.
     drift_h: f64,
+    /// At the last force evaluation a block vertex was off the floor below its level.
+    off_floor: bool,
+    /// Energy at release (with the springs' energy at release), J.
+    e_start: f64,
 }
 
 /// The shear spring of a contact of normal `n` after its point drifted by `d` (m): the old
@@ -623,9 +652,18 @@ impl<'a> Model<'a> {
             t_contact,
             max_steps: o.max_steps,
             skip_slides: true,
+            stop_off_floor: true,
             isotropic: iso,
             static_overlap,
             on_floor_at_start: rel.drop_height == 0.0,
+            energy_in_play: {
+                let shear = match hertz {
+                    None => m * g / o.shear_stiffness,
+                    Some(_) => static_overlap,
+                };
+                m * g * (rel.drop_height + 10.0 * (static_overlap + shear))
+                    + 0.5 * m * pr.v0.norm_squared()
+            },
             shape,
         })
     }
@@ -676,14 +714,15 @@ impl<'a> Model<'a> {
         *q.to_rotation_matrix().matrix()
     }
 
-    /// Contacts of the block at (c, R), appended to `out`.
+    /// Contacts of the block at (c, R), appended to `out`; true when a block vertex is off the
+    /// floor below the floor's level there (see [`Model::vertex_face_contacts`]).
     fn contacts(
         &self,
         c: &Vector3<f64>,
         r: &Matrix3<f64>,
         tris: &mut Vec<FloorTriangle>,
         out: &mut Vec<Geo>,
-    ) {
+    ) -> bool {
         out.clear();
         let sh = &self.shape;
         match &self.floor.kind {
@@ -700,11 +739,11 @@ impl<'a> Model<'a> {
                             u: -d,
                         });
                     }
-                    return;
+                    return false;
                 }
                 // cheap reject: the centre farther than r_max
                 if pl.height(c) * nz > sh.r_max {
-                    return;
+                    return false;
                 }
                 for (i, b) in sh.vertices.iter().enumerate() {
                     let p = c + r * b;
@@ -718,6 +757,7 @@ impl<'a> Model<'a> {
                         });
                     }
                 }
+                false
             }
             _ => self.contacts_mesh(c, r, tris, out),
         }
@@ -726,27 +766,29 @@ impl<'a> Model<'a> {
     /// Contacts of the block (centre `c`, orientation `r`) with a mesh floor: vertex–face,
     /// and, unless the floor under the block is one flat patch, face–vertex (floor peaks) and
     /// edge–edge (convex creases); `tris` is scratch for the floor triangles near the block.
+    /// True when a block vertex is off the floor below its level (the block leaves the floor).
     fn contacts_mesh(
         &self,
         c: &Vector3<f64>,
         r: &Matrix3<f64>,
         tris: &mut Vec<FloorTriangle>,
         out: &mut Vec<Geo>,
-    ) {
+    ) -> bool {
         let sh = &self.shape;
         let fl = self.floor;
         // clear of the floor under the centre by more than r_max (1 + s): no contact
-        if let Some(f) = fl.locate(c.x, c.y, 0.0, 0.0)
-            && fl.facet_plane(f).height(c) > self.clear_drop
+        let under = fl.locate(c.x, c.y, 0.0, 0.0).map(|f| fl.facet_plane(f));
+        if let Some(pl) = under
+            && pl.height(c) > self.clear_drop
         {
-            return;
+            return false;
         }
         if let Some(rad) = sh.sphere_radius {
             self.sphere_mesh_contacts(c, rad, tris, out);
-            return;
+            return false;
         }
         let world: Vec<Vector3<f64>> = sh.vertices.iter().map(|b| c + r * b).collect();
-        self.vertex_face_contacts(&world, out);
+        let off_floor = self.vertex_face_contacts(&world, under.as_ref(), out);
         // floor features inside the block's plan box (padded)
         let (mut x0, mut x1, mut y0, mut y1) = (
             f64::INFINITY,
@@ -768,7 +810,7 @@ impl<'a> Model<'a> {
         // a flat patch has no floor peak and no convex crease: its contacts are the vertex–face
         // ones found above (this skips the quadratic searches below on planar floor regions)
         if tris.is_empty() || one_flat_patch(tris, sh.r_max) {
-            return;
+            return off_floor;
         }
         // the block's faces in the world frame: (outward normal, offset)
         let faces_w: Vec<(Vector3<f64>, f64)> = sh
@@ -781,27 +823,48 @@ impl<'a> Model<'a> {
             .collect();
         floor_peak_contacts(tris, z_min, &faces_w, out);
         self.crease_contacts(tris, &world, &faces_w, out);
+        off_floor
     }
 
     /// Vertex–face contacts: each block vertex (`world`: their positions) below the facet
     /// under it, overlap measured along the facet's normal.
-    fn vertex_face_contacts(&self, world: &[Vector3<f64>], out: &mut Vec<Geo>) {
+    ///
+    /// Returns true when a vertex off the floor (beyond its edge or over a hole) is below the
+    /// floor's level there: a hole's surface filled in from the data around it, beyond a grid's
+    /// edge the nearest facet's plane continued, beyond a contour floor's the plane of the
+    /// facet under the centre (`under`). Such a vertex has no floor to push it up: the block
+    /// leaves the floor there, as a point mass does at its edge (physics.md §C.2, api.md
+    /// `left_floor`). Carried on, the vertex would come back over the floor already deep, its
+    /// spring's ½kₙU² created from nothing.
+    fn vertex_face_contacts(
+        &self,
+        world: &[Vector3<f64>],
+        under: Option<&super::terrain::FacetPlane>,
+        out: &mut Vec<Geo>,
+    ) -> bool {
         let fl = self.floor;
+        let mut off_floor = false;
         for (i, p) in world.iter().enumerate() {
-            if let Some(f) = fl.locate(p.x, p.y, 0.0, 0.0) {
-                let pl = fl.facet_plane(f);
-                let n = pl.normal();
-                let d = pl.height(p) * n.z;
-                if d < 0.0 {
-                    out.push(Geo {
-                        key: i as u64,
-                        p: *p,
-                        n,
-                        u: -d,
-                    });
-                }
+            let Some(f) = fl.locate(p.x, p.y, 0.0, 0.0) else {
+                let level = fl
+                    .level_off_floor(p.x, p.y)
+                    .or(under.map(|pl| pl.z(p.x, p.y)));
+                off_floor |= level.is_some_and(|z| p.z < z);
+                continue;
+            };
+            let pl = fl.facet_plane(f);
+            let n = pl.normal();
+            let d = pl.height(p) * n.z;
+            if d < 0.0 {
+                out.push(Geo {
+                    key: i as u64,
+                    p: *p,
+                    n,
+                    u: -d,
+                });
             }
         }
+        off_floor
     }
 
     /// Edge–edge contacts: block edges (vertices at `world`) crossed by the convex floor
@@ -1074,7 +1137,10 @@ impl<'a> Model<'a> {
                 Flight::Grounded => {}
             }
             self.check_budget(&run, control)?;
-            let step = self.leapfrog_step(&mut run, &cfg)?;
+            let Some(step) = self.leapfrog_step(&mut run, &cfg)? else {
+                // a vertex is off the floor below its level: the block leaves the floor
+                break StopReason::LeftFloor;
+            };
             let in_contact = !run.contacts.is_empty();
             self.book_episode(&mut run, &step, in_contact, events);
             if !in_contact && run.first_impact_done {
@@ -1178,6 +1244,8 @@ impl<'a> Model<'a> {
             patch_wait: None,
             half_step: None,
             drift_h: 0.0,
+            off_floor: false,
+            e_start,
         };
         (run, e_start)
     }
@@ -1240,6 +1308,8 @@ impl<'a> Model<'a> {
         // the flight starts from the velocities at the state's own time
         let st = self.synced(&st, run.half_step, &run.acc, &run.ang_acc);
         run.half_step = None;
+        // off the floor, nothing stored: the account must close here
+        self.check_energy(&st, 0.0, run.damping + run.friction, run.e_start)?;
         let t_target = st.t + tau;
         let gravity = Vector3::new(0.0, 0.0, -self.g);
         // lower end inside the flight?
@@ -1306,6 +1376,35 @@ impl<'a> Model<'a> {
         self.height_of_centre(&ca)
     }
 
+    /// Invariant: energy is never created. At the state `st` (velocities at its own time) with
+    /// `stored` J in the springs and `lost` J dissipated so far, KE + PE + stored + lost may
+    /// exceed the energy at release `e_start` by the scheme's error only: at most
+    /// [`ENERGY_TOLERANCE_LINEAR`] (linear law) or [`ENERGY_TOLERANCE_HERTZ`] (Hertz) of the
+    /// energy in play, m g (|Δs| + |Δz| + drop + ten static overlaps and shear displacements) +
+    /// ½ m v₀² (Δs along the dip and Δz down from the release), plus half the stored energy
+    /// (mid-contact the leapfrog's shadow energy differs from the true one by O(ωΔt) of it).
+    /// Beyond that the state is impossible: a numerical failure, never an answer.
+    fn check_energy(&self, st: &State, stored: f64, lost: f64, e_start: f64) -> PhysicsResult<()> {
+        let (kt, kr, pe) = self.energy(st);
+        let excess = kt + kr + pe + stored + lost - e_start;
+        let travel =
+            (self.mean.along(&st.c) - self.mean.along(&self.c0)).abs() + (st.c.z - self.c0.z).abs();
+        let scale = self.energy_in_play + self.m * self.g * travel;
+        let tol = match self.hertz {
+            None => ENERGY_TOLERANCE_LINEAR,
+            Some(_) => ENERGY_TOLERANCE_HERTZ,
+        };
+        if excess > tol * scale + 0.5 * stored || !excess.is_finite() {
+            return Err(PhysicsError::Numerical(format!(
+                "rigid block: {excess:.6e} J of energy created by t = {:.6} s (allowed \
+                 {:.3e} J of {scale:.6e} J in play): invariant violated",
+                st.t,
+                tol * scale + 0.5 * stored
+            )));
+        }
+        Ok(())
+    }
+
     /// Refuses a run past its step budget; polls the control every 4096 steps.
     fn check_budget(&self, run: &Run, control: Option<&Control>) -> PhysicsResult<()> {
         if run.steps as f64 >= self.max_steps {
@@ -1324,7 +1423,10 @@ impl<'a> Model<'a> {
 
     /// One leapfrog step of Δt (shortened to end exactly at the end time): the contact forces
     /// at x(t), the local damping, then Newton–Euler; refuses a non-finite state.
-    fn leapfrog_step(&self, run: &mut Run, cfg: &RunSettings) -> PhysicsResult<Step> {
+    /// None, without stepping, when a block vertex is off the floor below its level at x(t):
+    /// the block leaves the floor there, in the state the step started from (its springs
+    /// brought to it).
+    fn leapfrog_step(&self, run: &mut Run, cfg: &RunSettings) -> PhysicsResult<Option<Step>> {
         let dt = self.dt;
         let h = if cfg.end_t - run.st.t < dt * (1.0 + 1e-9) {
             cfg.end_t - run.st.t
@@ -1340,6 +1442,12 @@ impl<'a> Model<'a> {
         }
         let w_world = r * run.st.w;
         let mut forces = self.contact_forces(run, &r, &w_world, h, cfg);
+        if run.off_floor && self.stop_off_floor {
+            // the springs have seen the drift to x(t); the velocities lag by half a step
+            run.drift_h = 0.0;
+            run.half_step.get_or_insert(h);
+            return Ok(None);
+        }
         self.local_damping(&mut forces, &run.st.v, &w_world);
         let speed_before = run.st.v.norm();
         self.newton_euler(run, &r, &forces, h);
@@ -1350,11 +1458,11 @@ impl<'a> Model<'a> {
                 st.t
             )));
         }
-        Ok(Step {
+        Ok(Some(Step {
             h,
             speed_before,
             forces,
-        })
+        }))
     }
 
     /// The forces at x(t) with the half-step velocities (ω in the world frame `w_world`):
@@ -1369,7 +1477,7 @@ impl<'a> Model<'a> {
         h: f64,
         cfg: &RunSettings,
     ) -> Forces {
-        self.contacts(&run.st.c, r, &mut run.tris, &mut run.contacts);
+        run.off_floor = self.contacts(&run.st.c, r, &mut run.tris, &mut run.contacts);
         // the velocities at x(t), predicted from the half step with the last accelerations
         let v_t = run.st.v + run.acc * (0.5 * h);
         let w_t = w_world + run.ang_acc * (0.5 * h);
@@ -1848,6 +1956,7 @@ impl<'a> Model<'a> {
             run.stored = stored;
             run.friction += slip;
         }
+        self.check_energy(&st, run.stored, run.damping + run.friction, e_start)?;
         if let Some(ep) = run.episode.take()
             && ep.impact
         {
@@ -3085,6 +3194,45 @@ mod tests {
                 meet,
                 leave
             );
+        }
+    }
+
+    /// The review's repro: a block dropped 3.27 m onto a 40° plane grid at its upper edge
+    /// (along_dip 0) lands with half of it beyond the edge. It leaves the floor there at the
+    /// landing speed √(2 g h); carried on without that stop, its corners came back over the floor
+    /// deep and threw it off at 143 m/s, which the energy invariant refuses.
+    #[test]
+    fn a_block_landing_across_a_grid_edge_leaves_the_floor_or_fails_the_energy_invariant() {
+        let t = 40f64.to_radians().tan();
+        let mut c = MigrationCase {
+            method: super::super::Method::RigidBlock,
+            ..MigrationCase::default()
+        };
+        c.face.dip_deg = 40.0;
+        c.face.length = 30.0;
+        c.face.floor = FloorSpec::Grid {
+            origin: [0.0, -6.0],
+            spacing: 1.0,
+            heights: (0..=12)
+                .map(|_| (0..=45).map(|j| -(j as f64) * t).collect())
+                .collect(),
+        };
+        let pr = super::super::prepare(&c).unwrap();
+        let mut model = Model::new(&c, &pr).unwrap();
+        let (mu, beta) = (
+            c.face.friction_coefficient,
+            c.rigid_block.critical_damping_ratio,
+        );
+        let o = model.simulate(mu, beta, None, true, None).unwrap();
+        assert_eq!(o.reason, StopReason::LeftFloor);
+        close(o.st.v.norm(), (2.0 * 9.81 * 3.27f64).sqrt(), 5e-3);
+        model.stop_off_floor = false;
+        match model.simulate(mu, beta, None, true, None) {
+            Err(PhysicsError::Numerical(msg)) => assert!(msg.contains("energy created"), "{msg}"),
+            other => panic!(
+                "the invariant did not fire: {:?}",
+                other.map(|o| o.st.v.norm())
+            ),
         }
     }
 

@@ -1717,6 +1717,26 @@ pub(crate) struct FloorTriangle {
 }
 
 impl Floor {
+    /// Height (m) of the floor's level at a point (x, y) off the floor: over a hole, its facet's
+    /// height filled in from the data around it (the surface a flight lands in the hole on);
+    /// beyond a grid's extent, the plane of the facet at the nearest point of the extent,
+    /// continued; None on the floor, and beyond a contour floor's extent.
+    pub(crate) fn level_off_floor(&self, x: f64, y: f64) -> Option<f64> {
+        if self.locate(x, y, 0.0, 0.0).is_some() {
+            return None;
+        }
+        if let Some(f) = self.locate_any(x, y, 0.0, 0.0) {
+            return Some(self.facet_plane(f).z(x, y));
+        }
+        let FloorKind::Grid(g) = &self.kind else {
+            return None;
+        };
+        let c = &g.cells;
+        let (xc, yc) = (x.clamp(c.x0, c.x_max()), y.clamp(c.y0, c.y_max()));
+        let f = self.locate_any(xc, yc, 0.0, 0.0)?;
+        Some(self.facet_plane(f).z(x, y))
+    }
+
     /// Appends to `out` the triangles whose plan bounding boxes may overlap the plan box
     /// [x_min, x_max, y_min, y_max] (each once; nothing for the plane).
     pub(crate) fn triangles_in(&self, b: [f64; 4], out: &mut Vec<FloorTriangle>) {
