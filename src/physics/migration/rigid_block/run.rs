@@ -1,0 +1,995 @@
+//! One run of the block: release, the leapfrog step with its contact forces, flights in closed
+//! form, episodes (impacts, ground phases), stops, samples and the energy books.
+
+use super::*;
+
+impl Model<'_> {
+    /// Runs the block from its release to its stop with the friction coefficient `mu` and
+    /// the critical damping ratio `beta`; `record`: (sample interval s, most samples) of the
+    /// trajectory; `events`: keep the event log; `control`: polled for cancellation.
+    pub(super) fn simulate(
+        &self,
+        mu: f64,
+        beta: f64,
+        record: Option<(f64, usize)>,
+        events: bool,
+        control: Option<&Control>,
+    ) -> PhysicsResult<RunOut> {
+        let cfg = RunSettings {
+            mu,
+            beta,
+            end_t: self.end_time.unwrap_or(f64::INFINITY),
+            has_columns: self.supports.iter().any(|c| c.across.is_some()),
+            plane_normal: match &self.floor.kind {
+                FloorKind::Plane(pl) => Some(pl.normal()),
+                _ => None,
+            },
+            log_events: events,
+        };
+        let (mut run, e_start) = self.release(record);
+        let reason = loop {
+            if let Some(reason) = self.stop_before_step(&mut run, &cfg)? {
+                break reason;
+            }
+            match self.try_flight(&mut run, &cfg)? {
+                Flight::Stopped(reason) => break reason,
+                Flight::Flew => continue,
+                Flight::Grounded => {}
+            }
+            self.check_budget(&run, control)?;
+            let Some(step) = self.leapfrog_step(&mut run, &cfg)? else {
+                // a vertex is off the floor below its level: the block leaves the floor
+                break StopReason::LeftFloor;
+            };
+            let in_contact = !run.contacts.is_empty();
+            self.book_episode(&mut run, &step, in_contact, events);
+            if !in_contact && run.first_impact_done {
+                run.max_bounce = run.max_bounce.max(self.height_of_centre(&run.st.c));
+            }
+            if let Some(reason) = self.reach_in_step(&mut run, step.h, &cfg) {
+                break reason;
+            }
+            if self.at_rest(&mut run, in_contact) {
+                break StopReason::AtRest;
+            }
+            self.skip_settled_slide(&mut run, &step.forces, &cfg);
+        };
+        self.finish(run, reason, e_start, &cfg)
+    }
+
+    /// The run at release, with the energy at the start (J): a block released on the floor
+    /// has its contacts closed already (with unloaded shear springs) and the acceleration of
+    /// their elastic forces.
+    pub(super) fn release(&self, record: Option<(f64, usize)>) -> (Run, f64) {
+        let st = State {
+            t: 0.0,
+            c: self.c0,
+            v: self.v0,
+            q: self.q0,
+            w: Vector3::zeros(),
+        };
+        let mut springs = Vec::new();
+        let mut contacts = Vec::new();
+        let mut tris = Vec::new();
+        let mut acc = Vector3::new(0.0, 0.0, -self.g);
+        let r = self.rot(&st.q);
+        self.contacts(&st.c, &r, &mut tris, &mut contacts);
+        let stored = contacts
+            .iter()
+            .map(|g| self.normal_energy(g.u))
+            .sum::<f64>();
+        for gk in &contacts {
+            let f_el = match self.hertz {
+                None => self.kn * gk.u,
+                Some(hz) => hz.k * gk.u * gk.u.sqrt(),
+            };
+            acc += gk.n * (f_el / self.m);
+            springs.push(Spring {
+                key: gk.key,
+                fs: Vector3::zeros(),
+                ks: self.ks,
+                rr: gk.p - st.c,
+                n: gk.n,
+            });
+        }
+        let (k0, r0, p0) = self.energy(&st);
+        let e_start = k0 + r0 + p0 + stored;
+        let on_floor = self.on_floor_at_start;
+        let episode = on_floor.then(|| Episode {
+            t0: 0.0,
+            speed_before: st.v.norm(),
+            diss_before: 0.0,
+            peak: 0.0,
+            p: st.c,
+            ground: true,
+            impact: false,
+            last_speed: st.v.norm(),
+            last_p: st.c,
+            last_diss: 0.0,
+            last_t: 0.0,
+        });
+        let run = Run {
+            st,
+            springs,
+            new_springs: Vec::new(),
+            contacts,
+            tris,
+            damping: 0.0,
+            friction: 0.0,
+            stored,
+            acc,
+            ang_acc: Vector3::zeros(),
+            rec: record.map(|(interval, max)| Recorder {
+                interval,
+                next: 0.0,
+                max,
+                tr: Trajectory::default(),
+            }),
+            events: Vec::new(),
+            impacts: 0,
+            slide_start: on_floor.then(|| self.mean.along(&st.c)),
+            max_bounce: 0.0,
+            steps: 0,
+            max_overlap: 0.0,
+            had_contact: on_floor,
+            last_contact_t: if on_floor { 0.0 } else { f64::NEG_INFINITY },
+            episode,
+            first_impact_done: false,
+            still_since: None,
+            quiet_window: None,
+            slip_max: 0.0,
+            prev_along: self.mean.along(&st.c),
+            support: None,
+            steady_since: None,
+            patch_wait: None,
+            half_step: None,
+            drift_h: 0.0,
+            off_floor: false,
+            e_start,
+        };
+        (run, e_start)
+    }
+
+    /// Before a step: records the trajectory sample due; stops at the end time or off the
+    /// floor's extent; closes an episode whose contact ended more than the gap ago.
+    pub(super) fn stop_before_step(
+        &self,
+        run: &mut Run,
+        cfg: &RunSettings,
+    ) -> PhysicsResult<Option<StopReason>> {
+        if let Some(r) = run.rec.as_mut()
+            && run.st.t >= r.next
+        {
+            let diss = run.damping + run.friction;
+            let s = self.synced(&run.st, run.half_step, &run.acc, &run.ang_acc);
+            self.sample(r, &s, diss, run.stored)?;
+            while r.next <= run.st.t {
+                r.next += r.interval;
+            }
+        }
+        if run.st.t >= cfg.end_t * (1.0 - 1e-12) {
+            return Ok(Some(StopReason::EndTime));
+        }
+        if !matches!(self.floor.kind, FloorKind::Plane(_))
+            && self
+                .floor
+                .locate(run.st.c.x, run.st.c.y, 0.0, 0.0)
+                .is_none()
+        {
+            return Ok(Some(StopReason::LeftFloor));
+        }
+        if run.springs.is_empty()
+            && run.st.t - run.last_contact_t > self.gap
+            && let Some(ep) = run.episode.take()
+        {
+            self.close_episode(ep, true, &mut run.events, cfg.log_events);
+        }
+        Ok(None)
+    }
+
+    /// Free flight in closed form, when the block has been off the floor for longer than the
+    /// gap and stays clear of it for more than two steps: the parabola to the floor's
+    /// approach, a column, the lower end or the end time, with the bounce's apex and the
+    /// trajectory samples inside it.
+    pub(super) fn try_flight(&self, run: &mut Run, cfg: &RunSettings) -> PhysicsResult<Flight> {
+        let dt = self.dt;
+        if !(run.springs.is_empty() && run.st.t - run.last_contact_t > self.gap.max(dt)) {
+            return Ok(Flight::Grounded);
+        }
+        let st = run.st;
+        let margin = 2.0 * (st.v.norm() + st.w.norm() * self.shape.r_max + self.g * dt) * dt
+            + 1e-9 * self.shape.r_max;
+        let Some(tau) = self
+            .clear_time(&st.c, &st.v, margin, cfg.end_t - st.t)
+            .filter(|&tau| tau > 2.0 * dt)
+        else {
+            return Ok(Flight::Grounded);
+        };
+        // the flight starts from the velocities at the state's own time
+        let st = self.synced(&st, run.half_step, &run.acc, &run.ang_acc);
+        run.half_step = None;
+        // off the floor, nothing stored: the account must close here
+        self.check_energy(&st, 0.0, run.damping + run.friction, run.e_start)?;
+        let t_target = st.t + tau;
+        let gravity = Vector3::new(0.0, 0.0, -self.g);
+        // lower end inside the flight?
+        let cross = self.along_cross(&st, tau);
+        // a column reached inside the flight ends it there
+        let column = if cfg.has_columns {
+            super::super::first_column_reach(
+                &self.mean,
+                &self.supports,
+                &st.c,
+                &st.v,
+                &gravity,
+                cross.unwrap_or(tau),
+            )
+        } else {
+            None
+        };
+        let cross = if column.is_some() { None } else { cross };
+        let t_stop = column.map(|c| st.t + c.0).or(cross.map(|tc| st.t + tc));
+        let t_final = t_stop.unwrap_or(t_target);
+        if run.first_impact_done {
+            run.max_bounce = run.max_bounce.max(self.apex_height(&st, t_final));
+        }
+        // samples inside the flight
+        while let Some(r) = run.rec.as_mut()
+            && r.next < t_final
+        {
+            let s = self.fly(&st, r.next - st.t);
+            self.sample(r, &s, run.damping + run.friction, run.stored)?;
+            r.next += r.interval;
+        }
+        run.st = self.fly(&st, t_final - st.t);
+        run.drift_h = 0.0;
+        run.acc = gravity;
+        run.ang_acc = Vector3::zeros();
+        if let Some((_, k)) = column {
+            run.support = Some(k);
+            return Ok(Flight::Stopped(StopReason::Support));
+        }
+        if t_stop.is_some() {
+            return Ok(Flight::Stopped(StopReason::LowerEnd));
+        }
+        if let Some(te) = self.end_time
+            && t_target >= te * (1.0 - 1e-12)
+        {
+            run.st.t = te;
+            return Ok(Flight::Flew);
+        }
+        run.prev_along = self.mean.along(&run.st.c);
+        Ok(Flight::Flew)
+    }
+
+    /// Height of the centre above its resting height (m) at the apex of the flight from `st`
+    /// that ends at `t_final` (s): the highest point along the mean plane's normal.
+    pub(super) fn apex_height(&self, st: &State, t_final: f64) -> f64 {
+        let nrm = self.mean.normal();
+        let (b, a) = (nrm.dot(&st.v), -self.g * nrm.z);
+        let ta = if a < 0.0 {
+            (-b / a).clamp(0.0, t_final - st.t)
+        } else {
+            0.0
+        };
+        let ca = st.c + st.v * ta + Vector3::new(0.0, 0.0, -0.5 * self.g * ta * ta);
+        self.height_of_centre(&ca)
+    }
+
+    /// Invariant: energy is never created. At the state `st` (velocities at its own time) with
+    /// `stored` J in the springs and `lost` J dissipated so far, KE + PE + stored + lost may
+    /// exceed the energy at release `e_start` by the scheme's error only: at most
+    /// [`ENERGY_TOLERANCE_LINEAR`] (linear law) or [`ENERGY_TOLERANCE_HERTZ`] (Hertz) of the
+    /// energy in play, m g (|Δs| + |Δz| + drop + ten static overlaps and shear displacements) +
+    /// ½ m v₀² (Δs along the dip and Δz down from the release), plus half the stored energy
+    /// (mid-contact the leapfrog's shadow energy differs from the true one by O(ωΔt) of it).
+    /// Beyond that the state is impossible: a numerical failure, never an answer.
+    pub(super) fn check_energy(
+        &self,
+        st: &State,
+        stored: f64,
+        lost: f64,
+        e_start: f64,
+    ) -> PhysicsResult<()> {
+        let (kt, kr, pe) = self.energy(st);
+        let excess = kt + kr + pe + stored + lost - e_start;
+        let travel =
+            (self.mean.along(&st.c) - self.mean.along(&self.c0)).abs() + (st.c.z - self.c0.z).abs();
+        let scale = self.energy_in_play + self.m * self.g * travel;
+        let tol = match self.hertz {
+            None => ENERGY_TOLERANCE_LINEAR,
+            Some(_) => ENERGY_TOLERANCE_HERTZ,
+        };
+        if excess > tol * scale + 0.5 * stored || !excess.is_finite() {
+            return Err(PhysicsError::Numerical(format!(
+                "rigid block: {excess:.6e} J of energy created by t = {:.6} s (allowed \
+                 {:.3e} J of {scale:.6e} J in play): invariant violated",
+                st.t,
+                tol * scale + 0.5 * stored
+            )));
+        }
+        Ok(())
+    }
+
+    /// Refuses a run past its step budget; polls the control every 4096 steps.
+    pub(super) fn check_budget(&self, run: &Run, control: Option<&Control>) -> PhysicsResult<()> {
+        if run.steps as f64 >= self.max_steps {
+            return Err(PhysicsError::TooManySteps {
+                estimated: run.steps as f64,
+                limit: self.max_steps,
+            });
+        }
+        if run.steps & 0xFFF == 0
+            && let Some(c) = control
+        {
+            c.check()?;
+        }
+        Ok(())
+    }
+
+    /// One leapfrog step of Δt (shortened to end exactly at the end time): the contact forces
+    /// at x(t), the local damping, then Newton–Euler; refuses a non-finite state.
+    /// None, without stepping, when a block vertex is off the floor below its level at x(t):
+    /// the block leaves the floor there, in the state the step started from (its springs
+    /// brought to it).
+    pub(super) fn leapfrog_step(
+        &self,
+        run: &mut Run,
+        cfg: &RunSettings,
+    ) -> PhysicsResult<Option<Step>> {
+        let dt = self.dt;
+        let h = if cfg.end_t - run.st.t < dt * (1.0 + 1e-9) {
+            cfg.end_t - run.st.t
+        } else {
+            dt
+        };
+        let r = self.rot(&run.st.q);
+        // stepping from a state with its velocities at its own time (release, end of a
+        // flight): put them half a step back, where the leapfrog keeps them
+        if run.half_step.is_none() {
+            run.st.v -= run.acc * (0.5 * h);
+            run.st.w -= r.transpose() * run.ang_acc * (0.5 * h);
+        }
+        let w_world = r * run.st.w;
+        let mut forces = self.contact_forces(run, &r, &w_world, h, cfg);
+        if run.off_floor && self.stop_off_floor {
+            // the springs have seen the drift to x(t); the velocities lag by half a step
+            run.drift_h = 0.0;
+            run.half_step.get_or_insert(h);
+            return Ok(None);
+        }
+        self.local_damping(&mut forces, &run.st.v, &w_world);
+        let speed_before = run.st.v.norm();
+        self.newton_euler(run, &r, &forces, h);
+        let st = &run.st;
+        if !st.c.iter().chain(st.v.iter()).all(|x| x.is_finite()) {
+            return Err(PhysicsError::Numerical(format!(
+                "the block's state became non-finite at t = {:.6} s",
+                st.t
+            )));
+        }
+        Ok(Some(Step {
+            h,
+            speed_before,
+            forces,
+        }))
+    }
+
+    /// The forces at x(t) with the half-step velocities (ω in the world frame `w_world`):
+    /// gravity and, per contact, the normal spring–dashpot and the capped shear spring. Books
+    /// the shear springs' work (those of opened contacts too), the elastic energy stored, the
+    /// deepest overlap and the fastest slip.
+    pub(super) fn contact_forces(
+        &self,
+        run: &mut Run,
+        r: &Matrix3<f64>,
+        w_world: &Vector3<f64>,
+        h: f64,
+        cfg: &RunSettings,
+    ) -> Forces {
+        run.off_floor = self.contacts(&run.st.c, r, &mut run.tris, &mut run.contacts);
+        // the velocities at x(t), predicted from the half step with the last accelerations
+        let v_t = run.st.v + run.acc * (0.5 * h);
+        let w_t = w_world + run.ang_acc * (0.5 * h);
+        let mut fo = Forces {
+            force: Vector3::new(0.0, 0.0, -self.m * self.g),
+            moment: Vector3::zeros(),
+            normal_total: 0.0,
+            damping_force: Vector3::zeros(),
+            damping_moment: Vector3::zeros(),
+            slip_force: Vector3::zeros(),
+            slipping: 0,
+        };
+        run.new_springs.clear();
+        run.stored = 0.0;
+        run.slip_max = 0.0;
+        for gk in &run.contacts {
+            run.max_overlap = run.max_overlap.max(gk.u);
+            let rr = gk.p - run.st.c;
+            let vrel = run.st.v + w_world.cross(&rr);
+            let vn = gk.n.dot(&vrel);
+            let vt = vrel - gk.n * vn;
+            run.slip_max = run.slip_max.max(vt.norm());
+            let old = run.springs.iter().find(|s| s.key == gk.key);
+            let (f_el, fnm, ks) =
+                self.normal_force(gk, &rr, &v_t, &w_t, h, old.is_none(), cfg.beta);
+            // dashpot work (and the clipped spring's share)
+            let fd = gk.n * (fnm - f_el);
+            fo.damping_force += fd;
+            fo.damping_moment += rr.cross(&fd);
+            fo.normal_total += fnm;
+            // the spring follows the contact point's drift since the last step
+            let d = vt * run.drift_h;
+            let (fs, es_new, slipping, work) = shear_spring(&gk.n, old, &d, ks, cfg.mu * f_el);
+            fo.slipping += usize::from(slipping);
+            if slipping {
+                fo.slip_force += fs;
+            }
+            run.friction += work;
+            run.stored += self.normal_energy(gk.u) + es_new;
+            run.new_springs.push(Spring {
+                key: gk.key,
+                fs,
+                ks,
+                rr,
+                n: gk.n,
+            });
+            let fc = gk.n * fnm + fs;
+            fo.force += fc;
+            fo.moment += rr.cross(&fc);
+        }
+        // springs of contacts that opened release their shear energy over the drift
+        for sp in &run.springs {
+            if !run.new_springs.iter().any(|s| s.key == sp.key) {
+                run.friction += self.opened_spring_work(sp, &run.st, w_world, run.drift_h);
+            }
+        }
+        std::mem::swap(&mut run.springs, &mut run.new_springs);
+        fo
+    }
+
+    /// Normal force of the contact `gk` (arm `rr` from the centre, m) over a step h (s):
+    /// (elastic force N, spring–dashpot force N ≥ 0, shear stiffness N/m), the dashpot taking
+    /// the velocity at x(t) from `v_t` and `w_t` (world frame); `fresh`: a contact that has
+    /// just closed, whose dashpot impulse is corrected for the time since its touch.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn normal_force(
+        &self,
+        gk: &Geo,
+        rr: &Vector3<f64>,
+        v_t: &Vector3<f64>,
+        w_t: &Vector3<f64>,
+        h: f64,
+        fresh: bool,
+        beta: f64,
+    ) -> (f64, f64, f64) {
+        let (f_el, kt, ks) = match self.hertz {
+            None => (self.kn * gk.u, self.kn, self.ks),
+            Some(hz) => {
+                let kt = hz.kt * gk.u.sqrt();
+                (hz.k * gk.u * gk.u.sqrt(), kt, kt * hz.shear_ratio)
+            }
+        };
+        let cn = 2.0 * beta * (self.m * kt).sqrt();
+        // the dashpot takes the velocity at x(t), predicted from the half step with the last
+        // acceleration (second order; the lagged half-step velocity alone would err by
+        // O(β ω Δt) in the restitution)
+        let vn_t = gk.n.dot(&(v_t + w_t.cross(rr)));
+        // A contact that has just closed touched U/|vₙ| ago, not half a step ago as the step's
+        // impulse assumes: correct the dashpot impulse by c(U − |vₙ|Δt/2) (else the
+        // restitution errs by O(Δt) with the random phase of the touch). Only for a fresh
+        // touch (U within the step's approach), never for a contact that appears deep (a new
+        // floor feature under a block already in contact).
+        let onset = if fresh && vn_t < 0.0 && gk.u <= -1.5 * vn_t * h {
+            cn * (gk.u / h + 0.5 * vn_t)
+        } else {
+            0.0
+        };
+        (f_el, (f_el - cn * vn_t + onset).max(0.0), ks)
+    }
+
+    /// Local damping: each component of the force and of the moment (world frame) loses α
+    /// times its size against the sign of its velocity `v` (of ω `w_world`); booked with the
+    /// dashpots.
+    pub(super) fn local_damping(&self, fo: &mut Forces, v: &Vector3<f64>, w_world: &Vector3<f64>) {
+        if self.alpha > 0.0 {
+            for i in 0..3 {
+                let d = self.alpha * fo.force[i].abs() * v[i].signum();
+                if v[i] != 0.0 {
+                    fo.force[i] -= d;
+                    fo.damping_force[i] -= d;
+                }
+                let dm = self.alpha * fo.moment[i].abs() * w_world[i].signum();
+                if w_world[i] != 0.0 {
+                    fo.moment[i] -= dm;
+                    fo.damping_moment[i] -= dm;
+                }
+            }
+        }
+    }
+
+    /// Newton–Euler over h (s) under the forces `fo` (orientation `r`): the half-step
+    /// velocity, Euler's equations in the body frame (implicit midpoint for an anisotropic
+    /// block), the dashpots' work with the step's mean velocities, then position and turn.
+    pub(super) fn newton_euler(&self, run: &mut Run, r: &Matrix3<f64>, fo: &Forces, h: f64) {
+        let m = self.m;
+        let st = &mut run.st;
+        let v_old = st.v;
+        run.acc = fo.force / m;
+        st.v += fo.force * (h / m);
+        let torque_body = r.transpose() * fo.moment;
+        let i = self.inertia;
+        let w0 = st.w;
+        let mut w1 = w0 + (torque_body - w0.cross(&w0.component_mul(&i))).component_div(&i) * h;
+        if !self.isotropic {
+            for _ in 0..3 {
+                let wm = (w0 + w1) * 0.5;
+                w1 = w0 + (torque_body - wm.cross(&wm.component_mul(&i))).component_div(&i) * h;
+            }
+        }
+        run.ang_acc = r * ((w1 - w0) / h);
+        st.w = w1;
+        // Dissipation is booked with the step's mean velocities, the ones whose product
+        // with a force gives the leapfrog's kinetic-energy change.
+        let v_bar = (v_old + st.v) * 0.5;
+        let w_bar = r * ((w0 + w1) * 0.5);
+        run.damping -= (v_bar.dot(&fo.damping_force) + w_bar.dot(&fo.damping_moment)) * h;
+        st.c += st.v * h;
+        run.drift_h = h;
+        st.q = UnitQuaternion::new_normalize(
+            (st.q * UnitQuaternion::from_scaled_axis(st.w * h)).into_inner(),
+        );
+        st.t += h;
+        run.steps += 1;
+        run.half_step = Some(h);
+    }
+
+    /// Contact episodes after a step: contact after more than the gap is a new impact (the
+    /// last episode closed); an episode that lasts five contact times becomes the ground phase
+    /// and the slide's start; one whose contact stays open for the gap is over.
+    pub(super) fn book_episode(&self, run: &mut Run, step: &Step, in_contact: bool, events: bool) {
+        let t = run.st.t;
+        if !in_contact {
+            if let Some(ep) = run.episode
+                && t - run.last_contact_t > self.gap
+            {
+                run.episode = None;
+                self.close_episode(ep, true, &mut run.events, events);
+            }
+            return;
+        }
+        if !run.had_contact || t - run.last_contact_t > self.gap {
+            // a new impact (the previous episode, if any, is closed here)
+            if let Some(ep) = run.episode.take() {
+                self.close_episode(ep, true, &mut run.events, events);
+            }
+            run.impacts += 1;
+            run.first_impact_done = true;
+            run.episode = Some(Episode {
+                t0: t - step.h,
+                speed_before: step.speed_before,
+                diss_before: run.damping + run.friction,
+                peak: 0.0,
+                p: run.st.c,
+                ground: false,
+                impact: true,
+                last_speed: run.st.v.norm(),
+                last_p: run.st.c,
+                last_diss: run.damping + run.friction,
+                last_t: t,
+            });
+        }
+        run.had_contact = true;
+        run.last_contact_t = t;
+        let Some(ep) = run.episode.as_mut() else {
+            return;
+        };
+        ep.peak = ep.peak.max(step.forces.normal_total);
+        ep.last_speed = run.st.v.norm();
+        ep.last_p = run.st.c;
+        ep.last_diss = run.damping + run.friction;
+        ep.last_t = t;
+        let became_ground = !ep.ground && t - ep.t0 > 5.0 * self.t_contact;
+        if !became_ground {
+            return;
+        }
+        ep.ground = true;
+        if run.slide_start.is_some() {
+            return;
+        }
+        run.slide_start = Some(self.mean.along(&run.st.c));
+        if events {
+            let speed = run.st.v.norm();
+            // the impact that became the ground phase
+            run.events.push(self.event(
+                ep.t0,
+                EventKind::Impact,
+                &ep.p,
+                ep.speed_before,
+                speed,
+                run.damping + run.friction - ep.diss_before,
+                Some(ep.peak),
+            ));
+            ep.impact = false;
+            run.events.push(self.event(
+                t,
+                EventKind::SlideStart,
+                &run.st.c,
+                speed,
+                speed,
+                0.0,
+                None,
+            ));
+        }
+    }
+
+    /// A column reached inside the step h (s; the centre moved by v h along a line) or the
+    /// lower end passed: the block put back to where it happened.
+    pub(super) fn reach_in_step(
+        &self,
+        run: &mut Run,
+        h: f64,
+        cfg: &RunSettings,
+    ) -> Option<StopReason> {
+        let dt = self.dt;
+        let st = &mut run.st;
+        if cfg.has_columns {
+            let c_prev = st.c - st.v * h;
+            if let Some((tc, k)) = super::super::first_column_reach(
+                &self.mean,
+                &self.supports,
+                &c_prev,
+                &st.v,
+                &Vector3::zeros(),
+                h,
+            ) {
+                st.t -= h - tc;
+                st.c = c_prev + st.v * tc;
+                run.drift_h = tc;
+                run.support = Some(k);
+                return Some(StopReason::Support);
+            }
+        }
+        let along = self.mean.along(&st.c);
+        if along >= self.length {
+            let frac = if along > run.prev_along {
+                (along - self.length) / (along - run.prev_along)
+            } else {
+                0.0
+            };
+            st.t -= frac * dt;
+            st.c -= st.v * (frac * dt);
+            run.drift_h -= frac * dt;
+            return Some(StopReason::LowerEnd);
+        }
+        run.prev_along = along;
+        None
+    }
+
+    /// At rest: in contact, slower than REST_SPEED_M_S (centre and farthest point) for
+    /// REST_TIME_S; or, over REST_TIME_S of unbroken contact, centre and farthest point moved
+    /// less than REST_SPEED_M_S·REST_TIME_S (a block held by its stuck shear springs may keep
+    /// an elastic vibration that no dashpot damps, its speeds above the threshold while it
+    /// goes nowhere).
+    pub(super) fn at_rest(&self, run: &mut Run, in_contact: bool) -> bool {
+        let st = &run.st;
+        let still = st.v.norm() < REST_SPEED_M_S
+            && st.w.norm() * self.shape.r_max < REST_SPEED_M_S
+            && in_contact;
+        if still {
+            let since = *run.still_since.get_or_insert(st.t);
+            if st.t - since >= REST_TIME_S {
+                return true;
+            }
+        } else {
+            run.still_since = None;
+        }
+        if !in_contact {
+            run.quiet_window = None;
+            return false;
+        }
+        let (t0, c0, q0) = *run.quiet_window.get_or_insert((st.t, st.c, st.q));
+        if st.t - t0 >= REST_TIME_S {
+            let reach = REST_SPEED_M_S * REST_TIME_S;
+            if (st.c - c0).norm() < reach && q0.angle_to(&st.q) * self.shape.r_max < reach {
+                return true;
+            }
+            run.quiet_window = Some((st.t, st.c, st.q));
+        }
+        false
+    }
+
+    /// The run's report: the velocities brought to the end time and the springs to the end
+    /// position (second order), the last episode closed, the phase and the stop event.
+    pub(super) fn finish(
+        &self,
+        mut run: Run,
+        reason: StopReason,
+        e_start: f64,
+        cfg: &RunSettings,
+    ) -> PhysicsResult<RunOut> {
+        let lagged = run.st;
+        let st = self.synced(&run.st, run.half_step, &run.acc, &run.ang_acc);
+        // the springs at the end position: the normal ones from its overlaps, the shear ones
+        // carried over the last drift (the slip on it booked)
+        let in_contact = !run.springs.is_empty();
+        if in_contact {
+            let (stored, slip) = self.stored_at_end(
+                &lagged,
+                &st,
+                cfg.mu,
+                &run.springs,
+                run.drift_h,
+                &mut run.tris,
+                &mut run.contacts,
+            );
+            run.stored = stored;
+            run.friction += slip;
+        }
+        self.check_energy(&st, run.stored, run.damping + run.friction, e_start)?;
+        if let Some(ep) = run.episode.take()
+            && ep.impact
+        {
+            self.close_episode(ep, false, &mut run.events, cfg.log_events);
+        }
+        let reason = match (reason, self.span_support) {
+            (StopReason::LowerEnd, Some(k)) => {
+                run.support = Some(k);
+                StopReason::Support
+            }
+            (r, _) => r,
+        };
+        let phase = match reason {
+            StopReason::AtRest => Phase::Stopped,
+            _ if !in_contact => Phase::Flight,
+            _ if run.slip_max < 1e-3 * st.v.norm() => Phase::Roll,
+            _ => Phase::Slide,
+        };
+        let stop_along = (reason == StopReason::AtRest).then(|| self.mean.along(&st.c));
+        if cfg.log_events && reason == StopReason::AtRest {
+            run.events
+                .push(self.event(st.t, EventKind::Stop, &st.c, st.v.norm(), 0.0, 0.0, None));
+        }
+        if let Some(r) = run.rec.as_mut()
+            && r.tr.time.last().is_none_or(|&t| t < st.t)
+        {
+            self.sample(r, &st, run.damping + run.friction, run.stored)?;
+        }
+        Ok(RunOut {
+            st,
+            reason,
+            phase,
+            impacts: run.impacts,
+            slide_start: run.slide_start,
+            stop_along,
+            max_bounce: run.max_bounce,
+            damping: run.damping,
+            friction: run.friction,
+            stored: run.stored,
+            e_start,
+            steps: run.steps,
+            max_overlap: run.max_overlap,
+            events: run.events,
+            trajectory: run.rec.map(|r| r.tr),
+            support: run.support,
+        })
+    }
+
+    /// Work the shear spring `sp` of a contact that opened dissipates over the drift `h` (s)
+    /// with the block's velocities in `st` (ω in the world frame `w_world`): its force falls to
+    /// zero along it (see [`shear_work`]).
+    pub(super) fn opened_spring_work(
+        &self,
+        sp: &Spring,
+        st: &State,
+        w_world: &Vector3<f64>,
+        h: f64,
+    ) -> f64 {
+        let vrel = st.v + w_world.cross(&sp.rr);
+        let vt = vrel - sp.n * sp.n.dot(&vrel);
+        shear_work(&sp.fs, sp.energy(), &Vector3::zeros(), 0.0, &(vt * h))
+    }
+
+    /// Elastic energy held in the contacts at the end state `end` (J), and the shear work
+    /// dissipated on the way there: the springs as the last step left them are carried over
+    /// the drift `h` (s) since with the velocities of `lagged` (the leapfrog's half-step ones),
+    /// rotated into the end's tangent planes and capped at μ times the end's elastic force; a
+    /// spring whose contact is no longer closed releases its energy.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn stored_at_end(
+        &self,
+        lagged: &State,
+        end: &State,
+        mu: f64,
+        springs: &[Spring],
+        h: f64,
+        tris: &mut Vec<FloorTriangle>,
+        geos: &mut Vec<Geo>,
+    ) -> (f64, f64) {
+        let r = self.rot(&end.q);
+        self.contacts(&end.c, &r, tris, geos);
+        let w_world = r * lagged.w;
+        let (mut stored, mut friction) = (0.0, 0.0);
+        for gk in geos.iter() {
+            stored += self.normal_energy(gk.u);
+            let Some(old) = springs.iter().find(|s| s.key == gk.key) else {
+                continue;
+            };
+            let rr = gk.p - end.c;
+            let vrel = lagged.v + w_world.cross(&rr);
+            let vt = vrel - gk.n * gk.n.dot(&vrel);
+            let (f_el, ks) = self.elastic_and_shear(gk.u);
+            let mag = old.fs.norm();
+            let pr = old.fs - gk.n * gk.n.dot(&old.fs);
+            let pn = pr.norm();
+            let fs_old = if pn > 0.0 { pr * (mag / pn) } else { pr };
+            let d = vt * h;
+            let mut fs = fs_old - d * ks;
+            let cap = mu * f_el;
+            let fs_n = fs.norm();
+            if fs_n > cap {
+                fs *= if fs_n > 0.0 { cap / fs_n } else { 0.0 };
+            }
+            let es_new = if ks > 0.0 {
+                fs.norm_squared() / (2.0 * ks)
+            } else {
+                0.0
+            };
+            stored += es_new;
+            friction += shear_work(&fs_old, old.energy(), &fs, es_new, &d);
+        }
+        for sp in springs {
+            if !geos.iter().any(|g| g.key == sp.key) {
+                friction += self.opened_spring_work(sp, lagged, &w_world, h);
+            }
+        }
+        (stored, friction)
+    }
+
+    /// Elastic normal force (N) and shear stiffness (N/m) of a contact of overlap `u` (m).
+    pub(super) fn elastic_and_shear(&self, u: f64) -> (f64, f64) {
+        match self.hertz {
+            None => (self.kn * u, self.ks),
+            Some(hz) => (hz.k * u * u.sqrt(), hz.kt * u.sqrt() * hz.shear_ratio),
+        }
+    }
+
+    pub(super) fn normal_energy(&self, u: f64) -> f64 {
+        match self.hertz {
+            None => 0.5 * self.kn * u * u,
+            Some(h) => 0.4 * h.k * u * u * u.sqrt(),
+        }
+    }
+
+    /// The state with its velocities brought to its time: the leapfrog's velocities lag the
+    /// positions by half a step h, so v + a h/2 and ω + α h/2 with the last step's
+    /// accelerations (world frame; error O(h²)). Without a pending half step, the state itself.
+    pub(super) fn synced(
+        &self,
+        st: &State,
+        half_step: Option<f64>,
+        acc: &Vector3<f64>,
+        wacc_world: &Vector3<f64>,
+    ) -> State {
+        let Some(h) = half_step else { return *st };
+        let r = self.rot(&st.q);
+        State {
+            v: st.v + acc * (0.5 * h),
+            w: st.w + r.transpose() * wacc_world * (0.5 * h),
+            ..*st
+        }
+    }
+
+    /// Free flight over τ: the parabola and the torque-free rotation.
+    pub(super) fn fly(&self, st: &State, tau: f64) -> State {
+        let (q, w) = self.free_rotation(st.q, st.w, tau);
+        let gv = Vector3::new(0.0, 0.0, -self.g);
+        State {
+            t: st.t + tau,
+            c: st.c + st.v * tau + gv * (0.5 * tau * tau),
+            v: st.v + gv * tau,
+            q,
+            w,
+        }
+    }
+
+    /// First time in (0, τ] at which the centre's along-dip position reaches the face length.
+    pub(super) fn along_cross(&self, st: &State, tau: f64) -> Option<f64> {
+        let d = self.mean.dip_dir();
+        let s0 = self.mean.along(&st.c) - self.length;
+        let b = d.dot(&st.v);
+        let a = -self.g * d.z; // d²s/dt² = g sin θ
+        super::super::terrain::outward_root(s0, b, a).filter(|&t| t <= tau)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn event(
+        &self,
+        t: f64,
+        kind: EventKind,
+        p: &Vector3<f64>,
+        before: f64,
+        after: f64,
+        lost: f64,
+        peak: Option<f64>,
+    ) -> Event {
+        Event {
+            time: t,
+            kind,
+            position: v3(p),
+            along_dip: self.mean.along(p),
+            speed_before: before,
+            speed_after: after,
+            energy_lost: lost,
+            peak_contact_force: peak,
+        }
+    }
+
+    /// Reports an episode's impact (speed after = at its last contact) and, when a ground
+    /// phase ends by separation, the take-off.
+    pub(super) fn close_episode(
+        &self,
+        ep: Episode,
+        separated: bool,
+        evs: &mut Vec<Event>,
+        events: bool,
+    ) {
+        if !events {
+            return;
+        }
+        if ep.impact {
+            evs.push(self.event(
+                ep.t0,
+                EventKind::Impact,
+                &ep.p,
+                ep.speed_before,
+                ep.last_speed,
+                ep.last_diss - ep.diss_before,
+                Some(ep.peak),
+            ));
+        }
+        if ep.ground && separated {
+            evs.push(self.event(
+                ep.last_t,
+                EventKind::TakeOff,
+                &ep.last_p,
+                ep.last_speed,
+                ep.last_speed,
+                0.0,
+                None,
+            ));
+        }
+    }
+
+    pub(super) fn sample(
+        &self,
+        r: &mut Recorder,
+        st: &State,
+        diss: f64,
+        _stored: f64,
+    ) -> PhysicsResult<()> {
+        if r.tr.time.len() >= r.max {
+            return Err(PhysicsError::invalid(
+                Param::TrajectorySampleInterval,
+                r.interval,
+                format!("the trajectory would need more than {} samples", r.max),
+            ));
+        }
+        let (kt, kr, pe) = self.energy(st);
+        let w = st.q * st.w;
+        let tr = &mut r.tr;
+        tr.time.push(st.t);
+        tr.position.push(v3(&st.c));
+        tr.along_dip.push(self.mean.along(&st.c));
+        tr.height.push(self.height_of_centre(&st.c).max(0.0));
+        tr.velocity.push(v3(&st.v));
+        tr.speed.push(st.v.norm());
+        tr.angular_velocity.push(v3(&w));
+        tr.orientation.push([st.q.w, st.q.i, st.q.j, st.q.k]);
+        tr.kinetic_energy.push(kt + kr);
+        tr.rotational_energy.push(kr);
+        tr.potential_energy.push(pe);
+        tr.dissipated_energy.push(diss);
+        Ok(())
+    }
+}
