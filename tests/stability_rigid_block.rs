@@ -149,8 +149,12 @@ fn check_within(c: &MigrationCase, r: &MigrationResult, factor: f64) -> Result<(
         "{e:?} scale {scale}"
     );
 
+    // a loss the account cannot book (a contact switched off on the floor's relief while
+    // compressed) is answered with the `energy_unaccounted` warning, and only a loss is
+    let warned = r.warnings.iter().any(|w| w.code == "energy_unaccounted");
+    prop_assert!(!warned || e.residual < 0.0, "{:?} {e:?}", r.warnings);
     prop_assert!(
-        e.residual.abs() <= tol * scale + mid,
+        e.residual <= tol * scale + mid && (warned || e.residual >= -(tol * scale + mid)),
         "residual {} of scale {scale}: {e:?}",
         e.residual
     );
@@ -264,9 +268,8 @@ prop_compose! {
         d in prop_oneof![Just(1.0), 0.2..=2.0f64],
         x_len in 4.0..=16.0f64,
         half_width in 1.0..=6.0f64,
-        // rough floors are left out: there the floor-peak and crease contacts can still appear
-        // already deep (the run's energy invariant then refuses it as a numerical failure)
-        rough in Just(0.0),
+        // relief up to ±5 % of the spacing (±2.5 cm on the 0.5 m grid)
+        rough in prop_oneof![Just(0.0), 0.0..=0.1f64],
         hole_rate in prop_oneof![Just(0.0), 0.0..=0.05f64],
         seed in any::<u64>(),
         along_frac in prop_oneof![Just(0.0), 0.0..=0.05f64, 0.0..=1.0f64],
@@ -304,9 +307,8 @@ prop_compose! {
         c.face.floor = FloorSpec::Grid { origin: [0.0, -y_half], spacing: d, heights };
         c.release.along_dip = along_frac * 0.9 * c.face.length;
         c.release.across = across_frac * y_half;
-        // on a rough floor the block is dropped from above the relief (placed on the facet
-        // under the release point, it would start inside the nodes around it)
-        c.release.drop_height = if rough > 0.0 { h.max(4.0 * rough * d) } else { h };
+        // dropped or placed: placed on a rough floor, it is lifted onto the relief around it
+        c.release.drop_height = h;
         c.release.speed = speed;
         c.end_time = Some(end_time);
         c.rigid_block.critical_damping_ratio = beta;
@@ -354,6 +356,84 @@ proptest! {
                 prop_assert!(estimated > 0.0 && limit == 20_000.0);
             }
             Err(e) => prop_assert!(false, "unexpected error {e:?}"),
+        }
+    }
+}
+
+/// A rough grid of the benchmark kind: 0.5 m spacing, dip 45°, node heights ±5 cm
+/// around the plane (seeded), 40 m along the dip and 10 m across.
+fn rough_grid_case(shape: RockShape, seed: u64) -> MigrationCase {
+    let (d, dip) = (0.5, 45.0f64);
+    let t = dip.to_radians().tan();
+    let heights: Vec<Vec<f64>> = (0..21)
+        .map(|i| {
+            (0..81)
+                .map(|j| -(j as f64) * d * t + 0.05 * noise(seed, i, j))
+                .collect()
+        })
+        .collect();
+    let mut c = MigrationCase {
+        method: Method::RigidBlock,
+        ..MigrationCase::default()
+    };
+    c.rock.shape = shape;
+    c.rock.side_length = 0.4;
+    c.face.dip_deg = dip;
+    c.face.length = 40.0 / dip.to_radians().cos();
+    c.face.floor = FloorSpec::Grid {
+        origin: [0.0, -5.0],
+        spacing: d,
+        heights,
+    };
+    c.release.along_dip = 2.0;
+    c.end_time = Some(1.5);
+    c.rigid_block.max_steps = 200_000.0;
+    c.output.events = true;
+    c.output.trajectory = true;
+    c
+}
+
+/// A block placed on a rough grid (drop 0, the default release) starts resting on the relief
+/// around its release point, not inside it, and slides and tumbles down without gaining
+/// energy. Before onset offsets, floor peaks and creases switched on inside the block as it
+/// tipped over the relief and created their ½kₙU² (for example 1.06 kJ of 30.5 kJ for a
+/// 0.95 m cube), which the run's invariant refused with a 500; and a placed block started
+/// inside the nodes around it, launched by their springs.
+#[test]
+fn rigid_blocks_placed_on_a_rough_grid_start_on_the_relief_and_gain_no_energy() {
+    let shapes = [
+        RockShape::Cube,
+        RockShape::Cuboid {
+            dimensions: [0.6, 0.3, 0.2],
+        },
+        RockShape::RandomPolyhedron {
+            semi_axes: [0.3, 0.2, 0.25],
+            vertices: 14,
+            seed: 7,
+        },
+        RockShape::Sphere { radius: 0.2 },
+    ];
+    for (k, shape) in shapes.into_iter().enumerate() {
+        for seed in 0..3u64 {
+            let c = rough_grid_case(shape.clone(), 1000 * k as u64 + seed);
+            let r = run(&c, &Control::unlimited())
+                .unwrap_or_else(|e| panic!("{shape:?} seed {seed}: {e:?}"));
+            check_within(&c, &r, 2.5).unwrap_or_else(|e| panic!("{shape:?} seed {seed}: {e}"));
+            // released at rest on the floor, the springs hold no more than eight contacts at
+            // the rest overlap: the energy at release less the first sample's KE + PE
+            let rb = r.rigid_block.unwrap();
+            let tr = r.trajectory.as_ref().unwrap();
+            let stored0 = r.energy.total_start - tr.kinetic_energy[0] - tr.potential_energy[0];
+            let rest = 8.0 * 0.5 * rb.mass * c.gravity * rb.static_overlap;
+            assert!(
+                tr.time[0] == 0.0 && stored0 <= rest * (1.0 + 1e-9) + 1e-9,
+                "{shape:?} seed {seed}: {stored0} J stored at release, rest {rest} J"
+            );
+            assert!(
+                r.arrival.along_dip > c.release.along_dip,
+                "{shape:?} seed {seed}: {:?}",
+                r.arrival
+            );
         }
     }
 }

@@ -701,12 +701,12 @@ pub fn solve_nominal(
         plan.push(stage(
             false,
             "release",
-            "impact_velocity_m_s given: no release",
+            "an impact velocity is given: no release",
         ));
         plan.push(stage(
             false,
             "migration",
-            "impact_velocity_m_s given: no migration",
+            "an impact velocity is given: no migration",
         ));
         let mut impacts = Vec::with_capacity(case.supports.len());
         control.set_total(case.supports.len() as u64);

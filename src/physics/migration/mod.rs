@@ -173,7 +173,7 @@ fn nominal_run(
         warnings.push(Warning {
             code: "roll_as_sphere",
             message: format!(
-                "rolling treats the rock as a solid sphere of radius side_length_m / 2 = {} m \
+                "rolling treats the rock as a solid sphere of radius half its side length, {} m \
                  (the sphere inscribed in its cube): the motion and energies are a rolling \
                  sphere's whatever the shape, and the radius sets only the angular speed",
                 roll_radius(&case.rock)

@@ -98,7 +98,7 @@ pub(super) fn prepare_on(case: &MigrationCase, floor: Arc<Floor>) -> PhysicsResu
                 PhysicsError::invalid(
                     Param::ReleaseAlongDip,
                     rel.along_dip,
-                    "the release point is not on the floor at this across_m (outside it or over a hole)",
+                    "the release point is not on the floor at this across-dip position (outside it or over a hole)",
                 )
             };
             // the part of the line y = across that lies over the floor (a contour set's hull

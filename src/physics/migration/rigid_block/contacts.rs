@@ -25,6 +25,7 @@ impl Model<'_> {
                     if d < 0.0 {
                         out.push(Geo {
                             key: 0,
+                            feature: 0,
                             p: c - n * rad,
                             n,
                             u: -d,
@@ -42,6 +43,7 @@ impl Model<'_> {
                     if d < 0.0 {
                         out.push(Geo {
                             key: i as u64,
+                            feature: i as u64,
                             p,
                             n,
                             u: -d,
@@ -149,6 +151,7 @@ impl Model<'_> {
             if d < 0.0 {
                 out.push(Geo {
                     key: i as u64,
+                    feature: i as u64,
                     p: *p,
                     n,
                     u: -d,
@@ -206,8 +209,10 @@ impl Model<'_> {
                         let h = (u64::from(key.0).wrapping_mul(0x9E37_79B9_7F4A_7C15)
                             ^ u64::from(key.1))
                             & ((1 << 40) - 1);
+                        let key = (2 << 62) | ((ei as u64) << 40) | h;
                         out.push(Geo {
-                            key: (2 << 62) | ((ei as u64) << 40) | h,
+                            key,
+                            feature: key,
                             ..geo
                         });
                     }
@@ -268,7 +273,9 @@ impl Model<'_> {
             let corners: Vec<u32> = ids.iter().copied().filter(|&k| k != u32::MAX).collect();
             let shadowed = corners.len() < 3
                 && tris.iter().zip(&best).any(|(t, bd)| {
-                    corners.iter().all(|k| t.ids.contains(k)) && *bd < d * (1.0 - 1e-12)
+                    corners.iter().all(|k| t.ids.contains(k))
+                        && *bd < d * (1.0 - 1e-12)
+                        && covers(tris, t, &corners, rad)
                 });
             if shadowed {
                 continue;
@@ -284,6 +291,7 @@ impl Model<'_> {
             });
             out.push(Geo {
                 key: (3 << 62) | (h >> 2),
+                feature: (3 << 62) | (h >> 2),
                 p,
                 n,
                 u: rad - d,
@@ -294,6 +302,24 @@ impl Model<'_> {
             out[k].key = 0;
         }
     }
+}
+
+/// True when the facets of `tris` around the edge or corner `corners` (ids) lie on or below
+/// the plane of facet `t`, one of them: the floor there is flat or convex as seen from `t`,
+/// whose half-space holds it, so a touch of that edge or corner is already felt through `t`
+/// (`rad`: the sphere's radius, m, for the rounding tolerance). Across a concave seam or into
+/// a pit the floor rises above `t`'s plane and the touch is a contact of its own: shadowing it
+/// there would drop a closed contact (or switch one on) deep inside the sphere.
+pub(super) fn covers(tris: &[FloorTriangle], t: &FloorTriangle, corners: &[u32], rad: f64) -> bool {
+    let mut n = triangle_normal(t);
+    if n.z < 0.0 {
+        n = -n;
+    }
+    let o = t.corners[0];
+    let tol = 1e-12 * (1.0 + rad + o.norm());
+    tris.iter()
+        .filter(|t2| corners.iter().all(|k| t2.ids.contains(k)))
+        .all(|t2| t2.corners.iter().all(|y| n.dot(&(y - o)) <= tol))
 }
 
 /// Depth inside the block and nearest face of a point, or None outside.
@@ -377,6 +403,7 @@ pub(super) fn floor_peak_contacts(
             if peak && any {
                 out.push(Geo {
                     key: (1 << 62) | u64::from(id),
+                    feature: (1 << 62) | u64::from(id),
                     p: x,
                     n: -nf,
                     u: depth,
@@ -442,6 +469,7 @@ pub(super) fn edge_contact(
     inside(&p_floor)?;
     Some(Geo {
         key: 0,
+        feature: 0,
         p: p_block,
         n,
         u: depth,

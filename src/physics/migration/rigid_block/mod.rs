@@ -9,8 +9,22 @@
 //!   block edge (edge–edge, along the common perpendicular). A flat patch of floor therefore
 //!   gives vertex–face contacts only, so a flat grid gives the plane's answer. A sphere touches
 //!   every facet within its radius at the facet's closest point (inside it, on an edge or at a
-//!   corner; a seam counts once, and only where no facet beside it is closer), so it rests on
-//!   both walls of a V and rolls over a crease instead of seeing only the facet under its centre.
+//!   corner; a seam counts once, and only where no facet beside it is closer and holds it in
+//!   its half-space: not across a concave seam or into a pit, where dropping the touch, or
+//!   switching it on, would happen deep inside the sphere), so it rests on both walls of a V and
+//!   rolls over a crease instead of seeing only the facet under its centre.
+//! * **Onset offsets** (3DEC's incremental normal law at a contact's birth): a polyhedron's
+//!   pair of features that first touches deeper than the rest overlap plus twice the last
+//!   drift's approach at that point (a floor peak or crease met inside the block as it tips
+//!   over the relief) carries only that much in its spring; the rest is its offset, kept while the pair is closed and
+//!   lowered with the overlap. A feature switching on never creates the ½kₙU² of its depth
+//!   (0.95 m cubes on ±5 cm of relief gained 1.06 kJ of 30.5 kJ so). A pair that switches off
+//!   while compressed still loses its elastic energy: the account then shows a negative
+//!   residual, and beyond the scheme's error (0.2 % of the energy in play, Hertz 1 %) the
+//!   answer warns `energy_unaccounted` with the amount. A sphere's touches change feature
+//!   (face, edge, corner) without a jump in depth, so they need no offset.
+//! * **Placed on a rough floor** (drop 0), the block set on the facet under the release point
+//!   is lifted along that facet's normal until no contact is deeper than the rest overlap.
 //! * **Force law** per contact: PFC linear, Fₙ = max(0, kₙU − cₙvₙ) with cₙ = 2β√(m kₙ), or
 //!   Hertz, Fₙ = max(0, (4/3)E*√r U^{3/2} − cₙvₙ) with cₙ = 2β√(m k_t), k_t = 2E*√(rU); an
 //!   incremental shear spring Fₛ ← Fₛ − kₛ vₜ Δt, rotated into the current tangent plane
@@ -76,7 +90,7 @@ use super::shape::BlockShape;
 use super::terrain::{Floor, FloorKind, FloorTriangle, MeanPlane};
 use super::{
     Arrival, EnergyBudget, Event, MigrationCase, MigrationResult, MonteCarlo, RunSummary,
-    Trajectory,
+    Trajectory, Warning,
 };
 use crate::physics::control::Control;
 use crate::physics::error::{Param, PhysicsError, PhysicsResult};
@@ -104,6 +118,13 @@ const STEADY_TOLERANCE: f64 = 1e-9;
 const ENERGY_TOLERANCE_LINEAR: f64 = 1e-2;
 /// The same with the Hertz law (five times its property tests' 1 %).
 const ENERGY_TOLERANCE_HERTZ: f64 = 5e-2;
+
+/// Residual an energy account may show, as a fraction of the energy in play, with the linear
+/// law before the answer warns (`energy_unaccounted`): what its property tests bound it to on
+/// the plane.
+const ACCOUNT_TOLERANCE_LINEAR: f64 = 2e-3;
+/// The same with the Hertz law.
+const ACCOUNT_TOLERANCE_HERTZ: f64 = 1e-2;
 
 /// Normal contact law of the rigid block.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -202,10 +223,26 @@ pub fn bounce_restitution(m: f64, k: f64, beta: f64, clip: bool) -> (f64, f64) {
 /// One contact point of the current configuration.
 #[derive(Debug, Clone, Copy)]
 struct Geo {
+    /// The shear spring's key (block feature, floor feature; a sphere's deepest contact: 0).
     key: u64,
+    /// The touching pair of features, stable from step to step (the key but for a sphere).
+    feature: u64,
+    /// Contact point (world frame), m.
     p: Vector3<f64>,
+    /// Unit normal, pointing from the floor into the block.
     n: Vector3<f64>,
+    /// Overlap carried by the spring, m: the geometric one less the contact's onset offset.
     u: f64,
+}
+
+/// The onset offset of a contact that is closed: the overlap it already had, beyond one step's
+/// approach, when its pair of features first touched (m); see [`Model::onset_offsets`].
+#[derive(Debug, Clone, Copy)]
+struct Onset {
+    /// The touching pair of features ([`Geo::feature`]).
+    feature: u64,
+    /// Overlap not carried by the spring, m.
+    offset: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -259,6 +296,8 @@ struct Model<'a> {
     isotropic: bool,
     static_overlap: f64,
     on_floor_at_start: bool,
+    /// Unit normal of the floor facet under the release point.
+    floor_normal_at_release: Vector3<f64>,
     /// The energy in play before any travel, J: m g (drop + ten static overlaps and ten static
     /// shear displacements) + ½ m v₀² (the scale of [`Model::check_energy`] at the release).
     energy_in_play: f64,
@@ -416,6 +455,10 @@ struct Run {
     new_springs: Vec<Spring>,
     /// The contacts of the current configuration.
     contacts: Vec<Geo>,
+    /// The onset offsets of the closed contacts (every closed contact has one, most of them 0).
+    onsets: Vec<Onset>,
+    /// Scratch for the next onset offsets.
+    new_onsets: Vec<Onset>,
     /// Scratch for the floor triangles near the block.
     tris: Vec<FloorTriangle>,
     /// Energy dissipated by the dashpots and the local damping, J.
@@ -660,6 +703,7 @@ impl<'a> Model<'a> {
             isotropic: iso,
             static_overlap,
             on_floor_at_start: rel.drop_height == 0.0,
+            floor_normal_at_release: nf,
             energy_in_play: {
                 let shear = match hertz {
                     None => m * g / o.shear_stiffness,
@@ -935,7 +979,27 @@ fn nominal_run(
             .map(|k| super::support_impact_speed(&mean, &case.supports[k], &st.c, &st.v)),
     };
     let residual = kt + kr + pe + out.stored + out.damping + out.friction - out.e_start;
-    let warnings = Vec::new();
+    let mut warnings = Vec::new();
+    let scale = model.energy_scale(st);
+    let allowed = match model.hertz {
+        None => ACCOUNT_TOLERANCE_LINEAR,
+        Some(_) => ACCOUNT_TOLERANCE_HERTZ,
+    } * scale
+        + 0.5 * out.stored;
+    if residual < -allowed {
+        warnings.push(Warning {
+            code: "energy_unaccounted",
+            message: format!(
+                "{:.4e} J ({:.2} % of the {scale:.4e} J in play) left the energy account \
+                 without being booked, more than the time step's error ({allowed:.3e} J): on a \
+                 rough floor a contact between the block and a floor peak or crease can switch \
+                 off while compressed, its elastic energy lost. Speeds and energies after that \
+                 may be low by up to this amount (a sphere's contacts do not switch off so)",
+                -residual,
+                -100.0 * residual / scale
+            ),
+        });
+    }
     if case.monte_carlo.is_none() {
         control.set_total(1);
         control.add_done(1);
@@ -1430,10 +1494,11 @@ mod tests {
 
     /// The review's repro: a block dropped 3.27 m onto a 40° plane grid at its upper edge
     /// (along_dip 0) lands with half of it beyond the edge. It leaves the floor there at the
-    /// landing speed √(2 g h); carried on without that stop, its corners came back over the floor
-    /// deep and threw it off at 143 m/s, which the energy invariant refuses.
+    /// landing speed √(2 g h). Carried on without that stop, its corners came back over the
+    /// floor deep and threw it off at 143 m/s; the onset offsets now keep their springs from
+    /// creating that energy, so even then the block is never faster than its fall allows.
     #[test]
-    fn a_block_landing_across_a_grid_edge_leaves_the_floor_or_fails_the_energy_invariant() {
+    fn a_block_landing_across_a_grid_edge_leaves_the_floor_and_is_never_thrown_off() {
         let t = 40f64.to_radians().tan();
         let mut c = MigrationCase {
             method: super::super::Method::RigidBlock,
@@ -1458,12 +1523,12 @@ mod tests {
         assert_eq!(o.reason, StopReason::LeftFloor);
         close(o.st.v.norm(), (2.0 * 9.81 * 3.27f64).sqrt(), 5e-3);
         model.stop_off_floor = false;
+        // the fall and the whole face's height: √(2 g (3.27 + 30 sin 40°)) = 21.1 m/s
+        let bound = (2.0 * 9.81 * (3.27 + 30.0 * 40f64.to_radians().sin())).sqrt();
         match model.simulate(mu, beta, None, true, None) {
+            Ok(o) => assert!(o.st.v.norm() <= bound, "{} m/s", o.st.v.norm()),
             Err(PhysicsError::Numerical(msg)) => assert!(msg.contains("energy created"), "{msg}"),
-            other => panic!(
-                "the invariant did not fire: {:?}",
-                other.map(|o| o.st.v.norm())
-            ),
+            Err(e) => panic!("{e:?}"),
         }
     }
 

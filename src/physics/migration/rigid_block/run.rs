@@ -61,7 +61,7 @@ impl Model<'_> {
     /// has its contacts closed already (with unloaded shear springs) and the acceleration of
     /// their elastic forces.
     pub(super) fn release(&self, record: Option<(f64, usize)>) -> (Run, f64) {
-        let st = State {
+        let mut st = State {
             t: 0.0,
             c: self.c0,
             v: self.v0,
@@ -74,6 +74,27 @@ impl Model<'_> {
         let mut acc = Vector3::new(0.0, 0.0, -self.g);
         let r = self.rot(&st.q);
         self.contacts(&st.c, &r, &mut tris, &mut contacts);
+        if self.on_floor_at_start {
+            // placed on the facet under the release point; on a rough floor the relief around
+            // it may reach deeper than the rest overlap: lift the block onto it
+            let nf = self.floor_normal_at_release;
+            for _ in 0..8 {
+                let deepest = contacts.iter().map(|g| g.u).fold(0.0, f64::max);
+                let excess = deepest - self.static_overlap;
+                if excess <= 1e-12 * (1.0 + self.shape.r_max) {
+                    break;
+                }
+                st.c += nf * (excess / nf.z.max(0.1) * 1.0001);
+                self.contacts(&st.c, &r, &mut tris, &mut contacts);
+            }
+        }
+        let onsets = contacts
+            .iter()
+            .map(|g| Onset {
+                feature: g.feature,
+                offset: 0.0,
+            })
+            .collect();
         let stored = contacts
             .iter()
             .map(|g| self.normal_energy(g.u))
@@ -113,6 +134,8 @@ impl Model<'_> {
             springs,
             new_springs: Vec::new(),
             contacts,
+            onsets,
+            new_onsets: Vec::new(),
             tris,
             damping: 0.0,
             friction: 0.0,
@@ -293,9 +316,7 @@ impl Model<'_> {
     ) -> PhysicsResult<()> {
         let (kt, kr, pe) = self.energy(st);
         let excess = kt + kr + pe + stored + lost - e_start;
-        let travel =
-            (self.mean.along(&st.c) - self.mean.along(&self.c0)).abs() + (st.c.z - self.c0.z).abs();
-        let scale = self.energy_in_play + self.m * self.g * travel;
+        let scale = self.energy_scale(st);
         let tol = match self.hertz {
             None => ENERGY_TOLERANCE_LINEAR,
             Some(_) => ENERGY_TOLERANCE_HERTZ,
@@ -309,6 +330,14 @@ impl Model<'_> {
             )));
         }
         Ok(())
+    }
+
+    /// The energy in play at the state `st` (J): the energy in play at release and m g times
+    /// the travel since (along the dip and down).
+    pub(super) fn energy_scale(&self, st: &State) -> f64 {
+        let travel =
+            (self.mean.along(&st.c) - self.mean.along(&self.c0)).abs() + (st.c.z - self.c0.z).abs();
+        self.energy_in_play + self.m * self.g * travel
     }
 
     /// Refuses a run past its step budget; polls the control every 4096 steps.
@@ -388,6 +417,7 @@ impl Model<'_> {
         cfg: &RunSettings,
     ) -> Forces {
         run.off_floor = self.contacts(&run.st.c, r, &mut run.tris, &mut run.contacts);
+        self.onset_offsets(run, w_world, h);
         // the velocities at x(t), predicted from the half step with the last accelerations
         let v_t = run.st.v + run.acc * (0.5 * h);
         let w_t = w_world + run.ang_acc * (0.5 * h);
@@ -404,7 +434,6 @@ impl Model<'_> {
         run.stored = 0.0;
         run.slip_max = 0.0;
         for gk in &run.contacts {
-            run.max_overlap = run.max_overlap.max(gk.u);
             let rr = gk.p - run.st.c;
             let vrel = run.st.v + w_world.cross(&rr);
             let vn = gk.n.dot(&vrel);
@@ -446,6 +475,48 @@ impl Model<'_> {
         }
         std::mem::swap(&mut run.springs, &mut run.new_springs);
         fo
+    }
+
+    /// Onset offsets, after 3DEC's incremental normal law (a contact's force grows from zero
+    /// with the approach after it forms): a pair of features that first touches deeper than
+    /// the rest overlap plus twice the approach of the last drift (the velocities of that
+    /// drift at the contact point, over the longer of it and the step `h`, s) is a floor peak
+    /// or crease met while the block already touched through another feature. Its spring
+    /// carries only that much; the rest of the overlap is the contact's offset, kept while the
+    /// pair stays closed and lowered to the overlap whenever the overlap falls below it. So a
+    /// feature switching on inside the block creates at most the elastic energy of the rest
+    /// overlap (a crease passed under a sliding block touches it there), never that of its
+    /// depth, and the offset never adds any. Records the deepest geometric overlap; `w_world`:
+    /// ω, world frame.
+    pub(super) fn onset_offsets(&self, run: &mut Run, w_world: &Vector3<f64>, h: f64) {
+        let span = run.drift_h.max(h);
+        let slack = 1e-12 * (1.0 + self.shape.r_max);
+        run.new_onsets.clear();
+        if self.shape.sphere_radius.is_some() {
+            // a sphere's touches are continuous in depth as they pass from a facet's face to
+            // its edges and corners (which change their feature): no offsets
+            for gk in &run.contacts {
+                run.max_overlap = run.max_overlap.max(gk.u);
+            }
+            return;
+        }
+        for gk in &mut run.contacts {
+            run.max_overlap = run.max_overlap.max(gk.u);
+            let offset = match run.onsets.iter().find(|o| o.feature == gk.feature) {
+                Some(o) => o.offset.min(gk.u),
+                None => {
+                    let vrel = run.st.v + w_world.cross(&(gk.p - run.st.c));
+                    let approach = (-gk.n.dot(&vrel)).max(0.0) * span;
+                    (gk.u - 2.0 * approach - self.static_overlap - slack).max(0.0)
+                }
+            };
+            gk.u -= offset;
+            run.new_onsets.push(Onset {
+                feature: gk.feature,
+                offset,
+            });
+        }
+        std::mem::swap(&mut run.onsets, &mut run.new_onsets);
     }
 
     /// Normal force of the contact `gk` (arm `rr` from the centre, m) over a step h (s):
@@ -719,6 +790,7 @@ impl Model<'_> {
                 &st,
                 cfg.mu,
                 &run.springs,
+                &run.onsets,
                 run.drift_h,
                 &mut run.tris,
                 &mut run.contacts,
@@ -802,6 +874,7 @@ impl Model<'_> {
         end: &State,
         mu: f64,
         springs: &[Spring],
+        onsets: &[Onset],
         h: f64,
         tris: &mut Vec<FloorTriangle>,
         geos: &mut Vec<Geo>,
@@ -810,7 +883,15 @@ impl Model<'_> {
         self.contacts(&end.c, &r, tris, geos);
         let w_world = r * lagged.w;
         let (mut stored, mut friction) = (0.0, 0.0);
-        for gk in geos.iter() {
+        for gk in geos.iter_mut() {
+            // the offsets as the last step left them (a pair new at the end: unloaded; a
+            // sphere has none, see [`Model::onset_offsets`])
+            if self.shape.sphere_radius.is_none() {
+                gk.u -= onsets
+                    .iter()
+                    .find(|o| o.feature == gk.feature)
+                    .map_or(gk.u, |o| o.offset.min(gk.u));
+            }
             stored += self.normal_energy(gk.u);
             let Some(old) = springs.iter().find(|s| s.key == gk.key) else {
                 continue;
