@@ -1,0 +1,337 @@
+//! The regular height grid: heights (m) at nodes `spacing` m apart, each cell split into two
+//! triangular facets; its facet ids, corners, planes and neighbours, the filling of nodes
+//! without data (holes), its memory estimate (bytes) and [`Floor::grid`].
+
+use super::facet::FacetPlane;
+use super::patches::Patch;
+use super::walk::CellGrid;
+use super::{Facet, Floor, FloorKind, MAX_TABLED_FACETS, MeanPlane};
+use crate::physics::error::{Param, PhysicsError, PhysicsResult};
+
+/// Regular height grid: heights[i][j] is z at (x₀ + j d, y₀ + i d); each cell is split along
+/// its (j, i)–(j+1, i+1) diagonal into two triangles.
+#[derive(Debug, Clone)]
+pub(crate) struct GridFloor {
+    pub(super) cells: CellGrid,
+    pub(super) nx: usize,
+    pub(super) z: Vec<f64>,
+    /// The facets' planes, precomputed unless there are more than [`MAX_TABLED_FACETS`].
+    pub(super) planes: Vec<FacetPlane>,
+    /// Facets removed because a corner had no data (empty: none removed).
+    pub(super) holes: Vec<bool>,
+    /// Per cell (row-major), the index in `patches` of the coplanar patch holding it, or
+    /// [`NONE`](super::NONE); empty when the planes are not tabled.
+    pub(super) patch: Vec<u32>,
+    /// Rectangles of cells whose facets all have one slope ([`Patch`]).
+    pub(super) patches: Vec<Patch>,
+}
+
+impl GridFloor {
+    /// Row i and column j of facet f's cell.
+    #[inline]
+    pub(super) fn cell_of(&self, f: Facet) -> (usize, usize) {
+        // facet ids are u32, so the cell index and the row length fit u32 (a cheaper division)
+        let cell = f >> 1;
+        let ncx = self.cells.ncx as u32;
+        ((cell / ncx) as usize, (cell % ncx) as usize)
+    }
+
+    #[inline]
+    pub(super) fn corners(&self, f: Facet) -> ([[f64; 2]; 3], [f64; 3]) {
+        let (i, j) = self.cell_of(f);
+        self.corners_at(f, i, j)
+    }
+
+    #[inline]
+    pub(super) fn corners_at(&self, f: Facet, i: usize, j: usize) -> ([[f64; 2]; 3], [f64; 3]) {
+        let d = self.cells.d;
+        let x = self.cells.x0 + j as f64 * d;
+        let y = self.cells.y0 + i as f64 * d;
+        let (xe, ye) = (
+            self.cells.x0 + (j + 1) as f64 * d,
+            self.cells.y0 + (i + 1) as f64 * d,
+        );
+        let z00 = self.z[i * self.nx + j];
+        let z10 = self.z[i * self.nx + j + 1];
+        let z01 = self.z[(i + 1) * self.nx + j];
+        let z11 = self.z[(i + 1) * self.nx + j + 1];
+        if f & 1 == 0 {
+            ([[x, y], [xe, y], [xe, ye]], [z00, z10, z11])
+        } else {
+            ([[x, y], [xe, ye], [x, ye]], [z00, z11, z01])
+        }
+    }
+
+    #[inline]
+    pub(super) fn plane(&self, f: Facet) -> FacetPlane {
+        match self.planes.get(f as usize) {
+            Some(p) => *p,
+            None => self.plane_of(f),
+        }
+    }
+
+    pub(super) fn plane_of(&self, f: Facet) -> FacetPlane {
+        let (i, j) = self.cell_of(f);
+        let d = self.cells.d;
+        let z00 = self.z[i * self.nx + j];
+        let z10 = self.z[i * self.nx + j + 1];
+        let z01 = self.z[(i + 1) * self.nx + j];
+        let z11 = self.z[(i + 1) * self.nx + j + 1];
+        let (bx, by) = if f & 1 == 0 {
+            ((z10 - z00) / d, (z11 - z10) / d)
+        } else {
+            ((z11 - z01) / d, (z01 - z00) / d)
+        };
+        FacetPlane::new(
+            self.cells.x0 + j as f64 * d,
+            self.cells.y0 + i as f64 * d,
+            z00,
+            bx,
+            by,
+        )
+    }
+
+    #[inline]
+    pub(super) fn facet(&self, ci: usize, cj: usize, half: u32) -> Facet {
+        (((cj * (self.nx - 1) + ci) as u32) << 1) | half
+    }
+
+    #[inline]
+    pub(super) fn neighbor_at(&self, f: Facet, i: usize, j: usize, edge: usize) -> Option<Facet> {
+        let ncx = self.nx - 1;
+        let ncy = self.cells.ncy;
+        match (f & 1, edge) {
+            (0, 0) => (i > 0).then(|| self.facet(j, i - 1, 1)),
+            (0, 1) => (j + 1 < ncx).then(|| self.facet(j + 1, i, 1)),
+            (0, _) => Some(f | 1),
+            (_, 0) => Some(f & !1),
+            (_, 1) => (i + 1 < ncy).then(|| self.facet(j, i + 1, 0)),
+            _ => (j > 0).then(|| self.facet(j - 1, i, 0)),
+        }
+    }
+}
+
+/// Fills the NaN nodes of a `nx`-wide grid in layers outward from the nodes with data, each with
+/// the mean of its neighbours (4-connected) filled in earlier layers; false when no node has data.
+fn fill_holes(z: &mut [f64], nx: usize, ny: usize) -> bool {
+    if z.iter().all(|h| h.is_nan()) {
+        return false;
+    }
+    let nbrs = |k: usize| {
+        let (i, j) = (k / nx, k % nx);
+        let mut out = [usize::MAX; 4];
+        if i > 0 {
+            out[0] = k - nx;
+        }
+        if i + 1 < ny {
+            out[1] = k + nx;
+        }
+        if j > 0 {
+            out[2] = k - 1;
+        }
+        if j + 1 < nx {
+            out[3] = k + 1;
+        }
+        out
+    };
+    let mut layer: Vec<usize> = (0..z.len())
+        .filter(|&k| z[k].is_nan() && nbrs(k).iter().any(|&n| n != usize::MAX && !z[n].is_nan()))
+        .collect();
+    let mut queued = vec![false; z.len()];
+    for &k in &layer {
+        queued[k] = true;
+    }
+    let mut values = Vec::new();
+    while !layer.is_empty() {
+        values.clear();
+        for &k in &layer {
+            let (sum, n) = nbrs(k)
+                .iter()
+                .filter(|&&n| n != usize::MAX && !z[n].is_nan())
+                .fold((0.0, 0.0), |(s, c), &n| (s + z[n], c + 1.0));
+            values.push(sum / n);
+        }
+        for (&k, &v) in layer.iter().zip(&values) {
+            z[k] = v;
+        }
+        let mut next = Vec::new();
+        for &k in &layer {
+            for n in nbrs(k) {
+                if n != usize::MAX && z[n].is_nan() && !queued[n] {
+                    queued[n] = true;
+                    next.push(n);
+                }
+            }
+        }
+        layer = next;
+    }
+    true
+}
+
+/// Bound on the memory of a grid floor, bytes per height (the heights as received and as
+/// stored, with room for the allocator), besides its facet table (see [`grid_bytes`]).
+pub const GRID_BYTES_PER_POINT: f64 = 32.0;
+
+/// Estimated memory of an `rows` × `cols` grid floor, bytes: [`GRID_BYTES_PER_POINT`] per
+/// height plus the 64-byte planes of at most 2²⁰ tabled facets.
+#[must_use]
+pub fn grid_bytes(rows: usize, cols: usize) -> f64 {
+    let points = rows as f64 * cols as f64;
+    let facets = 2.0 * rows.saturating_sub(1) as f64 * cols.saturating_sub(1) as f64;
+    GRID_BYTES_PER_POINT * points + 64.0 * facets.min(MAX_TABLED_FACETS as f64)
+}
+
+impl Floor {
+    /// A regular height grid; the mean plane passes through the mean height of column j = 0.
+    pub(crate) fn grid(
+        dip: f64,
+        origin: [f64; 2],
+        spacing: f64,
+        heights: &[Vec<f64>],
+    ) -> PhysicsResult<Self> {
+        let ny = heights.len();
+        let nx = heights.first().map_or(0, Vec::len);
+        if ny < 2 || nx < 2 {
+            return Err(PhysicsError::invalid(
+                Param::FloorHeights,
+                ny.min(nx) as f64,
+                "a grid needs at least 2 × 2 points",
+            ));
+        }
+        let mut z = Vec::with_capacity(nx * ny);
+        for (i, row) in heights.iter().enumerate() {
+            if row.len() != nx {
+                return Err(PhysicsError::invalid(
+                    Param::FloorHeightRow(i),
+                    row.len() as f64,
+                    format!("every row must have {nx} heights, like row 0"),
+                ));
+            }
+            for (j, &h) in row.iter().enumerate() {
+                if h.is_infinite() {
+                    return Err(PhysicsError::invalid(
+                        Param::FloorHeight(i, j),
+                        0.0,
+                        "heights must be finite numbers (m)",
+                    ));
+                }
+            }
+            z.extend_from_slice(row);
+        }
+        // NaN marks a node without data: the facets touching it are removed
+        let missing: Vec<bool> = z.iter().map(|h| h.is_nan()).collect();
+        let any_missing = missing.iter().any(|&m| m);
+        let z_ref = if any_missing {
+            let (sum, n) = heights
+                .iter()
+                .map(|r| r[0])
+                .filter(|h| !h.is_nan())
+                .fold((0.0, 0usize), |(s, n), h| (s + h, n + 1));
+            if !fill_holes(&mut z, nx, ny) {
+                return Err(PhysicsError::invalid(
+                    Param::Floor,
+                    0.0,
+                    "every node of the grid is without data",
+                ));
+            }
+            if n > 0 {
+                sum / n as f64
+            } else {
+                (0..ny).map(|i| z[i * nx]).sum::<f64>() / ny as f64
+            }
+        } else {
+            heights.iter().map(|r| r[0]).sum::<f64>() / ny as f64
+        };
+        let (sin, cos) = dip.sin_cos();
+        let mut grid = GridFloor {
+            cells: CellGrid {
+                x0: origin[0],
+                y0: origin[1],
+                d: spacing,
+                ncx: nx - 1,
+                ncy: ny - 1,
+            },
+            nx,
+            z,
+            planes: Vec::new(),
+            holes: Vec::new(),
+            patch: Vec::new(),
+            patches: Vec::new(),
+        };
+        let n_facets = 2 * (nx - 1) * (ny - 1);
+        if n_facets <= MAX_TABLED_FACETS {
+            grid.planes = (0..n_facets as Facet).map(|f| grid.plane_of(f)).collect();
+        }
+        if any_missing {
+            let node = |i: usize, j: usize| missing[i * nx + j];
+            grid.holes = (0..n_facets as Facet)
+                .map(|f| {
+                    let (i, j) = grid.cell_of(f);
+                    node(i, j)
+                        || node(i + 1, j + 1)
+                        || if f & 1 == 0 {
+                            node(i, j + 1)
+                        } else {
+                            node(i + 1, j)
+                        }
+                })
+                .collect();
+        }
+        grid.find_patches();
+        Ok(Floor {
+            kind: FloorKind::Grid(grid),
+            mean: MeanPlane {
+                x0: origin[0],
+                z_ref,
+                cos,
+                sin,
+            },
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::facet::plane_of;
+    use super::*;
+
+    #[test]
+    fn tabled_planes_equal_planes_set_up_on_demand() {
+        let h: Vec<Vec<f64>> = (0..4)
+            .map(|i| {
+                (0..5)
+                    .map(|j| (0.3 * i as f64).sin() - 0.7 * j as f64)
+                    .collect()
+            })
+            .collect();
+        let f = Floor::grid(0.6, [1.0, -2.0], 0.5, &h).unwrap();
+        let FloorKind::Grid(g) = &f.kind else {
+            unreachable!()
+        };
+        assert_eq!(g.planes.len(), 2 * 4 * 3);
+        for id in 0..g.planes.len() as Facet {
+            let (c, z) = g.corners(id);
+            assert_eq!(g.plane(id), g.plane_of(id));
+            // the same plane as through the facet's corners, up to rounding
+            let p = plane_of(&c, &z);
+            assert!((p.bx - g.plane(id).bx).abs() < 1e-12);
+            assert!((p.by - g.plane(id).by).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn grid_plane_matches_heights() {
+        let d = 0.5;
+        let h: Vec<Vec<f64>> = (0..3)
+            .map(|i| {
+                (0..4)
+                    .map(|j| 1.0 + 0.2 * j as f64 * d - 0.1 * i as f64 * d)
+                    .collect()
+            })
+            .collect();
+        let f = Floor::grid(0.5, [2.0, -1.0], d, &h).unwrap();
+        let id = f.locate(2.7, -0.6, 0.0, 0.0).unwrap();
+        let pl = f.facet_plane(id);
+        assert!((pl.z(2.7, -0.6) - (1.0 + 0.2 * 0.7 - 0.1 * 0.4)).abs() < 1e-14);
+    }
+}
