@@ -119,8 +119,8 @@ impl Floor {
             PhysicsError::invalid(
                 Param::FloorMapOrigin,
                 0.0,
-                "the map origin is not on the floor (outside it or over a hole): along_dip_m = 0 \
-                 is measured from the floor's height there",
+                "the map origin is not on the floor (outside it or over a hole): the along-dip \
+                 distance is measured from the floor's height there",
             )
         })?;
         self.mean.x0 = 0.0;

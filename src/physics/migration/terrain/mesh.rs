@@ -235,7 +235,7 @@ impl Floor {
             return Err(PhysicsError::invalid(
                 Param::FloorResolution,
                 resolution,
-                "the resampled contours have more than 5e7 points: use a coarser resolution_m",
+                "the resampled contours have more than 5e7 points: use a coarser resampling resolution",
             ));
         }
         let (mut x_min, mut z_at_min) = (f64::INFINITY, 0.0);
