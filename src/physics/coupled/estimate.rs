@@ -34,7 +34,8 @@ pub struct StepEstimate {
     /// instead, with steps of at most t_c/20: the contact term is then ½t_c/(t_c/20) = 10.
     pub lower_bound: f64,
     /// The expected count: 8 steps per period of the stiffest mode over the window (the flight
-    /// propagator's rate, which the contact phases take about as well), T·8·ω_max/(2π), plus
+    /// propagator's rate, modal or dense alike, which the contact phases take about as well),
+    /// T·8·ω_max/(2π), plus
     /// t_c·(rate − ω_max)/3.307 in contact when the damping rate is above ω_max (40 for the
     /// exponential contact integrator, twice its count at the largest step t_c/20).
     pub expected: f64,

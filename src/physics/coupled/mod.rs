@@ -11,7 +11,7 @@
 //!
 //! The parts, one per file: `system.rs` (the state's layout, the right-hand side and the linear
 //! functionals of the state), `flight.rs` (the exact propagator of the free column and the flight
-//! loop), `pass.rs` (one integration over the window: the walk through contact and flight phases,
+//! loop), `modal.rs` (the same flight in modal coordinates, O(n) per step), `pass.rs` (one integration over the window: the walk through contact and flight phases,
 //! event location, history samples and the energy balances), `exponential.rs` (the contact phase
 //! of a heavily damped column), `estimate.rs` (the step count before integrating) and this file
 //! (the public types and [`solve_coupled`], which runs the passes).
@@ -27,6 +27,7 @@ use super::error::{PhysicsError, PhysicsResult};
 mod estimate;
 mod exponential;
 mod flight;
+mod modal;
 mod pass;
 mod system;
 #[cfg(test)]
@@ -146,11 +147,13 @@ pub struct CoupledResult {
 /// with the other right-hand side, so no step straddles the switch of the contact law.
 ///
 /// In contact: Dormand–Prince 5(4) with dense output at relative tolerance `tolerance`. In
-/// flight (no contact force, a linear system): the exact propagator e^{Ah} at 1/8 of the
-/// shortest period, with the dissipated energy from Van Loan's Gramian; events there are
-/// detected on cubic Hermite interpolants and located on the Taylor series of e^{Aτ} (on the
-/// exact propagator built for that span when the damping rate·τ exceeds 2: heavily damped
-/// columns, up to c = 1e9 N·s/m², are propagated exactly in flight too).
+/// flight (no contact force, a linear system): exact propagation at 1/8 of the shortest period,
+/// in modal coordinates (A = VΛV⁻¹ once per pass, O(n) per step, the dissipated energy a
+/// closed-form quadrature over the flight; `modal.rs`) when that decomposition is accurate,
+/// otherwise by the dense propagator e^{Ah} with the dissipated energy from Van Loan's Gramian
+/// (`flight.rs`); events there are detected on cubic Hermite interpolants and located on the
+/// exact state (heavily damped columns, up to c = 1e9 N·s/m², are propagated exactly in flight
+/// too).
 ///
 /// # Special cases
 /// * The Hertz law has no capacity; the log laws stop at δ_cap.
@@ -165,7 +168,12 @@ pub struct CoupledResult {
 /// # References
 /// physics.md §B.7.
 pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<CoupledResult> {
-    solve_coupled_with(input, control, ContactIntegrator::Auto)
+    solve_coupled_with(
+        input,
+        control,
+        ContactIntegrator::Auto,
+        FlightPropagator::Auto,
+    )
 }
 
 /// Which integrator takes the contact phases.
@@ -179,11 +187,24 @@ enum ContactIntegrator {
     DormandPrince,
 }
 
-/// [`solve_coupled`] with the contact integrator chosen by `contact`.
+/// Which propagator takes the free flights.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum FlightPropagator {
+    /// The modal propagator (O(n) per step) when its decomposition is accurate, the dense
+    /// exact propagator otherwise.
+    Auto,
+    /// The dense exact propagator always (the reference of the comparison tests).
+    #[cfg_attr(not(test), allow(dead_code))]
+    Dense,
+}
+
+/// [`solve_coupled`] with the contact integrator chosen by `contact` and the flight propagator
+/// by `flight`.
 fn solve_coupled_with(
     input: &CoupledInput,
     control: &Control,
     contact: ContactIntegrator,
+    flight: FlightPropagator,
 ) -> PhysicsResult<CoupledResult> {
     // Refuse at once what cannot finish within the step limit, instead of integrating until
     // the limit is reached.
@@ -196,7 +217,7 @@ fn solve_coupled_with(
     }
     let ke0 = 0.5 * input.rock_mass * input.velocity * input.velocity;
     // Pass 1: modal states controlled on the scale of the rock's energy.
-    let mut res = run_pass(input, control, input.tolerance, ke0, contact)?;
+    let mut res = run_pass(input, control, input.tolerance, ke0, contact, flight)?;
     let mut passes = 1;
     // A small transfer leaves the modal states far below that scale: their errors are then not
     // controlled relative to what they carry. Refine on the column's own energy scale, then
@@ -215,7 +236,7 @@ fn solve_coupled_with(
         } else {
             (input.tolerance * 0.01).max(1e-13)
         };
-        res = run_pass(input, control, tol, scale, contact)?;
+        res = run_pass(input, control, tol, scale, contact, flight)?;
         passes += 1;
     }
     res.passes = passes;

@@ -11,10 +11,11 @@ use nalgebra::{DMatrix, DVector};
 
 use super::estimate::CONTACT_MAX_STEP_FRACTION;
 use super::flight::{FreeFlight, free_flight};
+use super::modal::{ModalFlight, ModalFunctionals, modal_free_flight};
 use super::system::{Functionals, ROCK_DISPLACEMENT, ROCK_VELOCITY, System, apply};
 use super::{
-    ContactIntegrator, CoupledInput, CoupledResult, capacity_exceeded, contact_energy, exponential,
-    extremum_slot,
+    ContactIntegrator, CoupledInput, CoupledResult, FlightPropagator, capacity_exceeded,
+    contact_energy, exponential, extremum_slot,
 };
 use crate::physics::contact::ForceLaw;
 use crate::physics::control::Control;
@@ -30,6 +31,7 @@ pub(super) fn run_pass(
     tol: f64,
     energy_scale: f64,
     contact: ContactIntegrator,
+    flight: FlightPropagator,
 ) -> PhysicsResult<CoupledResult> {
     let (sys, mass, minv) = System::new(input)?;
     let n = sys.n;
@@ -88,6 +90,7 @@ pub(super) fn run_pass(
         .copied()
         .unwrap_or(0.0);
     let mut free: Option<FreeFlight> = None;
+    let mut modal: Option<Option<(ModalFlight, ModalFunctionals)>> = None;
     // φ(½)ᵀK⁻¹φ(½), m²/J: |w_mid| ≤ √(2·E_col·reach) for a column holding energy E_col
     // (Cauchy–Schwarz in the norm of K, and E_col ≥ ½wᵀKw).
     let reach: f64 = (0..n).map(|j| sys.phi[j] * sys.phi[j] / sys.k[j]).sum();
@@ -95,6 +98,46 @@ pub(super) fn run_pass(
     // damped column has its propagator built by doubling and its in-step states exactly).
     let exact_flight = omega_max > 0.0;
     while walk.t < t_end {
+        if !walk.in_contact && exact_flight && flight == FlightPropagator::Auto {
+            let m = modal.get_or_insert_with(|| {
+                let mass_diag: Vec<f64> = (0..n).map(|j| mass[(j, j)]).collect();
+                ModalFlight::new(&minv, &sys.k, &sys.c, &mass_diag, omega_max).map(|mf| {
+                    let fl = ModalFunctionals {
+                        delta: mf.functional(layout, &fs.delta),
+                        values: [&fs.wmid, &fs.c0, &fs.cm].map(|f| mf.functional(layout, f)),
+                        rates: [&fs.wmid_rate, &fs.c0_rate, &fs.cm_rate]
+                            .map(|f| mf.functional(layout, f)),
+                    };
+                    (mf, fl)
+                })
+            });
+            if let Some((mf, fl)) = m {
+                let (recontact, t_new) = modal_free_flight(
+                    mf,
+                    fl,
+                    &sys,
+                    &mut walk.y,
+                    walk.t,
+                    t_end,
+                    &mut walk.res,
+                    &mut walk.next_sample,
+                    samples,
+                    &record,
+                    &mut st,
+                    control,
+                    input.max_steps,
+                    &|yy: &[f64]| {
+                        let (kin, strain) = column_energy(yy);
+                        (2.0 * (kin + strain) * reach).sqrt()
+                    },
+                )?;
+                walk.t = t_new;
+                if recontact {
+                    walk.switch(&pass, &mut st, t_new);
+                }
+                continue;
+            }
+        }
         if !walk.in_contact && exact_flight {
             let ff = free.get_or_insert_with(|| FreeFlight::new(&minv, &sys.k, &sys.c, omega_max));
             let (recontact, t_new) = free_flight(

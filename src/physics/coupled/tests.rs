@@ -273,6 +273,7 @@ fn exponential_contact_matches_dormand_prince_on_heavily_damped_columns() {
             &input(1e-9),
             &Control::unlimited(),
             ContactIntegrator::DormandPrince,
+            FlightPropagator::Auto,
         )
         .unwrap();
         for (tol, bound) in [(1e-6, 1e-5), (1e-8, 1e-7)] {
@@ -426,4 +427,249 @@ fn state_layout_names_every_slot_once() {
     slots.sort_unstable();
     assert_eq!(slots, (0..layout.len()).collect::<Vec<_>>());
     assert_eq!(layout.column(), 2..8);
+}
+
+/// The modal flight propagator against the dense exact one (Taylor series of e^{Aτ} and Van
+/// Loan's Gramian): the state after τ = h and 0.37h and the dissipated energy, for an undamped
+/// column (c = 0: every pair λᵢ + λⱼ = 0 goes through the series of the divided difference),
+/// light, moderate and over-damped columns, 3 to 25 active modes. Physical expectation: both
+/// are the exact solution of the same linear system.
+#[test]
+fn modal_propagator_matches_dense_propagator_and_gramian() {
+    for (c_coef, modes) in [(0.0, 5usize), (1.0, 19), (2e4, 9), (1e6, 5), (1.0, 49)] {
+        let (mass, k, c, ff) = odd_mode_flight(&Column::default(), modes, c_coef);
+        let n = k.len();
+        let minv = mass.clone().cholesky().unwrap().inverse();
+        let diag: Vec<f64> = (0..n).map(|j| mass[(j, j)]).collect();
+        let omega = 2.0 * PI / (8.0 * ff.h);
+        let Some(mf) = super::modal::ModalFlight::new(&minv, &k, &c, &diag, omega) else {
+            panic!("{c_coef}, {modes} modes: decomposition refused");
+        };
+        let mut z0 = vec![0.0; 2 * n];
+        for j in 0..n {
+            z0[j] = 1e-4 / ((j + 1) * (j + 1)) as f64;
+            z0[n + j] = if j % 2 == 0 { 0.5 } else { -0.3 } / (j + 1) as f64;
+        }
+        let scale = |z: &[f64]| -> f64 {
+            let wd = DVector::from_column_slice(&z[n..]);
+            0.5 * wd.dot(&(&mass * &wd)) + (0..n).map(|j| 0.5 * k[j] * z[j] * z[j]).sum::<f64>()
+        };
+        let e0 = scale(&z0);
+        for tau in [ff.h, 0.37 * ff.h, 17.0 * ff.h] {
+            let (zd, dd) = if tau <= ff.h {
+                ff.taylor(&z0, tau, true)
+            } else {
+                // 17 full steps of the dense propagator
+                let mut z = DVector::from_column_slice(&z0);
+                let mut d = 0.0;
+                for _ in 0..17 {
+                    d += z.dot(&(&ff.gram * &z));
+                    z = &ff.phi * &z;
+                }
+                (z, d)
+            };
+            let (zm, dm) = mf.propagate(&z0, tau);
+            // energy-norm difference relative to the initial energy
+            let diff: Vec<f64> = (0..2 * n).map(|i| zm[i] - zd[i]).collect();
+            let err = (scale(&diff) / e0).sqrt();
+            assert!(err < 1e-10, "{c_coef}, {modes} modes, τ = {tau:e}: {err:e}");
+            assert!(
+                (dm - dd).abs() <= 1e-10 * e0 + 1e-8 * dd.abs(),
+                "{c_coef}, {modes} modes, τ = {tau:e}: D {dm:e} vs {dd:e}"
+            );
+            // energy never created: E(τ) + D(τ) = E(0)
+            assert!(
+                ((scale(&zm) + dm - e0) / e0).abs() < 1e-10,
+                "{c_coef}, {modes} modes: balance"
+            );
+        }
+    }
+}
+
+/// The coupled run with the modal flight against the dense exact flight (the propagator it
+/// replaces) and against a run at tolerance 1e-10: 10 and 50 modes (5 and 25 active), the
+/// default light damping and a moderate one (c = 2e4 N·s/m²), tolerance 1e-6. Pmax, the
+/// column energy after contact, the first contact duration, max |w_mid|, the two curvature
+/// maxima and the column's energy plus the dissipated energy agree with the dense flight to 1e-8
+/// relative (both exact in flight: only rounding differs) and are no further from the tight
+/// run than the dense flight's (the clamp curvature maximum carries the contact phase's error
+/// at this tolerance: 4e-5 for 10 modes, 1.2e-3 for 50, the same with either flight), with the
+/// same steps and contacts, and the estimated error meets the target.
+#[test]
+fn modal_flight_matches_dense_flight_on_ten_and_fifty_modes() {
+    for (n, c) in [(10usize, 1.0), (50, 1.0), (10, 2e4)] {
+        let input = |tol: f64| {
+            let mut i = base_input(n, tol);
+            i.galerkin = Galerkin::new(&Column::default(), n, c, true).unwrap();
+            i
+        };
+        let key = |r: &CoupledResult| {
+            [
+                r.max_force,
+                r.column_energy_after_contact,
+                r.first_contact_duration.unwrap(),
+                r.max_midpoint_displacement,
+                r.max_curvature_clamp,
+                r.max_curvature_midpoint,
+                r.column_energy_end + r.damping_energy,
+            ]
+        };
+        let run = |tol: f64, flight| {
+            solve_coupled_with(
+                &input(tol),
+                &Control::unlimited(),
+                ContactIntegrator::Auto,
+                flight,
+            )
+            .unwrap()
+        };
+        let modal = run(1e-6, FlightPropagator::Auto);
+        let dense = run(1e-6, FlightPropagator::Dense);
+        let tight = run(1e-10, FlightPropagator::Dense);
+        assert_eq!(modal.steps, dense.steps, "{n} modes: same steps");
+        assert_eq!(modal.contact_count, dense.contact_count);
+        assert_eq!(modal.contact_count, tight.contact_count);
+        for (q, ((m, d), e)) in key(&modal)
+            .iter()
+            .zip(key(&dense))
+            .zip(key(&tight))
+            .enumerate()
+        {
+            assert!(
+                ((m - d) / d).abs() < 1e-8,
+                "{n} modes, c {c}, quantity {q}: {m} vs {d}"
+            );
+            // no less accurate than the dense flight against the tight run
+            assert!(
+                (m - e).abs() <= (d - e).abs() + 1e-8 * e.abs(),
+                "{n} modes, c {c}, quantity {q}: {m} vs {e} (dense {d})"
+            );
+        }
+        assert!(
+            modal.estimated_error < ACCURACY_TARGET,
+            "{}",
+            modal.estimated_error
+        );
+    }
+}
+
+/// Run time against error of the many-mode columns (10 and 50 modes, base case, light
+/// damping), modal and dense flights: the largest relative error of Pmax, column energy after
+/// contact, first contact duration, max |w_mid| and the clamp curvature against a run at
+/// tolerance 1e-11. A measurement printed for BENCHMARKS.md, not a check: `cargo test --lib
+/// many_modes_time_against_error -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn many_modes_time_against_error() {
+    for n in [10usize, 50] {
+        let key = |r: &CoupledResult| {
+            [
+                r.max_force,
+                r.column_energy_after_contact,
+                r.first_contact_duration.unwrap(),
+                r.max_midpoint_displacement,
+                r.max_curvature_clamp,
+            ]
+        };
+        let run = |tol: f64, flight| {
+            solve_coupled_with(
+                &base_input(n, tol),
+                &Control::unlimited(),
+                ContactIntegrator::Auto,
+                flight,
+            )
+            .unwrap()
+        };
+        let reference = key(&run(1e-11, FlightPropagator::Dense));
+        for (name, flight) in [
+            ("modal", FlightPropagator::Auto),
+            ("dense", FlightPropagator::Dense),
+        ] {
+            println!("{n} modes, {name} flight");
+            for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9] {
+                let reps = if n == 50 { 2 } else { 5 };
+                let t0 = std::time::Instant::now();
+                let mut r = None;
+                for _ in 0..reps {
+                    r = Some(run(tol, flight));
+                }
+                let ms = t0.elapsed().as_secs_f64() * 1e3 / reps as f64;
+                let r = r.unwrap();
+                let err = key(&r)
+                    .iter()
+                    .zip(reference)
+                    .map(|(g, e)| ((g - e) / e).abs())
+                    .fold(0.0f64, f64::max);
+                println!(
+                    "| {tol:e} | {} | {} | {} | {ms:.2} | {err:.2e} | {:.2e} |",
+                    r.steps, r.rejected_steps, r.passes, r.estimated_error
+                );
+            }
+        }
+    }
+}
+
+/// One run of 10 and of 50 modes at tolerance 1e-6 with the dense and with the modal flight,
+/// for a profiler (`valgrind --tool=callgrind <lib test binary> --ignored
+/// profile_many_mode_runs`): the inclusive costs of the flight (`free_flight`,
+/// `modal_free_flight`) and of the contact phases (`explicit_step`) split the run.
+/// `PROFILE_CASE=50-dense` (or `10-modal`, …) runs one case only.
+#[test]
+#[ignore]
+fn profile_many_mode_runs() {
+    let only = std::env::var("PROFILE_CASE").ok();
+    for n in [10usize, 50] {
+        for (name, flight) in [
+            ("dense", FlightPropagator::Dense),
+            ("modal", FlightPropagator::Auto),
+        ] {
+            if only.as_ref().is_some_and(|o| *o != format!("{n}-{name}")) {
+                continue;
+            }
+            let r = solve_coupled_with(
+                &base_input(n, 1e-6),
+                &Control::unlimited(),
+                ContactIntegrator::Auto,
+                flight,
+            )
+            .unwrap();
+            println!(
+                "{n} modes, {flight:?}: {} steps, {} passes",
+                r.steps, r.passes
+            );
+        }
+    }
+}
+
+/// A critically damped mode has a double eigenvalue and no basis of eigenvectors: the modal
+/// decomposition refuses it (the pass then keeps the dense exact flight). Near it (c within
+/// 1e-9 … 1e-3 of critical), and lightly and strongly damped, the decomposition is accepted
+/// only where it is accurate: its state and dissipated energy after one step agree with the
+/// dense propagator to 1e-9 of the initial energy. One active mode, m = 2 kg, k = 8e6 N/m.
+#[test]
+fn modal_decomposition_is_refused_for_a_critically_damped_mode() {
+    let (m, k) = (2.0f64, 8e6f64);
+    let minv = DMatrix::from_element(1, 1, 1.0 / m);
+    let critical = 2.0 * (k * m).sqrt();
+    let omega = (k / m).sqrt();
+    let build = |c: f64| super::modal::ModalFlight::new(&minv, &[k], &[c], &[m], omega);
+    assert!(build(critical).is_none(), "critical damping accepted");
+    let mut accepted = 0;
+    for ratio in [1e-3, 1.0 - 1e-3, 1.0 + 1e-9, 1.0 + 1e-6, 1.0 + 1e-3, 10.0] {
+        let c = ratio * critical;
+        let Some(mf) = build(c) else { continue };
+        accepted += 1;
+        let ff = FreeFlight::new(&minv, &[k], &[c], omega);
+        let z0 = [1e-4, 0.3];
+        let e0 = 0.5 * k * z0[0] * z0[0] + 0.5 * m * z0[1] * z0[1];
+        let (zd, dd) = ff.taylor(&z0, ff.h, true);
+        let (zm, dm) = mf.propagate(&z0, ff.h);
+        let err = 0.5 * k * (zm[0] - zd[0]).powi(2) + 0.5 * m * (zm[1] - zd[1]).powi(2);
+        assert!(err.sqrt() < 1e-9 * e0.sqrt(), "c/c_crit = {ratio}: state");
+        assert!(
+            (dm - dd).abs() < 1e-9 * e0,
+            "c/c_crit = {ratio}: {dm} vs {dd}"
+        );
+    }
+    assert!(accepted >= 4, "{accepted}");
 }
