@@ -22,10 +22,11 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{
-    Functional, Pass, ROCK_DISPLACEMENT, ROCK_VELOCITY, System, apply, capacity_exceeded,
-    extremum_slot, hermite,
-};
+use super::estimate::DOPRI5_STABILITY_LIMIT;
+use super::flight::hermite;
+use super::pass::Pass;
+use super::system::{Functional, ROCK_DISPLACEMENT, ROCK_VELOCITY, System, apply};
+use super::{capacity_exceeded, extremum_slot};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
 use crate::physics::numeric::expo::{PhiAction, phi_action};
@@ -49,7 +50,7 @@ const EXPONENTIAL_CONTACT_MAX_STIFFNESS: f64 = 1e5;
 /// up to rate·t_c = [`EXPONENTIAL_CONTACT_MAX_STIFFNESS`].
 pub(super) fn exponential_contact_pays(rate: f64, contact_time: f64) -> bool {
     let stiffness = rate * contact_time;
-    stiffness / super::DOPRI5_STABILITY_LIMIT > EXPONENTIAL_CONTACT_STEPS
+    stiffness / DOPRI5_STABILITY_LIMIT > EXPONENTIAL_CONTACT_STEPS
         && stiffness <= EXPONENTIAL_CONTACT_MAX_STIFFNESS
 }
 
