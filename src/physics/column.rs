@@ -295,7 +295,7 @@ fn check_times(times: &[f64], limit: Option<f64>) -> PhysicsResult<()> {
             return Err(PhysicsError::invalid(
                 Param::HistoryTime(i),
                 t,
-                format!("coupled history times must lie in [0, end_time_s = {end:e}] s"),
+                format!("coupled history times must lie in [0, the end time = {end:e}] s"),
             ));
         }
     }
@@ -331,7 +331,7 @@ fn sample_times(
                     return Err(PhysicsError::invalid(
                         Param::HistoryDuration,
                         0.0,
-                        "the decoupled history needs duration_s in (0, 1e6] s",
+                        "the decoupled history needs a duration in (0, 1e6] s",
                     ));
                 }
             };
@@ -339,7 +339,7 @@ fn sample_times(
                 return Err(PhysicsError::invalid(
                     Param::HistoryDuration,
                     d,
-                    "duration_s must lie in (0, 1e6] s",
+                    "the history's duration must lie in (0, 1e6] s",
                 ));
             }
             if let Some(w) = window
@@ -348,7 +348,7 @@ fn sample_times(
                 return Err(PhysicsError::invalid(
                     Param::HistoryDuration,
                     d,
-                    format!("a coupled history's duration_s must not exceed end_time_s = {w:e} s"),
+                    format!("a coupled history's duration must not exceed the end time = {w:e} s"),
                 ));
             }
             let n = match samples {
@@ -703,7 +703,7 @@ fn coupled(
         return Err(PhysicsError::invalid(
             Param::InitialMidpointDisplacement,
             w,
-            "initial_midpoint_displacement_m applies to the decoupled model only",
+            "an initial midpoint displacement applies to the decoupled model only",
         ));
     }
     let n = case.modes.unwrap_or(3);
@@ -717,7 +717,7 @@ fn coupled(
             return Err(PhysicsError::invalid(
                 Param::CoupledWindow,
                 t,
-                "end_time_s must lie in [1e-9, 1e3] s",
+                "the end time must lie in [1e-9, 1e3] s",
             ));
         }
         Some(t) => t,

@@ -19,9 +19,11 @@
 //!   over the relief) carries only that much in its spring; the rest is its offset, kept while the pair is closed and
 //!   lowered with the overlap. A feature switching on never creates the ½kₙU² of its depth
 //!   (0.95 m cubes on ±5 cm of relief gained 1.06 kJ of 30.5 kJ so). A pair that switches off
-//!   while compressed still loses its elastic energy: the account then shows a negative
-//!   residual, and beyond the scheme's error (0.2 % of the energy in play, Hertz 1 %) the
-//!   answer warns `energy_unaccounted` with the amount. A sphere's touches change feature
+//!   while compressed takes its elastic energy with it; that energy is handed to the contacts
+//!   that carry offsets (their offsets lowered until their springs hold it), as far as their
+//!   offsets go. What finds no offset stays lost: the account then shows a negative residual,
+//!   and beyond the scheme's error (0.2 % of the energy in play, Hertz 1 %) the answer warns
+//!   `energy_unaccounted` with the amount. A sphere's touches change feature
 //!   (face, edge, corner) without a jump in depth, so they need no offset.
 //! * **Placed on a rough floor** (drop 0), the block set on the facet under the release point
 //!   is lifted along that facet's normal until no contact is deeper than the rest overlap.
@@ -243,6 +245,12 @@ struct Onset {
     feature: u64,
     /// Overlap not carried by the spring, m.
     offset: f64,
+    /// Overlap carried by the spring, m.
+    carried: f64,
+    /// Contact point relative to the centre (world frame), m.
+    rr: Vector3<f64>,
+    /// Contact normal.
+    n: Vector3<f64>,
 }
 
 #[derive(Debug, Clone, Copy)]

@@ -93,6 +93,9 @@ impl Model<'_> {
             .map(|g| Onset {
                 feature: g.feature,
                 offset: 0.0,
+                carried: g.u,
+                rr: g.p - st.c,
+                n: g.n,
             })
             .collect();
         let stored = contacts
@@ -514,9 +517,67 @@ impl Model<'_> {
             run.new_onsets.push(Onset {
                 feature: gk.feature,
                 offset,
+                carried: gk.u,
+                rr: gk.p - run.st.c,
+                n: gk.n,
             });
         }
+        self.hand_over_switched_off(run, w_world);
         std::mem::swap(&mut run.onsets, &mut run.new_onsets);
+    }
+
+    /// A pair that switched off while still compressed (its overlap carried at the last force
+    /// evaluation, less the approach undone over the drift since, is positive) took its
+    /// spring's energy with it. The contacts that carry onset offsets hold overlap their
+    /// springs do not count: that energy is handed to them, their offsets lowered (largest
+    /// first) until their springs hold it, as far as their offsets go. Only energy just lost is
+    /// handed on, so none is created; what finds no offset stays lost (the account's residual).
+    pub(super) fn hand_over_switched_off(&self, run: &mut Run, w_world: &Vector3<f64>) {
+        let mut lost = 0.0;
+        for o in &run.onsets {
+            if run.new_onsets.iter().any(|x| x.feature == o.feature) {
+                continue;
+            }
+            let vrel = run.st.v + w_world.cross(&o.rr);
+            let u = o.carried + o.n.dot(&vrel) * -run.drift_h;
+            if u > 0.0 {
+                lost += self.normal_energy(u);
+            }
+        }
+        if lost <= 0.0 {
+            return;
+        }
+        let mut order: Vec<usize> = (0..run.new_onsets.len())
+            .filter(|&k| run.new_onsets[k].offset > 0.0)
+            .collect();
+        order.sort_by(|&a, &b| {
+            run.new_onsets[b]
+                .offset
+                .total_cmp(&run.new_onsets[a].offset)
+        });
+        for k in order {
+            if lost <= 0.0 {
+                break;
+            }
+            let on = &mut run.new_onsets[k];
+            let held = self.normal_energy(on.carried);
+            let wanted = self.overlap_holding(held + lost);
+            let du = (wanted - on.carried).min(on.offset).max(0.0);
+            on.carried += du;
+            on.offset = if du >= on.offset { 0.0 } else { on.offset - du };
+            lost -= self.normal_energy(on.carried) - held;
+            if let Some(gk) = run.contacts.iter_mut().find(|g| g.feature == on.feature) {
+                gk.u = on.carried;
+            }
+        }
+    }
+
+    /// The overlap (m) whose normal spring holds the elastic energy `e` (J).
+    pub(super) fn overlap_holding(&self, e: f64) -> f64 {
+        match self.hertz {
+            None => (2.0 * e / self.kn).sqrt(),
+            Some(h) => (e / (0.4 * h.k)).powf(0.4),
+        }
     }
 
     /// Normal force of the contact `gk` (arm `rr` from the centre, m) over a step h (s):
