@@ -517,14 +517,14 @@ fn assemble_result(
                 code: "decay_time_unrepresentable",
                 message: format!(
                     "the damping (decay rate {:e} 1/s) is so light that the decay time exceeds \
-                     the range of double precision: decay_time_1pct_s is null",
+                     the range of double precision: the decay time to 1 % is left undefined (null)",
                     fv.decay_rate()
                 ),
             }
         } else {
             Warning {
                 code: "no_damping",
-                message: "without damping the vibration never decays: decay_time_1pct_s is null"
+                message: "without damping the vibration never decays: the decay time to 1 % is left undefined (null)"
                     .into(),
             }
         });
@@ -729,7 +729,7 @@ fn coupled(
                 format!(
                     "the default window, 50 × the rigid contact duration = {:e} s, exceeds \
                      {MAX_DEFAULT_END_TIME:e} s (the contact law barely resists this impact): \
-                     give end_time_s in [1e-9, 1e3] s",
+                     give an end time in [1e-9, 1e3] s",
                     50.0 * tc
                 ),
             ));
@@ -779,7 +779,7 @@ fn coupled(
         warnings.push(Warning {
             code: "contact_not_ended",
             message: "the rock is still in contact at the end of the window: the first-contact \
-                      quantities are those at the end; increase end_time_s"
+                      quantities are those at the end; increase the end time"
                 .into(),
         });
     }

@@ -80,39 +80,30 @@ pub(super) fn run_pass(
         walk.next_sample += 1;
     }
 
-    let omega_max = 2.0
-        * std::f64::consts::PI
-        * crate::physics::beam::generalized_frequencies(
-            &mass,
-            &DMatrix::from_diagonal(&DVector::from_column_slice(&sys.k)),
-        )
-        .last()
-        .copied()
-        .unwrap_or(0.0);
+    let omega_max = highest_angular_frequency(&sys, &mass);
     let mut free: Option<FreeFlight> = None;
     let mut modal: Option<Option<(ModalFlight, ModalFunctionals)>> = None;
     // φ(½)ᵀK⁻¹φ(½), m²/J: |w_mid| ≤ √(2·E_col·reach) for a column holding energy E_col
     // (Cauchy–Schwarz in the norm of K, and E_col ≥ ½wᵀKw).
     let reach: f64 = (0..n).map(|j| sys.phi[j] * sys.phi[j] / sys.k[j]).sum();
+    let amplitude_bound = |yy: &[f64]| {
+        let (kin, strain) = column_energy(yy);
+        (2.0 * (kin + strain) * reach).sqrt()
+    };
     // The exact propagator steps at 1/8 of the shortest period whatever the damping (a heavily
     // damped column has its propagator built by doubling and its in-step states exactly).
     let exact_flight = omega_max > 0.0;
     while walk.t < t_end {
-        if !walk.in_contact && exact_flight && flight == FlightPropagator::Auto {
-            let m = modal.get_or_insert_with(|| {
-                let mass_diag: Vec<f64> = (0..n).map(|j| mass[(j, j)]).collect();
-                ModalFlight::new(&minv, &sys.k, &sys.c, &mass_diag, omega_max).map(|mf| {
-                    let fl = ModalFunctionals {
-                        delta: mf.functional(layout, &fs.delta),
-                        values: [&fs.wmid, &fs.c0, &fs.cm].map(|f| mf.functional(layout, f)),
-                        rates: [&fs.wmid_rate, &fs.c0_rate, &fs.cm_rate]
-                            .map(|f| mf.functional(layout, f)),
-                    };
-                    (mf, fl)
-                })
-            });
-            if let Some((mf, fl)) = m {
-                let (recontact, t_new) = modal_free_flight(
+        if !walk.in_contact && exact_flight {
+            // the modal flight where its decomposition is accurate, else the dense one
+            let modal = match flight {
+                FlightPropagator::Auto => modal
+                    .get_or_insert_with(|| modal_flight(&sys, &mass, &minv, &fs, omega_max))
+                    .as_ref(),
+                _ => None,
+            };
+            let (recontact, t_new) = if let Some((mf, fl)) = modal {
+                modal_free_flight(
                     mf,
                     fl,
                     &sys,
@@ -126,41 +117,30 @@ pub(super) fn run_pass(
                     &mut st,
                     control,
                     input.max_steps,
-                    &|yy: &[f64]| {
-                        let (kin, strain) = column_energy(yy);
-                        (2.0 * (kin + strain) * reach).sqrt()
-                    },
-                )?;
-                walk.t = t_new;
-                if recontact {
-                    walk.switch(&pass, &mut st, t_new);
-                }
-                continue;
-            }
-        }
-        if !walk.in_contact && exact_flight {
-            let ff = free.get_or_insert_with(|| FreeFlight::new(&minv, &sys.k, &sys.c, omega_max));
-            let (recontact, t_new) = free_flight(
-                ff,
-                &sys,
-                &mut walk.y,
-                walk.t,
-                t_end,
-                &mut walk.res,
-                &mut walk.next_sample,
-                samples,
-                &record,
-                &apply,
-                &[&fs.wmid, &fs.c0, &fs.cm],
-                &[&fs.wmid_rate, &fs.c0_rate, &fs.cm_rate],
-                &mut st,
-                control,
-                input.max_steps,
-                &|yy: &[f64]| {
-                    let (kin, strain) = column_energy(yy);
-                    (2.0 * (kin + strain) * reach).sqrt()
-                },
-            )?;
+                    &amplitude_bound,
+                )?
+            } else {
+                let ff =
+                    free.get_or_insert_with(|| FreeFlight::new(&minv, &sys.k, &sys.c, omega_max));
+                free_flight(
+                    ff,
+                    &sys,
+                    &mut walk.y,
+                    walk.t,
+                    t_end,
+                    &mut walk.res,
+                    &mut walk.next_sample,
+                    samples,
+                    &record,
+                    &apply,
+                    &[&fs.wmid, &fs.c0, &fs.cm],
+                    &[&fs.wmid_rate, &fs.c0_rate, &fs.cm_rate],
+                    &mut st,
+                    control,
+                    input.max_steps,
+                    &amplitude_bound,
+                )?
+            };
             walk.t = t_new;
             if recontact {
                 walk.switch(&pass, &mut st, t_new);
@@ -168,40 +148,16 @@ pub(super) fn run_pass(
             continue;
         }
         if let (true, Some(es)) = (walk.in_contact, exp_contact.as_mut()) {
-            let (steps, rejected) = (es.steps, es.rejected);
-            let (separated, t_new) = exponential::exponential_contact(
-                es,
-                &pass,
-                &mut walk.y,
-                walk.t,
-                &mut walk.res,
-                &mut walk.next_sample,
-                control,
-                st.steps,
-            )?;
-            st.steps += es.steps - steps;
-            st.rejected += es.rejected - rejected;
-            walk.t = t_new;
-            if separated {
-                walk.separate_first(&pass, t_new);
-                walk.in_contact = false;
-                sys.in_contact.set(false);
-                st.reset();
-            }
+            exponential_contact_phase(es, &pass, &mut walk, &mut st, control)?;
             continue;
         }
         explicit_step(&pass, &mut walk, &mut st, control)?;
     }
     // Samples at exactly the end (rounding).
-    while walk.next_sample < samples.len() {
-        record(
-            &mut walk.res,
-            samples[walk.next_sample],
-            &walk.y,
-            walk.in_contact,
-        );
-        walk.next_sample += 1;
+    for &ts in &samples[walk.next_sample..] {
+        record(&mut walk.res, ts, &walk.y, walk.in_contact);
     }
+    walk.next_sample = samples.len();
     let mut res = walk.res;
     close_balances(
         input,
@@ -215,6 +171,71 @@ pub(super) fn run_pass(
     res.steps = st.steps;
     res.rejected_steps = st.rejected;
     Ok(res)
+}
+
+/// The highest angular frequency of the column's modes, rad/s (0 without modes).
+fn highest_angular_frequency(sys: &System, mass: &DMatrix<f64>) -> f64 {
+    2.0 * std::f64::consts::PI
+        * crate::physics::beam::generalized_frequencies(
+            mass,
+            &DMatrix::from_diagonal(&DVector::from_column_slice(&sys.k)),
+        )
+        .last()
+        .copied()
+        .unwrap_or(0.0)
+}
+
+/// The modal free flight of the column and the functionals it reports, in modal coordinates;
+/// None where the decomposition would lose accuracy (the dense flight is used then).
+fn modal_flight(
+    sys: &System,
+    mass: &DMatrix<f64>,
+    minv: &DMatrix<f64>,
+    fs: &Functionals,
+    omega_max: f64,
+) -> Option<(ModalFlight, ModalFunctionals)> {
+    let layout = sys.layout;
+    let mass_diag: Vec<f64> = (0..sys.n).map(|j| mass[(j, j)]).collect();
+    ModalFlight::new(minv, &sys.k, &sys.c, &mass_diag, omega_max).map(|mf| {
+        let fl = ModalFunctionals {
+            delta: mf.functional(layout, &fs.delta),
+            values: [&fs.wmid, &fs.c0, &fs.cm].map(|f| mf.functional(layout, f)),
+            rates: [&fs.wmid_rate, &fs.c0_rate, &fs.cm_rate].map(|f| mf.functional(layout, f)),
+        };
+        (mf, fl)
+    })
+}
+
+/// One contact phase by the exponential integrator `es`, up to separation (the walk switched
+/// to flight) or the end of the window; its steps counted into `st`.
+fn exponential_contact_phase(
+    es: &mut exponential::ExpStepper,
+    pass: &Pass<'_>,
+    walk: &mut Walk,
+    st: &mut Dopri5,
+    control: &Control,
+) -> PhysicsResult<()> {
+    let (steps, rejected) = (es.steps, es.rejected);
+    let (separated, t_new) = exponential::exponential_contact(
+        es,
+        pass,
+        &mut walk.y,
+        walk.t,
+        &mut walk.res,
+        &mut walk.next_sample,
+        control,
+        st.steps,
+    )?;
+    st.steps += es.steps - steps;
+    st.rejected += es.rejected - rejected;
+    walk.t = t_new;
+    if separated {
+        walk.separate_first(pass, t_new);
+        walk.in_contact = false;
+        pass.sys.in_contact.set(false);
+        st.reset();
+    }
+    Ok(())
 }
 
 /// The mutable state of one pass's walk over the window: the state vector and its two scratch

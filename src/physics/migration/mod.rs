@@ -194,7 +194,7 @@ fn nominal_run(
         warnings.push(Warning {
             code: "stop_distance_infinite",
             message: "the rock was still on the floor without deceleration at end_time: it would \
-                      not stop, so stop_along_dip_m is null"
+                      not stop, so its stop position is left undefined (null)"
                 .into(),
         });
     }
