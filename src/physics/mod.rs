@@ -14,7 +14,7 @@ pub mod migration;
 pub mod numeric;
 pub mod scene;
 pub mod spalling;
-pub mod stats_interval;
+pub mod stats;
 pub mod study;
 pub mod validity;
 

@@ -23,12 +23,12 @@ use super::control::Control;
 use super::error::{Param, PhysicsError};
 use super::material::{Column, ImpactCase, Rock, RockShape};
 use super::migration::shape::BlockShape;
-use super::migration::stats::{self, Summary};
 use super::migration::{
     self, Distribution, Method, MigrationCase, MigrationResult, MonteCarlo, RunSummary, StopReason,
     SupportStop, monte_carlo,
 };
-use super::stats_interval::{Z_95, wilson_interval};
+use super::stats::interval::{Z_95, wilson_interval};
+use super::stats::{self, Summary};
 
 /// Impact speed below which a support counts as reached without an impact, m/s.
 pub const NO_IMPACT_SPEED: f64 = 1e-6;

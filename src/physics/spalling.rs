@@ -5,7 +5,7 @@
 //! Events: A spalling, B high support resistance, C low support resistance. Counts may be
 //! fractional (the paper prints A∩C = 4.5 and 10.5: events split between zones).
 
-use super::stats_interval::{Z_95, wilson_interval};
+use super::stats::interval::{Z_95, wilson_interval};
 
 /// Event counts of one zone (may be fractional).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -17,10 +17,11 @@ use super::terrain::Floor;
 use super::trajectory::{robust_norm, support_impact_speed};
 use super::{
     Method, MigrationCase, MigrationResult, MonteCarlo, RunSummary, Statistics, StopReason,
-    Warning, monte_carlo, rigid_block, stats,
+    Warning, monte_carlo, rigid_block,
 };
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
+use crate::physics::stats;
 
 /// Runs `one(i)` for the global run indices i in `range` on the thread pool, `chunk` runs at a
 /// time (each chunk on one thread), and returns the results in run order.

@@ -17,7 +17,6 @@ mod release;
 mod report;
 mod rigid_block;
 pub mod shape;
-pub mod stats;
 mod terrain;
 mod trajectory;
 
@@ -30,13 +29,13 @@ use self::release::{Prepared, lumped_mass_setup, prepare, prepare_on, roll_radiu
 pub use self::report::*;
 use self::trajectory::{arrival_of, sample_trajectory, xyz};
 pub(crate) use self::trajectory::{first_column_reach, support_impact_speed};
+pub use crate::physics::stats::{Histogram, Summary};
 pub use lumped_mass::{EventKind, MAX_TURN, MIN_REBOUND, Motion, Phase, StopReason};
 pub use monte_carlo::Distribution;
 pub use rigid_block::{
     ContactModel, FLOOR_MODULUS_PA, FLOOR_POISSON, REST_SPEED_M_S, REST_TIME_S, RigidBlockOptions,
     RigidBlockReport, bounce_restitution,
 };
-pub use stats::{Histogram, Summary};
 pub use terrain::{
     CONTOUR_BYTES_PER_POINT, ContourLine, GRID_BYTES_PER_POINT, MapFrame, contour_points,
     grid_bytes,

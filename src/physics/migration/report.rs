@@ -4,7 +4,7 @@
 use super::Method;
 use super::lumped_mass::{EventKind, Phase, StopReason};
 use super::rigid_block::RigidBlockReport;
-use super::stats::Summary;
+use crate::physics::stats::Summary;
 
 /// State at the end of the nominal run (api.md `arrival`).
 #[derive(Debug, Clone, PartialEq)]

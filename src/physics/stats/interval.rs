@@ -13,7 +13,7 @@ pub const Z_95: f64 = 1.959_963_984_540_054_2;
 ///
 /// # Examples
 /// ```
-/// use gangue::physics::stats_interval::{wilson_interval, Z_95};
+/// use gangue::physics::stats::interval::{wilson_interval, Z_95};
 /// let [lo, hi] = wilson_interval(5.0, 8.0, Z_95).unwrap();
 /// assert!((lo - 0.305_742_394_603).abs() < 1e-12 && (hi - 0.863_155_714_176).abs() < 1e-12);
 /// assert!(wilson_interval(0.0, 0.0, Z_95).is_none());

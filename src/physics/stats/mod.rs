@@ -1,5 +1,10 @@
 //! Ensemble statistics: mean, sample standard deviation, Hyndman–Fan type 7 percentiles and an
 //! equal-bin histogram.
+//!
+//! Used by the migration ensembles, the scenes' per-support statistics and (with
+//! [`interval`]'s Wilson score interval) spalling and the scenes' probabilities.
+
+pub mod interval;
 
 /// Number of histogram bins (api.md: 20 equal bins, 21 edges).
 pub const HISTOGRAM_BINS: usize = 20;
@@ -49,7 +54,7 @@ pub struct Summary {
 ///
 /// # Examples
 /// ```
-/// use gangue::physics::migration::stats::percentile_sorted;
+/// use gangue::physics::stats::percentile_sorted;
 /// assert_eq!(percentile_sorted(&[1.0, 2.0, 3.0, 4.0], 0.5), 2.5);
 /// ```
 #[must_use]
