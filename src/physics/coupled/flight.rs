@@ -377,12 +377,12 @@ pub(super) fn flight_extrema(
 }
 
 /// Refuses a pass whose rock can no longer reach the column and whose remaining fixed flight
-/// steps exceed the limit. Once the rock recedes (u̇ ≤ 0) beyond the reach of the column's
-/// energy (u < −√(2·E_col·reach), E_col never grows in flight), it never touches the column
-/// again: the rest of the window is the propagator's fixed steps, counted exactly.
+/// steps (of `h`, s) exceed the limit. Once the rock recedes (u̇ ≤ 0) beyond the reach of the
+/// column's energy (u < −√(2·E_col·reach), E_col never grows in flight), it never touches the
+/// column again: the rest of the window is the propagator's fixed steps, counted exactly.
 pub(super) fn refuse_unreachable(
-    ff: &FreeFlight,
     y: &[f64],
+    h: f64,
     t: f64,
     t_end: f64,
     steps: u64,
@@ -390,7 +390,7 @@ pub(super) fn refuse_unreachable(
     amplitude_bound: &dyn Fn(&[f64]) -> f64,
 ) -> PhysicsResult<()> {
     if y[ROCK_VELOCITY] <= 0.0 && y[ROCK_DISPLACEMENT] < -amplitude_bound(y) * (1.0 + 1e-9) {
-        let remaining = ((t_end - t) / ff.h).ceil();
+        let remaining = ((t_end - t) / h).ceil();
         let total = steps as f64 + remaining;
         if total > max_steps as f64 {
             return Err(PhysicsError::TooManySteps {
@@ -398,6 +398,28 @@ pub(super) fn refuse_unreachable(
                 limit: max_steps as f64,
             });
         }
+    }
+    Ok(())
+}
+
+/// Counts one flight step into `st` at time `t` (s): polls the control every 1000 steps and
+/// refuses the pass at the step limit (the estimate scaled to the window's end `t_end`).
+pub(super) fn count_flight_step(
+    st: &mut Dopri5,
+    t: f64,
+    t_end: f64,
+    control: &Control,
+    max_steps: u64,
+) -> PhysicsResult<()> {
+    st.steps += 1;
+    if st.steps % 1000 == 999 {
+        control.check()?;
+    }
+    if st.steps >= max_steps {
+        return Err(PhysicsError::TooManySteps {
+            estimated: st.steps as f64 * t_end / t.max(f64::MIN_POSITIVE),
+            limit: max_steps as f64,
+        });
     }
     Ok(())
 }
@@ -433,19 +455,10 @@ pub(super) fn free_flight(
         }
         // Checked on entry and every 64 steps.
         if steps_in_flight.is_multiple_of(64) {
-            refuse_unreachable(ff, y, t, t_end, st.steps, max_steps, amplitude_bound)?;
+            refuse_unreachable(y, ff.h, t, t_end, st.steps, max_steps, amplitude_bound)?;
         }
         steps_in_flight += 1;
-        st.steps += 1;
-        if st.steps % 1000 == 999 {
-            control.check()?;
-        }
-        if st.steps >= max_steps {
-            return Err(PhysicsError::TooManySteps {
-                estimated: st.steps as f64 * t_end / t.max(f64::MIN_POSITIVE),
-                limit: max_steps as f64,
-            });
-        }
+        count_flight_step(st, t, t_end, control, max_steps)?;
         let last = t + ff.h >= t_end;
         let h = if last { t_end - t } else { ff.h };
         s.y0.copy_from_slice(y);

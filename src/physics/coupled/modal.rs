@@ -31,10 +31,10 @@ use nalgebra::{Complex, DMatrix, Schur};
 
 use super::CoupledResult;
 use super::extremum_slot;
-use super::flight::{Recorder, hermite};
+use super::flight::{Recorder, count_flight_step, hermite, refuse_unreachable};
 use super::system::{Functional, ROCK_DISPLACEMENT, ROCK_VELOCITY, StateLayout, System};
 use crate::physics::control::Control;
-use crate::physics::error::{PhysicsError, PhysicsResult};
+use crate::physics::error::PhysicsResult;
 use crate::physics::ode::{Dopri5, find_roots};
 
 type C64 = Complex<f64>;
@@ -442,28 +442,10 @@ pub(super) fn modal_free_flight(
         // Checked on entry and every 64 steps.
         if steps_in_flight.is_multiple_of(64) {
             write_state(mf, layout, &q, u, ud, 0.0, &mut ys);
-            if ud <= 0.0 && u < -amplitude_bound(&ys) * (1.0 + 1e-9) {
-                let remaining = ((t_end - t) / mf.h).ceil();
-                let total = st.steps as f64 + remaining;
-                if total > max_steps as f64 {
-                    return Err(PhysicsError::TooManySteps {
-                        estimated: total,
-                        limit: max_steps as f64,
-                    });
-                }
-            }
+            refuse_unreachable(&ys, mf.h, t, t_end, st.steps, max_steps, amplitude_bound)?;
         }
         steps_in_flight += 1;
-        st.steps += 1;
-        if st.steps % 1000 == 999 {
-            control.check()?;
-        }
-        if st.steps >= max_steps {
-            return Err(PhysicsError::TooManySteps {
-                estimated: st.steps as f64 * t_end / t.max(f64::MIN_POSITIVE),
-                limit: max_steps as f64,
-            });
-        }
+        count_flight_step(st, t, t_end, control, max_steps)?;
         let last = t + mf.h >= t_end;
         let h = if last { t_end - t } else { mf.h };
         if last {

@@ -195,6 +195,33 @@ fn doubled_propagator_of_a_heavily_damped_column_matches_integration_and_energy(
     }
 }
 
+/// Prints one row of a run-time-against-error table: `solve` run `reps` times at tolerance
+/// `tol`, its mean time (ms) and the largest relative error of the quantities `key` picks
+/// against `reference`, with the steps, rejections, passes and estimated error of the run.
+fn print_time_and_error<const K: usize>(
+    tol: f64,
+    reps: usize,
+    reference: &[f64; K],
+    key: impl Fn(&CoupledResult) -> [f64; K],
+    mut solve: impl FnMut() -> CoupledResult,
+) {
+    let t0 = std::time::Instant::now();
+    let mut r = solve();
+    for _ in 1..reps {
+        r = solve();
+    }
+    let ms = t0.elapsed().as_secs_f64() * 1e3 / reps as f64;
+    let err = key(&r)
+        .iter()
+        .zip(reference)
+        .map(|(g, e)| ((g - e) / e).abs())
+        .fold(0.0f64, f64::max);
+    println!(
+        "| {tol:e} | {} | {} | {} | {ms:.2} | {err:.2e} | {:.2e} |",
+        r.steps, r.rejected_steps, r.passes, r.estimated_error
+    );
+}
+
 /// Run time against error of the c = 1e9 N·s/m² column (3 and 9 modes, base case): the
 /// largest relative error of Pmax, column energy after contact, first contact duration and
 /// max |w_mid| against a run at tolerance 1e-12. A measurement printed for BENCHMARKS.md, not a
@@ -221,23 +248,9 @@ fn heavily_damped_time_against_error() {
         println!("{n} modes, c = 1e9 N·s/m²");
         for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10] {
             let inp = input(tol);
-            let reps = 5;
-            let t0 = std::time::Instant::now();
-            let mut r = None;
-            for _ in 0..reps {
-                r = Some(solve_coupled(&inp, &Control::unlimited()).unwrap());
-            }
-            let ms = t0.elapsed().as_secs_f64() * 1e3 / reps as f64;
-            let r = r.unwrap();
-            let err = key(&r)
-                .iter()
-                .zip(reference)
-                .map(|(g, e)| ((g - e) / e).abs())
-                .fold(0.0f64, f64::max);
-            println!(
-                "| {tol:e} | {} | {} | {} | {ms:.2} | {err:.2e} | {:.2e} |",
-                r.steps, r.rejected_steps, r.passes, r.estimated_error
-            );
+            print_time_and_error(tol, 5, &reference, key, || {
+                solve_coupled(&inp, &Control::unlimited()).unwrap()
+            });
         }
     }
 }
@@ -588,22 +601,7 @@ fn many_modes_time_against_error() {
             println!("{n} modes, {name} flight");
             for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9] {
                 let reps = if n == 50 { 2 } else { 5 };
-                let t0 = std::time::Instant::now();
-                let mut r = None;
-                for _ in 0..reps {
-                    r = Some(run(tol, flight));
-                }
-                let ms = t0.elapsed().as_secs_f64() * 1e3 / reps as f64;
-                let r = r.unwrap();
-                let err = key(&r)
-                    .iter()
-                    .zip(reference)
-                    .map(|(g, e)| ((g - e) / e).abs())
-                    .fold(0.0f64, f64::max);
-                println!(
-                    "| {tol:e} | {} | {} | {} | {ms:.2} | {err:.2e} | {:.2e} |",
-                    r.steps, r.rejected_steps, r.passes, r.estimated_error
-                );
+                print_time_and_error(tol, reps, &reference, key, || run(tol, flight));
             }
         }
     }

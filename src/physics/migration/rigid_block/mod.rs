@@ -963,7 +963,6 @@ fn nominal_run(
         case.output.events,
         Some(control),
     )?;
-    let m = model.m;
     let st = &out.st;
     let (kt, kr, pe) = model.energy(st);
     let mean = model.mean;
@@ -1012,7 +1011,6 @@ fn nominal_run(
         control.set_total(1);
         control.add_done(1);
     }
-    let _ = m;
     Ok(MigrationResult {
         method: case.method,
         mass: model.m,

@@ -503,10 +503,16 @@ impl Model<'_> {
             }
             return;
         }
+        // pairs still closed, and whether any carries an offset: without a pair switched off
+        // and an offset to take its energy there is nothing to hand over
+        let (mut kept, mut any_offset) = (0usize, false);
         for gk in &mut run.contacts {
             run.max_overlap = run.max_overlap.max(gk.u);
             let offset = match run.onsets.iter().find(|o| o.feature == gk.feature) {
-                Some(o) => o.offset.min(gk.u),
+                Some(o) => {
+                    kept += 1;
+                    o.offset.min(gk.u)
+                }
                 None => {
                     let vrel = run.st.v + w_world.cross(&(gk.p - run.st.c));
                     let approach = (-gk.n.dot(&vrel)).max(0.0) * span;
@@ -514,6 +520,7 @@ impl Model<'_> {
                 }
             };
             gk.u -= offset;
+            any_offset |= offset > 0.0;
             run.new_onsets.push(Onset {
                 feature: gk.feature,
                 offset,
@@ -522,7 +529,9 @@ impl Model<'_> {
                 n: gk.n,
             });
         }
-        self.hand_over_switched_off(run, w_world);
+        if any_offset && kept < run.onsets.len() {
+            self.hand_over_switched_off(run, w_world);
+        }
         std::mem::swap(&mut run.onsets, &mut run.new_onsets);
     }
 
