@@ -118,6 +118,18 @@ impl Run<'_, '_> {
         s.s_r += (s.p - s.r).dot(&dip);
         s.r = s.p;
         let vn = s.v.dot(&n);
+        // the release's landing is the procedure's first impact (§C.2 step 2); a take-off's
+        // landing slower along the normal than the stop speed is a touch-down, a rebound's
+        // below a fraction of it ([`FlightFrom`])
+        let touch_down_below = match s.flight_from {
+            FlightFrom::Release => 0.0,
+            FlightFrom::Rebound => REBOUND_TOUCH_DOWN * su.v_stop,
+            FlightFrom::TakeOff => su.v_stop,
+        };
+        if -vn < touch_down_below {
+            self.touch_down(facet, n, vn);
+            return;
+        }
         let vt = s.v - n * vn;
         let (en, et) = draw();
         s.impacts += 1;
@@ -152,7 +164,50 @@ impl Run<'_, '_> {
             }
         } else {
             s.v = rebound;
+            s.flight_from = FlightFrom::Rebound;
             s.apex = Some((r * r / (2.0 * g * n.z), s.t + r / (g * n.z)));
         }
+    }
+
+    /// A touch-down on `facet` (unit normal `n`) at normal speed `vn` (m/s, ≤ 0) below the stop
+    /// speed: not an impact but a re-attachment ([`Run::reattach`]), the ground phase going on
+    /// from here. A rolling rock also keeps its angular momentum about the contact point, so
+    /// its rolling speed is (v + 0.4 u)/1.4 with u the surface speed of its spin in flight; the
+    /// loss |v − u|²/7 (zero when the spin matches) is booked as transition.
+    fn touch_down(&mut self, facet: Facet, n: Vector3<f64>, vn: f64) {
+        let (roll, radius) = (self.roll, self.su.radius);
+        let speed_before = self.s.v.norm();
+        let spin_in_flight = std::mem::replace(&mut self.s.spin, (0.0, Vector3::zeros()));
+        let mut lost = self.reattach(&n, vn);
+        if roll {
+            let s = &mut self.s;
+            let u = spin_in_flight.1.cross(&n) * radius;
+            let u = u - n * u.dot(&n);
+            let v_after = (s.v + u * 0.4) / 1.4;
+            let spin_loss =
+                0.5 * s.v.norm_squared() + spin_in_flight.0 - 0.7 * v_after.norm_squared();
+            s.e_trans += spin_loss;
+            s.v = v_after;
+            lost += spin_loss;
+        }
+        let s = &mut self.s;
+        s.spin = (0.0, Vector3::zeros());
+        s.ground = Some(facet);
+        if s.slide_start.is_none() {
+            s.slide_start = Some(self.mean.along(&s.p));
+        }
+        let ev = EventRec {
+            t: s.t,
+            kind: if roll {
+                EventKind::RollStart
+            } else {
+                EventKind::SlideStart
+            },
+            p: s.p,
+            speed_before,
+            speed_after: s.v.norm(),
+            lost,
+        };
+        self.push_event(ev);
     }
 }

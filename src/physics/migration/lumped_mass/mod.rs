@@ -2,7 +2,10 @@
 //!
 //! The rock is a point mass. Flights are parabolas whose first strike of the floor is a root of a
 //! quadratic; an impact applies the normal and tangential restitution in the struck facet's frame;
-//! a rebound slower than the stop speed starts the ground phase (slide, or roll as a sphere). On a
+//! a rebound slower than the stop speed starts the ground phase (slide, or roll as a sphere). A
+//! landing after a take-off at a kink, or a grazing one after a rebound, is not an impact but a
+//! re-attachment ([`Run::reattach`]): the limit of a smooth floor, so a floor within millimetres
+//! of a plane gives the plane's answer and a finer grid of a curve converges to it. On a
 //! facet the acceleration is constant while the friction direction is fixed, so a slide moves in
 //! closed form from event to event: a facet edge, the lower end, the end time, the moment the
 //! speed along the friction direction reaches zero, or — only when gravity's in-plane part is not
@@ -198,6 +201,8 @@ struct St {
     /// A floor point (m) and its `along_dip` (m): the last point where the rock was on the floor.
     r: Vector3<f64>,
     s_r: f64,
+    /// How the current (or last) flight began: its landing's rule depends on it.
+    flight_from: FlightFrom,
     /// The last position (m) put on or above the floor's surface ([`floor_surface_above`]):
     /// the check at a flight's start is skipped there (the floor does not change, so it would
     /// find nothing to correct).
@@ -226,10 +231,30 @@ impl St {
             crease: None,
             r: base.0,
             s_r: base.1,
+            flight_from: FlightFrom::Release,
             on_surface: None,
         }
     }
 }
+
+/// How a flight began, which decides what its landing is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum FlightFrom {
+    /// The release's fall: its landing is the procedure's first impact (§C.2 step 2).
+    Release,
+    /// A rebound at the stop speed or faster: its landing is an impact unless its normal speed
+    /// is below [`REBOUND_TOUCH_DOWN`] of the stop speed.
+    Rebound,
+    /// A take-off at a convex edge: its landing is a touch-down below the stop speed.
+    TakeOff,
+}
+
+/// Fraction of the stop speed below which the landing of a rebound's flight is a touch-down
+/// rather than an impact. On a plane a rebound lands at its launch speed, at least the stop
+/// speed, so it is an impact; the margin (hysteresis) keeps a floor within millimetres of the
+/// plane from turning such an impact into a touch-down, while a rebound landing on a facet that
+/// falls away (a grazing landing on real relief) is one.
+pub(crate) const REBOUND_TOUCH_DOWN: f64 = 0.5;
 
 /// A concave edge (V-shaped crease) that holds the rock: it slides along the edge line.
 #[derive(Debug, Clone, Copy)]
@@ -513,6 +538,7 @@ impl<'a, 'r> Run<'a, 'r> {
             hit: None,
         };
         if let Some(f) = su.on_floor {
+            run.s.flight_from = FlightFrom::TakeOff;
             run.enter_ground(f);
         }
         run
@@ -579,6 +605,7 @@ impl<'a, 'r> Run<'a, 'r> {
         let sp = s.v.norm();
         if vn > 1e-9 * sp + 1e-12 {
             s.ground = None;
+            s.flight_from = FlightFrom::TakeOff;
             if self.roll {
                 s.spin = (
                     0.2 * sp * sp,
@@ -596,12 +623,53 @@ impl<'a, 'r> Run<'a, 'r> {
             self.push_event(ev);
             None
         } else {
-            let vp = s.v - nb * vn;
-            s.e_trans += 0.5 * self.ke_factor * (sp * sp - vp.norm_squared());
-            s.v = vp;
-            s.ground = Some(fb);
+            self.reattach(&nb, vn.min(0.0));
+            self.s.ground = Some(fb);
             Some(plb)
         }
+    }
+
+    /// Puts the velocity into a plane of unit normal `n` that the rock meets at normal speed
+    /// `vn` (m/s, ≤ 0): a concave kink met on the ground, or a touch-down after a flight; returns
+    /// the energy lost per kg. The meeting is a plastic impact with Coulomb friction. Below the
+    /// stop speed (|vn| < v_stop) the kink is taken as a fillet too small for the floor to
+    /// resolve: the rock turns into the plane keeping its speed (the normal force of a smooth
+    /// turn does no work), and a sliding rock loses the friction impulse μ|vn| along its motion
+    /// (booked as friction). Summed over the kinks of a curve that is μ v² κ per metre, the
+    /// work of the centripetal part of the normal force, so a finer floor converges to the
+    /// continuous slide, and a floor perturbed far below the rock's scale gives the plane's
+    /// answer. From the stop speed up, the normal speed is lost as well (booked as transition).
+    fn reattach(&mut self, n: &Vector3<f64>, vn: f64) -> f64 {
+        let (kf, mu) = (self.ke_factor, self.mu);
+        let smooth = -vn < self.su.v_stop;
+        let s = &mut self.s;
+        let sp = s.v.norm();
+        let vt = s.v - n * vn;
+        let vtn = vt.norm();
+        let Some(dir) = vt.try_normalize(0.0) else {
+            let lost = 0.5 * kf * sp * sp;
+            s.e_trans += lost;
+            s.v = Vector3::zeros();
+            return lost;
+        };
+        let mut lost = 0.0;
+        let speed = if smooth {
+            sp
+        } else {
+            let l = 0.5 * kf * (sp * sp - vtn * vtn);
+            s.e_trans += l;
+            lost += l;
+            vtn
+        };
+        let after = if self.roll {
+            speed
+        } else {
+            (speed - mu * -vn).max(0.0)
+        };
+        let l = 0.5 * kf * (speed * speed - after * after);
+        s.e_fric += l;
+        s.v = dir * after;
+        lost + l
     }
 
     /// The first column reached by the piece p + v τ + ½ a τ² within τ ≤ dt: its time and index.
