@@ -101,9 +101,9 @@ mod contacts;
 mod run;
 mod settled;
 
-/// Young's modulus of the floor for the Hertz law, Pa (physics.md §C.3).
+/// Young's modulus of the floor for the Hertz law when none is given, Pa (physics.md §C.3).
 pub const FLOOR_MODULUS_PA: f64 = 4.38e9;
-/// Poisson ratio of the floor for the Hertz law.
+/// Poisson ratio of the floor for the Hertz law when none is given.
 pub const FLOOR_POISSON: f64 = 0.3;
 /// Speed below which the block counts as still (|v| and |ω| r_max), m/s.
 pub const REST_SPEED_M_S: f64 = 1e-3;
@@ -155,6 +155,10 @@ pub struct RigidBlockOptions {
     pub local_damping: f64,
     /// Normal contact law (default linear).
     pub contact_model: ContactModel,
+    /// Young's modulus of the floor in the Hertz law's E*, Pa (default [`FLOOR_MODULUS_PA`]).
+    pub floor_modulus: f64,
+    /// Poisson ratio of the floor in the Hertz law's E* (default [`FLOOR_POISSON`]).
+    pub floor_poisson: f64,
     /// Monte Carlo distribution of β, drawn once per run after μ (default: β for every run).
     pub critical_damping_ratio_distribution: Option<Distribution>,
     /// Largest number of time steps of one run (default 2e7).
@@ -171,6 +175,8 @@ impl Default for RigidBlockOptions {
             critical_damping_ratio: 0.35,
             local_damping: 0.0,
             contact_model: ContactModel::Linear,
+            floor_modulus: FLOOR_MODULUS_PA,
+            floor_poisson: FLOOR_POISSON,
             critical_damping_ratio_distribution: None,
             max_steps: 2e7,
         }
@@ -580,9 +586,10 @@ impl<'a> Model<'a> {
                     None => case.rock.corner_radius,
                 };
                 let nu = case.rock.poisson_ratio;
+                let nu_f = o.floor_poisson;
                 let estar = 1.0
                     / ((1.0 - nu * nu) / case.rock.elastic_modulus
-                        + (1.0 - FLOOR_POISSON * FLOOR_POISSON) / FLOOR_MODULUS_PA);
+                        + (1.0 - nu_f * nu_f) / o.floor_modulus);
                 Some(Hertz {
                     k: 4.0 / 3.0 * estar * r.sqrt(),
                     kt: 2.0 * estar * r.sqrt(),
