@@ -554,6 +554,21 @@ async fn tangential_restitution_spin_and_rebound_angle_follow_chung_ooi_test_4()
             ));
         }
     }
+    // Kharaz et al.'s measured rebound angles, for information (VALIDATION.md): the runs at
+    // the measured angles from 5° up
+    let measured = curve(
+        "test4_rebound_angle.csv",
+        "incident_angle_deg",
+        "contact_patch_rebound_angle_deg",
+        Some("experiment_kharaz_2001"),
+    );
+    for &(theta, y) in measured.iter().filter(|p| p.0 >= 5.0) {
+        let r = rebound(&app, &t4, beta, theta).await;
+        eprintln!(
+            "measured rebound angle at {theta:.3}°: ours {:.3}°, measured {y:.3}°",
+            r.rebound_deg
+        );
+    }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
