@@ -721,3 +721,31 @@ async fn floor_material_out_of_range_is_422_naming_the_field() {
         assert!(text.contains(pointer), "{material}: {text}");
     }
 }
+
+#[tokio::test]
+async fn a_hertz_contact_too_soft_for_the_block_is_422_naming_the_softer_body() {
+    // A 1 m cube (2.5 t) on its 0.02 m corners: on a 1e7 Pa floor it would sink 16 mm, more than
+    // 1 % of its side; the floor is the soft body. On a stiff floor a 1e7 Pa rock is.
+    let app = common::app();
+    for (floor, rock_modulus, pointer) in [
+        (1e7, 5e9, "/face/floor_material/elastic_modulus_pa"),
+        (1e12, 1e7, "/rock/elastic_modulus_pa"),
+    ] {
+        let body = json!({
+            "method": "rigid_block",
+            "face": {"contact_model": "hertz",
+                     "floor_material": {"elastic_modulus_pa": floor, "poisson_ratio": 0.3}},
+            "rock": {"side_length_m": 1.0, "elastic_modulus_pa": rock_modulus}
+        });
+        let reply = common::post(&app, "/v1/migration", &body).await;
+        assert_eq!(
+            reply.status,
+            422,
+            "{}",
+            String::from_utf8_lossy(&reply.body)
+        );
+        let p = reply.json();
+        assert_eq!(p["errors"][0]["field"], pointer, "{p}");
+        assert!(p["detail"].as_str().unwrap().contains("too soft"), "{p}");
+    }
+}

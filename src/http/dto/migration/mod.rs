@@ -15,9 +15,9 @@ use crate::config::Config;
 use crate::http::error::{ApiError, num};
 use crate::physics::Param;
 use crate::physics::migration::{
-    self, ContactModel, ContourLine, Distribution, EventKind, Face, FloorSpec, LumpedMassOptions,
-    MapFrame, Method, MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase,
-    Release, RigidBlockOptions, RunSummary, StopReason, Summary,
+    self, ContactModel, ContourLine, Distribution, EventKind, Face, FloorMaterial, FloorSpec,
+    LumpedMassOptions, MapFrame, Method, MigrationCase, MigrationResult, MonteCarlo, Motion,
+    OutputOptions, Phase, Release, RigidBlockOptions, RunSummary, StopReason, Summary,
 };
 
 mod floor_check;
@@ -870,12 +870,10 @@ impl MigrationRequest {
                 ContactModelDto::Linear => ContactModel::Linear,
                 ContactModelDto::Hertz => ContactModel::Hertz,
             },
-            floor_modulus: f
-                .floor_material
-                .map_or(migration::FLOOR_MODULUS_PA, |m| m.elastic_modulus_pa),
-            floor_poisson: f
-                .floor_material
-                .map_or(migration::FLOOR_POISSON, |m| m.poisson_ratio),
+            floor_material: f.floor_material.map(|m| FloorMaterial {
+                elastic_modulus: m.elastic_modulus_pa,
+                poisson_ratio: m.poisson_ratio,
+            }),
             critical_damping_ratio_distribution: damping_distribution,
             max_steps: config.max_rigid_steps,
         };
