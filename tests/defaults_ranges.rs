@@ -91,6 +91,12 @@ fn context(path: &str, pointer: &str) -> Value {
             "/face/floor/",
             json!({"face": {"floor": grid}, "release": {"across_m": 50.0}}),
         ),
+        // The floor material's fields are required together.
+        (
+            "/v1/migration",
+            "/face/floor_material/",
+            json!({"face": {"floor_material": {"elastic_modulus_pa": 4.38e9, "poisson_ratio": 0.3}}}),
+        ),
         ("/v1/column", "/end_time_s", json!({"model": "coupled"})),
         (
             "/v1/spalling",

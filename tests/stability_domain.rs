@@ -67,6 +67,11 @@ fn map_grid() -> Value {
            "map": {"origin_m": [0, 0], "dip_direction_deg": 90}})
 }
 
+/// The coal floor's elastic constants as a `face.floor_material`.
+fn floor_material() -> Value {
+    json!({"elastic_modulus_pa": 4.38e9, "poisson_ratio": 0.3})
+}
+
 /// Values of a field whose extreme would be expensive to compute in full: (pointer, replaced
 /// value). Marked "cost-limited" in the output; the refusal just outside is still sent.
 const COST_LIMITED: &[(&str, &str, f64)] = &[
@@ -132,10 +137,24 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             "/face/floor/map/",
             json!({"face": {"length_m": 6, "floor": map_grid()}}),
         ),
+        // the floor material's fields are sent together, and used by the rigid block's Hertz law
+        (
+            "/v1/migration",
+            "/face/floor_material/",
+            json!({"method": "rigid_block", "rock": {"shape": "sphere"}, "end_time_s": 0.5,
+                   "face": {"contact_model": "hertz", "floor_material": floor_material()}}),
+        ),
+        (
+            "/v1/scene",
+            "/face/floor_material/",
+            json!({"face": {"floor_material": floor_material()}}),
+        ),
     ];
     // `map` exists only on grid and contour floors: its fields are varied on a grid in map
     // coordinates, never on the default plane
-    let mut out = if pointer.starts_with("/face/floor/map/") {
+    let mut out = if pointer.starts_with("/face/floor/map/")
+        || pointer.starts_with("/face/floor_material/")
+    {
         vec![]
     } else {
         vec![json!({})]

@@ -131,6 +131,8 @@ pub enum Param {
     DrawnFriction,
     /// Normal contact stiffness of the floor, N/m.
     FaceNormalStiffness,
+    /// Young's modulus of the floor in the rigid block's Hertz contact, Pa.
+    FloorElasticModulus,
     /// Time step of the rigid-block integrator, s.
     RigidBlockTimeStep,
 }

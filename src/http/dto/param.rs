@@ -69,6 +69,7 @@ fn place(param: Param) -> Place {
         Param::FaceFriction => Path("/face/friction_coefficient".into()),
         Param::DrawnFriction => Path("/monte_carlo/friction_coefficient".into()),
         Param::FaceNormalStiffness => Path("/face/normal_stiffness_n_m".into()),
+        Param::FloorElasticModulus => Path("/face/floor_material/elastic_modulus_pa".into()),
         Param::RigidBlockTimeStep => Path("/rigid_block/time_step_s".into()),
     }
 }

@@ -33,8 +33,8 @@ pub use crate::physics::stats::{Histogram, Summary};
 pub use lumped_mass::{EventKind, MAX_TURN, MIN_REBOUND, Motion, Phase, StopReason};
 pub use monte_carlo::Distribution;
 pub use rigid_block::{
-    ContactModel, FLOOR_MODULUS_PA, FLOOR_POISSON, REST_SPEED_M_S, REST_TIME_S, RigidBlockOptions,
-    RigidBlockReport, bounce_restitution,
+    ContactModel, FLOOR_MODULUS_PA, FLOOR_POISSON, FloorMaterial, REST_SPEED_M_S, REST_TIME_S,
+    RigidBlockOptions, RigidBlockReport, bounce_restitution,
 };
 pub use terrain::{
     CONTOUR_BYTES_PER_POINT, ContourLine, GRID_BYTES_PER_POINT, MapFrame, contour_points,

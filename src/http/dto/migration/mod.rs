@@ -15,9 +15,9 @@ use crate::config::Config;
 use crate::http::error::{ApiError, num};
 use crate::physics::Param;
 use crate::physics::migration::{
-    self, ContactModel, ContourLine, Distribution, EventKind, Face, FloorSpec, LumpedMassOptions,
-    MapFrame, Method, MigrationCase, MigrationResult, MonteCarlo, Motion, OutputOptions, Phase,
-    Release, RigidBlockOptions, RunSummary, StopReason, Summary,
+    self, ContactModel, ContourLine, Distribution, EventKind, Face, FloorMaterial, FloorSpec,
+    LumpedMassOptions, MapFrame, Method, MigrationCase, MigrationResult, MonteCarlo, Motion,
+    OutputOptions, Phase, Release, RigidBlockOptions, RunSummary, StopReason, Summary,
 };
 
 mod floor_check;
@@ -81,6 +81,14 @@ number_fields! {
     FACE_CRITICAL_DAMPING, face_critical_damping_schema:
         "Critical damping ratio β of the contact dashpot (rigid block), in [0, 1).",
         FieldDefault::Value(0.35), Closed(0.0), Open(1.0), "", 0.35;
+    /// `face.floor_material.elastic_modulus_pa` (rigid block, Hertz; required in `floor_material`).
+    FLOOR_MATERIAL_MODULUS, floor_material_modulus_schema:
+        "Young's modulus of the floor E_f in the Hertz law's E* (rigid block), Pa, in [1e7, 1e12].",
+        FieldDefault::Required, Closed(1e7), Closed(1e12), "Pa", 4.38e9;
+    /// `face.floor_material.poisson_ratio` (rigid block, Hertz; required in `floor_material`).
+    FLOOR_MATERIAL_POISSON, floor_material_poisson_schema:
+        "Poisson ratio of the floor ν_f in the Hertz law's E* (rigid block), in [0, 0.5).",
+        FieldDefault::Required, Closed(0.0), Open(0.5), "", 0.3;
     /// `face.local_damping` (rigid block).
     FACE_LOCAL_DAMPING, face_local_damping_schema: "PFC local damping α (rigid block), in [0, 1).",
         FieldDefault::Value(0.0), Closed(0.0), Open(1.0), "", 0.0;
@@ -150,6 +158,11 @@ pub const MIGRATION_FIELDS: &[(&str, NumberField)] = &[
     ("/face/shear_stiffness_n_m", FACE_SHEAR_STIFFNESS),
     ("/face/critical_damping_ratio", FACE_CRITICAL_DAMPING),
     ("/face/local_damping", FACE_LOCAL_DAMPING),
+    (
+        "/face/floor_material/elastic_modulus_pa",
+        FLOOR_MATERIAL_MODULUS,
+    ),
+    ("/face/floor_material/poisson_ratio", FLOOR_MATERIAL_POISSON),
     ("/face/floor/spacing_m", FLOOR_SPACING),
     ("/face/floor/resolution_m", FLOOR_RESOLUTION),
     ("/face/floor/map/dip_direction_deg", MAP_DIP_DIRECTION),
@@ -370,6 +383,18 @@ pub enum ContactModelDto {
     Hertz,
 }
 
+/// The floor's elastic constants in the rigid block's Hertz contact (physics.md §C.3).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FloorMaterialDto {
+    /// Young's modulus of the floor E_f, Pa, in [1e7, 1e12].
+    #[schema(schema_with = floor_material_modulus_schema)]
+    pub elastic_modulus_pa: f64,
+    /// Poisson ratio of the floor ν_f, in [0, 0.5).
+    #[schema(schema_with = floor_material_poisson_schema)]
+    pub poisson_ratio: f64,
+}
+
 /// The working face (paper Table 3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields, default)]
@@ -406,6 +431,12 @@ pub struct FaceDto {
     /// Normal contact law (rigid block).
     #[schema(default = "linear", example = "linear")]
     pub contact_model: ContactModelDto,
+    /// The floor's elastic constants in the Hertz law's two-body E* (rigid block,
+    /// `contact_model` hertz; null: the coal floor, E_f = 4.38e9 Pa, ν_f = 0.3). The shear
+    /// stiffness keeps the rock's ratio 2(1 − ν)/(2 − ν) to the normal tangent stiffness.
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub floor_material: Option<FloorMaterialDto>,
 }
 
 impl Default for FaceDto {
@@ -422,6 +453,7 @@ impl Default for FaceDto {
             critical_damping_ratio: FACE_CRITICAL_DAMPING.value(),
             local_damping: FACE_LOCAL_DAMPING.value(),
             contact_model: ContactModelDto::Linear,
+            floor_material: None,
         }
     }
 }
@@ -838,6 +870,10 @@ impl MigrationRequest {
                 ContactModelDto::Linear => ContactModel::Linear,
                 ContactModelDto::Hertz => ContactModel::Hertz,
             },
+            floor_material: f.floor_material.map(|m| FloorMaterial {
+                elastic_modulus: m.elastic_modulus_pa,
+                poisson_ratio: m.poisson_ratio,
+            }),
             critical_damping_ratio_distribution: damping_distribution,
             max_steps: config.max_rigid_steps,
         };
@@ -924,6 +960,14 @@ impl MigrationRequest {
             (FACE_LOCAL_DAMPING, "/face/local_damping", f.local_damping),
         ] {
             field.check(ck, pointer, v);
+        }
+        if let Some(m) = f.floor_material {
+            FLOOR_MATERIAL_MODULUS.check(
+                ck,
+                "/face/floor_material/elastic_modulus_pa",
+                m.elastic_modulus_pa,
+            );
+            FLOOR_MATERIAL_POISSON.check(ck, "/face/floor_material/poisson_ratio", m.poisson_ratio);
         }
     }
 

@@ -101,9 +101,9 @@ mod contacts;
 mod run;
 mod settled;
 
-/// Young's modulus of the floor for the Hertz law, Pa (physics.md §C.3).
+/// Young's modulus of the floor for the Hertz law when none is given, Pa (physics.md §C.3).
 pub const FLOOR_MODULUS_PA: f64 = 4.38e9;
-/// Poisson ratio of the floor for the Hertz law.
+/// Poisson ratio of the floor for the Hertz law when none is given.
 pub const FLOOR_POISSON: f64 = 0.3;
 /// Speed below which the block counts as still (|v| and |ω| r_max), m/s.
 pub const REST_SPEED_M_S: f64 = 1e-3;
@@ -155,6 +155,9 @@ pub struct RigidBlockOptions {
     pub local_damping: f64,
     /// Normal contact law (default linear).
     pub contact_model: ContactModel,
+    /// The floor's elastic constants in the Hertz law's E* (None: [`FLOOR_MODULUS_PA`],
+    /// [`FLOOR_POISSON`]).
+    pub floor_material: Option<FloorMaterial>,
     /// Monte Carlo distribution of β, drawn once per run after μ (default: β for every run).
     pub critical_damping_ratio_distribution: Option<Distribution>,
     /// Largest number of time steps of one run (default 2e7).
@@ -171,10 +174,20 @@ impl Default for RigidBlockOptions {
             critical_damping_ratio: 0.35,
             local_damping: 0.0,
             contact_model: ContactModel::Linear,
+            floor_material: None,
             critical_damping_ratio_distribution: None,
             max_steps: 2e7,
         }
     }
+}
+
+/// Elastic constants of the floor in the rigid block's Hertz contact (physics.md §C.3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FloorMaterial {
+    /// Young's modulus, Pa.
+    pub elastic_modulus: f64,
+    /// Poisson ratio.
+    pub poisson_ratio: f64,
 }
 
 /// What the rigid-block method reports besides the common outputs (api.md `rigid_block`).
@@ -580,9 +593,13 @@ impl<'a> Model<'a> {
                     None => case.rock.corner_radius,
                 };
                 let nu = case.rock.poisson_ratio;
-                let estar = 1.0
-                    / ((1.0 - nu * nu) / case.rock.elastic_modulus
-                        + (1.0 - FLOOR_POISSON * FLOOR_POISSON) / FLOOR_MODULUS_PA);
+                let (e_f, nu_f) = o
+                    .floor_material
+                    .map_or((FLOOR_MODULUS_PA, FLOOR_POISSON), |f| {
+                        (f.elastic_modulus, f.poisson_ratio)
+                    });
+                let estar =
+                    1.0 / ((1.0 - nu * nu) / case.rock.elastic_modulus + (1.0 - nu_f * nu_f) / e_f);
                 Some(Hertz {
                     k: 4.0 / 3.0 * estar * r.sqrt(),
                     kt: 2.0 * estar * r.sqrt(),
@@ -603,9 +620,16 @@ impl<'a> Model<'a> {
                 (h.kt * ug.sqrt(), (w_face / h.k).powf(2.0 / 3.0))
             }
         };
-        let (field, what) = match hertz {
-            None => (Param::FaceNormalStiffness, o.normal_stiffness),
-            Some(_) => (Param::RockElasticModulus, case.rock.elastic_modulus),
+        let rock_compliance = (1.0 - case.rock.poisson_ratio.powi(2)) / case.rock.elastic_modulus;
+        let (field, what) = match (hertz, o.floor_material) {
+            (None, _) => (Param::FaceNormalStiffness, o.normal_stiffness),
+            // a given floor softer than the rock is what sinks it
+            (Some(_), Some(f))
+                if (1.0 - f.poisson_ratio.powi(2)) / f.elastic_modulus > rock_compliance =>
+            {
+                (Param::FloorElasticModulus, f.elastic_modulus)
+            }
+            (Some(_), _) => (Param::RockElasticModulus, case.rock.elastic_modulus),
         };
         if static_overlap > 0.01 * shape.smallest_dimension {
             return Err(PhysicsError::invalid(
