@@ -733,7 +733,7 @@ impl<'a> Model<'a> {
 
     /// Estimated steps: the work the run steps, not what it does in closed form. The last
     /// r_max(1 + s) of the fall (the flight above is skipped); then the time down the rest of
-    /// the face at μ (a sphere rolling at (5/7) g sin θ when μ allows), or until the end time,
+    /// the face at μ, from the release speed plus the fall's speed along the dip, (a sphere rolling at (5/7) g sin θ when μ allows), or until the end time,
     /// wherever that motion is stepped: a sphere's roll, a slide that never settles (no
     /// damping: β = 0 possible and α = 0), any floor but the plane. A polyhedron's settled
     /// slide on the plane is skipped in closed form: there only the fall and, for a slide that
@@ -744,7 +744,8 @@ impl<'a> Model<'a> {
         let g = self.g;
         let h = case.release.drop_height;
         let s = (self.length - case.release.along_dip).max(0.0);
-        let v0 = case.release.speed;
+        // the landing keeps the fall's speed along the floor (at most)
+        let v0 = case.release.speed + (2.0 * g * h).sqrt() * dip.sin();
         let slide = g * (dip.sin() - mu * dip.cos());
         let a = match self.shape.sphere_radius {
             Some(_) => slide.max(5.0 / 7.0 * g * dip.sin()),
