@@ -616,19 +616,25 @@ impl<'a> Model<'a> {
         if hertz.is_none() {
             impact.check_overlap(&shape, o.normal_stiffness)?;
         }
-        let (dt_crit, k_rest) = step::critical_step(o, &shape, hertz, &impact, g);
+        let (dt_crit, dt_bound, k_rest) = step::critical_step(o, &shape, hertz, &impact, g);
+        // safety ≤ 1 keeps the step within PFC's Δt_crit and within half the damped limit
+        let dt_max = dt_crit.min(dt_bound);
         let mut dt = match o.time_step {
             Some(dt) => {
-                if dt > dt_crit {
+                if dt > dt_max {
                     return Err(PhysicsError::invalid(
                         Param::RigidBlockTimeStep,
                         dt,
-                        format!("above the critical time step {dt_crit:.6e} s"),
+                        format!(
+                            "above the largest stable time step {dt_max:.6e} s (the critical \
+                             time step {dt_crit:.6e} s, half the contacts' damped stability \
+                             limit {dt_bound:.6e} s)"
+                        ),
                     ));
                 }
                 dt
             }
-            None => o.time_step_safety * dt_crit,
+            None => o.time_step_safety * dt_max,
         };
         if let Some(te) = case.end_time {
             dt = te / (te / dt).ceil();

@@ -243,24 +243,25 @@ impl ImpactBounds {
     }
 }
 
-/// The critical time step Δt_crit (s) of the options `o` for the block `shape` and, for the
-/// ground phase's contact time, the resting stiffness per contact (N/m).
+/// The time steps of the options `o` for the block `shape` (s): PFC's Δt_crit, the bound the
+/// damping and the Hertz impacts set, and, for the ground phase's contact time, the resting
+/// stiffness per contact (N/m). The step is safety × the smaller of the two.
 ///
-/// Δt_crit is the smallest of PFC's √(m/k_tran), √(I/k_rot) (physics.md §C.3) and half the
+/// Δt_crit is PFC's √(m/k_tran), √(I/k_rot) (physics.md §C.3: the linear law's kₙ, or kₛ if
+/// stiffer; the Hertz law's k_t at the overlap of a contact carrying m g). The bound is half the
 /// largest stable step of the resting contact set with the largest damping ratio a run can take
 /// ([`stable_step`]): safety ≤ 1 keeps every step within half the damped limit (PFC's 1/ω
-/// against the undamped 2/ω). The linear law's stiffness is kₙ (the shear springs kₛ); the
-/// Hertz law's is the tangent stiffness at the deepest overlap the fastest impact can press,
-/// [`hertz_impact_overlap`] at [`ImpactBounds::speed`] with the whole mass on one contact (not
-/// only the static overlap), and Δt_crit also resolves that impact by
-/// [`HERTZ_STEPS_PER_IMPACT`] steps.
+/// against the undamped 2/ω). For the Hertz law its stiffness is the tangent stiffness at the
+/// deepest overlap the fastest impact can press, [`hertz_impact_overlap`] at
+/// [`ImpactBounds::speed`] with the whole mass on one contact, and the bound also resolves that
+/// impact by [`HERTZ_STEPS_PER_IMPACT`] steps.
 pub(super) fn critical_step(
     o: &RigidBlockOptions,
     shape: &BlockShape,
     hertz: Option<Hertz>,
     impact: &ImpactBounds,
     g: f64,
-) -> (f64, f64) {
+) -> (f64, f64, f64) {
     let m = shape.mass;
     let nc = shape.resting_contacts() as f64;
     let beta = largest_beta(
@@ -287,12 +288,11 @@ pub(super) fn critical_step(
             )
         }
     };
-    let k_pfc = k.max(ks);
-    let pfc = (m / (nc * k_pfc))
+    let pfc = (m / (nc * k_rest))
         .sqrt()
-        .min((shape.inertia.min() / (k_pfc * shape.resting_r2())).sqrt());
+        .min((shape.inertia.min() / (k_rest * shape.resting_r2())).sqrt());
     let damped = 0.5 * stable_step(shape, k, ks, beta);
-    (pfc.min(damped).min(resolve), k_rest)
+    (pfc, damped.min(resolve), k_rest)
 }
 
 #[cfg(test)]
