@@ -366,4 +366,27 @@ mod tests {
             );
         }
     }
+
+    #[test]
+    fn an_ensemble_drawing_damping_ratios_steps_for_the_largest_it_can_draw() {
+        let dt = |beta: f64, draw: Option<Distribution>| {
+            let mut c = super::super::super::MigrationCase {
+                method: super::super::super::Method::RigidBlock,
+                ..Default::default()
+            };
+            c.rigid_block.critical_damping_ratio = beta;
+            c.rigid_block.critical_damping_ratio_distribution = draw;
+            let pr = super::super::super::prepare(&c).unwrap();
+            super::super::Model::new(&c, &pr).unwrap().dt
+        };
+        let draw = Distribution::Uniform { min: 0.1, max: 0.9 };
+        assert_eq!(dt(0.35, Some(draw)), dt(0.9, None));
+        assert!(dt(0.9, None) < 0.6 * dt(0.35, None));
+        // an unbounded normal draw is clamped at 0.999, as the runs clamp it
+        let normal = Distribution::Normal {
+            mean: 0.3,
+            std: 0.1,
+        };
+        assert_eq!(dt(0.35, Some(normal)), dt(0.999, None));
+    }
 }
