@@ -561,9 +561,11 @@ async fn a_block_vibrating_on_its_stuck_shear_springs_comes_to_rest() {
         "{}",
         b["rigid_block"]
     );
-    // It rests where it landed: 9 cm above its release point along the dip at most.
+    // It rests near where it landed: 0.33–0.35 m down the dip of its release point once the
+    // step is converged (safety 0.1 to 0.025), 0.21 m at the default step (the coarser step
+    // of the undamped rule rested it 0.09 m above).
     let along = b["arrival"]["along_dip_m"].as_f64().unwrap();
-    assert!((along - 4.418877164262054).abs() < 0.2, "{along}");
+    assert!((along - 4.418877164262054).abs() < 0.5, "{along}");
 }
 
 /// The 40° face as a grid z = −x tan 40° over x in [0, 45] m, y in [−6, 6] m, spacing 1 m: its

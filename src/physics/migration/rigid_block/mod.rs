@@ -100,6 +100,7 @@ use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 mod contacts;
 mod run;
 mod settled;
+mod step;
 
 /// Young's modulus of the floor for the Hertz law when none is given, Pa (physics.md §C.3).
 pub const FLOOR_MODULUS_PA: f64 = 4.38e9;
@@ -607,18 +608,10 @@ impl<'a> Model<'a> {
                 })
             }
         };
-        // stiffness for the time step and the static overlap
         let w_face = m * g * dip.cos() / nc;
-        let (k_step, static_overlap) = match hertz {
-            // a shear spring stiffer than the normal one sets the step (PFC takes the larger)
-            None => (
-                o.normal_stiffness.max(o.shear_stiffness),
-                w_face / o.normal_stiffness,
-            ),
-            Some(h) => {
-                let ug = (m * g / h.k).powf(2.0 / 3.0);
-                (h.kt * ug.sqrt(), (w_face / h.k).powf(2.0 / 3.0))
-            }
+        let static_overlap = match hertz {
+            None => w_face / o.normal_stiffness,
+            Some(h) => (w_face / h.k).powf(2.0 / 3.0),
         };
         let rock_compliance = (1.0 - case.rock.poisson_ratio.powi(2)) / case.rock.elastic_modulus;
         let (field, what) = match (hertz, o.floor_material) {
@@ -642,28 +635,35 @@ impl<'a> Model<'a> {
                 ),
             ));
         }
-        let i_min = shape.inertia.min();
-        let dt_crit = (m / (nc * k_step))
-            .sqrt()
-            .min((i_min / (k_step * shape.resting_r2())).sqrt());
+        let rel = &case.release;
+        let impact = step::ImpactBounds::of(case, pr, g);
+        if hertz.is_none() {
+            impact.check_overlap(&shape, o.normal_stiffness)?;
+        }
+        let (dt_crit, dt_bound, k_rest) = step::critical_step(o, &shape, hertz, &impact, g);
+        // safety ≤ 1 keeps the step within PFC's Δt_crit and within half the damped limit
+        let dt_max = dt_crit.min(dt_bound);
         let mut dt = match o.time_step {
             Some(dt) => {
-                if dt > dt_crit {
+                if dt > dt_max {
                     return Err(PhysicsError::invalid(
                         Param::RigidBlockTimeStep,
                         dt,
-                        format!("above the critical time step {dt_crit:.6e} s"),
+                        format!(
+                            "above the largest stable time step {dt_max:.6e} s (the critical \
+                             time step {dt_crit:.6e} s, half the contacts' damped stability \
+                             limit {dt_bound:.6e} s)"
+                        ),
                     ));
                 }
                 dt
             }
-            None => o.time_step_safety * dt_crit,
+            None => o.time_step_safety * dt_max,
         };
         if let Some(te) = case.end_time {
             dt = te / (te / dt).ceil();
         }
         // release: resting face-down on the facet under the release point, then lifted
-        let rel = &case.release;
         let floor_pt = pr.p0 - Vector3::z() * rel.drop_height;
         let facet = floor
             .locate(floor_pt.x, floor_pt.y, 1.0, 0.0)
@@ -704,7 +704,7 @@ impl<'a> Model<'a> {
         };
         let inertia = shape.inertia;
         let iso = (inertia.max() - inertia.min()) <= 1e-12 * inertia.max();
-        let t_contact = std::f64::consts::PI * (m / (nc * k_step)).sqrt();
+        let t_contact = std::f64::consts::PI * (m / (nc * k_rest)).sqrt();
         Ok(Model {
             floor,
             mean,
@@ -761,19 +761,48 @@ impl<'a> Model<'a> {
         }
     }
 
-    /// Estimated steps: the fall and the slide down the rest of the face at μ (or end_time).
+    /// Estimated steps: the work the run steps, not what it does in closed form. The last
+    /// r_max(1 + s) of the fall (the flight above is skipped); then the time down the rest of
+    /// the face at μ, from the release speed plus the fall's speed along the dip, (a sphere rolling at (5/7) g sin θ when μ allows), or until the end time,
+    /// wherever that motion is stepped: a sphere's roll, a slide that never settles (no
+    /// damping: β = 0 possible and α = 0), any floor but the plane. A polyhedron's settled
+    /// slide on the plane is skipped in closed form: there only the fall and, for a slide that
+    /// stops, the rest time count; its impacts and contact transients are not estimated, and
+    /// the run refuses itself when its real step count reaches the limit.
     fn estimated_steps(&self, case: &MigrationCase, mu: f64) -> f64 {
         let dip = case.face.dip_deg.to_radians();
         let g = self.g;
         let h = case.release.drop_height;
         let s = (self.length - case.release.along_dip).max(0.0);
-        let v0 = case.release.speed;
-        let a = g * (dip.sin() - mu * dip.cos());
-        let t_slide = if a > 1e-9 * g {
-            ((v0 * v0 + 2.0 * a * s).sqrt() - v0) / a
-        } else {
+        // the landing keeps the fall's speed along the floor (at most)
+        let v0 = case.release.speed + (2.0 * g * h).sqrt() * dip.sin();
+        let slide = g * (dip.sin() - mu * dip.cos());
+        let a = match self.shape.sphere_radius {
+            Some(_) => slide.max(5.0 / 7.0 * g * dip.sin()),
+            None => slide,
+        };
+        let decelerating = a <= 1e-9 * g;
+        let t_slide = if decelerating {
             // decelerating: it stops within v0/|a| (or at once), then rests REST_TIME_S
             (v0 / a.abs().max(1e-9 * g)).min(s / v0.max(1e-300)) + REST_TIME_S
+        } else {
+            ((v0 * v0 + 2.0 * a * s).sqrt() - v0) / a
+        };
+        let o = &case.rigid_block;
+        let undamped = o.local_damping == 0.0
+            && o.critical_damping_ratio_distribution
+                .as_ref()
+                .map_or(o.critical_damping_ratio, |d| {
+                    d.lower_bound().min(o.critical_damping_ratio)
+                })
+                <= 0.0;
+        let skipped = self.shape.sphere_radius.is_none()
+            && !undamped
+            && matches!(self.floor.kind, FloorKind::Plane(_));
+        let t_stepped = match (skipped, decelerating) {
+            (false, _) => t_slide,
+            (true, true) => REST_TIME_S,
+            (true, false) => 0.0,
         };
         // free flight is skipped: only the last r_max of the fall is stepped
         let t_fall = if h > 0.0 {
@@ -782,7 +811,7 @@ impl<'a> Model<'a> {
         } else {
             0.0
         };
-        let t = t_fall + t_slide;
+        let t = t_fall + t_stepped;
         let t = match self.end_time {
             Some(te) => te.min(t),
             None => t,
@@ -1332,7 +1361,13 @@ mod tests {
             }
         };
         let at = |x: f64| x / 45f64.to_radians().cos();
-        let base = slide(None, 0.2, 12.0, 0.0);
+        let mut base = slide(None, 0.2, 12.0, 0.0);
+        // the step its tolerances past the feature were set with, PFC's 0.2 √(I/k_rot) to the
+        // last bit: the rolls after the bump diverge chaotically with the step (1e-9 to 3e-3
+        // over safeties 0.1–0.4 of the damped Δt_crit, 4e-4 for a step one ulp away)
+        let sh = BlockShape::of_rock(&base.rock).unwrap();
+        base.rigid_block.time_step =
+            Some(0.2 * (sh.inertia.min() / (1e8 * sh.resting_r2())).sqrt());
         let cases: [(&str, MigrationCase, f64); 4] = [
             (
                 "convex crease",
