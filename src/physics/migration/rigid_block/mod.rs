@@ -430,7 +430,9 @@ struct Forces {
     force: Vector3<f64>,
     /// Moment about the centre, N·m.
     moment: Vector3<f64>,
-    /// Sum of the normal contact forces, N.
+    /// Sum of the normal contact forces at the step's position, N: a contact that has just
+    /// touched counts with its force at the touch (its dashpot on the approach speed), not with
+    /// the step's impulse spread over the step (see [`Model::normal_force`]).
     normal_total: f64,
     /// The dashpots' and the local damping's share of the force, N.
     damping_force: Vector3<f64>,
@@ -449,6 +451,8 @@ struct Step {
     h: f64,
     /// Speed of the centre before it (half-step velocity), m/s.
     speed_before: f64,
+    /// Energy dissipated (dashpots, local damping, shear springs) before it, J.
+    diss_before: f64,
     /// The forces it applied.
     forces: Forces,
 }

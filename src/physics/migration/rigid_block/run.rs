@@ -383,6 +383,7 @@ impl Model<'_> {
             run.st.w -= r.transpose() * run.ang_acc * (0.5 * h);
         }
         let w_world = r * run.st.w;
+        let diss_before = run.damping + run.friction;
         let mut forces = self.contact_forces(run, &r, &w_world, h, cfg);
         if run.off_floor && self.stop_off_floor {
             // the springs have seen the drift to x(t); the velocities lag by half a step
@@ -403,6 +404,7 @@ impl Model<'_> {
         Ok(Some(Step {
             h,
             speed_before,
+            diss_before,
             forces,
         }))
     }
@@ -443,13 +445,13 @@ impl Model<'_> {
             let vt = vrel - gk.n * vn;
             run.slip_max = run.slip_max.max(vt.norm());
             let old = run.springs.iter().find(|s| s.key == gk.key);
-            let (f_el, fnm, ks) =
-                self.normal_force(gk, &rr, &v_t, &w_t, h, old.is_none(), cfg.beta);
+            let nf = self.normal_force(gk, &rr, &v_t, &w_t, h, old.is_none(), cfg.beta);
+            let (f_el, fnm, ks) = (nf.elastic, nf.total, nf.shear_stiffness);
             // dashpot work (and the clipped spring's share)
             let fd = gk.n * (fnm - f_el);
             fo.damping_force += fd;
             fo.damping_moment += rr.cross(&fd);
-            fo.normal_total += fnm;
+            fo.normal_total += nf.at_position;
             // the spring follows the contact point's drift since the last step
             let d = vt * run.drift_h;
             let (fs, es_new, slipping, work) = shear_spring(&gk.n, old, &d, ks, cfg.mu * f_el);
@@ -589,10 +591,10 @@ impl Model<'_> {
         }
     }
 
-    /// Normal force of the contact `gk` (arm `rr` from the centre, m) over a step h (s):
-    /// (elastic force N, spring–dashpot force N ≥ 0, shear stiffness N/m), the dashpot taking
-    /// the velocity at x(t) from `v_t` and `w_t` (world frame); `fresh`: a contact that has
-    /// just closed, whose dashpot impulse is corrected for the time since its touch.
+    /// Normal force of the contact `gk` (arm `rr` from the centre, m) over a step h (s), the
+    /// dashpot taking the velocity at x(t) from `v_t` and `w_t` (world frame); `fresh`: a
+    /// contact that has just closed, whose dashpot impulse is corrected for the time since its
+    /// touch.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn normal_force(
         &self,
@@ -603,7 +605,7 @@ impl Model<'_> {
         h: f64,
         fresh: bool,
         beta: f64,
-    ) -> (f64, f64, f64) {
+    ) -> NormalForce {
         let (f_el, kt, ks) = match self.hertz {
             None => (self.kn * gk.u, self.kn, self.ks),
             Some(hz) => {
@@ -621,12 +623,32 @@ impl Model<'_> {
         // restitution errs by O(Δt) with the random phase of the touch). Only for a fresh
         // touch (U within the step's approach), never for a contact that appears deep (a new
         // floor feature under a block already in contact).
-        let onset = if fresh && vn_t < 0.0 && gk.u <= -1.5 * vn_t * h {
+        let touch = fresh && vn_t < 0.0 && gk.u <= -1.5 * vn_t * h;
+        let onset = if touch {
             cn * (gk.u / h + 0.5 * vn_t)
         } else {
             0.0
         };
-        (f_el, (f_el - cn * vn_t + onset).max(0.0), ks)
+        // The force itself: that impulse spread over the step is no force the contact ever
+        // carried (up to 1.5 c vₙ). A fresh touch's force is the dashpot's at the touch, c₀|vₙ|
+        // (c₀ the dashpot at zero overlap: 0 for Hertz); the velocity predicted at x(t) has
+        // not yet seen the contact's own deceleration since the touch, so the force there
+        // would be too high by O(k vₙ Δt).
+        let at_position = if touch {
+            let c0 = match self.hertz {
+                None => cn,
+                Some(_) => 0.0,
+            };
+            -c0 * vn_t
+        } else {
+            (f_el - cn * vn_t).max(0.0)
+        };
+        NormalForce {
+            elastic: f_el,
+            total: (f_el - cn * vn_t + onset).max(0.0),
+            shear_stiffness: ks,
+            at_position,
+        }
     }
 
     /// Local damping: each component of the force and of the moment (world frame) loses α
@@ -691,6 +713,13 @@ impl Model<'_> {
     pub(super) fn book_episode(&self, run: &mut Run, step: &Step, in_contact: bool, events: bool) {
         let t = run.st.t;
         if !in_contact {
+            // the step in which the contacts opened: the shear springs release their energy
+            // over its drift, part of the contact's loss
+            if let Some(ep) = run.episode.as_mut()
+                && (t - step.h - ep.last_t).abs() < 0.5 * step.h
+            {
+                ep.last_diss = run.damping + run.friction;
+            }
             if let Some(ep) = run.episode
                 && t - run.last_contact_t > self.gap
             {
@@ -709,7 +738,8 @@ impl Model<'_> {
             run.episode = Some(Episode {
                 t0: t - step.h,
                 speed_before: step.speed_before,
-                diss_before: run.damping + run.friction,
+                // the impact's first step dissipates too (its dashpot's onset most)
+                diss_before: step.diss_before,
                 peak: 0.0,
                 p: run.st.c,
                 ground: false,
@@ -1143,4 +1173,19 @@ impl Model<'_> {
         tr.dissipated_energy.push(diss);
         Ok(())
     }
+}
+
+/// The normal force of one contact over one step (see [`Model::normal_force`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct NormalForce {
+    /// Elastic force of the spring, N.
+    pub(super) elastic: f64,
+    /// Spring–dashpot force applied over the step (≥ 0, a fresh touch's dashpot impulse
+    /// corrected for the time since the touch), N.
+    pub(super) total: f64,
+    /// Shear stiffness at the overlap, N/m.
+    pub(super) shear_stiffness: f64,
+    /// The force the contact carries at the step's position (≥ 0; a fresh touch: at the
+    /// touch), N: what its peak is made of.
+    pub(super) at_position: f64,
 }
