@@ -730,3 +730,67 @@ fn an_impact_reports_the_peak_force_and_the_loss_of_its_own_contact() {
         }
     }
 }
+
+/// A 0.5 m cube released 2 m above a 45° grid (0.5 m spacing) with a one-node valley across
+/// it (one column of nodes 0.8 m lower than the plane): it strikes the valley's far flank and
+/// slides over the convex crease below it, its corners measured against two facets.
+fn valley_case(safety: f64) -> MigrationCase {
+    let heights: Vec<Vec<f64>> = (0..9)
+        .map(|_| {
+            (0..30)
+                .map(|j| if j == 8 { -4.3 } else { -0.5 * j as f64 })
+                .collect()
+        })
+        .collect();
+    let mut c = MigrationCase {
+        method: Method::RigidBlock,
+        ..MigrationCase::default()
+    };
+    c.rock.side_length = 0.5;
+    c.face.dip_deg = 45.0;
+    c.face.length = 10.0;
+    c.face.floor = FloorSpec::Grid {
+        origin: [0.0, -2.0],
+        spacing: 0.5,
+        heights,
+    };
+    c.release.drop_height = 2.0;
+    c.release.speed = 5.0;
+    c.release.along_dip = 1.0;
+    c.rigid_block.time_step_safety = safety;
+    c
+}
+
+/// Energy does not vanish where a block's corner passes a crease: its overlap is its depth
+/// below the floor's surface, continuous from facet to facet, and the switch of its normal
+/// inside a step is placed where it happens. The account's residual of the valley run is
+/// below 1e-3 of the energy at release at the default step and shrinks with the step (seen:
+/// −9.96, −1.16, −0.185 J of 29 547 J at safety 0.2, 0.05, 0.01: order about 1.5), without
+/// the `energy_unaccounted` warning. Before, each corner's overlap was measured against the
+/// plane of the facet under it, jumping by the ratio of the two facets' normals' z as it
+/// crossed the crease in plan: −353, −360, −371 J at those steps (1.2 %, independent of Δt).
+#[test]
+fn a_block_sliding_over_a_crease_keeps_its_energy_account() {
+    let mut prev: Option<f64> = None;
+    for (safety, shrink) in [(0.2, 0.0), (0.05, 4.0), (0.01, 3.0)] {
+        let r = solve(&valley_case(safety));
+        let e = &r.energy;
+        println!(
+            "safety {safety}: residual {:+.4e} J of {:.4e} J",
+            e.residual, e.total_start
+        );
+        assert!(r.impact_count >= 2, "{r:?}");
+        assert!(r.warnings.is_empty(), "safety {safety}: {:?}", r.warnings);
+        if safety == 0.2 {
+            assert!(e.residual.abs() < 1e-3 * e.total_start, "{e:?}");
+        }
+        if let Some(p) = prev {
+            assert!(
+                e.residual.abs() * shrink < p.abs(),
+                "safety {safety}: {} after {p}",
+                e.residual
+            );
+        }
+        prev = Some(e.residual);
+    }
+}

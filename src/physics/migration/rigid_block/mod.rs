@@ -334,6 +334,8 @@ struct Spring {
     rr: Vector3<f64>,
     /// Contact normal.
     n: Vector3<f64>,
+    /// Overlap carried by the normal spring, m.
+    u: f64,
 }
 
 impl Spring {

@@ -114,6 +114,7 @@ impl Model<'_> {
                 ks: self.ks,
                 rr: gk.p - st.c,
                 n: gk.n,
+                u: gk.u,
             });
         }
         let (k0, r0, p0) = self.energy(&st);
@@ -436,6 +437,8 @@ impl Model<'_> {
             slipping: 0,
         };
         run.new_springs.clear();
+        // the centre at the last force evaluation
+        let c_prev = run.st.c - run.st.v * run.drift_h;
         run.stored = 0.0;
         run.slip_max = 0.0;
         for gk in &run.contacts {
@@ -461,14 +464,19 @@ impl Model<'_> {
             }
             run.friction += work;
             run.stored += self.normal_energy(gk.u) + es_new;
+            // a contact whose nearest floor feature switched during the drift
+            let kink = old.map_or_else(Vector3::zeros, |o| {
+                crease_kink_force(o, gk, &(c_prev + o.rr), f_el)
+            });
             run.new_springs.push(Spring {
                 key: gk.key,
                 fs,
                 ks,
                 rr,
                 n: gk.n,
+                u: gk.u,
             });
-            let fc = gk.n * fnm + fs;
+            let fc = gk.n * fnm + fs + kink;
             fo.force += fc;
             fo.moment += rr.cross(&fc);
         }
@@ -1188,4 +1196,33 @@ pub(super) struct NormalForce {
     /// The force the contact carries at the step's position (≥ 0; a fresh touch: at the
     /// touch), N: what its peak is made of.
     pub(super) at_position: f64,
+}
+
+/// The force (N) that makes up for a switch of a contact's nearest floor feature inside the
+/// last drift. Its overlap is the distance to the floor's surface (see
+/// [`Model::depth_below_surface`]), the smaller of its distances to two facets' planes
+/// across a convex crease (or to two faces of the block for a floor peak): continuous, but
+/// its gradient, the normal, jumps where the two are equal. The leapfrog applies each step's
+/// force over the half drifts either side of its position, so the old normal `old.n` and the
+/// new one `gk.n` share the drift at its midpoint instead of at the switch: a work error of
+/// up to half a drift's (F_old − F_new)·Δx, O(Δt), of either sign. Locating the switch on
+/// the drift (the two planes' distances, linear along it, equal at the fraction φ) and adding
+/// (F_old − F_new)(φ − ½) to this step's force gives the work the force did along the drift,
+/// to O(Δt²). `p_prev`: the contact point at the last evaluation (its arm from the centre
+/// then added to the centre then), m; `f_el`: the elastic force, N. Zero unless the old
+/// feature was the nearer at the start of the drift and the new one at its end.
+fn crease_kink_force(old: &Spring, gk: &Geo, p_prev: &Vector3<f64>, f_el: f64) -> Vector3<f64> {
+    let (na, nb) = (old.n, gk.n);
+    if na.dot(&nb) >= 1.0 - 1e-12 {
+        return Vector3::zeros();
+    }
+    let dp = gk.p - p_prev;
+    // distance to the old plane less that to the new, at the drift's start and end
+    let g0 = old.u - gk.u - nb.dot(&dp);
+    let g1 = old.u - na.dot(&dp) - gk.u;
+    if !(g0 < 0.0 && g1 > 0.0) {
+        return Vector3::zeros();
+    }
+    let phi = g0 / (g0 - g1);
+    (na - nb) * (f_el * (phi - 0.5))
 }
