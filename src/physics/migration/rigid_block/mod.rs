@@ -3,8 +3,12 @@
 //! The block ([`BlockShape`]) moves under gravity and the contact forces of the floor:
 //!
 //! * **Contacts.** Plane: every vertex below the plane (a sphere: its lowest point). Grid and
-//!   contour floors: every block vertex below the facet under it (vertex–face, that facet's
-//!   normal); every floor vertex inside the block that pokes up from its neighbours towards the
+//!   contour floors: every block vertex below the facet under it (vertex–face: its overlap the
+//!   distance to the floor's surface, its normal the direction to the nearest surface point,
+//!   which is that facet's normal away from the facet's edges; so the overlap is continuous as
+//!   the vertex passes a crease in plan, and ½kₙU² is its force's potential — a switch of the
+//!   nearest facet inside a step is placed where it happens on the drift, see
+//!   `crease_kink_force`); every floor vertex inside the block that pokes up from its neighbours towards the
 //!   nearest block face (face–vertex, that face's normal); every convex floor crease crossed by a
 //!   block edge (edge–edge, along the common perpendicular). A flat patch of floor therefore
 //!   gives vertex–face contacts only, so a flat grid gives the plane's answer. A sphere touches
