@@ -2,6 +2,7 @@
 //! facets under them, floor peaks and convex creases against its faces and edges, a sphere
 //! against the mesh; the closest point on a triangle.
 
+use super::super::terrain::inside_tri;
 use super::*;
 
 impl Model<'_> {
@@ -81,7 +82,7 @@ impl Model<'_> {
             return false;
         }
         let world: Vec<Vector3<f64>> = sh.vertices.iter().map(|b| c + r * b).collect();
-        let off_floor = self.vertex_face_contacts(&world, under.as_ref(), out);
+        let off_floor = self.vertex_face_contacts(&world, under.as_ref(), tris, out);
         // floor features inside the block's plan box (padded)
         let (mut x0, mut x1, mut y0, mut y1) = (
             f64::INFINITY,
@@ -120,7 +121,8 @@ impl Model<'_> {
     }
 
     /// Vertex–face contacts: each block vertex (`world`: their positions) below the facet
-    /// under it, overlap measured along the facet's normal.
+    /// under it, its overlap the distance to the floor's surface and its normal the direction
+    /// to the nearest surface point (see [`Model::depth_below_surface`]); `tris`: scratch.
     ///
     /// Returns true when a vertex off the floor (beyond its edge or over a hole) is below the
     /// floor's level there: a hole's surface filled in from the data around it, beyond a grid's
@@ -133,6 +135,7 @@ impl Model<'_> {
         &self,
         world: &[Vector3<f64>],
         under: Option<&super::super::terrain::FacetPlane>,
+        tris: &mut Vec<FloorTriangle>,
         out: &mut Vec<Geo>,
     ) -> bool {
         let fl = self.floor;
@@ -146,19 +149,72 @@ impl Model<'_> {
                 continue;
             };
             let pl = fl.facet_plane(f);
-            let n = pl.normal();
-            let d = pl.height(p) * n.z;
-            if d < 0.0 {
+            let height = pl.height(p);
+            if height < 0.0 {
+                let (u, n) = self.depth_below_surface(p, f, -height, tris);
                 out.push(Geo {
                     key: i as u64,
                     feature: i as u64,
                     p: *p,
                     n,
-                    u: -d,
+                    u,
                 });
             }
         }
         off_floor
+    }
+
+    /// Depth (m) of the point `p`, `depth` m vertically below facet `f` (the facet under it),
+    /// below the floor's surface, and the unit normal pushing it out: the distance to the
+    /// nearest surface point and the direction to it. Away from the facet's edges (its plan
+    /// triangle holds the disc of radius `depth` around p) that is the distance to the facet's
+    /// plane along its normal; near an edge the nearest point may lie on a neighbour or on the
+    /// crease itself. So the overlap is continuous as a vertex passes from facet to facet in
+    /// plan (the distance to the surface is), and the spring's ½kₙU² is the potential of its
+    /// force: measured against the plane of the facet under it alone, the overlap would jump
+    /// by the ratio of the two facets' normals' z at a crease, and the energy with it.
+    /// `tris`: scratch for the triangles near p.
+    pub(super) fn depth_below_surface(
+        &self,
+        p: &Vector3<f64>,
+        f: super::super::terrain::Facet,
+        depth: f64,
+        tris: &mut Vec<FloorTriangle>,
+    ) -> (f64, Vector3<f64>) {
+        let fl = self.floor;
+        let pl = fl.facet_plane(f);
+        let n = pl.normal();
+        let d = depth * n.z;
+        // every surface point within `depth` of p lies over the facet: its plane's distance
+        let inside = fl
+            .facet_corners(f)
+            .is_none_or(|(c, _)| inside_tri(&c, p.x, p.y, -depth));
+        if inside {
+            return (d, n);
+        }
+        tris.clear();
+        fl.triangles_in([p.x - depth, p.x + depth, p.y - depth, p.y + depth], tris);
+        let mut best = (d, n);
+        let mut best_dist = f64::INFINITY;
+        for t in tris.iter() {
+            let (q, feat) = closest_on_triangle(p, &t.corners);
+            let e = (q - p).norm();
+            if e >= best_dist {
+                continue;
+            }
+            best_dist = e;
+            let nt = triangle_normal(t);
+            best = if feat == TriFeature::Face && nt.dot(&n) >= 1.0 - 1e-12 {
+                // inside the facet or a coplanar neighbour: its plane's distance, as away
+                // from the edges
+                (d, n)
+            } else if e > 0.0 {
+                (e, (q - p) / e)
+            } else {
+                (0.0, n)
+            };
+        }
+        best
     }
 
     /// Edge–edge contacts: block edges (vertices at `world`) crossed by the convex floor

@@ -3,8 +3,12 @@
 //! The block ([`BlockShape`]) moves under gravity and the contact forces of the floor:
 //!
 //! * **Contacts.** Plane: every vertex below the plane (a sphere: its lowest point). Grid and
-//!   contour floors: every block vertex below the facet under it (vertex–face, that facet's
-//!   normal); every floor vertex inside the block that pokes up from its neighbours towards the
+//!   contour floors: every block vertex below the facet under it (vertex–face: its overlap the
+//!   distance to the floor's surface, its normal the direction to the nearest surface point,
+//!   which is that facet's normal away from the facet's edges; so the overlap is continuous as
+//!   the vertex passes a crease in plan, and ½kₙU² is its force's potential — a switch of the
+//!   nearest facet inside a step is placed where it happens on the drift, see
+//!   `crease_kink_force`); every floor vertex inside the block that pokes up from its neighbours towards the
 //!   nearest block face (face–vertex, that face's normal); every convex floor crease crossed by a
 //!   block edge (edge–edge, along the common perpendicular). A flat patch of floor therefore
 //!   gives vertex–face contacts only, so a flat grid gives the plane's answer. A sphere touches
@@ -348,6 +352,8 @@ struct Spring {
     rr: Vector3<f64>,
     /// Contact normal.
     n: Vector3<f64>,
+    /// Overlap carried by the normal spring, m.
+    u: f64,
 }
 
 impl Spring {
@@ -444,7 +450,9 @@ struct Forces {
     force: Vector3<f64>,
     /// Moment about the centre, N·m.
     moment: Vector3<f64>,
-    /// Sum of the normal contact forces, N.
+    /// Sum of the normal contact forces at the step's position, N: a contact that has just
+    /// touched counts with its force at the touch (its dashpot on the approach speed), not with
+    /// the step's impulse spread over the step (see [`Model::normal_force`]).
     normal_total: f64,
     /// The dashpots' and the local damping's share of the force, N.
     damping_force: Vector3<f64>,
@@ -463,6 +471,8 @@ struct Step {
     h: f64,
     /// Speed of the centre before it (half-step velocity), m/s.
     speed_before: f64,
+    /// Energy dissipated (dashpots, local damping, shear springs) before it, J.
+    diss_before: f64,
     /// The forces it applied.
     forces: Forces,
 }

@@ -114,6 +114,7 @@ impl Model<'_> {
                 ks: self.ks,
                 rr: gk.p - st.c,
                 n: gk.n,
+                u: gk.u,
             });
         }
         let (k0, r0, p0) = self.energy(&st);
@@ -383,6 +384,7 @@ impl Model<'_> {
             run.st.w -= r.transpose() * run.ang_acc * (0.5 * h);
         }
         let w_world = r * run.st.w;
+        let diss_before = run.damping + run.friction;
         let mut forces = self.contact_forces(run, &r, &w_world, h, cfg);
         if run.off_floor && self.stop_off_floor {
             // the springs have seen the drift to x(t); the velocities lag by half a step
@@ -403,6 +405,7 @@ impl Model<'_> {
         Ok(Some(Step {
             h,
             speed_before,
+            diss_before,
             forces,
         }))
     }
@@ -434,6 +437,8 @@ impl Model<'_> {
             slipping: 0,
         };
         run.new_springs.clear();
+        // the centre at the last force evaluation
+        let c_prev = run.st.c - run.st.v * run.drift_h;
         run.stored = 0.0;
         run.slip_max = 0.0;
         for gk in &run.contacts {
@@ -443,13 +448,13 @@ impl Model<'_> {
             let vt = vrel - gk.n * vn;
             run.slip_max = run.slip_max.max(vt.norm());
             let old = run.springs.iter().find(|s| s.key == gk.key);
-            let (f_el, fnm, ks) =
-                self.normal_force(gk, &rr, &v_t, &w_t, h, old.is_none(), cfg.beta);
+            let nf = self.normal_force(gk, &rr, &v_t, &w_t, h, old.is_none(), cfg.beta);
+            let (f_el, fnm, ks) = (nf.elastic, nf.total, nf.shear_stiffness);
             // dashpot work (and the clipped spring's share)
             let fd = gk.n * (fnm - f_el);
             fo.damping_force += fd;
             fo.damping_moment += rr.cross(&fd);
-            fo.normal_total += fnm;
+            fo.normal_total += nf.at_position;
             // the spring follows the contact point's drift since the last step
             let d = vt * run.drift_h;
             let (fs, es_new, slipping, work) = shear_spring(&gk.n, old, &d, ks, cfg.mu * f_el);
@@ -459,14 +464,19 @@ impl Model<'_> {
             }
             run.friction += work;
             run.stored += self.normal_energy(gk.u) + es_new;
+            // a contact whose nearest floor feature switched during the drift
+            let kink = old.map_or_else(Vector3::zeros, |o| {
+                crease_kink_force(o, gk, &(c_prev + o.rr), f_el)
+            });
             run.new_springs.push(Spring {
                 key: gk.key,
                 fs,
                 ks,
                 rr,
                 n: gk.n,
+                u: gk.u,
             });
-            let fc = gk.n * fnm + fs;
+            let fc = gk.n * fnm + fs + kink;
             fo.force += fc;
             fo.moment += rr.cross(&fc);
         }
@@ -589,10 +599,10 @@ impl Model<'_> {
         }
     }
 
-    /// Normal force of the contact `gk` (arm `rr` from the centre, m) over a step h (s):
-    /// (elastic force N, spring–dashpot force N ≥ 0, shear stiffness N/m), the dashpot taking
-    /// the velocity at x(t) from `v_t` and `w_t` (world frame); `fresh`: a contact that has
-    /// just closed, whose dashpot impulse is corrected for the time since its touch.
+    /// Normal force of the contact `gk` (arm `rr` from the centre, m) over a step h (s), the
+    /// dashpot taking the velocity at x(t) from `v_t` and `w_t` (world frame); `fresh`: a
+    /// contact that has just closed, whose dashpot impulse is corrected for the time since its
+    /// touch.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn normal_force(
         &self,
@@ -603,7 +613,7 @@ impl Model<'_> {
         h: f64,
         fresh: bool,
         beta: f64,
-    ) -> (f64, f64, f64) {
+    ) -> NormalForce {
         let (f_el, kt, ks) = match self.hertz {
             None => (self.kn * gk.u, self.kn, self.ks),
             Some(hz) => {
@@ -621,12 +631,32 @@ impl Model<'_> {
         // restitution errs by O(Δt) with the random phase of the touch). Only for a fresh
         // touch (U within the step's approach), never for a contact that appears deep (a new
         // floor feature under a block already in contact).
-        let onset = if fresh && vn_t < 0.0 && gk.u <= -1.5 * vn_t * h {
+        let touch = fresh && vn_t < 0.0 && gk.u <= -1.5 * vn_t * h;
+        let onset = if touch {
             cn * (gk.u / h + 0.5 * vn_t)
         } else {
             0.0
         };
-        (f_el, (f_el - cn * vn_t + onset).max(0.0), ks)
+        // The force itself: that impulse spread over the step is no force the contact ever
+        // carried (up to 1.5 c vₙ). A fresh touch's force is the dashpot's at the touch, c₀|vₙ|
+        // (c₀ the dashpot at zero overlap: 0 for Hertz); the velocity predicted at x(t) has
+        // not yet seen the contact's own deceleration since the touch, so the force there
+        // would be too high by O(k vₙ Δt).
+        let at_position = if touch {
+            let c0 = match self.hertz {
+                None => cn,
+                Some(_) => 0.0,
+            };
+            -c0 * vn_t
+        } else {
+            (f_el - cn * vn_t).max(0.0)
+        };
+        NormalForce {
+            elastic: f_el,
+            total: (f_el - cn * vn_t + onset).max(0.0),
+            shear_stiffness: ks,
+            at_position,
+        }
     }
 
     /// Local damping: each component of the force and of the moment (world frame) loses α
@@ -691,6 +721,13 @@ impl Model<'_> {
     pub(super) fn book_episode(&self, run: &mut Run, step: &Step, in_contact: bool, events: bool) {
         let t = run.st.t;
         if !in_contact {
+            // the step in which the contacts opened: the shear springs release their energy
+            // over its drift, part of the contact's loss
+            if let Some(ep) = run.episode.as_mut()
+                && (t - step.h - ep.last_t).abs() < 0.5 * step.h
+            {
+                ep.last_diss = run.damping + run.friction;
+            }
             if let Some(ep) = run.episode
                 && t - run.last_contact_t > self.gap
             {
@@ -709,7 +746,8 @@ impl Model<'_> {
             run.episode = Some(Episode {
                 t0: t - step.h,
                 speed_before: step.speed_before,
-                diss_before: run.damping + run.friction,
+                // the impact's first step dissipates too (its dashpot's onset most)
+                diss_before: step.diss_before,
                 peak: 0.0,
                 p: run.st.c,
                 ground: false,
@@ -1143,4 +1181,48 @@ impl Model<'_> {
         tr.dissipated_energy.push(diss);
         Ok(())
     }
+}
+
+/// The normal force of one contact over one step (see [`Model::normal_force`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct NormalForce {
+    /// Elastic force of the spring, N.
+    pub(super) elastic: f64,
+    /// Spring–dashpot force applied over the step (≥ 0, a fresh touch's dashpot impulse
+    /// corrected for the time since the touch), N.
+    pub(super) total: f64,
+    /// Shear stiffness at the overlap, N/m.
+    pub(super) shear_stiffness: f64,
+    /// The force the contact carries at the step's position (≥ 0; a fresh touch: at the
+    /// touch), N: what its peak is made of.
+    pub(super) at_position: f64,
+}
+
+/// The force (N) that makes up for a switch of a contact's nearest floor feature inside the
+/// last drift. Its overlap is the distance to the floor's surface (see
+/// [`Model::depth_below_surface`]), the smaller of its distances to two facets' planes
+/// across a convex crease (or to two faces of the block for a floor peak): continuous, but
+/// its gradient, the normal, jumps where the two are equal. The leapfrog applies each step's
+/// force over the half drifts either side of its position, so the old normal `old.n` and the
+/// new one `gk.n` share the drift at its midpoint instead of at the switch: a work error of
+/// up to half a drift's (F_old − F_new)·Δx, O(Δt), of either sign. Locating the switch on
+/// the drift (the two planes' distances, linear along it, equal at the fraction φ) and adding
+/// (F_old − F_new)(φ − ½) to this step's force gives the work the force did along the drift,
+/// to O(Δt²). `p_prev`: the contact point at the last evaluation (its arm from the centre
+/// then added to the centre then), m; `f_el`: the elastic force, N. Zero unless the old
+/// feature was the nearer at the start of the drift and the new one at its end.
+fn crease_kink_force(old: &Spring, gk: &Geo, p_prev: &Vector3<f64>, f_el: f64) -> Vector3<f64> {
+    let (na, nb) = (old.n, gk.n);
+    if na.dot(&nb) >= 1.0 - 1e-12 {
+        return Vector3::zeros();
+    }
+    let dp = gk.p - p_prev;
+    // distance to the old plane less that to the new, at the drift's start and end
+    let g0 = old.u - gk.u - nb.dot(&dp);
+    let g1 = old.u - na.dot(&dp) - gk.u;
+    if !(g0 < 0.0 && g1 > 0.0) {
+        return Vector3::zeros();
+    }
+    let phi = g0 / (g0 - g1);
+    (na - nb) * (f_el * (phi - 0.5))
 }
