@@ -855,6 +855,27 @@ async function phoneSection(context) {
     assert(clipped.length === 0, `at 390 px: ${clipped.join('; ')}`);
     await page.close();
   });
+
+  await check('phone 390 px: the Scene shows each support\'s verdict and P(exceed) without scrolling sideways', async () => {
+    const page = await context.newPage();
+    await page.setViewportSize({ width: 390, height: 844 });
+    if (await endpointStatus('/v1/scene') === 404) {
+      await page.route('**/v1/scene', (route) => route.fulfill({ status: 200, contentType: 'application/json', body: JSON.stringify(sceneFixture(JSON.parse(route.request().postData()))) }));
+    }
+    await open(page);
+    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    await submit(page, '#scene-form', '/v1/scene');
+    const row = page.locator('#scene-table tbody tr').first();
+    await row.waitFor({ state: 'visible', timeout: WAIT_MS });
+    await row.scrollIntoViewIfNeeded();
+    const boxes = await row.evaluate((tr) => [...tr.children].slice(0, 3).map((c) => c.getBoundingClientRect().right));
+    assert(boxes.every((r) => r <= 390), `support, verdict and P(exceed) end at ${boxes.map(Math.round).join(', ')} px in a 390 px window`);
+    assert(/P\(exceed\)/.test(await page.locator('#scene-table thead th').nth(2).textContent()), 'the third column is not P(exceed)');
+    await noHorizontalScroll(page, 'scene');
+    await page.locator('#scene-table').scrollIntoViewIfNeeded();
+    await page.screenshot({ path: path.join(ARTIFACTS, 'phone-scene.png') });
+    await page.close();
+  });
 }
 
 /**
@@ -897,6 +918,7 @@ function sceneFixture(request) {
 }
 
 async function sceneSection(page) {
+  let lastScene = null;
   const status = await endpointStatus('/v1/scene');
   const real = status !== 404;
   if (!real) {
@@ -936,6 +958,7 @@ async function sceneSection(page) {
     const text = await response.text();
     const lines = text.trim().split('\n').map((l) => JSON.parse(l));
     const answer = lines.find((l) => l.result)?.result ?? lines[lines.length - 1];
+    lastScene = answer;
     const worst = answer.statistics.supports.filter((x) => x.verdict === 'exceeded').length;
     assert(await page.locator('#scene-table tbody tr.verdict-exceeded').count() === worst, 'exceeded rows differ from the answer');
     assert(/never reached/.test(await page.locator('#scene-table').textContent()), 'an unreached support is not said so');
@@ -943,12 +966,121 @@ async function sceneSection(page) {
     assert(warned <= 6, `${warned} warning lines: repeated warnings are not folded`);
     assert(await page.locator('#scene-dist-table tbody tr').count() === 5, 'no distributions for the chosen support');
     const csv = await downloaded(page, page.locator('#panel-scene .card:has(#scene-table) .export-bar [data-csv]'));
-    assert(csv.bytes.toString('utf8').startsWith('Support,Column,Along the dip'), `per-support CSV: ${csv.bytes.toString('utf8').slice(0, 60)}`);
+    assert(csv.bytes.toString('utf8').startsWith('Support,Verdict,P(exceed)'), `per-support CSV: ${csv.bytes.toString('utf8').slice(0, 60)}`);
     const runs = await downloaded(page, page.locator('[data-csv="scene_runs.csv"]'));
     assert(runs.bytes.toString('utf8').startsWith('run,'), 'runs CSV header');
   });
 
   await screenshot(page, 'scene.png');
+
+  await check(`scene${what}: the Answer names the supports that exceed, worst first, with their positions`, async () => {
+    const answer = lastScene;
+    const over = answer.statistics.supports.filter((x) => x.verdict === 'exceeded');
+    const worstP = (x) => Math.max(0, ...Object.values(x.exceedance ?? {}).map((v) => v.probability));
+    over.sort((a, b) => worstP(b) - worstP(a));
+    const list = page.locator('#scene-summary [data-out="scene.exceeded"]');
+    await list.waitFor({ state: 'visible', timeout: WAIT_MS });
+    if (!over.length) {
+      assert(/No support exceeds/.test(await list.textContent()), 'no words when nothing exceeds');
+      return;
+    }
+    const named = await list.locator('li').evaluateAll((lis) => lis.map((li) => ({ support: Number(li.dataset.support), text: li.textContent })));
+    assert(named.length === Math.min(12, over.length), `${named.length} supports named, ${over.length} exceed`);
+    assert(named[0].support === over[0].support, `first named #${named[0].support}, worst is #${over[0].support}`);
+    assert(named[0].text.includes(`${over[0].along_dip_m}`.slice(0, 3)) && /along the dip/.test(named[0].text), `no position: ${named[0].text}`);
+    for (let i = 1; i < named.length; i += 1) {
+      const p = (n) => worstP(answer.statistics.supports.find((x) => x.support === n));
+      assert(p(named[i - 1].support) >= p(named[i].support), 'not worst first');
+    }
+  });
+
+  await check(`scene${what}: the risk plot shows P(exceed) per support with its interval on an axis scaled to the data`, async () => {
+    const answer = lastScene;
+    const plot = await page.locator('#scene-support-plot').evaluate((el) => ({
+      range: el.dataset.range.split(',').map(Number), scale: el.dataset.scale, data: el.uplot.data, label: el.getAttribute('aria-label'),
+      ticks: el.uplot.axes[0].values(el.uplot, [3, 3.5, 10]),
+    }));
+    const highs = answer.statistics.supports.flatMap((x) => Object.values(x.exceedance).map((v) => v.ci95[1] * 100));
+    const top = Math.max(...highs);
+    assert(plot.range[1] >= top && plot.range[1] <= Math.max(10 * top, 1), `y axis ${plot.range} for a largest upper bound of ${top} %`);
+    assert(plot.range[1] < 100 || top > 50, 'the axis is the fixed 0–100 %');
+    // x in support numbers; a support with P = 0 shows its upper bound; the threshold is a line
+    assert(plot.data[0].length === answer.statistics.supports.length, 'not one x per support');
+    assert(plot.ticks.join() === '#3,,#10', `x ticks are not support numbers: ${plot.ticks.join(' | ')}`);
+    const zero = answer.statistics.supports.findIndex((x) => Object.values(x.exceedance).every((v) => v.probability === 0));
+    if (zero >= 0) {
+      const order = [...answer.statistics.supports].sort((a, b) => a.support - b.support);
+      const k = order.indexOf(answer.statistics.supports[zero]);
+      assert(Math.abs(plot.data[3][k] - Math.max(...Object.values(order[k].exceedance).map((v) => v.ci95[1])) * 100) < 1e-9, 'P = 0 has no upper bound drawn');
+    }
+    const acceptable = answer.inputs?.design_limits?.acceptable_probability ?? 0.01;
+    assert(plot.data[5].every((v) => Math.abs(v - acceptable * 100) < 1e-9), 'no acceptable-probability line');
+    assert(/largest P\(exceed\)/.test(plot.label), `no text alternative: ${plot.label}`);
+  });
+
+  await check(`scene${what}: the per-support table puts exceeded first, filters and sorts; send buttons keep rows one line and name the statistic`, async () => {
+    const rows = page.locator('#scene-table tbody tr');
+    const exceeded = await page.locator('#scene-table tbody tr.verdict-exceeded').count();
+    if (exceeded) assert(/verdict-exceeded/.test(await rows.first().getAttribute('class')), 'the first row is not an exceeded support');
+    const heights = await rows.evaluateAll((trs) => trs.map((tr) => tr.getBoundingClientRect().height));
+    const withButton = await rows.evaluateAll((trs) => trs.map((tr) => Boolean(tr.querySelector('button.send'))));
+    assert(withButton.some(Boolean), 'no send buttons');
+    assert(Math.max(...heights) <= 1.4 * Math.min(...heights), `row heights ${Math.min(...heights)}–${Math.max(...heights)} px: a button makes rows tall`);
+    await page.locator('#scene-filter').selectOption('exceeded');
+    assert(await rows.count() === exceeded, `exceeded filter shows ${await rows.count()} rows, ${exceeded} exceed`);
+    await page.locator('#scene-filter').selectOption('risk');
+    const ps = await page.locator('#scene-table tbody td[data-p]').evaluateAll((tds) => tds.map((td) => Number(td.dataset.p)));
+    assert(ps.every((p) => p > 0), 'P > 0 filter keeps a zero');
+    await page.locator('#scene-filter').selectOption('all');
+    await page.locator('#scene-sort').selectOption('p');
+    const sortedP = await page.locator('#scene-table tbody td[data-p]').evaluateAll((tds) => tds.map((td) => Number(td.dataset.p)));
+    assert(sortedP.every((p, i) => i === 0 || sortedP[i - 1] >= p), 'not sorted by P(exceed)');
+    await page.locator('#scene-sort').selectOption('support');
+    const numbers = await page.locator('#scene-table tbody th').evaluateAll((ths) => ths.map((t) => Number(t.textContent.slice(1))));
+    assert(numbers.every((n, i) => i === 0 || numbers[i - 1] <= n), 'not sorted by support number');
+    await page.locator('#scene-sort').selectOption('risk');
+    await page.locator('#scene-send-stat').selectOption('max');
+    const send = page.locator('#scene-table tbody button.send:not([disabled])').first();
+    const text = await send.textContent();
+    assert(/^max /.test(text), `the button does not say which statistic it sends: ${text}`);
+    const answers = [page.waitForResponse((r) => r.url().endsWith('/v1/impact') && r.request().method() === 'POST', { timeout: WAIT_MS }),
+      page.waitForResponse((r) => r.url().endsWith('/v1/column') && r.request().method() === 'POST', { timeout: WAIT_MS })];
+    await send.click();
+    const [impact, column] = await Promise.all(answers);
+    assert(impact.status() === 200 && column.status() === 200, `impact ${impact.status()}, column ${column.status()}`);
+    const sent = Number(await page.locator('#impact-form [data-pointer="/velocity_m_s"]').inputValue());
+    assert(Math.abs(sent - parseShown(text.replace(/^max /, ''))) <= 1e-3 * sent, `sent ${sent}, button says ${text}`);
+    const note = await page.locator('#impact-source').textContent();
+    assert(await page.locator('#impact-source').isVisible() && /largest impact speed at support #\d+/.test(note), `Impact does not say where its speed came from: ${note}`);
+    assert(/from the Scene/.test(await page.locator('#column-source').textContent()), 'Column does not say where its speed came from');
+    await page.locator('#impact-form [data-pointer="/velocity_m_s"]').fill('12');
+    assert(!(await page.locator('#impact-source').isVisible()), 'a typed speed still claims to come from the Scene');
+    await page.locator('#tab-scene').click();
+  });
+
+  await check(`scene${what}: a risk spanning decades is drawn on a log axis; P = 0 at its upper bound`, async () => {
+    const decades = async (route) => {
+      const request = JSON.parse(route.request().postData());
+      const body = sceneFixture({ ...request, support_rows: { ...request.support_rows, count: 6 } });
+      const ps = [0.3, 0.02, 0.0005, 0, 0, 0];
+      body.statistics.supports.forEach((x, k) => {
+        x.exceedance.stress_utilisation = { probability: ps[k], ci95: ps[k] ? [ps[k] / 2, ps[k] * 1.5] : [0, 0.0004] };
+        x.verdict = ps[k] > 0.01 ? 'exceeded' : 'ok';
+      });
+      await route.fulfill({ status: 200, contentType: 'application/json', body: JSON.stringify(body) });
+    };
+    await page.route('**/v1/scene', decades);
+    await page.locator('#scene-form input[name="scene_monte_carlo"]').check();
+    await submit(page, '#scene-form', '/v1/scene');
+    await page.locator('#scene-table tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
+    const plot = await page.locator('#scene-support-plot').evaluate((el) => ({ range: el.dataset.range.split(',').map(Number), scale: el.dataset.scale }));
+    assert(plot.scale === 'log', `scale ${plot.scale} for P from 0.025 % to 45 %`);
+    assert(plot.range[0] <= 0.02 && plot.range[0] > 0 && plot.range[1] >= 45, `log range ${plot.range}`);
+    const names = await page.locator('#scene-summary [data-out="scene.exceeded"] li').evaluateAll((lis) => lis.map((li) => li.dataset.support));
+    assert(names.join() === '1,2', `exceeded named ${names.join()}`);
+    await page.locator('#scene-support-plot').screenshot({ path: path.join(ARTIFACTS, 'scene-risk-log.png') });
+    await page.unroute('**/v1/scene', decades);
+  });
 
   await check(`scene${what}: a single run shows its impact, and one click sends it to the Impact tab`, async () => {
     await page.locator('#scene-form input[name="scene_monte_carlo"]').uncheck();
