@@ -3,6 +3,7 @@
 
 import { getJson } from './js/api.js';
 import { initColumn } from './js/column.js';
+import { setFloorLimits } from './js/floor.js';
 import { applyServerDefaults, applyState, formState, setDefaults } from './js/form.js';
 import { csvButton, download, fmt, h, tableRows } from './js/format.js';
 import { initImpact } from './js/impact.js';
@@ -93,6 +94,7 @@ function applyPresetValues() {
     if (el) el.value = el.defaultValue = String(value);
   }
   setSceneRanges(presets.study);
+  setFloorLimits(presets.limits);
   setStudyDefaults(d.study);
   setSpallingDefaults(d.spalling);
 }

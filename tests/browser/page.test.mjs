@@ -769,6 +769,55 @@ async function floorSection(page) {
     await err.waitFor({ state: 'visible', timeout: WAIT_MS });
     assert(/choose a floor file/.test(await err.textContent()), await err.textContent());
   });
+
+  await check('floors: a 200 000-cell grid is read and drawn (no call-stack overflow)', async () => {
+    await open(page, '#migration');
+    await page.locator('#floor-kind').selectOption('upload');
+    const ncols = 500;
+    const nrows = 400;
+    const rows = [];
+    for (let r = 0; r < nrows; r += 1) {
+      rows.push(Array.from({ length: ncols }, (_, c) => (-(c * 0.25) + 0.01 * Math.sin(r)).toFixed(3)).join(' '));
+    }
+    const text = `ncols ${ncols}\nnrows ${nrows}\nxllcenter 0\nyllcenter 0\ncellsize 0.25\n${rows.join('\n')}\n`;
+    await page.locator('#floor-file').setInputFiles({ name: 'big.asc', mimeType: 'text/plain', buffer: Buffer.from(text) });
+    await page.locator('#floor-canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const info = await page.locator('#floor-info').textContent();
+    assert(/500 × 400 grid/.test(info), `preview: ${info}`);
+    assert(!(await page.locator('#floor-file-error').isVisible()), `refused: ${await page.locator('#floor-file-error').textContent()}`);
+  });
+
+  await check('floors: a file over the service\'s body limit is refused beside the file field, naming the limit; nothing is sent', async () => {
+    const limits = (await (await fetch(`${BASE}/v1/presets`)).json()).limits;
+    const limit = limits?.max_body_bytes ?? 16 * 1024 * 1024;
+    let sent = 0;
+    const count = (r) => { if (r.url().endsWith('/v1/migration')) sent += 1; };
+    page.on('request', count);
+    await page.locator('#floor-file').setInputFiles({ name: 'huge.asc', mimeType: 'text/plain', buffer: Buffer.alloc(limit + 1024, 0x30) });
+    const err = page.locator('#migration-form .field-file #floor-file-error');
+    await err.waitFor({ state: 'visible', timeout: WAIT_MS });
+    const words = await err.textContent();
+    assert(words.includes(`${limit / (1024 * 1024)} MiB`) && /huge\.asc/.test(words), `refusal: ${words}`);
+    assert(await page.locator('#floor-file').getAttribute('aria-invalid') === 'true', 'the file field is not marked invalid');
+    await page.locator('#migration-form button[type="submit"]').click();
+    await page.waitForTimeout(500);
+    assert(await err.isVisible() && words === await err.textContent(), 'the refusal went away on Compute');
+    page.off('request', count);
+    assert(sent === 0, `${sent} requests sent with a refused file`);
+  });
+
+  await check('floors: a grid with letters is refused in the preview, and the refusal stays visible', async () => {
+    await page.locator('#floor-file').setInputFiles({ name: 'letters.asc', mimeType: 'text/plain', buffer: Buffer.from('ncols 2\nnrows 2\nxllcenter 0\nyllcenter 0\ncellsize 1\n0 -1\n0 abc\n') });
+    const err = page.locator('#floor-file-error');
+    await err.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/line 7: "abc" is not a number/.test(await err.textContent()), await err.textContent());
+    assert(!(await page.locator('#floor-canvas').isVisible()), 'a refused grid is drawn');
+    await page.locator('#floor-kind').selectOption('plane');
+    await page.locator('#floor-kind').selectOption('upload');
+    assert(await err.isVisible() && /not a number/.test(await err.textContent()), 'the read error was overwritten');
+    assert(!/^Choose a file/.test(await page.locator('#floor-info').textContent()), 'the info still says "Choose a file" over the refusal');
+    await screenshot(page, 'floor-refused.png');
+  });
 }
 
 async function caseSection(page, context) {
