@@ -254,8 +254,11 @@ async function pageSection(page) {
     assert(await page.locator('#study-form input[name="points"]').inputValue() === String(study.points), 'study points');
     for (const [i, p] of study.parameters.entries()) {
       for (const key of ['name', 'min', 'max']) {
-        const v = await page.locator(`#study-parameters-${i}-${key}`).inputValue();
-        assert(key === 'name' ? v === p.name : Number(v) === p[key], `study parameter ${i} ${key}: ${v} vs ${p[key]}`);
+        const input = page.locator(`#study-parameters-${i}-${key}`);
+        const v = await input.inputValue();
+        // shown in the display unit: SI = value × 10^data-exp
+        const si = key === 'name' ? v : Number(`${v}e${(await input.getAttribute('data-exp')) ?? 0}`);
+        assert(key === 'name' ? v === p.name : si === p[key], `study parameter ${i} ${key}: ${v} vs ${p[key]}`);
       }
     }
     for (const [i, z] of presets.defaults.spalling.zones.entries()) {
@@ -1157,8 +1160,11 @@ async function studySection(page) {
   await check('study: the paper ranges run; Figure 21 is drawn and Pmax L > v > ρ > E is reproduced', async () => {
     await open(page, '#study');
     const min = await page.locator('#study-parameters-1-min').inputValue();
-    assert(Number(min) === 0.2, `L min prefilled with the paper's 0.2, got ${min}`);
+    assert(Number(min) === 200, `L min prefilled with the paper's 200 mm, got ${min}`);
+    const sent = page.waitForRequest((r) => r.url().endsWith('/v1/study'));
     await page.locator('#study-form button[type="submit"]').click();
+    const body = JSON.parse((await sent).postData());
+    assert(body.parameters[1].name === 'rock.side_length_m' && body.parameters[1].min === 0.2 && body.parameters[2].max === 6e9, `SI not sent: ${JSON.stringify(body.parameters)}`);
     await page.locator('#study-fig21 canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
     const text = await page.locator('#study-paper').textContent();
     assert(text.includes('Figures 12–20 Pmax ordering (elasticity)'), 'paper comparison table shown');
@@ -1167,6 +1173,37 @@ async function studySection(page) {
   });
 
   await screenshot(page, 'study.png');
+
+  await check('study: the tab speaks in labels and units (no dotted field names, Pa or section numbers); heat maps have ticks and a colour bar', async () => {
+    await page.locator('#study-form select[name="grid"]').selectOption('pairs');
+    await page.locator('#study-form input[name="points"]').fill('5');
+    await page.locator('#study-form button[type="submit"]').click();
+    const map = page.locator('#study-grids figure.heatmap canvas').first();
+    await map.waitFor({ state: 'visible', timeout: WAIT_MS });
+    const text = await page.locator('#panel-study').innerText();
+    for (const bad of ['rock.elastic_modulus_pa', 'rock.side_length_m', 'velocity_m_s', '§', 'physics.md', 'p_max)', '_pa', 'hertz_point']) {
+      const at = text.indexOf(bad);
+      assert(at < 0, `the Study tab shows "${bad}": …${text.slice(Math.max(0, at - 80), at + 40)}…`);
+    }
+    assert(/Rock elastic modulus/.test(text) && /GPa/.test(text) && /Max force Pmax \(kN\)/.test(text), 'no engineer\'s labels and units');
+    const info = await map.evaluate((c) => {
+      const [bx, top, bh] = c.dataset.bar.split(',').map(Number);
+      const px = (x, y) => [...c.getContext('2d').getImageData(x, y, 1, 1).data];
+      // tick labels left of the cells and under them are drawn (dark pixels in the margins)
+      const dark = (x0, y0, w, hh) => {
+        const d = c.getContext('2d').getImageData(x0, y0, w, hh).data;
+        let n = 0;
+        for (let i = 0; i < d.length; i += 4) if (d[i] < 120 && d[i + 1] < 120 && d[i + 2] < 120) n += 1;
+        return n;
+      };
+      return { high: px(bx + 6, top + 2), low: px(bx + 6, top + bh - 2), leftTicks: dark(20, top, 40, bh), bottomTicks: dark(64, top + bh + 6, bx - 80, 12), label: c.getAttribute('aria-label') };
+    });
+    assert(info.high[0] > info.high[2] && info.low[2] > info.low[0], `colour bar not red over blue: ${info.high} / ${info.low}`);
+    assert(info.leftTicks > 20 && info.bottomTicks > 20, `no tick labels (${info.leftTicks}, ${info.bottomTicks} dark pixels)`);
+    assert(/\(kN\)|\(mm\)|\(J\)/.test(info.label) && /from .* to /.test(info.label), `heat map text alternative: ${info.label}`);
+    await page.locator('#study-grids .card').first().screenshot({ path: path.join(ARTIFACTS, 'study-heatmap.png') });
+    await screenshot(page, 'study-pairs.png');
+  });
 
   await check('study: letters in a range are a field error beside it; the old result is cleared', async () => {
     await page.locator('#study-parameters-1-min').fill('x');
