@@ -102,12 +102,35 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
   };
   const data = [x.values, ...series.map((s) => s.values)];
   const u = new uPlot(opts, data, el);
+  // A text alternative: what is plotted against what, over which ranges (the CSV button gives the numbers).
+  el.setAttribute('role', 'img');
+  el.setAttribute('aria-label', describe(x, y, series));
   u.root.addEventListener('dblclick', () => { u.zoom = null; }, true);
   el.uplot = u;
   el.title = el.title || 'Drag across to zoom in; double-click to zoom out';
   plots.set(el, u);
   resizer.observe(el);
   return u;
+}
+
+/** "Plot of A (from 1 to 5) and B (from 0 to 3) against x (m), from 0 to 120." */
+function describe(x, y, series) {
+  const span = (values) => {
+    let lo = Infinity;
+    let hi = -Infinity;
+    for (const v of values ?? []) {
+      if (v === null || v === undefined || !Number.isFinite(v)) continue;
+      if (v < lo) lo = v;
+      if (v > hi) hi = v;
+    }
+    return lo <= hi ? `from ${short(lo)} to ${short(hi)}` : 'no values';
+  };
+  const parts = series.filter((s) => s.label).map((s) => `${s.label} (${span(s.values)})`);
+  return `Plot of ${y.label ? `${y.label}: ` : ''}${parts.join('; ')}, against ${x.label}, ${span(x.values)}.`;
+}
+
+function short(v) {
+  return Math.abs(v) >= 1e-3 && Math.abs(v) < 1e6 ? String(Number(v.toPrecision(4))) : v.toExponential(3);
 }
 
 /** Aligns several [xs, ys] tables on one ascending x (null where absent). */
@@ -124,6 +147,8 @@ export function destroy(el) {
   }
   el.uplot = null;
   el.csv = null;
+  el.removeAttribute('aria-label');
+  el.removeAttribute('role');
   el.replaceChildren();
 }
 

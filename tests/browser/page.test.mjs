@@ -353,6 +353,31 @@ async function pageSection(page) {
     const clipped = await clippedSelects(page);
     assert(clipped.length === 0, clipped.join('; '));
   });
+
+  await check('page: the guide is open on the first visit and folded after it; the Scene\'s Compute is in view at once', async () => {
+    await page.evaluate(() => localStorage.removeItem('gangue.guide'));
+    await open(page);
+    assert(await page.locator('#guide').evaluate((d) => d.open), 'the guide is folded on the first visit');
+    await open(page);
+    assert(!(await page.locator('#guide').evaluate((d) => d.open)), 'the guide is open again on a second visit');
+    await page.locator('#guide > summary').click();
+    await open(page);
+    assert(await page.locator('#guide').evaluate((d) => d.open), 'a guide left open by the engineer is folded');
+    await page.locator('#guide > summary').click();
+    await open(page);
+    const button = page.locator('#scene-form button[type="submit"]');
+    const box = await button.evaluate((b) => {
+      const r = b.getBoundingClientRect();
+      const hit = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
+      return { top: r.top + window.scrollY, bottom: r.bottom, inner: window.innerHeight, hit: hit === b || b.contains(hit) };
+    });
+    assert(box.bottom <= Math.min(box.inner, 1800) && box.hit, `Compute scene at ${Math.round(box.top)} px (window ${box.inner} px); uncovered: ${box.hit}`);
+    await page.mouse.wheel(0, 1200);
+    await page.waitForTimeout(200);
+    const after = await button.evaluate((b) => { const r = b.getBoundingClientRect(); return r.top >= 0 && r.bottom <= window.innerHeight; });
+    assert(after, 'Compute scene scrolls out of view halfway down the form');
+    await page.evaluate(() => window.scrollTo(0, 0));
+  });
 }
 
 /** Selects (on every tab) whose widest option does not fit their box. */
@@ -460,6 +485,26 @@ async function impactSection(page) {
     assert(sent === 0, `${sent} request(s) sent`);
     assert(await page.locator('[data-out="max_force_n"]').count() === 0, 'the old result is still shown');
     assert(await page.locator('#impact-checks tr').count() === 0, 'the old verdicts are still shown');
+  });
+
+  await check('impact: the focus moves to the first invalid field, marked aria-invalid and described by its message', async () => {
+    await open(page, '#impact');
+    await field(page, '#impact-form', '/rock/density_kg_m3').fill('abc');
+    await field(page, '#impact-form', '/velocity_m_s').fill('');
+    await page.locator('#impact-form button[type="submit"]').click();
+    await page.waitForTimeout(200);
+    const state = await page.evaluate(() => {
+      const a = document.activeElement;
+      const ids = (a.getAttribute('aria-describedby') ?? '').split(/\s+/).filter(Boolean);
+      return { pointer: a.dataset?.pointer, invalid: a.getAttribute('aria-invalid'), described: ids.map((id) => document.getElementById(id)?.textContent ?? '').join(' | ') };
+    });
+    const first = await page.locator('#impact-form [aria-invalid="true"]').first().getAttribute('data-pointer');
+    assert(state.pointer === first, `focus on ${state.pointer}, the first invalid field is ${first}`);
+    assert(state.invalid === 'true' && /required|not a number/.test(state.described), `focused field: aria-invalid ${state.invalid}, described by "${state.described}"`);
+    await page.locator('#impact-form button[type="reset"]').click();
+    await page.waitForTimeout(100);
+    const left = await page.locator('#impact-form [aria-describedby*="field-error"]').count();
+    assert(left === 0, `${left} fields still described by a cleared error`);
   });
 
   await check('impact: a server range error is worded in the field\'s unit, marked, with no pointer or HTTP code in the summary', async () => {
@@ -1068,6 +1113,16 @@ async function sceneSection(page) {
     const acceptable = answer.inputs?.design_limits?.acceptable_probability ?? 0.01;
     assert(plot.data[5].every((v) => Math.abs(v - acceptable * 100) < 1e-9), 'no acceptable-probability line');
     assert(/largest P\(exceed\)/.test(plot.label), `no text alternative: ${plot.label}`);
+  });
+
+  await check(`scene${what}: every drawn plot has a text alternative (what against what, over which ranges)`, async () => {
+    const plots = await page.locator('#panel-scene .plot').evaluateAll((els) => els.filter((el) => el.querySelector('canvas'))
+      .map((el) => ({ id: el.id, role: el.getAttribute('role'), label: el.getAttribute('aria-label') ?? '' })));
+    assert(plots.length >= 4, `${plots.length} plots drawn`);
+    for (const p of plots) {
+      assert(p.role === 'img' && p.label.length > 30 && /\d/.test(p.label), `${p.id}: role ${p.role}, text "${p.label}"`);
+    }
+    assert(/^Plot of .*against along the dip/.test(plots.find((p) => p.id === 'scene-side-plot').label), 'the side view is not described');
   });
 
   await check(`scene${what}: the per-support table puts exceeded first, filters and sorts; send buttons keep rows one line and name the statistic`, async () => {
