@@ -504,7 +504,7 @@ export function initScene() {
     let lo = Infinity;
     let hi = 0;
     for (const v of values) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
-    if (!values.length) { lo = 0.01; hi = 1; }
+    if (!values.length) { lo = 1; hi = 1; }
     const log = hi / lo >= 100;
     const range = log
       ? [10 ** Math.floor(Math.log10(lo)), Math.min(100, 10 ** Math.ceil(Math.log10(hi)))]
