@@ -552,13 +552,13 @@ export function initScene() {
     };
     const pShown = (v) => (v === null || v === undefined ? '—' : `${fmt(v, 3)} %`);
     linePlot(plots.support, {
-      x: { label: 'support number (position along the dip on hover)', values: xs, range: [xs[0] - 0.8, xs[xs.length - 1] + 0.8], value: where, ticks },
+      x: { label: 'support number', values: xs, range: [xs[0] - 0.8, xs[xs.length - 1] + 0.8], value: where, ticks },
       y: { label: `P(exceed) (%)${log ? ', log scale' : ''}`, range, log, ticks: (v) => fmt(v, 3) },
       series: [
-        { label: 'P(exceed), within the acceptable probability', values: sorted.map((e) => (e.verdict === 'exceeded' ? null : pOf(e))), points: 'only', color: GREEN, pointSize: 6, value: pShown },
-        { label: 'P(exceed), above the acceptable probability', values: sorted.map((e) => (e.verdict === 'exceeded' ? pOf(e) : null)), points: 'only', color: RED, pointSize: 7, value: pShown },
-        { label: 'no run exceeded: upper bound of the 95 % interval', values: sorted.map((e) => (e.risk > 0 ? null : pct(e.riskCi[1]))), points: 'only', color: GREY, pointSize: 6, pointFill: '#fff', value: pShown },
-        { label: '95 % interval (upper bound)', values: sorted.map((e) => pct(e.riskCi[1])), points: 'none', color: '#3b4350', value: pShown },
+        { label: 'P within the acceptable', values: sorted.map((e) => (e.verdict === 'exceeded' ? null : pOf(e))), points: 'only', color: GREEN, pointSize: 6, value: pShown },
+        { label: 'P above the acceptable', values: sorted.map((e) => (e.verdict === 'exceeded' ? pOf(e) : null)), points: 'only', color: RED, pointSize: 7, value: pShown },
+        { label: 'none exceeded: upper bound', values: sorted.map((e) => (e.risk > 0 ? null : pct(e.riskCi[1]))), points: 'only', color: GREY, pointSize: 6, pointFill: '#fff', value: pShown },
+        { label: '95 % upper bound', values: sorted.map((e) => pct(e.riskCi[1])), points: 'none', color: '#3b4350', value: pShown },
         ...(acceptable > 0 ? [{ label: 'acceptable probability', values: sorted.map(() => pct(acceptable)), color: '#3b4350', dash: [6, 4], width: 1.5, value: pShown }] : []),
       ],
       draw,

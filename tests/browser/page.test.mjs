@@ -1113,6 +1113,14 @@ async function sceneSection(page) {
     const acceptable = answer.inputs?.design_limits?.acceptable_probability ?? 0.01;
     assert(plot.data[5].every((v) => Math.abs(v - acceptable * 100) < 1e-9), 'no acceptable-probability line');
     assert(/largest P\(exceed\)/.test(plot.label), `no text alternative: ${plot.label}`);
+    // hovering a support shows its number and position along the dip
+    const over = page.locator('#scene-support-plot .u-over');
+    await over.scrollIntoViewIfNeeded();
+    const box = await over.boundingBox();
+    await page.mouse.move(box.x + box.width * 0.5, box.y + box.height * 0.5);
+    await page.mouse.move(box.x + box.width * 0.52, box.y + box.height * 0.5);
+    const hover = await page.locator('#scene-support-plot .u-legend .u-series').first().locator('.u-value').textContent();
+    assert(/^#\d+ at [\d.]+ m$/.test(hover.trim()), `hover shows "${hover}"`);
   });
 
   await check(`scene${what}: every drawn plot has a text alternative (what against what, over which ranges)`, async () => {
