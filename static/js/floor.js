@@ -112,6 +112,7 @@ export function initFloor(form) {
       loaded = /\.(geo)?json$/i.test(f.name) || text.trim().startsWith('{') ? readGeojson(f.name, text, elevation.value.trim()) : readAsc(f.name, text);
       info.textContent = `${f.name}: ${loaded.summary}. An uploaded floor cannot travel in a link: whoever opens the link must upload the same file.`;
       canvas.hidden = false;
+      canvas.setAttribute('aria-label', `the uploaded floor ${f.name}, north up: ${loaded.summary}`);
       draw(canvas, loaded.draw, null);
     } catch (err) {
       loaded = null;

@@ -832,6 +832,8 @@ async function floorSection(page) {
     await page.locator('#floor-canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
     const info = await page.locator('#floor-info').textContent();
     assert(/500 × 400 grid/.test(info), `preview: ${info}`);
+    const alt = await page.locator('#floor-canvas').getAttribute('aria-label');
+    assert(/big\.asc.*500 × 400 grid/.test(alt), `the drawn floor's text alternative: ${alt}`);
     assert(!(await page.locator('#floor-file-error').isVisible()), `refused: ${await page.locator('#floor-file-error').textContent()}`);
   });
 
@@ -1299,6 +1301,8 @@ async function spallingSection(page) {
     await page.locator('#spalling-zones-0-spalling_and_high').fill('50');
     const response = await submit(page, '#spalling-form', '/v1/spalling');
     assert(response.status() === 422, `status ${response.status()}`);
+    // the answer is read and marked after it arrives
+    await page.locator('#spalling-input [aria-invalid="true"]').first().waitFor({ state: 'attached', timeout: WAIT_MS }).catch(() => {});
     const marked = await page.locator('#spalling-input [aria-invalid="true"]').count();
     assert(marked >= 1, 'no count marked');
     const summary = await page.locator('#spalling-status .summary').textContent();
