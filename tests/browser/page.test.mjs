@@ -1251,6 +1251,8 @@ async function studySection(page) {
       assert(at < 0, `the Study tab shows "${bad}": …${text.slice(Math.max(0, at - 80), at + 40)}…`);
     }
     assert(/Rock elastic modulus/.test(text) && /GPa/.test(text) && /Max force Pmax \(kN\)/.test(text), 'no engineer\'s labels and units');
+    const [wide, room] = await page.locator('#study-parameters').evaluate((t) => [t.scrollWidth, t.closest('.table-scroll').clientWidth]);
+    assert(wide <= room, `the ranges table is ${wide} px in a ${room} px column: its units are cut off`);
     const info = await map.evaluate((c) => {
       const [bx, top, bh] = c.dataset.bar.split(',').map(Number);
       const px = (x, y) => [...c.getContext('2d').getImageData(x, y, 1, 1).data];
