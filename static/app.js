@@ -3,6 +3,7 @@
 
 import { getJson } from './js/api.js';
 import { initColumn } from './js/column.js';
+import { setFloorLimits } from './js/floor.js';
 import { applyServerDefaults, applyState, formState, setDefaults } from './js/form.js';
 import { csvButton, download, fmt, h, tableRows } from './js/format.js';
 import { initImpact } from './js/impact.js';
@@ -93,6 +94,7 @@ function applyPresetValues() {
     if (el) el.value = el.defaultValue = String(value);
   }
   setSceneRanges(presets.study);
+  setFloorLimits(presets.limits);
   setStudyDefaults(d.study);
   setSpallingDefaults(d.spalling);
 }
@@ -456,9 +458,33 @@ async function showVersion() {
   }
 }
 
+/**
+ * The guidance is open on the first visit (not on a phone) and folded after it,
+ * unless the engineer left it open; one click opens it.
+ */
+function initGuide() {
+  const guide = document.getElementById('guide');
+  const KEY = 'gangue.guide';
+  let seen = null;
+  try {
+    seen = localStorage.getItem(KEY);
+    if (seen === null) localStorage.setItem(KEY, 'seen');
+  } catch {
+    // no storage: every visit is the first
+  }
+  guide.open = seen === 'open' || (seen === null && !window.matchMedia('(max-width: 600px)').matches);
+  // A click on the summary is the engineer's choice (a toggle event also follows the page's own setting).
+  guide.querySelector('summary').addEventListener('click', () => {
+    try {
+      localStorage.setItem(KEY, guide.open ? 'closed' : 'open');
+    } catch {
+      // no storage
+    }
+  });
+}
+
 async function main() {
-  // On a phone the guidance starts folded: one tap opens it.
-  if (window.matchMedia('(max-width: 600px)').matches) document.getElementById('guide').open = false;
+  initGuide();
   panels.impact = initImpact();
   panels.column = initColumn();
   panels.migration = initMigration();

@@ -4,6 +4,33 @@
 
 import { fmt, h } from './format.js';
 
+/** The largest request the service takes (GET /v1/presets `limits.max_body_bytes`; 16 MiB unless told). */
+let maxBodyBytes = 16 * 1024 * 1024;
+
+/** Takes the service's body limit from GET /v1/presets. */
+export function setFloorLimits(limits) {
+  if (limits?.max_body_bytes > 0) maxBodyBytes = limits.max_body_bytes;
+}
+
+/** Bytes in words: "16 MiB", "1.5 MiB", "900 kiB". */
+export function bytesWords(n) {
+  if (n >= 1024 * 1024) return `${fmt(n / (1024 * 1024), 3)} MiB`;
+  if (n >= 1024) return `${fmt(n / 1024, 3)} kiB`;
+  return `${n} bytes`;
+}
+
+/** Smallest and largest of many numbers (a spread of a big array overflows the call stack). */
+function extent(values) {
+  let lo = Infinity;
+  let hi = -Infinity;
+  for (const v of values) {
+    if (v === null) continue;
+    if (v < lo) lo = v;
+    if (v > hi) hi = v;
+  }
+  return [lo, hi];
+}
+
 /** The floor group of the Migration form (its controls are built here, not by buildForm). */
 export function initFloor(form) {
   const group = h('fieldset', { dataset: { group: '/face/floor' } });
@@ -21,8 +48,9 @@ export function initFloor(form) {
   const row = (label, control, unit = '', hint = '') => h('div', { class: `field field-${control.tagName === 'SELECT' ? 'select' : 'number'}` },
     h('label', { for: control.id }, label), h('div', { class: 'control' }, control, h('span', { class: 'unit' }, unit)),
     hint ? h('p', { class: 'hint' }, hint) : null, h('p', { class: 'field-error', hidden: true, role: 'alert' }));
+  const fileError = h('p', { class: 'field-error', id: 'floor-file-error', hidden: true, role: 'alert' });
   const uploadBox = h('div', { class: 'floor-upload', hidden: true },
-    h('div', { class: 'field field-file' }, h('label', { for: 'floor-file' }, 'File'), file, h('p', { class: 'field-error', hidden: true, role: 'alert' })),
+    h('div', { class: 'field field-file' }, h('label', { for: 'floor-file' }, 'File'), file, fileError),
     row('Elevation property (GeoJSON)', elevation, '', 'else the third coordinate'),
     row('Contour resolution (GeoJSON)', resolution, 'm'),
     row('Map origin, easting', mapE, 'm', 'map coordinates: the face\'s origin and dip direction; empty: the file\'s own frame'),
@@ -33,18 +61,34 @@ export function initFloor(form) {
   form.querySelector('.form-fields fieldset').after(group);
 
   let loaded = null; // {name, floor (without map), draw: {kind, ...}}
+  let refused = null; // why the chosen file was refused; stays until another file is chosen
+
+  const showRefusal = (text) => {
+    refused = text;
+    fileError.textContent = text ?? '';
+    fileError.hidden = !text;
+    if (text) {
+      file.setAttribute('aria-invalid', 'true');
+      file.setAttribute('aria-describedby', 'floor-file-error floor-info');
+    } else {
+      file.removeAttribute('aria-invalid');
+      file.setAttribute('aria-describedby', 'floor-info');
+    }
+  };
 
   const sync = () => {
     uploadBox.hidden = kind.value !== 'upload';
     form.dataset.floorUploaded = String(kind.value === 'upload' && Boolean(loaded));
     if (kind.value === 'plane') info.textContent = 'The plane floor follows the dip and length above.';
-    else if (!loaded) info.textContent = 'Choose a file. An uploaded floor cannot travel in a link: whoever opens the link must upload the same file.';
+    else if (!loaded && !refused) info.textContent = 'Choose a file. An uploaded floor cannot travel in a link: whoever opens the link must upload the same file.';
+    else if (!loaded) info.textContent = 'Choose another file. An uploaded floor cannot travel in a link.';
   };
   kind.addEventListener('change', sync);
   form.addEventListener('reset', () => setTimeout(() => {
     loaded = null;
     file.value = '';
     canvas.hidden = true;
+    showRefusal(null);
     sync();
   }));
 
@@ -52,18 +96,28 @@ export function initFloor(form) {
     const f = file.files?.[0];
     loaded = null;
     canvas.hidden = true;
+    showRefusal(null);
     if (!f) return sync();
+    // The file travels inside the JSON request: one over the service's body limit is refused here, unsent.
+    if (f.size > maxBodyBytes) {
+      showRefusal(`${f.name} is ${bytesWords(f.size)} (${f.size} bytes): the service takes requests up to ${bytesWords(maxBodyBytes)} (${maxBodyBytes} bytes). `
+        + 'Coarsen the grid (larger cells) or crop it to the face.');
+      return sync();
+    }
     // No computing with a half-read file: the button waits for the file.
     const submit = form.querySelector('button[type="submit"]');
     submit.disabled = true;
-    const text = await f.text().finally(() => { submit.disabled = false; });
     try {
+      const text = await f.text().finally(() => { submit.disabled = false; });
       loaded = /\.(geo)?json$/i.test(f.name) || text.trim().startsWith('{') ? readGeojson(f.name, text, elevation.value.trim()) : readAsc(f.name, text);
       info.textContent = `${f.name}: ${loaded.summary}. An uploaded floor cannot travel in a link: whoever opens the link must upload the same file.`;
       canvas.hidden = false;
+      canvas.setAttribute('aria-label', `the uploaded floor ${f.name}, north up: ${loaded.summary}`);
       draw(canvas, loaded.draw, null);
     } catch (err) {
-      info.textContent = `${f.name} cannot be read: ${err.message}`;
+      loaded = null;
+      canvas.hidden = true;
+      showRefusal(`${f.name} cannot be read: ${err.message}`);
     }
     sync();
   });
@@ -73,6 +127,7 @@ export function initFloor(form) {
     /** Sets `request.face.floor` from the form (or throws field errors). */
     apply(request, local) {
       if (local.floor !== 'upload') return;
+      if (!loaded && refused) throw { fieldErrors: [{ field: '/face/floor/esri_ascii', message: refused }] };
       if (!loaded) {
         throw { fieldErrors: [{ field: '/face/floor', message: 'choose a floor file (.asc or GeoJSON); an uploaded floor does not travel in links' }] };
       }
@@ -122,7 +177,17 @@ export function readAsc(name, text) {
   for (const key of ['ncols', 'nrows', 'cellsize']) {
     if (!(head[key] > 0)) throw new Error(`line ${i + 1}: the header lacks a positive ${key}`);
   }
-  const values = lines.slice(i).join(' ').trim().split(/\s+/).filter(Boolean).map(Number);
+  // Every value must be a number, as the server reads it: a letter is refused with its line.
+  const values = [];
+  const number = /^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/;
+  for (let k = i; k < lines.length; k++) {
+    const line = lines[k].trim();
+    if (!line) continue;
+    for (const token of line.split(/\s+/)) {
+      if (!number.test(token)) throw new Error(`line ${k + 1}: "${token.slice(0, 20)}" is not a number`);
+      values.push(Number(token));
+    }
+  }
   if (values.length !== head.ncols * head.nrows) {
     throw new Error(`${values.length} values for ${head.nrows} rows × ${head.ncols} columns`);
   }
@@ -183,8 +248,8 @@ function draw(canvas, floor, path) {
     ymax = floor.y0 + (floor.nrows - 0.5) * floor.d;
   } else {
     const pts = floor.lines.flatMap((l) => l.points);
-    xmin = Math.min(...pts.map((p) => p[0])); xmax = Math.max(...pts.map((p) => p[0]));
-    ymin = Math.min(...pts.map((p) => p[1])); ymax = Math.max(...pts.map((p) => p[1]));
+    [xmin, xmax] = extent(pts.map((p) => p[0]));
+    [ymin, ymax] = extent(pts.map((p) => p[1]));
   }
   // The canvas takes the floor's aspect (within limits), north up, the floor centred.
   const W = canvas.width;
@@ -199,9 +264,7 @@ function draw(canvas, floor, path) {
   const py = (y) => H - oy - (y - ymin) * scale;
   if (floor.kind === 'grid') {
     const { z, d, nrows, ncols } = floor;
-    const all = z.flat().filter((v) => v !== null);
-    const lo = Math.min(...all);
-    const hi = Math.max(...all);
+    const [lo, hi] = extent(z.flat());
     const cell = Math.max(1, d * scale);
     for (let r = 0; r < nrows; r++) {
       for (let c = 0; c < ncols; c++) {
@@ -221,9 +284,7 @@ function draw(canvas, floor, path) {
       }
     }
   } else {
-    const zs = floor.lines.map((l) => l.z);
-    const lo = Math.min(...zs);
-    const hi = Math.max(...zs);
+    const [lo, hi] = extent(floor.lines.map((l) => l.z));
     ctx.lineWidth = 1.5;
     for (const l of floor.lines) {
       const t = hi > lo ? (l.z - lo) / (hi - lo) : 0.5;

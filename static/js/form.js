@@ -182,6 +182,37 @@ export function merge(a, b) {
   return out;
 }
 
+let errorIds = 0;
+
+/** Adds (or removes) an element id to an input's aria-describedby, keeping the others (hints, notes). */
+function describe(input, id, on) {
+  const ids = (input.getAttribute('aria-describedby') ?? '').split(/\s+/).filter((x) => x && x !== id);
+  if (on) ids.unshift(id);
+  if (ids.length) input.setAttribute('aria-describedby', ids.join(' '));
+  else input.removeAttribute('aria-describedby');
+  if (on) input.dataset.errorId = id;
+  else delete input.dataset.errorId;
+}
+
+/** Ties an input to the message beside it: aria-invalid, and aria-describedby naming the message. */
+function markInvalid(input, p) {
+  if (!p.id) p.id = `field-error-${++errorIds}`;
+  input.setAttribute('aria-invalid', 'true');
+  describe(input, p.id, true);
+}
+
+/** Moves the focus to the first marked field that can be seen, in the order of `forms`; true if one took it. */
+export function focusFirstInvalid(forms) {
+  for (const form of forms) {
+    for (const el of form.querySelectorAll('[aria-invalid="true"]')) {
+      if (el.disabled || !el.checkVisibility?.()) continue;
+      el.focus({ preventScroll: false });
+      return true;
+    }
+  }
+  return false;
+}
+
 /** Removes every field error mark from the forms. */
 export function clearErrors(...forms) {
   for (const form of forms) {
@@ -191,6 +222,7 @@ export function clearErrors(...forms) {
     }
     for (const el of form.querySelectorAll('.invalid')) el.classList.remove('invalid');
     for (const el of form.querySelectorAll('[aria-invalid]')) el.removeAttribute('aria-invalid');
+    for (const el of form.querySelectorAll('[data-error-id]')) describe(el, el.dataset.errorId, false);
     const panel = form.closest('[data-panel]');
     if (panel) document.querySelector(`[data-tab="${panel.dataset.panel}"]`)?.classList.remove('has-error');
   }
@@ -238,7 +270,7 @@ export function markErrors(errors, forms) {
     p.textContent = p.textContent ? `${p.textContent}; ${message}` : message;
     p.hidden = false;
     target.classList.add('invalid');
-    if (input) input.setAttribute('aria-invalid', 'true');
+    if (input) markInvalid(input, p);
     const panel = found.form.closest('[data-panel]');
     if (panel) document.querySelector(`[data-tab="${panel.dataset.panel}"]`)?.classList.add('has-error');
   }
@@ -253,7 +285,7 @@ export function markLocalErrors(errors) {
     p.textContent = message;
     p.hidden = false;
     field.classList.add('invalid');
-    el.setAttribute('aria-invalid', 'true');
+    markInvalid(el, p);
   }
 }
 

@@ -17,23 +17,27 @@ const resizer = new ResizeObserver((entries) => {
 /**
  * Draws a line plot into `el`.
  * - `x`: {label, values, range?}
- * - `series`: [{label, values, color?, axis?: 'y'|'y2', points?, width?, dash?, bars?}]
+ * - `series`: [{label, values, color?, axis?: 'y'|'y2', points?, width?, dash?, bars?, value?}];
+ *   points 'only' draws marks without a line, 'none' nothing (a value shown on hover)
  * - `y`, `y2`: {label, range?}; y2 only when a series uses it.
  * - `vlines`: [{x, color}] vertical marks across the plot (supports on a face).
+ * - `y.log`: a logarithmic y axis (base 10; `y.range` then bounds it).
+ * - `x.value(i)`: the x shown on hover for the i-th point; `x.ticks(v)`: a tick's label.
+ * - `draw(u)`: drawn over the series (error bars, markers).
  * The x values must be ascending (uPlot's own rule) unless `x.range` is given.
  */
-export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true, vlines = [] }) {
+export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true, vlines = [], draw = null }) {
   destroy(el);
   const axisStyle = { stroke: '#3b4350', grid: { stroke: '#e3e7ed', width: 1 }, ticks: { stroke: '#c9d0da', width: 1 } };
   // Drag-to-zoom: the selection is turned into a zoom range here (uPlot's own
   // zoom would be undone by a fixed x range); double-click returns to the full range.
   const scales = {
     x: { time: false, range: (u, min, max) => u?.zoom ?? x.range ?? padFlat(min, max) },
-    y: y.range ? { range: () => y.range } : {},
+    y: { ...(y.range ? { range: () => y.range } : {}), ...(y.log ? { distr: 3, log: 10 } : {}) },
   };
   const axes = [
-    { ...axisStyle, label: x.label },
-    { ...axisStyle, label: y.label, scale: 'y', size: 64 },
+    { ...axisStyle, label: x.label, ...(x.ticks ? { values: (u, ticks) => ticks.map(x.ticks) } : {}) },
+    { ...axisStyle, label: y.label, scale: 'y', size: 64, ...(y.ticks ? { values: (u, ticks) => ticks.map(y.ticks) } : {}) },
   ];
   if (y2) {
     scales.y2 = y2.range ? { range: () => y2.range } : {};
@@ -49,6 +53,7 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
     cursor: { drag: { x: true, y: false, setScale: false } },
     hooks: {
       draw: [(u) => {
+        if (draw) draw(u);
         if (!vlines.length) return;
         const { ctx } = u;
         ctx.save();
@@ -75,7 +80,7 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
       }],
     },
     series: [
-      { label: x.label },
+      { label: x.label, ...(x.value ? { value: (u, v, si, i) => (i === null || i === undefined ? '—' : x.value(i)) } : {}) },
       ...series.map((s, i) => {
         const color = s.color ?? COLORS[i % COLORS.length];
         return {
@@ -85,8 +90,9 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
           width: s.width ?? 1.75,
           dash: s.dash,
           spanGaps: true,
+          ...(s.value ? { value: (u, v, si, i) => (i === null || i === undefined ? '—' : s.value(v, i)) } : {}),
           fill: s.bars ? `${color}55` : undefined,
-          paths: s.bars ? uPlot.paths.bars({ size: [0.92, Infinity], align: 0 }) : s.points === 'only' ? () => null : undefined,
+          paths: s.bars ? uPlot.paths.bars({ size: [0.92, Infinity], align: 0 }) : s.points === 'only' || s.points === 'none' ? () => null : undefined,
           points: s.points === 'only' || s.points === true
             ? { show: true, size: s.pointSize ?? 9, stroke: color, fill: s.pointFill ?? color }
             : { show: false },
@@ -96,12 +102,35 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
   };
   const data = [x.values, ...series.map((s) => s.values)];
   const u = new uPlot(opts, data, el);
+  // A text alternative: what is plotted against what, over which ranges (the CSV button gives the numbers).
+  el.setAttribute('role', 'img');
+  el.setAttribute('aria-label', describe(x, y, series));
   u.root.addEventListener('dblclick', () => { u.zoom = null; }, true);
   el.uplot = u;
   el.title = el.title || 'Drag across to zoom in; double-click to zoom out';
   plots.set(el, u);
   resizer.observe(el);
   return u;
+}
+
+/** "Plot of A (from 1 to 5) and B (from 0 to 3) against x (m), from 0 to 120." */
+function describe(x, y, series) {
+  const span = (values) => {
+    let lo = Infinity;
+    let hi = -Infinity;
+    for (const v of values ?? []) {
+      if (v === null || v === undefined || !Number.isFinite(v)) continue;
+      if (v < lo) lo = v;
+      if (v > hi) hi = v;
+    }
+    return lo <= hi ? `from ${short(lo)} to ${short(hi)}` : 'no values';
+  };
+  const parts = series.filter((s) => s.label).map((s) => `${s.label} (${span(s.values)})`);
+  return `Plot of ${y.label ? `${y.label}: ` : ''}${parts.join('; ')}, against ${x.label}, ${span(x.values)}.`;
+}
+
+function short(v) {
+  return Math.abs(v) >= 1e-3 && Math.abs(v) < 1e6 ? String(Number(v.toPrecision(4))) : v.toExponential(3);
 }
 
 /** Aligns several [xs, ys] tables on one ascending x (null where absent). */
@@ -118,6 +147,8 @@ export function destroy(el) {
   }
   el.uplot = null;
   el.csv = null;
+  el.removeAttribute('aria-label');
+  el.removeAttribute('role');
   el.replaceChildren();
 }
 

@@ -99,6 +99,41 @@ const STAT_COLUMNS = ['mean', 'std', 'min', 'p05', 'p50', 'p95', 'p99', 'max'];
 const OUTCOMES = [['support', 'struck a support'], ['lower_end', 'reached the lower end'], ['at_rest', 'came to rest'],
   ['left_floor', 'left the floor'], ['end_time', 'still moving at the end time']];
 
+const RED = '#c8423b';
+const GREEN = '#2a8f4f';
+const GREY = '#7d8794';
+
+/** The impact speed statistic a row sends to the Impact and Column tabs. */
+const SEND_STATS = { p50: 'median', p95: 'p95', max: 'largest' };
+
+/** Exceeded first, then the larger exceedance probability (or utilisation), then its upper bound, then the support number. */
+function byRisk(a, b) {
+  return (b.verdict === 'exceeded') - (a.verdict === 'exceeded') || b.risk - a.risk
+    || (b.riskCi?.[1] ?? 0) - (a.riskCi?.[1] ?? 0) || a.support - b.support || (a.column_index ?? 0) - (b.column_index ?? 0);
+}
+
+const SORTS = {
+  risk: byRisk,
+  p: (a, b) => b.risk - a.risk || (b.riskCi?.[1] ?? 0) - (a.riskCi?.[1] ?? 0) || a.support - b.support,
+  util: (a, b) => (b.util ?? -1) - (a.util ?? -1) || a.support - b.support,
+  support: (a, b) => a.support - b.support || (a.column_index ?? 0) - (b.column_index ?? 0),
+};
+const SORT_WORDS = { risk: 'exceeded first, then by P(exceed)', p: 'P(exceed), largest first', util: 'stress utilisation, largest first', support: 'support number' };
+
+const FILTERS = {
+  all: { words: 'all supports', test: () => true },
+  exceeded: { words: 'exceeded only', test: (e) => e.verdict === 'exceeded' },
+  risk: { words: 'P(exceed) above 0', test: (e) => e.risk > 0 },
+  reached: { words: 'reached by a rock', test: (e) => e.single || e.reached_fraction > 0 },
+  util: { words: 'stress utilisation at or above 100 %', test: (e) => (e.util ?? 0) >= 1 },
+};
+
+function niceCeil(v) {
+  if (!(v > 0)) return 1;
+  const p = 10 ** Math.floor(Math.log10(v));
+  return [1, 2, 2.5, 5, 10].map((m) => m * p).find((m) => m >= v);
+}
+
 /** The paper's study ranges of the rock (GET /v1/presets `study`), drawn when "vary" is ticked. */
 let rockRanges = {};
 
@@ -127,7 +162,18 @@ export function initScene() {
   const impactForm = document.getElementById('impact-form');
   const columnForm = document.getElementById('column-form');
   const migrationForm = document.getElementById('migration-form');
+  const supportSummary = document.getElementById('scene-support-summary');
+  const filter = document.getElementById('scene-filter');
+  const sort = document.getElementById('scene-sort');
+  const sendStat = document.getElementById('scene-send-stat');
+  const sourceNotes = [document.getElementById('impact-source'), document.getElementById('column-source')];
   buildForm(form, SCENE_GROUPS);
+  // A velocity typed by hand no longer comes from the Scene.
+  impactForm.addEventListener('input', (ev) => {
+    if (ev.target.dataset?.pointer === '/velocity_m_s') for (const note of sourceNotes) note.hidden = true;
+  });
+  impactForm.addEventListener('reset', () => { for (const note of sourceNotes) note.hidden = true; });
+  for (const el of [filter, sort, sendStat]) el.addEventListener('change', () => last && renderTable(last, supportEntries(last)));
 
   const rowFields = ['/support_rows/lowest_along_dip_m', '/support_rows/spacing_m', '/support_rows/count']
     .map((p) => form.querySelector(`[data-pointer="${p}"]`));
@@ -204,6 +250,7 @@ export function initScene() {
     box.hidden = true;
     summary.replaceChildren();
     table.replaceChildren();
+    supportSummary.textContent = '';
     distTable.replaceChildren();
     planList.replaceChildren();
     showWarnings(warnings, []);
@@ -221,7 +268,7 @@ export function initScene() {
     const entries = supportEntries(data);
     renderSummary(data, entries);
     renderTable(data, entries);
-    renderSupportChart(entries);
+    renderSupportChart(entries, acceptableOf(data));
     renderFace(data, entries);
     distSelect.replaceChildren(...entries.map((e, i) => h('option', { value: String(i) }, label(e))));
     const worst = entries.reduce((b, e, i) => ((e.risk ?? -1) > (entries[b]?.risk ?? -1) ? i : b), 0);
@@ -229,18 +276,35 @@ export function initScene() {
     renderDistributions(data);
   }
 
-  /** One row per support entry, from the ensemble statistics or the single run's impacts. */
+  /**
+   * One row per support entry, from the ensemble statistics or the single run's impacts.
+   * `risk` is the largest exceedance probability over the limits (ensemble) or the largest
+   * utilisation (single run); `riskCi` its 95 % interval; `util` the stress utilisation
+   * (p95 over the runs, or the single run's).
+   */
   function supportEntries(data) {
     if (data.statistics?.supports) {
       return data.statistics.supports.map((s) => {
-        const probs = Object.values(s.exceedance ?? {}).map((x) => x.probability);
-        return { ...s, risk: probs.length ? Math.max(...probs) : 0 };
+        let worst = null;
+        for (const [limit, x] of Object.entries(s.exceedance ?? {})) {
+          if (!worst || x.probability > worst.probability || (x.probability === worst.probability && x.ci95[1] > worst.ci95[1])) worst = { limit, ...x };
+        }
+        return { ...s, risk: worst?.probability ?? 0, riskCi: worst?.ci95 ?? [0, 0], riskLimit: worst?.limit ?? null, util: s.stress_utilisation?.p95 ?? null };
       });
     }
     return (data.impacts ?? []).map((imp) => {
       const worst = Math.max(0, ...(imp.checks ?? []).map((c) => c.utilisation ?? 0));
-      return { ...imp, risk: worst, single: true };
+      const stress = (imp.checks ?? []).find((c) => c.limit === 'stress_utilisation');
+      return { ...imp, risk: worst, util: stress?.value ?? null, single: true };
     });
+  }
+
+  /** The acceptable exceedance probability the answer was judged against. */
+  function acceptableOf(data) {
+    const given = data.inputs?.design_limits?.acceptable_probability;
+    if (typeof given === 'number') return given;
+    const v = Number(form.querySelector('[data-pointer="/design_limits/acceptable_probability"]')?.value);
+    return Number.isFinite(v) ? v : 0;
   }
 
   function label(e) {
@@ -261,7 +325,8 @@ export function initScene() {
         any ? h('span', {}, 'Probability that a released rock overloads some support: ',
           h('strong', { dataset: { out: 'statistics.any_exceeded.probability' } }, `${fmt(any.probability * 100, 3)} %`),
           ` (95 % interval ${fmt(any.ci95[0] * 100, 3)}–${fmt(any.ci95[1] * 100, 3)} %), over ${st.runs} runs, seed ${st.seed}. `) : '',
-        `${entries.filter((e) => e.verdict === 'exceeded').length} of ${entries.length} support entries exceed the acceptable probability.`));
+        `${entries.filter((e) => e.verdict === 'exceeded').length} of ${entries.length} support entries exceed the acceptable probability of ${fmt(acceptableOf(data) * 100, 3)} %.`));
+      summary.append(exceededAnswer(entries));
       if (st.outcomes) {
         summary.append(h('div', { class: 'table-scroll' }, h('table', { class: 'results-table' },
           h('thead', {}, h('tr', {}, h('th', {}, 'Outcome of the runs'), h('th', { class: 'num' }, 'share'))),
@@ -274,9 +339,27 @@ export function initScene() {
         const a = data.migration?.arrival;
         summary.append(h('p', { class: 'answer' }, 'The rock reached no support', a ? ` (it ${a.stop_reason === 'at_rest' ? 'came to rest' : a.stop_reason.replace(/_/g, ' ')} at ${fmt(a.along_dip_m, 4)} m along the dip).` : '.'));
       }
+      if (impacts.length > 1) summary.append(exceededAnswer(entries));
       for (const imp of impacts) appendImpact(imp);
     }
     if (st) for (const imp of data.impacts ?? []) appendImpact(imp);
+  }
+
+  /** The supports that exceed, by number and position, worst first. */
+  function exceededAnswer(entries) {
+    const over = entries.filter((e) => e.verdict === 'exceeded').sort(byRisk);
+    if (!over.length) {
+      return h('p', { class: 'answer', dataset: { out: 'scene.exceeded' } }, 'No support exceeds: every support is within the limits.');
+    }
+    const shown = over.slice(0, 12);
+    const items = shown.map((e) => h('li', { dataset: { support: String(e.support) } },
+      h('strong', {}, `#${e.support}${e.column_index ? `.${e.column_index}` : ''}`), ` at ${fmt(e.along_dip_m, 4)} m along the dip: `,
+      e.single ? `utilisation ${fmt(e.risk * 100, 3)} %`
+        : `P(exceed) ${fmt(e.risk * 100, 3)} % [95 % interval ${fmt(e.riskCi[0] * 100, 2)}–${fmt(e.riskCi[1] * 100, 2)} %]${e.riskLimit ? `, ${LIMIT_WORDS[e.riskLimit] ?? e.riskLimit}` : ''}`));
+    return h('div', { class: 'answer exceeded-list', dataset: { out: 'scene.exceeded' } },
+      h('p', {}, h('strong', {}, over.length === 1 ? 'The support that exceeds:' : `The ${over.length} supports that exceed, worst first:`)),
+      h('ol', {}, items),
+      over.length > shown.length ? h('p', {}, `and ${over.length - shown.length} more (see the table below).`) : '');
   }
 
   /** One impact in words, its server checks and the page's validity checks of its impact and column. */
@@ -291,7 +374,8 @@ export function initScene() {
     } else {
       words = `support ${label(imp)} struck at ${fmt(imp.impact_velocity_m_s, 4)} m/s: `;
     }
-    summary.append(h('p', { class: 'answer' }, nominal, words, verdictBadge(imp.verdict), ' ', sendButton(imp.impact_velocity_m_s)));
+    summary.append(h('p', { class: 'answer' }, nominal, words, verdictBadge(imp.verdict), ' ',
+      sendButton(imp.impact_velocity_m_s, `${imp.nominal ? 'the nominal run\'s' : 'the single run\'s'} impact speed at support ${label(imp)}`)));
     const checks = [
       ...(imp.checks ?? []).map((c) => ({
         key: `design.${c.limit}`,
@@ -311,20 +395,28 @@ export function initScene() {
     summary.append(box);
   }
 
-  function sendButton(speed) {
-    const b = h('button', { type: 'button', class: 'chip send', disabled: typeof speed !== 'number' || speed <= 0 },
-      'Send to Impact and Column');
-    b.addEventListener('click', () => sendImpact(speed));
+  function sendButton(speed, source, text = 'Send to Impact and Column') {
+    const ok = typeof speed === 'number' && speed > 0;
+    const b = h('button', {
+      type: 'button', class: 'chip send', disabled: !ok,
+      title: ok ? `Send ${fmt(speed, 4)} m/s (${source}) to the Impact and Column tabs and compute` : 'no impact speed to send',
+    }, text);
+    b.addEventListener('click', () => sendImpact(speed, source));
     return b;
   }
 
-  /** One click: the support's impact speed into the Impact tab (the Column tab uses its case). */
-  function sendImpact(speed) {
+  /** One click: the speed into the Impact tab's velocity; Impact and Column say where it came from and compute. */
+  function sendImpact(speed, source) {
     const v = impactForm.querySelector('[data-pointer="/velocity_m_s"]');
     v.value = String(Number(speed.toPrecision(6)));
     v.dispatchEvent(new Event('change', { bubbles: true }));
+    for (const note of sourceNotes) {
+      note.textContent = `Velocity ${fmt(Number(v.value), 6)} m/s from the Scene: ${source}.`;
+      note.hidden = false;
+    }
     document.getElementById('tab-impact').click();
     impactForm.requestSubmit();
+    columnForm.requestSubmit();
   }
 
   function renderTable(data, entries) {
@@ -332,71 +424,158 @@ export function initScene() {
     const limits = ensemble
       ? [...new Set(entries.flatMap((e) => Object.keys(e.exceedance ?? {})))]
       : [...new Set(entries.flatMap((e) => (e.checks ?? []).map((c) => c.limit)))];
+    const perLimit = ensemble && limits.length > 1 ? limits : [];
+    const stat = sendStat.value;
+    const statWords = SEND_STATS[stat];
+    // Support, verdict and P(exceed) first: on a phone they show without scrolling sideways.
     const head = ensemble
-      ? ['Support', 'Column', 'Along the dip (m)', 'Across (m)', 'Reached (%)', 'Capacity exceeded (%)', 'Median impact speed (m/s)', 'p95 stress utilisation (%)',
-        ...limits.map((l) => `P(${l} exceeded) (%) [95 % CI]`), 'Verdict', '']
-      : ['Support', 'Column', 'Along the dip (m)', 'Across (m)', 'Impact speed (m/s)',
-        ...limits.map((l) => `${l}: value / allowed`), 'Verdict', ''];
+      ? ['Support', 'Verdict', 'P(exceed) (%) [95 % CI]', 'Along the dip (m)', 'Column', 'Across (m)', 'Reached (%)', 'Capacity exceeded (%)',
+        'Median impact speed (m/s)', 'p95 stress utilisation (%)', ...perLimit.map((l) => `P(${l} exceeded) (%) [95 % CI]`), `Send the ${statWords}`]
+      : ['Support', 'Verdict', 'Largest utilisation (%)', 'Along the dip (m)', 'Column', 'Across (m)', 'Impact speed (m/s)',
+        ...limits.map((l) => `${l}: value / allowed`), 'Send'];
+    const rows = entries.map((e, i) => ({ e, i })).filter(({ e }) => FILTERS[filter.value].test(e));
+    rows.sort((a, b) => SORTS[sort.value](a.e, b.e));
+    const ci = (x) => (x ? `${fmt(x.probability * 100, 3)} [${fmt(x.ci95[0] * 100, 2)}–${fmt(x.ci95[1] * 100, 2)}]` : '—');
     table.replaceChildren(
-      h('thead', {}, h('tr', {}, head.map((c) => h('th', {}, c)))),
-      h('tbody', {}, entries.map((e, i) => {
-        const common = [h('th', { scope: 'row' }, `#${e.support}`), h('td', { class: 'num' }, String(e.column_index ?? 0)),
-          h('td', { class: 'num' }, fmt(e.along_dip_m, 5)), h('td', { class: 'num' }, e.across_m === null || e.across_m === undefined ? 'spans' : fmt(e.across_m, 4))];
+      h('caption', { class: 'table-count' }, `${rows.length} of ${entries.length} support entries shown (${FILTERS[filter.value].words}; ${SORT_WORDS[sort.value]})`),
+      h('thead', {}, h('tr', {}, head.map((c) => h('th', { scope: 'col' }, c)))),
+      h('tbody', {}, rows.map(({ e, i }) => {
+        const first = [h('th', { scope: 'row' }, `#${e.support}`), h('td', {}, verdictBadge(e.verdict))];
+        const place = [h('td', { class: 'num' }, fmt(e.along_dip_m, 5)), h('td', { class: 'num' }, String(e.column_index ?? 0)),
+          h('td', { class: 'num' }, e.across_m === null || e.across_m === undefined ? 'spans' : fmt(e.across_m, 4))];
         if (ensemble) {
-          const speed = e.impact_velocity_m_s?.p50;
-          return h('tr', { class: `verdict-${e.verdict}`, dataset: { support: String(i) } }, common,
+          const speed = e.impact_velocity_m_s?.[stat];
+          return h('tr', { class: `verdict-${e.verdict}`, dataset: { support: String(i) } }, first,
+            h('td', { class: 'num', dataset: { p: String(e.risk) } }, ci({ probability: e.risk, ci95: e.riskCi })),
+            place,
             h('td', { class: 'num' }, fmt(e.reached_fraction * 100, 4)),
             h('td', { class: 'num' }, fmt((e.capacity_exceeded_fraction ?? 0) * 100, 4)),
-            h('td', { class: 'num' }, e.impact_velocity_m_s ? fmt(speed, 4) : 'never reached'),
+            h('td', { class: 'num' }, e.impact_velocity_m_s ? fmt(e.impact_velocity_m_s.p50, 4) : 'never reached'),
             h('td', { class: 'num' }, e.stress_utilisation ? fmt(e.stress_utilisation.p95 * 100, 4) : '—'),
-            limits.map((l) => {
-              const x = e.exceedance?.[l];
-              return h('td', { class: 'num' }, x ? `${fmt(x.probability * 100, 3)} [${fmt(x.ci95[0] * 100, 2)}–${fmt(x.ci95[1] * 100, 2)}]` : '—');
-            }),
-            h('td', {}, verdictBadge(e.verdict)),
-            h('td', {}, e.impact_velocity_m_s ? sendButton(speed) : ''));
+            perLimit.map((l) => h('td', { class: 'num' }, ci(e.exceedance?.[l]))),
+            h('td', {}, e.impact_velocity_m_s
+              ? sendButton(speed, `the ${statWords} impact speed at support ${label(e)} over ${data.statistics.runs} runs`, `${stat === 'p50' ? 'median' : stat} ${fmt(speed, 4)} m/s`)
+              : ''));
         }
-        return h('tr', { class: `verdict-${e.verdict}`, dataset: { support: String(i) } }, common,
+        return h('tr', { class: `verdict-${e.verdict}`, dataset: { support: String(i) } }, first,
+          h('td', { class: 'num' }, fmt(e.risk * 100, 4)),
+          place,
           h('td', { class: 'num' }, fmt(e.impact_velocity_m_s, 5)),
           limits.map((l) => {
             const c = (e.checks ?? []).find((x) => x.limit === l);
             return h('td', { class: 'num' }, c ? `${fmt(c.value, 4)} / ${fmt(c.allowed, 4)}` : '—');
           }),
-          h('td', {}, verdictBadge(e.verdict)),
-          h('td', {}, sendButton(e.impact_velocity_m_s)));
+          h('td', {}, sendButton(e.impact_velocity_m_s, `the single run's impact speed at support ${label(e)}`, `${fmt(e.impact_velocity_m_s, 4)} m/s`)));
       })),
     );
   }
 
-  function renderSupportChart(entries) {
+  function renderSupportChart(entries, acceptable) {
     if (!entries.length) {
       plotMessage(plots.support, 'No support entries.');
+      supportSummary.textContent = '';
       return;
     }
-    const sorted = [...entries].sort((a, b) => a.along_dip_m - b.along_dip_m);
-    const xs = sorted.map((e) => e.along_dip_m);
+    const sorted = [...entries].sort((a, b) => a.support - b.support || (a.column_index ?? 0) - (b.column_index ?? 0));
+    // x: the support number (columns of one support side by side); positions on hover.
+    const cols = Math.max(1, ...sorted.map((e) => (e.column_index ?? 0) + 1));
+    const xs = sorted.map((e) => e.support + (e.column_index ?? 0) / (cols + 1));
+    const where = (i) => `${label(sorted[i])}`;
+    const ticks = (v) => (Number.isInteger(v) ? `#${v}` : '');
+    const colour = (e) => (e.verdict === 'exceeded' ? RED : GREEN);
     if (entries[0].single) {
       linePlot(plots.support, {
-        x: { label: 'along the dip (m)', values: xs, range: [Math.min(...xs) - 1, Math.max(...xs) + 1] },
+        x: { label: 'support number', values: xs, range: [xs[0] - 1, xs[xs.length - 1] + 1], value: where, ticks },
         y: { label: 'largest utilisation (%)', range: [0, Math.max(110, ...sorted.map((e) => e.risk * 110))] },
         series: [
-          { label: 'within the limits', values: sorted.map((e) => (e.verdict === 'exceeded' ? null : e.risk * 100)), bars: true, color: '#2a8f4f' },
-          { label: 'exceeded', values: sorted.map((e) => (e.verdict === 'exceeded' ? e.risk * 100 : null)), bars: true, color: '#c8423b' },
+          { label: 'within the limits', values: sorted.map((e) => (e.verdict === 'exceeded' ? null : e.risk * 100)), bars: true, color: GREEN },
+          { label: 'exceeded', values: sorted.map((e) => (e.verdict === 'exceeded' ? e.risk * 100 : null)), bars: true, color: RED },
         ],
         height: 240,
       });
+      const over = sorted.filter((e) => e.verdict === 'exceeded');
+      supportSummary.textContent = `${sorted.length} support entries struck in this run; ${over.length} exceed a limit${over.length ? ` (${over.map((e) => `#${e.support}`).join(', ')})` : ''}.`;
+      plots.support.setAttribute('aria-label', supportSummary.textContent);
       return;
     }
+    const pct = (v) => v * 100;
+    // The axis follows the data: every probability, every interval bound and the threshold.
+    const values = [...sorted.flatMap((e) => [e.risk, e.riskCi[0], e.riskCi[1]]), acceptable].filter((v) => v > 0).map(pct);
+    let lo = Infinity;
+    let hi = 0;
+    for (const v of values) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+    if (!values.length) { lo = 1; hi = 1; }
+    const log = hi / lo >= 100;
+    const range = log
+      ? [10 ** Math.floor(Math.log10(lo)), Math.min(100, 10 ** Math.ceil(Math.log10(hi)))]
+      : [0, Math.min(100, niceCeil(hi * 1.1))];
+    if (range[1] <= range[0]) range[1] = range[0] * 10;
+    const bottom = range[0];
+    const pOf = (e) => (e.risk > 0 ? pct(e.risk) : null);
+    const draw = (u) => {
+      const { ctx } = u;
+      const r = devicePixelRatio;
+      const step = sorted.length > 1 ? Math.abs(u.valToPos(xs[1], 'x', true) - u.valToPos(xs[0], 'x', true)) : 40 * r;
+      const half = Math.max(1.5 * r, Math.min(10 * r, step * 0.35));
+      const yPos = (v) => u.valToPos(Math.max(v, bottom), 'y', true);
+      ctx.save();
+      ctx.setLineDash([]);
+      // A clip keeps zoomed-out bars inside the plot.
+      ctx.beginPath();
+      ctx.rect(u.bbox.left, u.bbox.top, u.bbox.width, u.bbox.height);
+      ctx.clip();
+      sorted.forEach((e, i) => {
+        const x = u.valToPos(xs[i], 'x', true);
+        const c = e.risk > 0 ? colour(e) : GREY;
+        if (e.risk > 0) {
+          ctx.fillStyle = `${c}66`;
+          const top = yPos(pct(e.risk));
+          ctx.fillRect(x - half, top, 2 * half, u.bbox.top + u.bbox.height - top);
+        }
+        // the 95 % interval; P = 0 draws from the axis to its upper bound
+        const y0 = yPos(pct(e.riskCi[0]));
+        const y1 = yPos(pct(e.riskCi[1]));
+        ctx.strokeStyle = c;
+        ctx.lineWidth = 1.5 * r;
+        ctx.beginPath();
+        ctx.moveTo(x, y0);
+        ctx.lineTo(x, y1);
+        ctx.moveTo(x - half * 0.7, y1);
+        ctx.lineTo(x + half * 0.7, y1);
+        if (e.riskCi[0] > 0) {
+          ctx.moveTo(x - half * 0.7, y0);
+          ctx.lineTo(x + half * 0.7, y0);
+        }
+        ctx.stroke();
+      });
+      ctx.restore();
+    };
+    const pShown = (v) => (v === null || v === undefined ? '—' : `${fmt(v, 3)} %`);
     linePlot(plots.support, {
-      x: { label: 'support position along the dip (m)', values: xs },
-      y: { label: 'fraction of runs (%)', range: [0, 100] },
+      x: { label: 'support number', values: xs, range: [xs[0] - 0.8, xs[xs.length - 1] + 0.8], value: where, ticks },
+      y: { label: `P(exceed) (%)${log ? ', log scale' : ''}`, range, log, ticks: (v) => fmt(v, 3) },
       series: [
-        { label: 'reached', values: sorted.map((e) => e.reached_fraction * 100), color: '#1d5fa8', points: true, pointSize: 4 },
-        { label: 'exceedance, within the acceptable probability', values: sorted.map((e) => (e.verdict === 'exceeded' ? null : e.risk * 100)), bars: true, color: '#2a8f4f' },
-        { label: 'exceedance, above the acceptable probability', values: sorted.map((e) => (e.verdict === 'exceeded' ? e.risk * 100 : null)), bars: true, color: '#c8423b' },
+        { label: 'P within the acceptable', values: sorted.map((e) => (e.verdict === 'exceeded' ? null : pOf(e))), points: 'only', color: GREEN, pointSize: 6, value: pShown },
+        { label: 'P above the acceptable', values: sorted.map((e) => (e.verdict === 'exceeded' ? pOf(e) : null)), points: 'only', color: RED, pointSize: 7, value: pShown },
+        { label: 'none exceeded: upper bound', values: sorted.map((e) => (e.risk > 0 ? null : pct(e.riskCi[1]))), points: 'only', color: GREY, pointSize: 6, pointFill: '#fff', value: pShown },
+        { label: '95 % upper bound', values: sorted.map((e) => pct(e.riskCi[1])), points: 'none', color: '#3b4350', value: pShown },
+        ...(acceptable > 0 ? [{ label: 'acceptable probability', values: sorted.map(() => pct(acceptable)), color: '#3b4350', dash: [6, 4], width: 1.5, value: pShown }] : []),
       ],
-      height: 260,
+      draw,
+      height: 280,
     });
+    plots.support.csv = () => [['support', 'column_index', 'along_dip_m', 'p_exceed', 'ci95_low', 'ci95_high', 'verdict'],
+      ...sorted.map((e) => [e.support, e.column_index ?? 0, e.along_dip_m, e.risk, e.riskCi[0], e.riskCi[1], e.verdict])];
+    const over = sorted.filter((e) => e.verdict === 'exceeded').sort(byRisk);
+    const top = [...sorted].sort(byRisk)[0];
+    supportSummary.textContent = `${sorted.length} support entries, #${sorted[0].support} to #${sorted[sorted.length - 1].support}; `
+      + `${over.length} above the acceptable probability of ${fmt(acceptable * 100, 3)} %${over.length ? ` (${over.slice(0, 8).map((e) => `#${e.support}`).join(', ')}${over.length > 8 ? ', …' : ''})` : ''}; `
+      + `largest P(exceed) ${fmt(top.risk * 100, 3)} % at #${top.support} (95 % interval ${fmt(top.riskCi[0] * 100, 2)}–${fmt(top.riskCi[1] * 100, 2)} %); `
+      + `${sorted.filter((e) => e.risk === 0).length} with no exceeding run. ${log ? 'Log scale: the values span decades.' : ''}`;
+    plots.support.setAttribute('role', 'img');
+    plots.support.setAttribute('aria-label', `Risk along the face: ${supportSummary.textContent}`);
+    plots.support.dataset.scale = log ? 'log' : 'linear';
+    plots.support.dataset.range = range.join(',');
   }
 
   /** Side view (a vertical section along the dip) and plan view, supports as vertical marks coloured by verdict. */

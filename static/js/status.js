@@ -2,7 +2,7 @@
 // summarised, with its field errors marked next to the inputs.
 
 import { fmt, h, humanMessage } from './format.js';
-import { clearErrors, locate, localise, markErrors, unitOf } from './form.js';
+import { clearErrors, focusFirstInvalid, locate, localise, markErrors, unitOf } from './form.js';
 
 export function showBusy(el, text) {
   el.hidden = false;
@@ -38,6 +38,8 @@ export function hideStatus(el) {
 export function showProblem(el, problem, { forms = [], endpoint = '', label = '' } = {}) {
   clearErrors(...forms);
   const unmatched = markErrors(problem.errors, forms);
+  // The first marked field takes the focus: typing corrects it at once.
+  if (unmatched.length < (problem.errors ?? []).length) queueMicrotask(() => focusFirstInvalid(forms));
   el.hidden = false;
   el.className = 'status error';
   el.replaceChildren();

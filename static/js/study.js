@@ -1,9 +1,9 @@
-// Study tab: POST /v1/study. Parameter ranges prefilled with the paper's
-// (physics.md §D.1); curves of each output against p/p_max, heat maps of the
+// Study tab: POST /v1/study. Parameter ranges prefilled with the paper's;
+// named and shown in the engineer's words and units (SI on the wire); curves of each output against p/p_max, heat maps of the
 // pair grids, the Figure 21 chart, sensitivity and ordering tables beside the
 // paper's, and a CSV of every table.
 
-import { parseNumber } from './form.js';
+import { parseNumber, toSi } from './form.js';
 import { fmt, h, showWarnings } from './format.js';
 import { initPanel } from './panel.js';
 import { destroy, linePlot } from './plot.js';
@@ -11,15 +11,79 @@ import { destroy, linePlot } from './plot.js';
 /** The server's default study (GET /v1/presets `defaults.study`): the paper's ranges and points. */
 let defaults = { parameters: [], points: '' };
 
+/** Study parameters in words: [name, symbol, display unit, decimal exponent from the unit to SI]. */
+const QUANTITIES = {
+  velocity_m_s: ['Impact velocity', 'v', 'm/s', 0],
+  'rock.side_length_m': ['Rock size', 'L', 'mm', -3],
+  'rock.elastic_modulus_pa': ['Rock elastic modulus', 'E', 'GPa', 9],
+  'rock.density_kg_m3': ['Rock density', 'ρ', 'kg/m³', 0],
+  'rock.poisson_ratio': ['Rock Poisson ratio', 'ν', '', 0],
+  'column.outer_diameter_m': ['Column outer diameter', 'D₁', 'mm', -3],
+  'column.inner_diameter_m': ['Column inner diameter', 'D₂', 'mm', -3],
+  'column.length_m': ['Column length', 'l', 'm', 0],
+  'column.elastic_modulus_pa': ['Column elastic modulus', 'Ec', 'GPa', 9],
+  'column.density_kg_m3': ['Column density', 'ρc', 'kg/m³', 0],
+  'column.poisson_ratio': ['Column Poisson ratio', 'νc', '', 0],
+  'column.yield_stress_pa': ['Column yield stress', 'σy', 'MPa', 6],
+};
+
+/** Study outputs in words: [name, display unit, factor from SI]. */
+const OUTPUTS = {
+  max_deformation_m: ['Max approach δmax', 'mm', 1e3],
+  max_force_n: ['Max force Pmax', 'kN', 1e-3],
+  absorbed_energy_j: ['Column energy', 'J', 1],
+  energy_ratio: ['Energy ratio (column / rock)', '', 1],
+  max_contact_deformation_m: ['Max contact approach δmax', 'mm', 1e3],
+  column_energy_after_contact_j: ['Column energy after contact', 'J', 1],
+  kinetic_energy_j: ['Rock kinetic energy', 'J', 1],
+  stress_utilisation: ['Stress utilisation σ/σy', '%', 100],
+  'max_bending_stress_pa.clamp': ['Bending stress at the clamp', 'MPa', 1e-6],
+  'max_bending_stress_pa.midpoint': ['Bending stress at mid-length', 'MPa', 1e-6],
+  initial_modal_displacement_m: ['Initial modal displacement', 'mm', 1e3],
+  max_midpoint_displacement_m: ['Mid-length displacement', 'mm', 1e3],
+  contact_count: ['Contacts', '', 1],
+  rebound_velocity_m_s: ['Rebound velocity', 'm/s', 1],
+  rock_velocity_end_m_s: ['Rock velocity at the end', 'm/s', 1],
+  column_energy_end_j: ['Column energy at the end', 'J', 1],
+  damping_energy_j: ['Energy lost to damping', 'J', 1],
+};
+
+const quantity = (name) => QUANTITIES[name] ?? [name, name, '', 0];
+/** "Rock elastic modulus E (GPa)". */
+export const paramWords = (name) => {
+  const [words, symbol, unit] = quantity(name);
+  return `${words}${QUANTITIES[name] ? ` ${symbol}` : ''}${unit ? ` (${unit})` : ''}`;
+};
+/** An SI value of a parameter in its display unit. */
+const paramShown = (name, si) => Number(`${si}e${-quantity(name)[3]}`);
+const outputWords = (o) => {
+  const [words, unit] = OUTPUTS[o] ?? [o, '', 1];
+  return unit ? `${words} (${unit})` : words;
+};
+const outputScale = (o) => OUTPUTS[o]?.[2] ?? 1;
+/** An ordering of parameter names ("a=b" ties) in symbols: "L > v > ρ = E". */
+const orderingWords = (list) => list.map((n) => n.split('=').map((x) => quantity(x)[1]).join(' = ')).join(' > ');
+/** Server notes without the specification's section numbers. */
+const plainNote = (text) => String(text ?? '').replace(/\s*\((?:see )?physics\.md[^)]*\)/g, '').replace(/physics\.md\s*§\s*[\w.]+/g, 'the physics notes');
+
 function paramRows(el, rows) {
   el.replaceChildren(
-    h('thead', {}, h('tr', {}, h('th', {}, 'parameter (dotted path)'), h('th', {}, 'min'), h('th', {}, 'max'), h('th', {}, 'use'))),
-    h('tbody', {}, ...rows.map(({ name, min, max }, i) => h('tr', {},
-      h('td', {}, h('input', { type: 'text', value: name, 'data-param': i, 'data-field': 'name', size: 24, id: `study-parameters-${i}-name`, 'data-target': `/parameters/${i}/name`, 'aria-label': `parameter ${i + 1}` })),
-      h('td', {}, h('input', { type: 'text', inputmode: 'decimal', value: min, 'data-param': i, 'data-field': 'min', id: `study-parameters-${i}-min`, 'data-target': `/parameters/${i}/min`, 'aria-label': `${name} min`, size: 10 })),
-      h('td', {}, h('input', { type: 'text', inputmode: 'decimal', value: max, 'data-param': i, 'data-field': 'max', id: `study-parameters-${i}-max`, 'data-target': `/parameters/${i}/max`, 'aria-label': `${name} max`, size: 10 })),
-      h('td', {}, h('input', { type: 'checkbox', checked: true, 'data-param': i, 'data-field': 'use', 'aria-label': `use ${name}` })),
-    ))),
+    h('thead', {}, h('tr', {}, h('th', {}, 'Parameter'), h('th', {}, 'from'), h('th', {}, 'to'), h('th', {}, 'unit'), h('th', {}, 'vary'))),
+    h('tbody', {}, ...rows.map(({ name, min, max }, i) => {
+      const [words, , unit, exp] = quantity(name);
+      const number = (field, value) => h('input', {
+        type: 'text', inputmode: 'decimal', value: paramShown(name, value), 'data-param': i, 'data-field': field, 'data-exp': exp,
+        id: `study-parameters-${i}-${field}`, 'data-target': `/parameters/${i}/${field}`, 'aria-label': `${words} ${field === 'min' ? 'from' : 'to'}${unit ? ` (${unit})` : ''}`, size: 10,
+      });
+      return h('tr', {},
+        h('th', { scope: 'row' }, h('input', { type: 'hidden', value: name, 'data-param': i, 'data-field': 'name', id: `study-parameters-${i}-name`, 'data-target': `/parameters/${i}/name` }),
+          paramWords(name).replace(/ \([^)]*\)$/, '')),
+        h('td', {}, number('min', min)),
+        h('td', {}, number('max', max)),
+        h('td', { class: 'unit' }, unit),
+        h('td', {}, h('input', { type: 'checkbox', checked: true, 'data-param': i, 'data-field': 'use', 'aria-label': `vary ${words}` })),
+      );
+    })),
   );
 }
 
@@ -33,7 +97,7 @@ function readRequest(form, table) {
     if (f === 'use') rows[i][f] = input.checked;
     else if (f === 'name') rows[i][f] = input.value.trim();
     else {
-      const parsed = parseNumber(input.value);
+      const parsed = parseNumber(input.value, Number(input.dataset.exp ?? 0));
       if (parsed.error) fieldErrors.push({ field: input.dataset.target, message: parsed.error });
       rows[i][f] = parsed.value;
     }
@@ -63,9 +127,8 @@ function csv(rows) {
   }).join(',')).join('\n') + '\n';
 }
 
-function csvLink(rows, name) {
-  const a = h('a', { class: 'csv', download: name, href: `data:text/csv;charset=utf-8,${encodeURIComponent(csv(rows))}` }, `CSV: ${name}`);
-  return a;
+function csvLink(rows, name, words = 'this table') {
+  return h('a', { class: 'csv', download: name, title: `Download ${name}`, href: `data:text/csv;charset=utf-8,${encodeURIComponent(csv(rows))}` }, `CSV: ${words}`);
 }
 
 function tableOf(rows, name, { numeric = true } = {}) {
@@ -77,27 +140,80 @@ function tableOf(rows, name, { numeric = true } = {}) {
     csvLink(rows, name));
 }
 
+/** A colour from blue (low) to red (high), t in [0, 1]. */
+const heat = (t) => `hsl(${220 - 220 * t}, 70%, ${35 + 25 * t}%)`;
+
+/** A heat map with ticks on both axes (parameters in their units) and a colour bar (the output in its unit). */
 function heatMap(grid, output) {
-  const z = grid[output];
+  const scale = outputScale(output);
+  const z = grid[output].map((row) => row.map((v) => v * scale));
   const ny = z.length;
   const nx = z[0].length;
-  const flat = z.flat();
-  const lo = Math.min(...flat);
-  const hi = Math.max(...flat);
-  const cw = 36;
-  const ch = 24;
-  const canvas = h('canvas', { width: nx * cw, height: ny * ch, role: 'img', 'aria-label': `${output} over ${grid.x} and ${grid.y}` });
+  let lo = Infinity;
+  let hi = -Infinity;
+  for (const row of z) for (const v of row) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+  const cw = Math.max(14, Math.min(40, Math.floor(300 / nx)));
+  const ch = Math.max(12, Math.min(28, Math.floor(220 / ny)));
+  const left = 64;
+  const bottom = 44;
+  const top = 10;
+  const bar = 70;
+  const W = left + nx * cw + bar;
+  const H = top + ny * ch + bottom;
+  const xs = grid.x_values.map((v) => paramShown(grid.x, v));
+  const ys = grid.y_values.map((v) => paramShown(grid.y, v));
+  const summary = `${outputWords(output)} over ${paramWords(grid.x)} (${fmt(xs[0], 4)} to ${fmt(xs[nx - 1], 4)}) and ${paramWords(grid.y)} (${fmt(ys[0], 4)} to ${fmt(ys[ny - 1], 4)}): from ${fmt(lo, 4)} (blue) to ${fmt(hi, 4)} (red)`;
+  const canvas = h('canvas', { width: W, height: H, role: 'img', 'aria-label': summary });
   const ctx = canvas.getContext('2d');
+  ctx.fillStyle = '#fff';
+  ctx.fillRect(0, 0, W, H);
   for (let i = 0; i < ny; i += 1) {
     for (let j = 0; j < nx; j += 1) {
-      const t = hi > lo ? (z[i][j] - lo) / (hi - lo) : 0.5;
-      ctx.fillStyle = `hsl(${220 - 220 * t}, 70%, ${35 + 25 * t}%)`;
+      ctx.fillStyle = heat(hi > lo ? (z[i][j] - lo) / (hi - lo) : 0.5);
       // Row 0 (y min) at the bottom.
-      ctx.fillRect(j * cw, (ny - 1 - i) * ch, cw, ch);
+      ctx.fillRect(left + j * cw, top + (ny - 1 - i) * ch, cw, ch);
     }
   }
-  return h('figure', { class: 'heatmap' }, canvas,
-    h('figcaption', {}, `${output}: x = ${grid.x} (${fmt(grid.x_values[0])} → ${fmt(grid.x_values[nx - 1])}), y = ${grid.y} (${fmt(grid.y_values[0])} bottom → ${fmt(grid.y_values[ny - 1])} top); ${fmt(lo)} (blue) to ${fmt(hi)} (red)`));
+  ctx.fillStyle = '#1c2430';
+  ctx.strokeStyle = '#3b4350';
+  ctx.font = '10px system-ui, sans-serif';
+  // Ticks: every cell when they fit, else about five.
+  const every = (n, room) => Math.max(1, Math.ceil(n / Math.max(1, Math.floor(room))));
+  ctx.textAlign = 'center';
+  for (let j = 0; j < nx; j += every(nx, (nx * cw) / 44)) {
+    const x = left + (j + 0.5) * cw;
+    ctx.beginPath(); ctx.moveTo(x, top + ny * ch); ctx.lineTo(x, top + ny * ch + 4); ctx.stroke();
+    ctx.fillText(fmt(xs[j], 3), x, top + ny * ch + 14);
+  }
+  ctx.textAlign = 'right';
+  for (let i = 0; i < ny; i += every(ny, (ny * ch) / 16)) {
+    const y = top + (ny - 1 - i + 0.5) * ch;
+    ctx.beginPath(); ctx.moveTo(left - 4, y); ctx.lineTo(left, y); ctx.stroke();
+    ctx.fillText(fmt(ys[i], 3), left - 6, y + 3);
+  }
+  ctx.textAlign = 'center';
+  ctx.font = '600 10px system-ui, sans-serif';
+  ctx.fillText(paramWords(grid.x), left + (nx * cw) / 2, top + ny * ch + 32);
+  ctx.save();
+  ctx.translate(12, top + (ny * ch) / 2);
+  ctx.rotate(-Math.PI / 2);
+  ctx.fillText(paramWords(grid.y), 0, 0);
+  ctx.restore();
+  // The colour bar: the output's range, low at the bottom.
+  const bx = left + nx * cw + 12;
+  const bh = ny * ch;
+  for (let k = 0; k < bh; k += 1) {
+    ctx.fillStyle = heat(1 - k / Math.max(1, bh - 1));
+    ctx.fillRect(bx, top + k, 12, 1);
+  }
+  ctx.strokeRect(bx, top, 12, bh);
+  ctx.fillStyle = '#1c2430';
+  ctx.font = '10px system-ui, sans-serif';
+  ctx.textAlign = 'left';
+  for (const [t, v] of [[0, hi], [0.5, (lo + hi) / 2], [1, lo]]) ctx.fillText(fmt(v, 3), bx + 16, top + t * bh + 4);
+  canvas.dataset.bar = `${bx},${top},${bh}`;
+  return h('figure', { class: 'heatmap' }, h('figcaption', { class: 'heatmap-title' }, outputWords(output)), canvas,
+    h('figcaption', { class: 'note' }, summary));
 }
 
 function render(data, els) {
@@ -108,9 +224,9 @@ function render(data, els) {
   els.curves.replaceChildren();
   for (const o of outputs) {
     const plot = h('div', { class: 'plot' });
-    els.curves.append(h('div', { class: 'card' }, h('h3', {}, o), plot));
+    els.curves.append(h('div', { class: 'card' }, h('h3', {}, outputWords(o)), plot));
     const n = data.inputs.points;
-    const series = params.map((p) => ({ label: p, values: data.curves[p][o] }));
+    const series = params.map((p) => ({ label: paramWords(p).replace(/ \([^)]*\)$/, ''), values: data.curves[p][o].map((v) => v * outputScale(o)) }));
     // Each curve on its own x = p/p_max: join on a common axis.
     const xs = [...new Set(params.flatMap((p) => data.curves[p].values.map((v) => v / data.inputs.parameters.find((q) => q.name === p).max)))].sort((a, b) => a - b);
     const aligned = series.map((s, k) => {
@@ -119,37 +235,40 @@ function render(data, els) {
       const map = new Map(data.curves[p].values.map((v, i) => [v / max, s.values[i]]));
       return { ...s, values: xs.map((x) => map.get(x) ?? null), points: true, pointSize: 5 };
     });
-    if (n >= 2) linePlot(plot, { x: { label: 'p / p_max', values: xs }, y: { label: o }, series: aligned });
+    if (n >= 2) linePlot(plot, { x: { label: 'parameter ÷ its largest value', values: xs }, y: { label: outputWords(o) }, series: aligned });
   }
 
   // Figure 21.
   const ep = data.energy_proportion;
   linePlot(els.fig21, {
-    x: { label: 'x = p / p_max', values: ep.x },
+    x: { label: 'x = parameter ÷ its largest value', values: ep.x },
     y: { label: `energy ratio (${ep.model})` },
-    series: params.map((p) => ({ label: p, values: ep.curves[p], points: true, pointSize: 6 })),
+    series: params.map((p) => ({ label: paramWords(p).replace(/ \([^)]*\)$/, ''), values: ep.curves[p], points: true, pointSize: 6 })),
   });
-  const epRows = [['x', ...params, 'ordering (highest first)'], ...ep.x.map((x, i) => [fmt(x, 4), ...params.map((p) => ep.curves[p][i]), ep.orderings[i].join(' > ')])];
+  const epRows = [['x = p ÷ largest', ...params.map((p) => quantity(p)[1]), 'ordering (highest first)'], ...ep.x.map((x, i) => [fmt(x, 4), ...params.map((p) => ep.curves[p][i]), orderingWords(ep.orderings[i])])];
   els.fig21Table.replaceChildren(tableOf(epRows, 'energy_proportion.csv'));
 
   // Sensitivity tables.
   els.sensitivity.replaceChildren();
   for (const o of outputs) {
     const s = data.sensitivity[o];
-    const rows = [['parameter', 'low', 'high', 'span/base', 'ratio', 'elasticity'],
+    const [, unit] = OUTPUTS[o] ?? [o, ''];
+    const k = outputScale(o);
+    const rows = [['parameter', `output at the low end${unit ? ` (${unit})` : ''}`, `at the high end${unit ? ` (${unit})` : ''}`, 'span / base', 'high / low', 'elasticity'],
       ...params.map((p) => {
         const m = s.parameters[p];
-        return [p, m.low, m.high, m.span_over_base, m.ratio, m.elasticity];
+        return [paramWords(p).replace(/ \([^)]*\)$/, ''), m.low * k, m.high * k, m.span_over_base, m.ratio, m.elasticity];
       })];
+    const MEASURES = { span_over_base: 'span / base', ratio: 'high / low', elasticity: 'elasticity' };
     const orderRows = [['measure', 'ordering (largest first)'],
-      ...Object.entries(s.ordering).map(([k, v]) => [k, v.join(' > ')])];
-    els.sensitivity.append(h('div', { class: 'card' }, h('h3', {}, `${o} (base ${fmt(s.base)})`),
+      ...Object.entries(s.ordering).map(([m, v]) => [MEASURES[m] ?? m, orderingWords(v)])];
+    els.sensitivity.append(h('div', { class: 'card' }, h('h3', {}, `${outputWords(o)}: base ${fmt(s.base * k)}`),
       tableOf(rows, `sensitivity_${o}.csv`), tableOf(orderRows, `ordering_${o}.csv`, { numeric: false })));
   }
 
   // Paper comparison.
   const cmp = [['item', 'paper', 'ours', 'reproduced', 'note'],
-    ...data.paper_comparison.map((c) => [c.item, c.paper, c.ours, c.reproduced ? 'yes' : 'no', c.note])];
+    ...data.paper_comparison.map((c) => [c.item, c.paper, c.ours, c.reproduced ? 'yes' : 'no', plainNote(c.note)])];
   els.paper.replaceChildren(data.paper_comparison.length
     ? tableOf(cmp, 'paper_comparison.csv', { numeric: false })
     : h('p', { class: 'note' }, 'No comparison: the paper states its orderings for its own four parameters and ranges.'));
@@ -158,8 +277,9 @@ function render(data, els) {
   els.grids.replaceChildren();
   for (const g of data.grids ?? []) {
     for (const o of outputs) {
-      const rows = [[`${g.y} \\ ${g.x}`, ...g.x_values], ...g.y_values.map((y, i) => [y, ...g[o][i]])];
-      els.grids.append(h('div', { class: 'card' }, heatMap(g, o), csvLink(rows, `grid_${g.x}_${g.y}_${o}.csv`)));
+      const rows = [[`${paramWords(g.y)} \\ ${paramWords(g.x)}: ${outputWords(o)}`, ...g.x_values.map((v) => paramShown(g.x, v))],
+        ...g.y_values.map((y, i) => [paramShown(g.y, y), ...g[o][i].map((v) => v * outputScale(o))])];
+      els.grids.append(h('div', { class: 'card' }, heatMap(g, o), csvLink(rows, `grid_${g.x}_${g.y}_${o}.csv`, 'this grid')));
     }
   }
 }

@@ -254,8 +254,11 @@ async function pageSection(page) {
     assert(await page.locator('#study-form input[name="points"]').inputValue() === String(study.points), 'study points');
     for (const [i, p] of study.parameters.entries()) {
       for (const key of ['name', 'min', 'max']) {
-        const v = await page.locator(`#study-parameters-${i}-${key}`).inputValue();
-        assert(key === 'name' ? v === p.name : Number(v) === p[key], `study parameter ${i} ${key}: ${v} vs ${p[key]}`);
+        const input = page.locator(`#study-parameters-${i}-${key}`);
+        const v = await input.inputValue();
+        // shown in the display unit: SI = value × 10^data-exp
+        const si = key === 'name' ? v : Number(`${v}e${(await input.getAttribute('data-exp')) ?? 0}`);
+        assert(key === 'name' ? v === p.name : si === p[key], `study parameter ${i} ${key}: ${v} vs ${p[key]}`);
       }
     }
     for (const [i, z] of presets.defaults.spalling.zones.entries()) {
@@ -349,6 +352,31 @@ async function pageSection(page) {
   await check('page: no select option is clipped by its box', async () => {
     const clipped = await clippedSelects(page);
     assert(clipped.length === 0, clipped.join('; '));
+  });
+
+  await check('page: the guide is open on the first visit and folded after it; the Scene\'s Compute is in view at once', async () => {
+    await page.evaluate(() => localStorage.removeItem('gangue.guide'));
+    await open(page);
+    assert(await page.locator('#guide').evaluate((d) => d.open), 'the guide is folded on the first visit');
+    await open(page);
+    assert(!(await page.locator('#guide').evaluate((d) => d.open)), 'the guide is open again on a second visit');
+    await page.locator('#guide > summary').click();
+    await open(page);
+    assert(await page.locator('#guide').evaluate((d) => d.open), 'a guide left open by the engineer is folded');
+    await page.locator('#guide > summary').click();
+    await open(page);
+    const button = page.locator('#scene-form button[type="submit"]');
+    const box = await button.evaluate((b) => {
+      const r = b.getBoundingClientRect();
+      const hit = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
+      return { top: r.top + window.scrollY, bottom: r.bottom, inner: window.innerHeight, hit: hit === b || b.contains(hit) };
+    });
+    assert(box.bottom <= Math.min(box.inner, 1800) && box.hit, `Compute scene at ${Math.round(box.top)} px (window ${box.inner} px); uncovered: ${box.hit}`);
+    await page.mouse.wheel(0, 1200);
+    await page.waitForTimeout(200);
+    const after = await button.evaluate((b) => { const r = b.getBoundingClientRect(); return r.top >= 0 && r.bottom <= window.innerHeight; });
+    assert(after, 'Compute scene scrolls out of view halfway down the form');
+    await page.evaluate(() => window.scrollTo(0, 0));
   });
 }
 
@@ -457,6 +485,26 @@ async function impactSection(page) {
     assert(sent === 0, `${sent} request(s) sent`);
     assert(await page.locator('[data-out="max_force_n"]').count() === 0, 'the old result is still shown');
     assert(await page.locator('#impact-checks tr').count() === 0, 'the old verdicts are still shown');
+  });
+
+  await check('impact: the focus moves to the first invalid field, marked aria-invalid and described by its message', async () => {
+    await open(page, '#impact');
+    await field(page, '#impact-form', '/rock/density_kg_m3').fill('abc');
+    await field(page, '#impact-form', '/velocity_m_s').fill('');
+    await page.locator('#impact-form button[type="submit"]').click();
+    await page.waitForTimeout(200);
+    const state = await page.evaluate(() => {
+      const a = document.activeElement;
+      const ids = (a.getAttribute('aria-describedby') ?? '').split(/\s+/).filter(Boolean);
+      return { pointer: a.dataset?.pointer, invalid: a.getAttribute('aria-invalid'), described: ids.map((id) => document.getElementById(id)?.textContent ?? '').join(' | ') };
+    });
+    const first = await page.locator('#impact-form [aria-invalid="true"]').first().getAttribute('data-pointer');
+    assert(state.pointer === first, `focus on ${state.pointer}, the first invalid field is ${first}`);
+    assert(state.invalid === 'true' && /required|not a number/.test(state.described), `focused field: aria-invalid ${state.invalid}, described by "${state.described}"`);
+    await page.locator('#impact-form button[type="reset"]').click();
+    await page.waitForTimeout(100);
+    const left = await page.locator('#impact-form [aria-describedby*="field-error"]').count();
+    assert(left === 0, `${left} fields still described by a cleared error`);
   });
 
   await check('impact: a server range error is worded in the field\'s unit, marked, with no pointer or HTTP code in the summary', async () => {
@@ -769,6 +817,57 @@ async function floorSection(page) {
     await err.waitFor({ state: 'visible', timeout: WAIT_MS });
     assert(/choose a floor file/.test(await err.textContent()), await err.textContent());
   });
+
+  await check('floors: a 200 000-cell grid is read and drawn (no call-stack overflow)', async () => {
+    await open(page, '#migration');
+    await page.locator('#floor-kind').selectOption('upload');
+    const ncols = 500;
+    const nrows = 400;
+    const rows = [];
+    for (let r = 0; r < nrows; r += 1) {
+      rows.push(Array.from({ length: ncols }, (_, c) => (-(c * 0.25) + 0.01 * Math.sin(r)).toFixed(3)).join(' '));
+    }
+    const text = `ncols ${ncols}\nnrows ${nrows}\nxllcenter 0\nyllcenter 0\ncellsize 0.25\n${rows.join('\n')}\n`;
+    await page.locator('#floor-file').setInputFiles({ name: 'big.asc', mimeType: 'text/plain', buffer: Buffer.from(text) });
+    await page.locator('#floor-canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const info = await page.locator('#floor-info').textContent();
+    assert(/500 × 400 grid/.test(info), `preview: ${info}`);
+    const alt = await page.locator('#floor-canvas').getAttribute('aria-label');
+    assert(/big\.asc.*500 × 400 grid/.test(alt), `the drawn floor's text alternative: ${alt}`);
+    assert(!(await page.locator('#floor-file-error').isVisible()), `refused: ${await page.locator('#floor-file-error').textContent()}`);
+  });
+
+  await check('floors: a file over the service\'s body limit is refused beside the file field, naming the limit; nothing is sent', async () => {
+    const limits = (await (await fetch(`${BASE}/v1/presets`)).json()).limits;
+    const limit = limits?.max_body_bytes ?? 16 * 1024 * 1024;
+    let sent = 0;
+    const count = (r) => { if (r.url().endsWith('/v1/migration')) sent += 1; };
+    page.on('request', count);
+    await page.locator('#floor-file').setInputFiles({ name: 'huge.asc', mimeType: 'text/plain', buffer: Buffer.alloc(limit + 1024, 0x30) });
+    const err = page.locator('#migration-form .field-file #floor-file-error');
+    await err.waitFor({ state: 'visible', timeout: WAIT_MS });
+    const words = await err.textContent();
+    assert(words.includes(`${limit / (1024 * 1024)} MiB`) && /huge\.asc/.test(words), `refusal: ${words}`);
+    assert(await page.locator('#floor-file').getAttribute('aria-invalid') === 'true', 'the file field is not marked invalid');
+    await page.locator('#migration-form button[type="submit"]').click();
+    await page.waitForTimeout(500);
+    assert(await err.isVisible() && words === await err.textContent(), 'the refusal went away on Compute');
+    page.off('request', count);
+    assert(sent === 0, `${sent} requests sent with a refused file`);
+  });
+
+  await check('floors: a grid with letters is refused in the preview, and the refusal stays visible', async () => {
+    await page.locator('#floor-file').setInputFiles({ name: 'letters.asc', mimeType: 'text/plain', buffer: Buffer.from('ncols 2\nnrows 2\nxllcenter 0\nyllcenter 0\ncellsize 1\n0 -1\n0 abc\n') });
+    const err = page.locator('#floor-file-error');
+    await err.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/line 7: "abc" is not a number/.test(await err.textContent()), await err.textContent());
+    assert(!(await page.locator('#floor-canvas').isVisible()), 'a refused grid is drawn');
+    await page.locator('#floor-kind').selectOption('plane');
+    await page.locator('#floor-kind').selectOption('upload');
+    assert(await err.isVisible() && /not a number/.test(await err.textContent()), 'the read error was overwritten');
+    assert(!/^Choose a file/.test(await page.locator('#floor-info').textContent()), 'the info still says "Choose a file" over the refusal');
+    await screenshot(page, 'floor-refused.png');
+  });
 }
 
 async function caseSection(page, context) {
@@ -855,6 +954,27 @@ async function phoneSection(context) {
     assert(clipped.length === 0, `at 390 px: ${clipped.join('; ')}`);
     await page.close();
   });
+
+  await check('phone 390 px: the Scene shows each support\'s verdict and P(exceed) without scrolling sideways', async () => {
+    const page = await context.newPage();
+    await page.setViewportSize({ width: 390, height: 844 });
+    if (await endpointStatus('/v1/scene') === 404) {
+      await page.route('**/v1/scene', (route) => route.fulfill({ status: 200, contentType: 'application/json', body: JSON.stringify(sceneFixture(JSON.parse(route.request().postData()))) }));
+    }
+    await open(page);
+    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    await submit(page, '#scene-form', '/v1/scene');
+    const row = page.locator('#scene-table tbody tr').first();
+    await row.waitFor({ state: 'visible', timeout: WAIT_MS });
+    await row.scrollIntoViewIfNeeded();
+    const boxes = await row.evaluate((tr) => [...tr.children].slice(0, 3).map((c) => c.getBoundingClientRect().right));
+    assert(boxes.every((r) => r <= 390), `support, verdict and P(exceed) end at ${boxes.map(Math.round).join(', ')} px in a 390 px window`);
+    assert(/P\(exceed\)/.test(await page.locator('#scene-table thead th').nth(2).textContent()), 'the third column is not P(exceed)');
+    await noHorizontalScroll(page, 'scene');
+    await page.locator('#scene-table').scrollIntoViewIfNeeded();
+    await page.screenshot({ path: path.join(ARTIFACTS, 'phone-scene.png') });
+    await page.close();
+  });
 }
 
 /**
@@ -897,6 +1017,7 @@ function sceneFixture(request) {
 }
 
 async function sceneSection(page) {
+  let lastScene = null;
   const status = await endpointStatus('/v1/scene');
   const real = status !== 404;
   if (!real) {
@@ -936,6 +1057,7 @@ async function sceneSection(page) {
     const text = await response.text();
     const lines = text.trim().split('\n').map((l) => JSON.parse(l));
     const answer = lines.find((l) => l.result)?.result ?? lines[lines.length - 1];
+    lastScene = answer;
     const worst = answer.statistics.supports.filter((x) => x.verdict === 'exceeded').length;
     assert(await page.locator('#scene-table tbody tr.verdict-exceeded').count() === worst, 'exceeded rows differ from the answer');
     assert(/never reached/.test(await page.locator('#scene-table').textContent()), 'an unreached support is not said so');
@@ -943,12 +1065,139 @@ async function sceneSection(page) {
     assert(warned <= 6, `${warned} warning lines: repeated warnings are not folded`);
     assert(await page.locator('#scene-dist-table tbody tr').count() === 5, 'no distributions for the chosen support');
     const csv = await downloaded(page, page.locator('#panel-scene .card:has(#scene-table) .export-bar [data-csv]'));
-    assert(csv.bytes.toString('utf8').startsWith('Support,Column,Along the dip'), `per-support CSV: ${csv.bytes.toString('utf8').slice(0, 60)}`);
+    assert(csv.bytes.toString('utf8').startsWith('Support,Verdict,P(exceed)'), `per-support CSV: ${csv.bytes.toString('utf8').slice(0, 60)}`);
     const runs = await downloaded(page, page.locator('[data-csv="scene_runs.csv"]'));
     assert(runs.bytes.toString('utf8').startsWith('run,'), 'runs CSV header');
   });
 
   await screenshot(page, 'scene.png');
+
+  await check(`scene${what}: the Answer names the supports that exceed, worst first, with their positions`, async () => {
+    const answer = lastScene;
+    const over = answer.statistics.supports.filter((x) => x.verdict === 'exceeded');
+    const worstP = (x) => Math.max(0, ...Object.values(x.exceedance ?? {}).map((v) => v.probability));
+    over.sort((a, b) => worstP(b) - worstP(a));
+    const list = page.locator('#scene-summary [data-out="scene.exceeded"]');
+    await list.waitFor({ state: 'visible', timeout: WAIT_MS });
+    if (!over.length) {
+      assert(/No support exceeds/.test(await list.textContent()), 'no words when nothing exceeds');
+      return;
+    }
+    const named = await list.locator('li').evaluateAll((lis) => lis.map((li) => ({ support: Number(li.dataset.support), text: li.textContent })));
+    assert(named.length === Math.min(12, over.length), `${named.length} supports named, ${over.length} exceed`);
+    assert(named[0].support === over[0].support, `first named #${named[0].support}, worst is #${over[0].support}`);
+    assert(named[0].text.includes(`${over[0].along_dip_m}`.slice(0, 3)) && /along the dip/.test(named[0].text), `no position: ${named[0].text}`);
+    for (let i = 1; i < named.length; i += 1) {
+      const p = (n) => worstP(answer.statistics.supports.find((x) => x.support === n));
+      assert(p(named[i - 1].support) >= p(named[i].support), 'not worst first');
+    }
+  });
+
+  await check(`scene${what}: the risk plot shows P(exceed) per support with its interval on an axis scaled to the data`, async () => {
+    const answer = lastScene;
+    const plot = await page.locator('#scene-support-plot').evaluate((el) => ({
+      range: el.dataset.range.split(',').map(Number), scale: el.dataset.scale, data: el.uplot.data, label: el.getAttribute('aria-label'),
+      ticks: el.uplot.axes[0].values(el.uplot, [3, 3.5, 10]),
+    }));
+    const highs = answer.statistics.supports.flatMap((x) => Object.values(x.exceedance).map((v) => v.ci95[1] * 100));
+    const top = Math.max(...highs);
+    assert(plot.range[1] >= top && plot.range[1] <= Math.max(10 * top, 1), `y axis ${plot.range} for a largest upper bound of ${top} %`);
+    assert(plot.range[1] < 100 || top > 50, 'the axis is the fixed 0–100 %');
+    // x in support numbers; a support with P = 0 shows its upper bound; the threshold is a line
+    assert(plot.data[0].length === answer.statistics.supports.length, 'not one x per support');
+    assert(plot.ticks.join() === '#3,,#10', `x ticks are not support numbers: ${plot.ticks.join(' | ')}`);
+    const zero = answer.statistics.supports.findIndex((x) => Object.values(x.exceedance).every((v) => v.probability === 0));
+    if (zero >= 0) {
+      const order = [...answer.statistics.supports].sort((a, b) => a.support - b.support);
+      const k = order.indexOf(answer.statistics.supports[zero]);
+      assert(Math.abs(plot.data[3][k] - Math.max(...Object.values(order[k].exceedance).map((v) => v.ci95[1])) * 100) < 1e-9, 'P = 0 has no upper bound drawn');
+    }
+    const acceptable = answer.inputs?.design_limits?.acceptable_probability ?? 0.01;
+    assert(plot.data[5].every((v) => Math.abs(v - acceptable * 100) < 1e-9), 'no acceptable-probability line');
+    assert(/largest P\(exceed\)/.test(plot.label), `no text alternative: ${plot.label}`);
+    // hovering a support shows its number and position along the dip
+    const over = page.locator('#scene-support-plot .u-over');
+    await over.scrollIntoViewIfNeeded();
+    const box = await over.boundingBox();
+    await page.mouse.move(box.x + box.width * 0.5, box.y + box.height * 0.5);
+    await page.mouse.move(box.x + box.width * 0.52, box.y + box.height * 0.5);
+    const hover = await page.locator('#scene-support-plot .u-legend .u-series').first().locator('.u-value').textContent();
+    assert(/^#\d+ at [\d.]+ m$/.test(hover.trim()), `hover shows "${hover}"`);
+  });
+
+  await check(`scene${what}: every drawn plot has a text alternative (what against what, over which ranges)`, async () => {
+    const plots = await page.locator('#panel-scene .plot').evaluateAll((els) => els.filter((el) => el.querySelector('canvas'))
+      .map((el) => ({ id: el.id, role: el.getAttribute('role'), label: el.getAttribute('aria-label') ?? '' })));
+    assert(plots.length >= 4, `${plots.length} plots drawn`);
+    for (const p of plots) {
+      assert(p.role === 'img' && p.label.length > 30 && /\d/.test(p.label), `${p.id}: role ${p.role}, text "${p.label}"`);
+    }
+    assert(/^Plot of .*against along the dip/.test(plots.find((p) => p.id === 'scene-side-plot').label), 'the side view is not described');
+  });
+
+  await check(`scene${what}: the per-support table puts exceeded first, filters and sorts; send buttons keep rows one line and name the statistic`, async () => {
+    const rows = page.locator('#scene-table tbody tr');
+    const exceeded = await page.locator('#scene-table tbody tr.verdict-exceeded').count();
+    if (exceeded) assert(/verdict-exceeded/.test(await rows.first().getAttribute('class')), 'the first row is not an exceeded support');
+    const heights = await rows.evaluateAll((trs) => trs.map((tr) => tr.getBoundingClientRect().height));
+    const withButton = await rows.evaluateAll((trs) => trs.map((tr) => Boolean(tr.querySelector('button.send'))));
+    assert(withButton.some(Boolean), 'no send buttons');
+    assert(Math.max(...heights) <= 1.4 * Math.min(...heights), `row heights ${Math.min(...heights)}–${Math.max(...heights)} px: a button makes rows tall`);
+    await page.locator('#scene-filter').selectOption('exceeded');
+    assert(await rows.count() === exceeded, `exceeded filter shows ${await rows.count()} rows, ${exceeded} exceed`);
+    await page.locator('#scene-filter').selectOption('risk');
+    const ps = await page.locator('#scene-table tbody td[data-p]').evaluateAll((tds) => tds.map((td) => Number(td.dataset.p)));
+    assert(ps.every((p) => p > 0), 'P > 0 filter keeps a zero');
+    await page.locator('#scene-filter').selectOption('all');
+    await page.locator('#scene-sort').selectOption('p');
+    const sortedP = await page.locator('#scene-table tbody td[data-p]').evaluateAll((tds) => tds.map((td) => Number(td.dataset.p)));
+    assert(sortedP.every((p, i) => i === 0 || sortedP[i - 1] >= p), 'not sorted by P(exceed)');
+    await page.locator('#scene-sort').selectOption('support');
+    const numbers = await page.locator('#scene-table tbody th').evaluateAll((ths) => ths.map((t) => Number(t.textContent.slice(1))));
+    assert(numbers.every((n, i) => i === 0 || numbers[i - 1] <= n), 'not sorted by support number');
+    await page.locator('#scene-sort').selectOption('risk');
+    await page.locator('#scene-send-stat').selectOption('max');
+    const send = page.locator('#scene-table tbody button.send:not([disabled])').first();
+    const text = await send.textContent();
+    assert(/^max /.test(text), `the button does not say which statistic it sends: ${text}`);
+    const answers = [page.waitForResponse((r) => r.url().endsWith('/v1/impact') && r.request().method() === 'POST', { timeout: WAIT_MS }),
+      page.waitForResponse((r) => r.url().endsWith('/v1/column') && r.request().method() === 'POST', { timeout: WAIT_MS })];
+    await send.click();
+    const [impact, column] = await Promise.all(answers);
+    assert(impact.status() === 200 && column.status() === 200, `impact ${impact.status()}, column ${column.status()}`);
+    const sent = Number(await page.locator('#impact-form [data-pointer="/velocity_m_s"]').inputValue());
+    assert(Math.abs(sent - parseShown(text.replace(/^max /, ''))) <= 1e-3 * sent, `sent ${sent}, button says ${text}`);
+    const note = await page.locator('#impact-source').textContent();
+    assert(await page.locator('#impact-source').isVisible() && /largest impact speed at support #\d+/.test(note), `Impact does not say where its speed came from: ${note}`);
+    assert(/from the Scene/.test(await page.locator('#column-source').textContent()), 'Column does not say where its speed came from');
+    await page.locator('#impact-form [data-pointer="/velocity_m_s"]').fill('12');
+    assert(!(await page.locator('#impact-source').isVisible()), 'a typed speed still claims to come from the Scene');
+    await page.locator('#tab-scene').click();
+  });
+
+  await check(`scene${what}: a risk spanning decades is drawn on a log axis; P = 0 at its upper bound`, async () => {
+    const decades = async (route) => {
+      const request = JSON.parse(route.request().postData());
+      const body = sceneFixture({ ...request, support_rows: { ...request.support_rows, count: 6 } });
+      const ps = [0.3, 0.02, 0.0005, 0, 0, 0];
+      body.statistics.supports.forEach((x, k) => {
+        x.exceedance.stress_utilisation = { probability: ps[k], ci95: ps[k] ? [ps[k] / 2, ps[k] * 1.5] : [0, 0.0004] };
+        x.verdict = ps[k] > 0.01 ? 'exceeded' : 'ok';
+      });
+      await route.fulfill({ status: 200, contentType: 'application/json', body: JSON.stringify(body) });
+    };
+    await page.route('**/v1/scene', decades);
+    await page.locator('#scene-form input[name="scene_monte_carlo"]').check();
+    await submit(page, '#scene-form', '/v1/scene');
+    await page.locator('#scene-table tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
+    const plot = await page.locator('#scene-support-plot').evaluate((el) => ({ range: el.dataset.range.split(',').map(Number), scale: el.dataset.scale }));
+    assert(plot.scale === 'log', `scale ${plot.scale} for P from 0.025 % to 45 %`);
+    assert(plot.range[0] <= 0.02 && plot.range[0] > 0 && plot.range[1] >= 45, `log range ${plot.range}`);
+    const names = await page.locator('#scene-summary [data-out="scene.exceeded"] li').evaluateAll((lis) => lis.map((li) => li.dataset.support));
+    assert(names.join() === '1,2', `exceeded named ${names.join()}`);
+    await page.locator('#scene-support-plot').screenshot({ path: path.join(ARTIFACTS, 'scene-risk-log.png') });
+    await page.unroute('**/v1/scene', decades);
+  });
 
   await check(`scene${what}: a single run shows its impact, and one click sends it to the Impact tab`, async () => {
     await page.locator('#scene-form input[name="scene_monte_carlo"]').uncheck();
@@ -976,8 +1225,11 @@ async function studySection(page) {
   await check('study: the paper ranges run; Figure 21 is drawn and Pmax L > v > ρ > E is reproduced', async () => {
     await open(page, '#study');
     const min = await page.locator('#study-parameters-1-min').inputValue();
-    assert(Number(min) === 0.2, `L min prefilled with the paper's 0.2, got ${min}`);
+    assert(Number(min) === 200, `L min prefilled with the paper's 200 mm, got ${min}`);
+    const sent = page.waitForRequest((r) => r.url().endsWith('/v1/study'));
     await page.locator('#study-form button[type="submit"]').click();
+    const body = JSON.parse((await sent).postData());
+    assert(body.parameters[1].name === 'rock.side_length_m' && body.parameters[1].min === 0.2 && body.parameters[2].max === 6e9, `SI not sent: ${JSON.stringify(body.parameters)}`);
     await page.locator('#study-fig21 canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
     const text = await page.locator('#study-paper').textContent();
     assert(text.includes('Figures 12–20 Pmax ordering (elasticity)'), 'paper comparison table shown');
@@ -986,6 +1238,39 @@ async function studySection(page) {
   });
 
   await screenshot(page, 'study.png');
+
+  await check('study: the tab speaks in labels and units (no dotted field names, Pa or section numbers); heat maps have ticks and a colour bar', async () => {
+    await page.locator('#study-form select[name="grid"]').selectOption('pairs');
+    await page.locator('#study-form input[name="points"]').fill('5');
+    await page.locator('#study-form button[type="submit"]').click();
+    const map = page.locator('#study-grids figure.heatmap canvas').first();
+    await map.waitFor({ state: 'visible', timeout: WAIT_MS });
+    const text = await page.locator('#panel-study').innerText();
+    for (const bad of ['rock.elastic_modulus_pa', 'rock.side_length_m', 'velocity_m_s', '§', 'physics.md', 'p_max)', '_pa', 'hertz_point']) {
+      const at = text.indexOf(bad);
+      assert(at < 0, `the Study tab shows "${bad}": …${text.slice(Math.max(0, at - 80), at + 40)}…`);
+    }
+    assert(/Rock elastic modulus/.test(text) && /GPa/.test(text) && /Max force Pmax \(kN\)/.test(text), 'no engineer\'s labels and units');
+    const [wide, room] = await page.locator('#study-parameters').evaluate((t) => [t.scrollWidth, t.closest('.table-scroll').clientWidth]);
+    assert(wide <= room, `the ranges table is ${wide} px in a ${room} px column: its units are cut off`);
+    const info = await map.evaluate((c) => {
+      const [bx, top, bh] = c.dataset.bar.split(',').map(Number);
+      const px = (x, y) => [...c.getContext('2d').getImageData(x, y, 1, 1).data];
+      // tick labels left of the cells and under them are drawn (dark pixels in the margins)
+      const dark = (x0, y0, w, hh) => {
+        const d = c.getContext('2d').getImageData(x0, y0, w, hh).data;
+        let n = 0;
+        for (let i = 0; i < d.length; i += 4) if (d[i] < 120 && d[i + 1] < 120 && d[i + 2] < 120) n += 1;
+        return n;
+      };
+      return { high: px(bx + 6, top + 2), low: px(bx + 6, top + bh - 2), leftTicks: dark(20, top, 40, bh), bottomTicks: dark(64, top + bh + 6, bx - 80, 12), label: c.getAttribute('aria-label') };
+    });
+    assert(info.high[0] > info.high[2] && info.low[2] > info.low[0], `colour bar not red over blue: ${info.high} / ${info.low}`);
+    assert(info.leftTicks > 20 && info.bottomTicks > 20, `no tick labels (${info.leftTicks}, ${info.bottomTicks} dark pixels)`);
+    assert(/\(kN\)|\(mm\)|\(J\)/.test(info.label) && /from .* to /.test(info.label), `heat map text alternative: ${info.label}`);
+    await page.locator('#study-grids .card').first().screenshot({ path: path.join(ARTIFACTS, 'study-heatmap.png') });
+    await screenshot(page, 'study-pairs.png');
+  });
 
   await check('study: letters in a range are a field error beside it; the old result is cleared', async () => {
     await page.locator('#study-parameters-1-min').fill('x');
@@ -1018,6 +1303,8 @@ async function spallingSection(page) {
     await page.locator('#spalling-zones-0-spalling_and_high').fill('50');
     const response = await submit(page, '#spalling-form', '/v1/spalling');
     assert(response.status() === 422, `status ${response.status()}`);
+    // the answer is read and marked after it arrives
+    await page.locator('#spalling-input [aria-invalid="true"]').first().waitFor({ state: 'attached', timeout: WAIT_MS }).catch(() => {});
     const marked = await page.locator('#spalling-input [aria-invalid="true"]').count();
     assert(marked >= 1, 'no count marked');
     const summary = await page.locator('#spalling-status .summary').textContent();
