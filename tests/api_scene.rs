@@ -747,3 +747,39 @@ async fn a_support_between_the_lifted_start_and_the_release_point_is_reached_dur
         }
     }
 }
+
+/// Release zones reaching where the block does not fit (the top 0.15 m of a grid, where a
+/// 0.3 m cube overhangs its upper edge) are clipped to where it does, with a warning giving the
+/// share clipped (0.1504/2 of a zone [0, 2] m); no run is lost off the floor (7 % were).
+#[tokio::test]
+async fn release_zones_are_clipped_to_where_the_block_fits_on_the_floor() {
+    let app = common::app();
+    let row: Vec<f64> = (0..18).map(|j| -f64::from(j)).collect();
+    let body = json!({
+        "method": "rigid_block",
+        "face": {"dip_deg": 45, "length_m": 20,
+                 "floor": {"kind": "grid", "origin_m": [0, -3], "spacing_m": 1,
+                           "heights_m": vec![row; 7]}},
+        "release": {"drop_height_m": 0},
+        "release_zones": [{"from_along_dip_m": 0, "to_along_dip_m": 2, "weight": 1}],
+        "monte_carlo": {"runs": 12, "seed": 7},
+        "supports": [{"along_dip_m": 10}],
+    });
+    let b = ok(&post(&app, "/v1/scene", &body).await);
+    let o = &b["statistics"]["outcomes"];
+    assert_eq!(o["left_floor"], 0.0, "{o}");
+    assert_eq!(o["support"], 1.0, "{o}");
+    let w = b["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|w| w["code"] == "release_zones_clipped")
+        .unwrap_or_else(|| panic!("{}", b["warnings"]));
+    let m = w["message"].as_str().unwrap();
+    let pct: f64 = m.split(" %").next().unwrap().parse().unwrap();
+    let r_max = 3f64.sqrt() * 0.3 / 2.0;
+    assert!(
+        (7.5..=100.0 * (0.15 + 2e-3 * r_max) / 2.0 + 0.005).contains(&pct),
+        "{m}"
+    );
+}

@@ -649,14 +649,7 @@ impl<'a> Model<'a> {
             })?;
         let pl = floor.facet_plane(facet);
         let nf = pl.normal();
-        let rest_normal = shape.rest_normal();
-        let q_face = UnitQuaternion::rotation_between(&rest_normal, &(-Vector3::z()))
-            .unwrap_or_else(|| {
-                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
-            });
-        let q_tilt = UnitQuaternion::rotation_between(&Vector3::z(), &nf)
-            .unwrap_or_else(UnitQuaternion::identity);
-        let q0 = q_tilt * q_face;
+        let q0 = shape.resting_orientation(&nf);
         let rest_offset = shape.rest_height() - static_overlap;
         let c0 = floor_pt + nf * rest_offset + Vector3::z() * rel.drop_height;
         let mean = floor.mean;
@@ -935,7 +928,9 @@ pub(crate) fn run_part(
         });
     }
     let r = if nominal {
-        Some(nominal_run(case, &model, control)?)
+        let mut r = nominal_run(case, &model, control)?;
+        super::start_and_end_warnings(&pr, &mut r);
+        Some(r)
     } else {
         None
     };
