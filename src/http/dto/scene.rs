@@ -946,7 +946,8 @@ pub struct SceneResponse {
     /// Both methods side by side (compare_methods).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub comparison: Option<Vec<MethodComparisonDto>>,
-    /// Named warnings.
+    /// Named warnings, among them `release_zones_clipped` (the share of the release zones'
+    /// weight where the rock does not fit on the floor, clipped off) and those of the migration.
     pub warnings: Vec<super::Warning>,
     /// The fully resolved request.
     pub inputs: SceneRequest,

@@ -512,3 +512,75 @@ pub(super) fn lumped_mass_setup<'a>(case: &'a MigrationCase, pr: &'a Prepared) -
         base: (pr.base, pr.release_along),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Over a 45° grid (x in [0, 17], y in [−3, 3] m), a 0.3 × 0.2 × 0.5 m block: where every
+    /// corner of the resting block is over the floor it is placed as asked (and everywhere at
+    /// least r_max inside the edges it is); elsewhere it is placed where every corner is, at most
+    /// two bounding radii away, and never where the stop rule would end the run at once.
+    #[test]
+    fn a_placed_block_rests_with_every_corner_over_the_floor() {
+        let dip = 45f64.to_radians();
+        let heights: Vec<Vec<f64>> = (0..7)
+            .map(|_| (0..18).map(|j| -f64::from(j)).collect())
+            .collect();
+        let floor = Floor::grid(dip, [0.0, -3.0], 1.0, &heights).unwrap();
+        let shape = BlockShape::cuboid([0.3, 0.2, 0.5], 2700.0);
+        let r = shape.r_max;
+        let (mut moved, mut kept) = (0, 0);
+        for i in 0..=60 {
+            for j in 0..=40 {
+                let x = -0.2 + 17.4 * f64::from(i) / 60.0;
+                let y = -3.2 + 6.4 * f64::from(j) / 40.0;
+                if floor.locate(x, y, 0.0, 0.0).is_none() {
+                    continue;
+                }
+                let inside = x >= r && x <= 17.0 - r && y.abs() <= 3.0 - r;
+                if fits(&floor, Some(&shape), x, y).is_some() {
+                    kept += 1;
+                    continue;
+                }
+                assert!(
+                    !inside,
+                    "({x}, {y}) is {r} m inside the edges and does not fit"
+                );
+                let (x2, y2, f) = place_block(&floor, &shape, x, y)
+                    .unwrap_or_else(|| panic!("({x}, {y}) not placed"));
+                assert!((x2 - x).hypot(y2 - y) <= RELEASE_MOVE_RADII * r * (1.0 + 1e-12));
+                assert_eq!(fits(&floor, Some(&shape), x2, y2), Some(f));
+                for d in footprint(&shape, &floor.facet_plane(f).normal()) {
+                    assert!(floor.locate(x2 + d[0], y2 + d[1], 0.0, 0.0).is_some());
+                }
+                moved += 1;
+            }
+        }
+        assert!(moved > 100 && kept > 1000, "{moved} moved, {kept} kept");
+    }
+
+    /// The along-dip interval where the 0.3 m cube fits at y = 0 on that grid starts half its
+    /// side down the dip from the upper edge and ends half its side (plus the rest height's
+    /// reach down the dip of the top face) above the lower edge; a point mass fits on all of it.
+    #[test]
+    fn the_release_span_is_where_the_block_fits() {
+        let mut case = MigrationCase::default();
+        let row: Vec<f64> = (0..18).map(|j| -f64::from(j)).collect();
+        case.face.floor = FloorSpec::Grid {
+            origin: [0.0, -3.0],
+            spacing: 1.0,
+            heights: vec![row; 7],
+        };
+        let floor = build_floor(&case).unwrap();
+        let end = 17.0 * 2f64.sqrt();
+        let (a, b) = release_span(&case, &floor).unwrap().unwrap();
+        assert!(a.abs() < 1e-9 && (b - end).abs() < 1e-9, "[{a}, {b}]");
+        case.method = Method::RigidBlock;
+        let (a, b) = release_span(&case, &floor).unwrap().unwrap();
+        // the cube's faces are ±0.15 m along the dip about its centre, whose foot is the point;
+        // the top face lies 0.3 m up the normal, which leans down the dip in plan
+        assert!((a - 0.15).abs() < 1e-6, "{a}");
+        assert!(b < end - 0.15 && b > end - 0.5, "{b}");
+    }
+}

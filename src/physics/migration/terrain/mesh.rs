@@ -339,3 +339,51 @@ fn outside_the_contours(tris: &[[u32; 3]], nbr: &[[u32; 3]], line_of: &[usize]) 
     }
     removed
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A top contour bowed down the dip (an arc between (0, ±6) through (0.6, 0)) above a
+    /// straight one: the triangulation joins the arc's points across its chord into level
+    /// triangles at the top contour's elevation, beyond the data. They are removed: the point
+    /// between the chord and the arc is off the floor, every remaining facet slopes, and the
+    /// floor below the top contour is kept.
+    #[test]
+    fn no_level_apron_beyond_the_highest_contour() {
+        let arc: Vec<[f64; 2]> = (0..=24)
+            .map(|k| {
+                let y = -6.0 + 0.5 * f64::from(k);
+                [0.6 * (1.0 - (y / 6.0).powi(2)), y]
+            })
+            .collect();
+        let lines = vec![
+            ContourLine {
+                elevation: 0.0,
+                points: arc,
+            },
+            ContourLine {
+                elevation: -3.0,
+                points: vec![[3.0, -6.0], [3.0, 6.0]],
+            },
+        ];
+        let floor = Floor::contours(45f64.to_radians(), &lines, 0.5).unwrap();
+        // between the chord x = 0 and the arc, at y = 0: up the dip of the top contour
+        assert!(floor.locate(0.3, 0.0, 0.0, 0.0).is_none());
+        // below the top contour: floor, sloping
+        let f = floor
+            .locate(1.5, 0.0, 0.0, 0.0)
+            .expect("floor below the top contour");
+        assert!(floor.facet_plane(f).normal().z < 0.99);
+        let FloorKind::Mesh(m) = &floor.kind else {
+            panic!("a mesh")
+        };
+        assert!(m.holes.iter().any(|&h| h));
+        for (i, t) in m.tris.iter().enumerate() {
+            let level = t
+                .iter()
+                .all(|&v| m.xyz[v as usize][2] == m.xyz[t[0] as usize][2]);
+            assert!(!level || m.holes[i], "level facet {i} kept: {t:?}");
+        }
+    }
+}
