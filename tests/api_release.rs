@@ -191,6 +191,37 @@ async fn a_release_the_floor_cannot_hold_is_422_with_where_it_fits() {
         rel(number_after(m, "at most"), 17.0 * 2f64.sqrt()) < 1e-9,
         "{m}"
     );
+    // over a hole (a NODATA node at x = 6 m, y = 0 of a 30° plane grid, x in [0, 20] m): the
+    // message gives the floor's along-dip span at that across position, [0, 20/cos 30°]
+    let mut asc = String::from(
+        "ncols 41\nnrows 9\nxllcenter 0\nyllcenter -2\ncellsize 0.5\nNODATA_value -9999\n",
+    );
+    for i in (0..9).rev() {
+        let row: Vec<String> = (0..41)
+            .map(|j| {
+                if i == 4 && j == 12 {
+                    "-9999".to_string()
+                } else {
+                    format!("{}", -(f64::from(j) * 0.5) * 30f64.to_radians().tan())
+                }
+            })
+            .collect();
+        asc.push_str(&row.join(" "));
+        asc.push('\n');
+    }
+    let th = 30f64.to_radians();
+    let body = json!({"face": {"dip_deg": 30, "length_m": 20,
+                               "floor": {"kind": "grid", "esri_ascii": asc}},
+                      "release": {"along_dip_m": 6.0 / th.cos()}});
+    let r = post(&app, "/v1/migration", &body).await;
+    let p = assert_problem(&r, 422, "invalid_input");
+    assert_eq!(p["errors"][0]["field"], "/release/along_dip_m", "{p}");
+    let m = p["errors"][0]["message"].as_str().unwrap();
+    assert!(number_after(m, "in [").abs() < 1e-4, "{m}");
+    assert!(
+        (number_after(m, ", ") - 20.0 / th.cos()).abs() < 1e-4,
+        "{m}"
+    );
     // a strip 0.2 m wide holds no 0.3 m cube anywhere
     let body = json!({"method": "rigid_block",
                       "face": {"length_m": 10, "floor": planar_grid(0.0, 0.1, 3, 120)}});

@@ -100,10 +100,22 @@ pub(super) fn prepare_on(case: &MigrationCase, floor: Arc<Floor>) -> PhysicsResu
                 Some(mean.along(&Vector3::new(x, y, z)))
             };
             let off = || {
+                let span = along_span(&floor, None, y).map_or_else(
+                    || "the floor is nowhere along the dip at this across_m".to_string(),
+                    |(a, b)| {
+                        format!(
+                            "at across_m = {y} m the floor spans along_dip_m in [{a:.4}, {b:.4}] m, \
+                             holes excepted"
+                        )
+                    },
+                );
                 PhysicsError::invalid(
                     Param::ReleaseAlongDip,
                     rel.along_dip,
-                    "the release point is not on the floor at this across-dip position (outside it or over a hole)",
+                    format!(
+                        "the release point is not on the floor at this across-dip position \
+                         (outside it or over a hole): {span}"
+                    ),
                 )
             };
             // the part of the line y = across that lies over the floor (a contour set's hull
