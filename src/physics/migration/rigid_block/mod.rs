@@ -1493,8 +1493,9 @@ mod tests {
         }
     }
 
-    /// The review's repro: a block dropped 3.27 m onto a 40° plane grid at its upper edge
-    /// (along_dip 0) lands with half of it beyond the edge. It leaves the floor there at the
+    /// A block dropped 3.27 m onto a 40° plane grid at its upper edge (along_dip 0) is placed
+    /// half its side down the dip, where every corner is over the floor; put back on the edge,
+    /// it lands with half of it beyond the edge. It leaves the floor there at the
     /// landing speed √(2 g h). Carried on without that stop, its corners came back over the
     /// floor deep and threw it off at 143 m/s; the onset offsets now keep their springs from
     /// creating that energy, so even then the block is never faster than its fall allows.
@@ -1516,6 +1517,9 @@ mod tests {
         };
         let pr = super::super::prepare(&c).unwrap();
         let mut model = Model::new(&c, &pr).unwrap();
+        let [ds, dy] = pr.moved.expect("moved onto the floor");
+        assert!((ds - 0.15).abs() < 1e-3 && dy == 0.0, "{ds} {dy}");
+        model.c0 -= model.mean.dip_dir() * ds;
         let (mu, beta) = (
             c.face.friction_coefficient,
             c.rigid_block.critical_damping_ratio,
