@@ -647,7 +647,7 @@ fn clip_zones(
         })
         .collect();
     let left: f64 = clipped.iter().map(|z| z.weight).sum();
-    if !(left > 0.0) {
+    if left <= 0.0 || left.is_nan() {
         return Err(PhysicsError::invalid(
             Param::ReleaseZones,
             0.0,
