@@ -691,3 +691,95 @@ async fn a_refused_output_field_names_the_scene_output_object() {
         assert_eq!(got, want, "{body}: {p}");
     }
 }
+
+/// During the initial drop the rock's along-dip position runs from s₀ − h sin θ (the release
+/// point lifted by h) to s₀, so a support standing in that interval, up-slope of the release
+/// point, is reached in the fall by both kinds of support and both methods: on the plane the
+/// rock (or the block's centre) moves as s(t) = s₀ − h sin θ + v₀ t + ½ g sin θ t², and a
+/// spanning support at s_c is reached when s = s_c, a column on the rock's line when
+/// s = s_c − R (R = D/2 + √3 L/2), both before the landing at t = √(2h/g).
+#[tokio::test]
+async fn a_support_between_the_lifted_start_and_the_release_point_is_reached_during_the_drop() {
+    let app = common::app();
+    let repro: Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            common::shared_dir().join("repro/scene_support_above_release.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let req = &repro["request"];
+    let th = req["face"]["dip_deg"].as_f64().unwrap().to_radians();
+    let s0 = req["release"]["along_dip_m"].as_f64().unwrap();
+    let h = req["release"]["drop_height_m"].as_f64().unwrap();
+    let v0 = req["release"]["speed_m_s"].as_f64().unwrap();
+    let sc = req["supports"][0]["along_dip_m"].as_f64().unwrap();
+    let g = 9.81;
+    let start = s0 - h * th.sin();
+    assert!(start < sc && sc < s0);
+    let t_land = (2.0 * h / g).sqrt();
+    // the default rock (cube, L = 0.3 m) and column (D = 0.25 m)
+    let reach = 0.25 / 2.0 + 3f64.sqrt() * 0.3 / 2.0;
+    let a = g * th.sin();
+    for method in ["lumped_mass", "rigid_block"] {
+        for (across, s_reach) in [(Value::Null, sc), (json!(0.0), sc - reach)] {
+            assert!(s_reach > start);
+            let mut body = req.clone();
+            body["method"] = json!(method);
+            body["supports"][0]["across_m"] = across.clone();
+            let b = ok(&post(&app, "/v1/scene", &body).await);
+            let arr = &b["migration"]["arrival"];
+            let what = format!("{method}, across {across}");
+            assert_eq!(arr["stop_reason"], "support", "{what}: {arr}");
+            // ½ a t² + v₀ t − (s_reach − start) = 0
+            let t = 2.0 * (s_reach - start) / (v0 + (v0 * v0 + 2.0 * a * (s_reach - start)).sqrt());
+            let t_got = arr["time_s"].as_f64().unwrap();
+            assert!(
+                t < t_land && rel(t_got, t) < 1e-9,
+                "{what}: t {t_got} vs {t}"
+            );
+            assert!(
+                arr["normal_offset_m"].as_f64().unwrap() > 1.0,
+                "{what}: {arr}"
+            );
+            let v = b["impacts"][0]["impact_velocity_m_s"].as_f64().unwrap();
+            assert!(rel(v, v0 + a * t) < 1e-9, "{what}: v {v} vs {}", v0 + a * t);
+        }
+    }
+}
+
+/// Release zones reaching where the block does not fit (the top 0.15 m of a grid, where a
+/// 0.3 m cube overhangs its upper edge) are clipped to where it does, with a warning giving the
+/// share clipped (0.1504/2 of a zone [0, 2] m); no run is lost off the floor (7 % were).
+#[tokio::test]
+async fn release_zones_are_clipped_to_where_the_block_fits_on_the_floor() {
+    let app = common::app();
+    let row: Vec<f64> = (0..18).map(|j| -f64::from(j)).collect();
+    let body = json!({
+        "method": "rigid_block",
+        "face": {"dip_deg": 45, "length_m": 20,
+                 "floor": {"kind": "grid", "origin_m": [0, -3], "spacing_m": 1,
+                           "heights_m": vec![row; 7]}},
+        "release": {"drop_height_m": 0},
+        "release_zones": [{"from_along_dip_m": 0, "to_along_dip_m": 2, "weight": 1}],
+        "monte_carlo": {"runs": 12, "seed": 7},
+        "supports": [{"along_dip_m": 10}],
+    });
+    let b = ok(&post(&app, "/v1/scene", &body).await);
+    let o = &b["statistics"]["outcomes"];
+    assert_eq!(o["left_floor"], 0.0, "{o}");
+    assert_eq!(o["support"], 1.0, "{o}");
+    let w = b["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|w| w["code"] == "release_zones_clipped")
+        .unwrap_or_else(|| panic!("{}", b["warnings"]));
+    let m = w["message"].as_str().unwrap();
+    let pct: f64 = m.split(" %").next().unwrap().parse().unwrap();
+    let r_max = 3f64.sqrt() * 0.3 / 2.0;
+    assert!(
+        (7.5..=100.0 * (0.15 + 2e-3 * r_max) / 2.0 + 0.005).contains(&pct),
+        "{m}"
+    );
+}

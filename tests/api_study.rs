@@ -437,3 +437,90 @@ async fn a_field_refused_while_solving_a_point_is_named_as_sent() {
         "{line}"
     );
 }
+
+/// A sweep of the column's outer diameter above the inner one (0.235 m) is a valid study: the
+/// energy-proportion points x·max that fall at or below the inner diameter are left out
+/// (`null`, warned), the defined ones equal separate column calls bit for bit, and a sweep
+/// whose own end is below the inner diameter is still refused naming that end.
+#[tokio::test]
+async fn an_outer_diameter_sweep_is_not_refused_for_its_energy_proportion_points() {
+    let app = common::app();
+    let repro: Value = serde_json::from_str(
+        &std::fs::read_to_string(common::shared_dir().join("repro/study_outer_diameter.json"))
+            .unwrap(),
+    )
+    .unwrap();
+    let req = &repro["request"];
+    let r = post(&app, "/v1/study", req).await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    let name = "column.outer_diameter_m";
+    // the requested sweep: 5 points from 0.24 to 0.30 m, each a separate column call
+    let values = b["curves"][name]["values"].as_array().unwrap();
+    assert_eq!(values.len(), 5);
+    for (k, v) in values.iter().enumerate() {
+        let body = json!({"column": {"outer_diameter_m": v}});
+        let want = column_value(&app, &body, "max_force_n").await;
+        let got = b["curves"][name]["max_force_n"][k].as_f64().unwrap();
+        assert_eq!(got.to_bits(), want.to_bits(), "max_force_n at {v}");
+    }
+    assert!(b["sensitivity"]["max_force_n"]["parameters"][name]["low"].is_number());
+    // default x = [2/3, 3/4, 5/6, 11/12, 1] of max 0.3 m: 0.2, 0.225 are not above the inner
+    // diameter 0.235 m; 0.25, 0.275, 0.3 are
+    let x = b["energy_proportion"]["x"].as_array().unwrap();
+    let curve = b["energy_proportion"]["curves"][name].as_array().unwrap();
+    assert_eq!(curve.len(), x.len());
+    let inner = 0.235;
+    let mut defined = 0;
+    for (k, xv) in x.iter().enumerate() {
+        let d = xv.as_f64().unwrap() * 0.3;
+        if d <= inner {
+            assert!(curve[k].is_null(), "x = {xv}: {}", curve[k]);
+            assert!(
+                b["energy_proportion"]["orderings"][k]
+                    .as_array()
+                    .unwrap()
+                    .is_empty()
+            );
+        } else {
+            let want = column_value(
+                &app,
+                &json!({"column": {"outer_diameter_m": d}}),
+                "energy_ratio",
+            )
+            .await;
+            assert_eq!(
+                curve[k].as_f64().unwrap().to_bits(),
+                want.to_bits(),
+                "x = {xv}"
+            );
+            assert_eq!(b["energy_proportion"]["orderings"][k], json!([name]));
+            defined += 1;
+        }
+    }
+    assert_eq!(defined, 3);
+    let w: Vec<&Value> = b["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|w| w["code"] == "energy_proportion_undefined")
+        .collect();
+    assert_eq!(w.len(), 1, "{}", b["warnings"]);
+    assert!(
+        w[0]["message"]
+            .as_str()
+            .unwrap()
+            .contains("inner_diameter_m"),
+        "{}",
+        w[0]
+    );
+    // the sweep's own points are still checked strictly
+    let r = post(
+        &app,
+        "/v1/study",
+        &json!({"parameters": [{"name": name, "min": 0.2, "max": 0.3}]}),
+    )
+    .await;
+    let p = assert_problem(&r, 422, "invalid_input");
+    assert_eq!(p["errors"][0]["field"], "/parameters/0/min", "{p}");
+}

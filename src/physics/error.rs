@@ -125,6 +125,8 @@ pub enum Param {
     ReleaseAcross,
     /// Along-dip release position, m.
     ReleaseAlongDip,
+    /// The release zones of a scene ensemble.
+    ReleaseZones,
     /// Rock–floor friction coefficient.
     FaceFriction,
     /// Distribution of the drawn friction coefficient of an ensemble.

@@ -572,6 +572,7 @@ pub fn scene_stream(seed: u64, index: u64) -> rand_pcg::Pcg64 {
 /// and mass.
 fn run_case(
     case: &SceneCase,
+    zones: Option<&[ReleaseZone]>,
     seed: u64,
     index: u64,
 ) -> Result<(MigrationCase, Rock, f64, f64), PhysicsError> {
@@ -580,7 +581,7 @@ fn run_case(
     m.output.trajectory = false;
     m.output.runs_csv = false;
     let mut rng = scene_stream(seed, index);
-    if let Some(zones) = &case.release_zones {
+    if let Some(zones) = zones {
         let total: f64 = zones.iter().map(|z| z.weight).sum();
         let u = monte_carlo::uniform01(&mut rng) * total;
         let mut acc = 0.0;
@@ -611,6 +612,69 @@ fn run_case(
     m.supports = stops(case, r);
     let rock = m.rock.clone();
     Ok((m, rock, r, mass))
+}
+
+/// The release zones clipped to the along-dip interval `span` where a release fits on the floor
+/// ([`migration::release_span`]; `None`: every position does), each zone's weight scaled by the
+/// share of its length kept (a zone of zero length: kept whole or dropped), and the share of
+/// the total weight clipped off.
+///
+/// Errors: nothing of the zones left (`InvalidInput` naming the zones, with the interval).
+fn clip_zones(
+    zones: &[ReleaseZone],
+    span: Option<(f64, f64)>,
+) -> Result<(Vec<ReleaseZone>, f64), PhysicsError> {
+    let Some((a, b)) = span else {
+        return Ok((zones.to_vec(), 0.0));
+    };
+    let total: f64 = zones.iter().map(|z| z.weight).sum();
+    let clipped: Vec<ReleaseZone> = zones
+        .iter()
+        .map(|z| {
+            let (from, to) = (z.from.max(a), z.to.min(b));
+            let kept = if z.to > z.from {
+                ((to - from) / (z.to - z.from)).clamp(0.0, 1.0)
+            } else if (a..=b).contains(&z.from) {
+                1.0
+            } else {
+                0.0
+            };
+            ReleaseZone {
+                from: from.clamp(a, b),
+                to: to.clamp(a, b).max(from.clamp(a, b)),
+                weight: if kept > 0.0 { z.weight * kept } else { 0.0 },
+            }
+        })
+        .collect();
+    let left: f64 = clipped.iter().map(|z| z.weight).sum();
+    if left <= 0.0 || left.is_nan() {
+        return Err(PhysicsError::invalid(
+            Param::ReleaseZones,
+            0.0,
+            format!(
+                "no release zone lies where the rock fits on the floor at the release's \
+                 across position: along_dip_m in [{a:.4}, {b:.4}] m"
+            ),
+        ));
+    }
+    let share = if total > 0.0 { 1.0 - left / total } else { 0.0 };
+    Ok((clipped, share.max(0.0)))
+}
+
+/// The warning for release zones reaching where the rock does not fit on the floor.
+fn clipped_zones_warning(share: f64, span: (f64, f64)) -> SceneWarning {
+    SceneWarning {
+        code: "release_zones_clipped",
+        message: format!(
+            "{:.2} % of the release zones' weight lies where the rock does not fit on the floor \
+             at the release's across position (along_dip_m outside [{:.4}, {:.4}] m: the point \
+             off the floor, or the resting block overhanging its edge): the zones were clipped \
+             to that interval and their releases drawn inside it",
+            100.0 * share,
+            span.0,
+            span.1
+        ),
+    }
 }
 
 /// Sets the rock's side length to `l`, scaling a sphere's radius and a cuboid's edges with it.
@@ -739,6 +803,14 @@ pub fn solve_nominal(
             _ => "the release of the request",
         },
     ));
+    if let (Some(z), Some(_)) = (&case.release_zones, &case.migration.monte_carlo) {
+        let floor = migration::build_floor(&case.migration)?;
+        let span = migration::release_span(&case.migration, &floor)?;
+        let (_, share) = clip_zones(z, span)?;
+        if let (Some(span), true) = (span, share > 0.0) {
+            warnings.push(clipped_zones_warning(share, span));
+        }
+    }
     let mut nominal_case = case.migration.clone();
     nominal_case.supports = stops(case, r_rock);
     let mc = nominal_case.monte_carlo.take();
@@ -948,8 +1020,12 @@ fn ensemble(
     // the floor depends on the face only, which no draw changes: built once for every run
     control.check()?;
     let floor = migration::build_floor(&case.migration)?;
+    let zones = match &case.release_zones {
+        Some(z) => Some(clip_zones(z, migration::release_span(&case.migration, &floor)?)?.0),
+        None => None,
+    };
     let one = |i: u64| -> SceneResult<SceneRun> {
-        let (mut m, rock, _, mass) = run_case(case, mc.seed, i)?;
+        let (mut m, rock, _, mass) = run_case(case, zones.as_deref(), mc.seed, i)?;
         m.monte_carlo = None;
         let summary = migration::ensemble_run(&m, &floor, mc, i, control)?;
         let Some(k) = summary.support else {

@@ -104,7 +104,7 @@ const ROWS = [
   { key: 'arrival.normal_velocity_m_s', label: 'Normal velocity', symbol: '<i>v</i><sub>n</sub>', unit: 'm/s', sig: 5, noise: (d) => d.arrival.speed_m_s },
   { key: 'arrival.angular_speed_rad_s', label: 'Rotation speed', symbol: '<i>ω</i>', unit: 'rad/s', sig: 5, noise: (d) => d.arrival.speed_m_s / (d.inputs?.rock?.side_length_m ?? 1) },
   { key: 'arrival.stop_reason', label: 'Outcome', symbol: '', words: (_, d) => outcomeWords(d) },
-  { key: 'arrival.phase', label: 'Motion at the end', symbol: '', words: (p) => PHASE_WORDS[p] ?? p },
+  { key: 'arrival.phase', label: 'Motion at the end', symbol: '', words: (p, d) => (d.arrival.stop_reason === 'left_floor' ? 'left the floor' : PHASE_WORDS[p] ?? p) },
   { key: 'arrival.along_dip_m', label: 'Final position along the dip', symbol: '<i>s</i>', unit: 'm', sig: 5 },
   { key: 'impact_count', label: 'Impacts', symbol: '' },
   { key: 'slide_start_along_dip_m', label: 'Ground phase starts at', symbol: '<i>s</i>', unit: 'm', sig: 6 },
@@ -477,7 +477,11 @@ export function outcomeWords(data) {
     case 'lower_end': return `reached the lower end of the face (${at}) at ${fmt(a.speed_m_s, 4)} m/s`;
     case 'at_rest': return `came to rest at ${at}`;
     case 'end_time': return `still moving at the end time, at ${at}`;
-    case 'left_floor': return `left the floor at ${at}`;
+    case 'left_floor': {
+      // the service says where and past which boundary (warning left_floor)
+      const why = (data.warnings ?? []).find((w) => w.code === 'left_floor');
+      return why ? why.message : `left the floor at ${at}`;
+    }
     case 'support': return `struck a support at ${at}`;
     default: return `${a.stop_reason} at ${at}`;
   }

@@ -337,7 +337,11 @@ export function initScene() {
       const impacts = data.impacts ?? [];
       if (!impacts.length) {
         const a = data.migration?.arrival;
-        summary.append(h('p', { class: 'answer' }, 'The rock reached no support', a ? ` (it ${a.stop_reason === 'at_rest' ? 'came to rest' : a.stop_reason.replace(/_/g, ' ')} at ${fmt(a.along_dip_m, 4)} m along the dip).` : '.'));
+        const words = { at_rest: 'came to rest', left_floor: 'left the floor', lower_end: 'reached the lower end', end_time: 'was still moving at the end time' };
+        summary.append(h('p', { class: 'answer' }, 'The rock reached no support', a ? ` (it ${words[a.stop_reason] ?? a.stop_reason.replace(/_/g, ' ')} at ${fmt(a.along_dip_m, 4)} m along the dip).` : '.'));
+        // where and past which boundary a run left the floor (warning left_floor)
+        const left = (data.migration?.warnings ?? []).find((w) => w.code === 'left_floor');
+        if (left) summary.append(h('p', {}, left.message));
       }
       if (impacts.length > 1) summary.append(exceededAnswer(entries));
       for (const imp of impacts) appendImpact(imp);

@@ -66,6 +66,7 @@ fn place(param: Param) -> Place {
         Param::FloorResolution => Path("/face/floor/resolution_m".into()),
         Param::ReleaseAcross => Path("/release/across_m".into()),
         Param::ReleaseAlongDip => Path("/release/along_dip_m".into()),
+        Param::ReleaseZones => Path("/release_zones".into()),
         Param::FaceFriction => Path("/face/friction_coefficient".into()),
         Param::DrawnFriction => Path("/monte_carlo/friction_coefficient".into()),
         Param::FaceNormalStiffness => Path("/face/normal_stiffness_n_m".into()),

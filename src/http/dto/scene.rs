@@ -29,6 +29,10 @@ use crate::physics::scene::{
 #[serde(deny_unknown_fields, default)]
 pub struct SupportDto {
     /// Along-dip position in the mean plane, m, in [0, face.length_m] (default: the lower end).
+    /// The rock reaches a spanning support when its along-dip position passes the support's,
+    /// a column when its distance in the mean plane from the axis falls to the reach; during
+    /// the drop its along-dip position runs from release.along_dip_m − drop_height_m·sin θ to
+    /// release.along_dip_m, so either kind standing there is reached in the fall.
     #[schema(minimum = 0.0, maximum = 10000.0, example = 60.0)]
     #[serde(deserialize_with = "super::common::some")]
     pub along_dip_m: Option<f64>,
@@ -942,7 +946,8 @@ pub struct SceneResponse {
     /// Both methods side by side (compare_methods).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub comparison: Option<Vec<MethodComparisonDto>>,
-    /// Named warnings.
+    /// Named warnings, among them `release_zones_clipped` (the share of the release zones'
+    /// weight where the rock does not fit on the floor, clipped off) and those of the migration.
     pub warnings: Vec<super::Warning>,
     /// The fully resolved request.
     pub inputs: SceneRequest,

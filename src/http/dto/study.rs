@@ -185,6 +185,10 @@ pub struct StudyGridDto {
     pub outputs: OrderedMap<Vec<Vec<f64>>>,
 }
 
+/// Warning code: an energy-proportion point x·max of a parameter is not a valid column request
+/// (e.g. an outer diameter at or below the inner one); its ratio is `null`.
+pub const ENERGY_PROPORTION_UNDEFINED: &str = "energy_proportion_undefined";
+
 /// Energy ratio against x = p/p_max, others at base (Figure 21, Table 5).
 #[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
 pub struct EnergyProportionDto {
@@ -192,10 +196,13 @@ pub struct EnergyProportionDto {
     pub model: String,
     /// The abscissae.
     pub x: Vec<f64>,
-    /// `<parameter>`: energy ratio at each x.
+    /// `<parameter>`: energy ratio at each x; `null` where x·max is not a valid column request
+    /// (warning `energy_proportion_undefined`), and that parameter is left out of `orderings`
+    /// there.
     #[schema(value_type = Object)]
-    pub curves: OrderedMap<Vec<f64>>,
-    /// `orderings[i]`: parameters by energy ratio at `x[i]`, highest first, ties joined by `=`.
+    pub curves: OrderedMap<Vec<Option<f64>>>,
+    /// `orderings[i]`: parameters by energy ratio at `x[i]`, highest first, ties joined by `=`
+    /// (a parameter whose ratio is `null` there is not listed).
     pub orderings: Vec<Vec<String>>,
 }
 
@@ -230,7 +237,10 @@ pub struct StudyResponse {
     pub energy_proportion: EnergyProportionDto,
     /// The paper's orderings beside ours (when the parameters and ranges are the paper's).
     pub paper_comparison: Vec<PaperComparisonDto>,
-    /// Named warnings.
+    /// Named warnings: `elasticity_undefined` (p ± 1e-4·|p| not valid inputs, or the base value
+    /// 0), `energy_proportion_undefined` (an x·max of a parameter is not a valid column request:
+    /// that energy-proportion entry is `null`), `no_paper_comparison`, and those of the
+    /// sensitivity measures.
     pub warnings: Vec<Warning>,
     /// Stages run or skipped.
     pub plan: Vec<PlanStep>,

@@ -17,9 +17,10 @@ use crate::config::Config;
 use crate::http::dto::column::{ColumnModelDto, ColumnRequest};
 use crate::http::dto::common::{LawDto, Meta, PlanStep, ShapeKind, Warning};
 use crate::http::dto::study::{
-    CANONICAL, EnergyProportionDto, MeasuresDto, OrderedMap, OrderingDto, OutputSensitivityDto,
-    PaperComparisonDto, StudyGrid, StudyGridDto, StudyParameterDto, StudyRequest, StudyResponse,
-    default_outputs, paper_parameters, pointer_of, set_pointer, study_outputs,
+    CANONICAL, ENERGY_PROPORTION_UNDEFINED, EnergyProportionDto, MeasuresDto, OrderedMap,
+    OrderingDto, OutputSensitivityDto, PaperComparisonDto, StudyGrid, StudyGridDto,
+    StudyParameterDto, StudyRequest, StudyResponse, default_outputs, paper_parameters, pointer_of,
+    set_pointer, study_outputs,
 };
 use crate::http::error::{ApiError, FieldError};
 use crate::http::json::{AppJson, from_value};
@@ -74,6 +75,9 @@ struct Param {
     base: Option<f64>,
     /// The four central-difference points when a numerical elasticity is needed and possible.
     fd: Option<[f64; 4]>,
+    /// For each x value: whether x·max is a valid column request (an energy-proportion point
+    /// that is not is left out, `null`, with an `energy_proportion_undefined` warning).
+    proportion_defined: Vec<bool>,
     analytic: Option<crate::physics::study::ImpactElasticities>,
 }
 
@@ -377,7 +381,7 @@ impl StudyBase<'_> {
         warnings: &mut Vec<Warning>,
     ) -> Result<Param, ApiError> {
         let pointer = pointer_of(&p.name);
-        self.check_sweep(i, p, &pointer, x_values)?;
+        let proportion_defined = self.check_sweep(i, p, &pointer, x_values, warnings)?;
         let base = self.resolved_json.pointer(&pointer).and_then(Value::as_f64);
         let rank = CANONICAL
             .iter()
@@ -420,18 +424,24 @@ impl StudyBase<'_> {
             base,
             fd,
             analytic,
+            proportion_defined,
         })
     }
 
-    /// The base request with parameter `i` (`p`, at `pointer`) set to its range ends and to
-    /// each x·max must be a valid column request.
+    /// The base request with parameter `i` (`p`, at `pointer`) set to its range ends must be a
+    /// valid column request (else 422 naming that end); returns, for each x value, whether x·max
+    /// is one too. An energy-proportion point that is not (x·max below the field's range, or
+    /// against another field's bound, e.g. an outer diameter at or below the inner one) is not
+    /// part of the requested sweep: it is left out with an `energy_proportion_undefined`
+    /// warning naming the points and why.
     fn check_sweep(
         &self,
         i: usize,
         p: &StudyParameterDto,
         pointer: &str,
         x_values: &[f64],
-    ) -> Result<(), ApiError> {
+        warnings: &mut Vec<Warning>,
+    ) -> Result<Vec<bool>, ApiError> {
         for (end, x) in [("min", p.min), ("max", p.max)] {
             if let Err(e) = resolve_point(self.config, &point_json(self.json, &[(pointer, x)])) {
                 let field = if matches!(e.code(), "unknown_field" | "invalid_type") {
@@ -446,17 +456,36 @@ impl StudyBase<'_> {
                 ));
             }
         }
-        for (k, &x) in x_values.iter().enumerate() {
+        let mut defined = Vec::with_capacity(x_values.len());
+        let mut left_out = Vec::new();
+        let mut why = None;
+        for &x in x_values {
             let v = x * p.max;
-            if let Err(e) = resolve_point(self.config, &point_json(self.json, &[(pointer, v)])) {
-                return Err(blame(
-                    &e,
-                    &format!("/x_values/{k}"),
-                    &format!("{} = x·max = {v}", p.name),
-                ));
+            match resolve_point(self.config, &point_json(self.json, &[(pointer, v)])) {
+                Ok(_) => defined.push(true),
+                Err(e) => {
+                    defined.push(false);
+                    left_out.push(format!("x = {x} ({} = {v})", p.name));
+                    why.get_or_insert_with(|| {
+                        e.errors()
+                            .first()
+                            .map_or_else(|| e.to_string(), |f| format!("{} {}", f.field, f.message))
+                    });
+                }
             }
         }
-        Ok(())
+        if let Some(why) = why {
+            warnings.push(Warning::new(
+                ENERGY_PROPORTION_UNDEFINED,
+                format!(
+                    "energy_proportion.curves[\"{}\"] is null at {}: x·max is not a valid column \
+                     request ({why}); the sweep from min to max is unaffected",
+                    p.name,
+                    left_out.join(", ")
+                ),
+            ));
+        }
+        Ok(defined)
     }
 
     /// The analytic elasticities of the impact (physics.md §D.2) for the parameter `name`:
@@ -534,7 +563,11 @@ fn study_slots(params: &[Param], grids: usize, n: usize, nx: usize) -> Vec<Slot>
         }
     }
     for (i, p) in params.iter().enumerate() {
-        slots.extend((0..nx).map(|k| Slot::Proportion(i, k)));
+        slots.extend(
+            (0..nx)
+                .filter(|&k| p.proportion_defined[k])
+                .map(|k| Slot::Proportion(i, k)),
+        );
         if p.fd.is_some() {
             slots.extend((0..4).map(|j| Slot::Difference(i, j)));
         }
@@ -655,8 +688,9 @@ struct Assembled {
     curves: Vec<Vec<Vec<f64>>>,
     /// The pair grids: [pair][output][y point][x point].
     grids: Vec<Vec<Vec<Vec<f64>>>>,
-    /// The energy ratio at each x·max: [parameter][x].
-    proportions: Vec<Vec<f64>>,
+    /// The energy ratio at each x·max: [parameter][x] (`None` where x·max is not a valid
+    /// column request).
+    proportions: Vec<Vec<Option<f64>>>,
     /// The four central-difference points' outputs: [parameter][output].
     differences: Vec<Vec<[f64; 4]>>,
 }
@@ -677,7 +711,7 @@ fn assemble(
         base: Vec::new(),
         curves: vec![vec![vec![0.0; n]; no]; np],
         grids: vec![vec![vec![vec![0.0; n]; n]; no]; n_pairs],
-        proportions: vec![vec![0.0; nx]; np],
+        proportions: vec![vec![None; nx]; np],
         differences: vec![vec![[0.0; 4]; no]; np],
     };
     for (slot, r) in slots.iter().zip(results) {
@@ -685,7 +719,7 @@ fn assemble(
             Slot::Base => y.base = r,
             Slot::Curve(i, k) => (0..no).for_each(|o| y.curves[i][o][k] = r[o]),
             Slot::Grid(g, yi, xi) => (0..no).for_each(|o| y.grids[g][o][yi][xi] = r[o]),
-            Slot::Proportion(i, k) => y.proportions[i][k] = r[ie],
+            Slot::Proportion(i, k) => y.proportions[i][k] = Some(r[ie]),
             Slot::Difference(i, j) => (0..no).for_each(|o| y.differences[i][o][j] = r[o]),
         }
     }
@@ -755,7 +789,7 @@ fn finish_study(
     }
     let prop_groups: Vec<Vec<Vec<usize>>> = (0..req.x_values.len())
         .map(|k| {
-            let m: Vec<Option<f64>> = (0..np).map(|i| Some(y.proportions[i][k])).collect();
+            let m: Vec<Option<f64>> = (0..np).map(|i| y.proportions[i][k]).collect();
             order_groups(&m, &ranks, TIE_REL)
         })
         .collect();

@@ -219,14 +219,29 @@ pub struct SupportStop {
 }
 
 impl MigrationCase {
+    /// Along-dip position of the rock at the start, m: the release point lifted vertically by
+    /// the drop, s₀ − h sin θ (the mean plane's along-dip coordinate falls by h sin θ for a
+    /// vertical lift h). During the drop the rock's along-dip position runs from here to s₀.
+    #[must_use]
+    pub fn start_along_dip(&self) -> f64 {
+        self.release.along_dip - self.release.drop_height * self.face.dip_deg.to_radians().sin()
+    }
+
     /// Along-dip position where a run ends at the latest (the face length, or the nearest
-    /// spanning support at or below the release), m, and that support's index.
+    /// spanning support at or below the rock's start), m, and that support's index.
+    ///
+    /// A spanning support is reached when the rock's along-dip position passes the support's,
+    /// during the drop as after it: supports stand normal to the mean plane and are modelled
+    /// without a height (a column is reached by its distance in the mean plane, whatever the
+    /// rock's height above the floor), so a rock falling from s₀ − h sin θ to s₀ passes a
+    /// spanning support in that interval as it passes a column's axis there.
     #[must_use]
     pub fn stop_length(&self) -> (f64, Option<usize>) {
+        let start = self.start_along_dip();
         let mut best = (self.face.length, None);
         for (i, s) in self.supports.iter().enumerate() {
             if s.across.is_none()
-                && s.along_dip >= self.release.along_dip
+                && s.along_dip >= start
                 && (s.along_dip < best.0 || (s.along_dip == best.0 && best.1.is_none()))
             {
                 best = (s.along_dip, Some(i));
@@ -251,6 +266,45 @@ impl Default for MigrationCase {
             output: OutputOptions::default(),
             max_steps_per_run: 10_000_000,
             supports: Vec::new(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A spanning support stands in the rock's path from the lifted start s₀ − h sin θ on:
+    /// up-slope of it the support is passed by nothing, between it and s₀ it is reached in
+    /// the fall, and the nearest such support ends the run.
+    #[test]
+    fn a_spanning_support_within_the_drop_is_in_the_rock_s_path() {
+        for (dip, s0, h) in [
+            (37.04, 13.7726, 4.456),
+            (45.0, 50.2, 3.27),
+            (10.0, 0.5, 0.0),
+        ] {
+            let mut case = MigrationCase::default();
+            case.face.dip_deg = dip;
+            case.release.along_dip = s0;
+            case.release.drop_height = h;
+            let start = s0 - h * f64::to_radians(dip).sin();
+            assert!((case.start_along_dip() - start).abs() <= 1e-12 * s0);
+            let span = |s: f64| SupportStop {
+                along_dip: s,
+                across: None,
+                reach: 0.0,
+            };
+            // up-slope of the start: never reached; the face's end ends the run
+            case.supports = vec![span(start - 1e-9)];
+            assert_eq!(case.stop_length(), (case.face.length, None));
+            // in [start, s0] (or at s0 without a drop): reached, before a support below
+            let inside = if h > 0.0 { 0.5 * (start + s0) } else { s0 };
+            case.supports = vec![span(s0 + 1.0), span(inside), span(start - 1e-9)];
+            assert_eq!(case.stop_length(), (inside, Some(1)));
+            // a column there does not end the run at its along-dip position
+            case.supports[1].across = Some(0.0);
+            assert_eq!(case.stop_length(), (s0 + 1.0, Some(0)));
         }
     }
 }

@@ -24,8 +24,10 @@ pub use self::case::*;
 use self::ensemble::{MU_MAX, Polled, ensemble};
 pub use self::ensemble::{RunRecords, STATISTICS_COLUMNS, attach_ensemble, run_columns};
 pub(crate) use self::ensemble::{ensemble_run, run_in_chunks};
-pub(crate) use self::release::build_floor;
-use self::release::{Prepared, lumped_mass_setup, prepare, prepare_on, roll_radius};
+use self::release::{
+    Prepared, lumped_mass_setup, prepare, prepare_on, roll_radius, start_and_end_warnings,
+};
+pub(crate) use self::release::{build_floor, release_span};
 pub use self::report::*;
 use self::trajectory::{arrival_of, sample_trajectory, xyz};
 pub(crate) use self::trajectory::{first_column_reach, support_impact_speed};
@@ -124,7 +126,9 @@ pub fn run_part(
     let pr = prepare(case)?;
     control.check()?;
     let r = if nominal {
-        Some(nominal_run(case, &pr, control)?)
+        let mut r = nominal_run(case, &pr, control)?;
+        start_and_end_warnings(&pr, &mut r);
+        Some(r)
     } else {
         None
     };

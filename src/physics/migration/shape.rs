@@ -18,7 +18,7 @@
 //! inertia (when the tensor is already diagonal the input axes are kept, so a cube keeps its
 //! faces on the axes), so Euler's equations take the diagonal moments.
 
-use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
 
 use super::monte_carlo::{run_stream, uniform01};
 use crate::physics::error::{Param, PhysicsError, PhysicsResult};
@@ -113,6 +113,19 @@ impl BlockShape {
             Some(_) => -Vector3::z(),
             None => self.faces[self.largest_face].normal,
         }
+    }
+
+    /// Orientation of the block resting face-down on a floor of unit normal `nf`: its resting
+    /// face turned to −z, then the whole tilted from z to `nf` (api.md release rule).
+    #[must_use]
+    pub fn resting_orientation(&self, nf: &Vector3<f64>) -> UnitQuaternion<f64> {
+        let q_face = UnitQuaternion::rotation_between(&self.rest_normal(), &(-Vector3::z()))
+            .unwrap_or_else(|| {
+                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+            });
+        let q_tilt = UnitQuaternion::rotation_between(&Vector3::z(), nf)
+            .unwrap_or_else(UnitQuaternion::identity);
+        q_tilt * q_face
     }
 
     /// A sphere of radius r and density ρ.

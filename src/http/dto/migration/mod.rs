@@ -104,7 +104,13 @@ number_fields! {
     /// is the longest face's).
     RELEASE_ALONG_DIP, release_along_dip_schema:
         "Along-dip position of the floor point, m, in [0, length_m): the upper bound depends on\n\
-         `face.length_m` (at most 10 000 m).",
+         `face.length_m` (at most 10 000 m). On a grid or contour floor the point must be on the\n\
+         floor at `across_m` (a point up the dip of the floor's upper edge starts on that edge;\n\
+         past its lower edge or over a hole is 422 naming this field). The rigid block rests\n\
+         face-down with every corner over the floor: a block overhanging the floor's edge is\n\
+         moved to the nearest position where it fits, at most two bounding radii away (warning\n\
+         `release_moved` with the shift; so the default release runs on every floor), farther is\n\
+         422 naming `along_dip_m` or `across_m` with the interval where it fits.",
         FieldDefault::Value(0.0), Closed(0.0), Open(10000.0), "m (below length_m)", 0.0;
     /// `release.across_m`.
     RELEASE_ACROSS, release_across_schema: "Across-face position y, m, in [−1000, 1000].",

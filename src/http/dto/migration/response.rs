@@ -230,7 +230,9 @@ pub struct MigrationResponse {
     /// Time step, steps and mass properties (rigid block).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rigid_block: Option<RigidBlockOutDto>,
-    /// Named warnings.
+    /// Named warnings, among them `release_moved` (the rigid block overhung the floor's edge at
+    /// the release point and was placed where every corner is over the floor: by how much) and
+    /// `left_floor` (the run left the floor: where, and past which boundary).
     pub warnings: Vec<Warning>,
     /// Stages run or skipped.
     pub plan: Vec<PlanStep>,

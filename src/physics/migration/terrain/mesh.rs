@@ -184,6 +184,8 @@ struct HPoint {
     x: f64,
     y: f64,
     z: f64,
+    /// Index of its contour line.
+    line: usize,
 }
 
 impl HasPosition for HPoint {
@@ -221,6 +223,7 @@ impl Floor {
                             x: q[0] + f * (p[0] - q[0]),
                             y: q[1] + f * (p[1] - q[1]),
                             z: line.elevation,
+                            line: c,
                         });
                     }
                 }
@@ -228,6 +231,7 @@ impl Floor {
                     x: p[0],
                     y: p[1],
                     z: line.elevation,
+                    line: c,
                 });
             }
         }
@@ -255,9 +259,11 @@ impl Floor {
             })?;
         let n_all = tri.num_all_faces();
         let mut xyz = Vec::with_capacity(tri.num_vertices());
+        let mut line_of = Vec::with_capacity(tri.num_vertices());
         for v in tri.vertices() {
             let d = v.data();
             xyz.push([d.x, d.y, d.z]);
+            line_of.push(d.line);
         }
         // face index k ≥ 1 (0 is the outer face) → facet k − 1
         let mut tris = vec![[0u32; 3]; n_all.saturating_sub(1)];
@@ -282,9 +288,10 @@ impl Floor {
                 "the contours do not span a surface (need at least 3 points not on one line)",
             ));
         }
+        let holes = outside_the_contours(&tris, &nbr, &line_of);
         let (sin, cos) = dip.sin_cos();
         Ok(Floor {
-            kind: FloorKind::Mesh(MeshFloor::new(xyz, tris, nbr, Vec::new())),
+            kind: FloorKind::Mesh(MeshFloor::new(xyz, tris, nbr, holes)),
             mean: MeanPlane {
                 x0: x_min,
                 z_ref: z_at_min,
@@ -292,5 +299,91 @@ impl Floor {
                 sin,
             },
         })
+    }
+}
+
+/// The triangles outside the contours' data, as removed facets (empty: none).
+///
+/// A Delaunay triangulation fills the convex hull of its points: beyond the outermost contours
+/// (up the dip of the highest, down the dip of the lowest, in the bays of a curved contour on
+/// the hull) it joins points of one contour line, so those triangles are level, a floor no data
+/// give (released at the top of a 45° face, a rock landed on such a level apron and stayed
+/// there). Every triangle whose three corners lie on one contour line and that is reached from
+/// the hull's boundary through such triangles is removed: the floor there is beyond its edge.
+/// Triangles of one line inside the data (at a contour's sharp bend between other lines) are
+/// kept. Nothing is removed when that would remove every triangle.
+fn outside_the_contours(tris: &[[u32; 3]], nbr: &[[u32; 3]], line_of: &[usize]) -> Vec<bool> {
+    let one_line = |t: &[u32; 3]| {
+        let l = line_of[t[0] as usize];
+        t.iter().all(|&v| line_of[v as usize] == l)
+    };
+    let mut removed = vec![false; tris.len()];
+    let mut stack: Vec<usize> = (0..tris.len())
+        .filter(|&i| nbr[i].contains(&NONE) && one_line(&tris[i]))
+        .collect();
+    let mut any = false;
+    while let Some(i) = stack.pop() {
+        if removed[i] {
+            continue;
+        }
+        removed[i] = true;
+        any = true;
+        for &j in &nbr[i] {
+            if j != NONE && !removed[j as usize] && one_line(&tris[j as usize]) {
+                stack.push(j as usize);
+            }
+        }
+    }
+    if !any || removed.iter().all(|&r| r) {
+        return Vec::new();
+    }
+    removed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A top contour bowed down the dip (an arc between (0, ±6) through (0.6, 0)) above a
+    /// straight one: the triangulation joins the arc's points across its chord into level
+    /// triangles at the top contour's elevation, beyond the data. They are removed: the point
+    /// between the chord and the arc is off the floor, every remaining facet slopes, and the
+    /// floor below the top contour is kept.
+    #[test]
+    fn no_level_apron_beyond_the_highest_contour() {
+        let arc: Vec<[f64; 2]> = (0..=24)
+            .map(|k| {
+                let y = -6.0 + 0.5 * f64::from(k);
+                [0.6 * (1.0 - (y / 6.0).powi(2)), y]
+            })
+            .collect();
+        let lines = vec![
+            ContourLine {
+                elevation: 0.0,
+                points: arc,
+            },
+            ContourLine {
+                elevation: -3.0,
+                points: vec![[3.0, -6.0], [3.0, 6.0]],
+            },
+        ];
+        let floor = Floor::contours(45f64.to_radians(), &lines, 0.5).unwrap();
+        // between the chord x = 0 and the arc, at y = 0: up the dip of the top contour
+        assert!(floor.locate(0.3, 0.0, 0.0, 0.0).is_none());
+        // below the top contour: floor, sloping
+        let f = floor
+            .locate(1.5, 0.0, 0.0, 0.0)
+            .expect("floor below the top contour");
+        assert!(floor.facet_plane(f).normal().z < 0.99);
+        let FloorKind::Mesh(m) = &floor.kind else {
+            panic!("a mesh")
+        };
+        assert!(m.holes.iter().any(|&h| h));
+        for (i, t) in m.tris.iter().enumerate() {
+            let level = t
+                .iter()
+                .all(|&v| m.xyz[v as usize][2] == m.xyz[t[0] as usize][2]);
+            assert!(!level || m.holes[i], "level facet {i} kept: {t:?}");
+        }
     }
 }
