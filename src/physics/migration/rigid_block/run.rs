@@ -716,8 +716,10 @@ impl Model<'_> {
     }
 
     /// Contact episodes after a step: contact after more than the gap is a new impact (the
-    /// last episode closed); an episode that lasts five contact times becomes the ground phase
-    /// and the slide's start; one whose contact stays open for the gap is over.
+    /// last episode closed); an episode that lasts five contact times becomes a ground phase
+    /// (its impact reported then, with the speed and loss up to then, and a `slide_start`
+    /// event; the first one is the run's slide start); one whose contact stays open for the gap
+    /// is over.
     pub(super) fn book_episode(&self, run: &mut Run, step: &Step, in_contact: bool, events: bool) {
         let t = run.st.t;
         if !in_contact {
@@ -773,13 +775,13 @@ impl Model<'_> {
             return;
         }
         ep.ground = true;
-        if run.slide_start.is_some() {
-            return;
+        if run.slide_start.is_none() {
+            run.slide_start = Some(self.mean.along(&run.st.c));
         }
-        run.slide_start = Some(self.mean.along(&run.st.c));
         if events {
             let speed = run.st.v.norm();
-            // the impact that became the ground phase
+            // the impact that became the ground phase, reported as it becomes it (not when
+            // the ground phase ends, seconds of sliding later)
             run.events.push(self.event(
                 ep.t0,
                 EventKind::Impact,
