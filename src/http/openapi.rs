@@ -98,6 +98,7 @@ const NULL_DEFAULTS: &[&str] = &[
     "max_force_n",
     "absorbed_energy_j",
     "time_step_s",
+    "floor_material",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot
