@@ -29,24 +29,9 @@ fn cases(default: u32) -> u32 {
         .unwrap_or(default)
 }
 
-/// The router and a runtime to drive it from a (synchronous) property.
-fn service() -> &'static (tokio::runtime::Runtime, axum::Router) {
-    static APP: std::sync::OnceLock<(tokio::runtime::Runtime, axum::Router)> =
-        std::sync::OnceLock::new();
-    APP.get_or_init(|| {
-        let rt = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(2)
-            .enable_all()
-            .build()
-            .unwrap();
-        let app = rt.block_on(async { common::app() });
-        (rt, app)
-    })
-}
-
 /// POSTs a migration request; anything but 200 fails the property with the answer.
 fn migrate(body: &Value) -> Result<Value, TestCaseError> {
-    let (rt, app) = service();
+    let (rt, app) = common::service();
     let r = rt.block_on(common::post(app, "/v1/migration", body));
     prop_assert!(
         r.status.as_u16() == 200,

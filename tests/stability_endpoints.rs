@@ -31,24 +31,9 @@ fn cases(n: u32) -> u32 {
         .unwrap_or(1)
 }
 
-/// The router and a runtime to drive it from a (synchronous) property.
-fn service() -> &'static (tokio::runtime::Runtime, axum::Router) {
-    static APP: std::sync::OnceLock<(tokio::runtime::Runtime, axum::Router)> =
-        std::sync::OnceLock::new();
-    APP.get_or_init(|| {
-        let rt = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(2)
-            .enable_all()
-            .build()
-            .unwrap();
-        let app = rt.block_on(async { common::app() });
-        (rt, app)
-    })
-}
-
 /// POSTs `body` and returns the status and the body's bytes.
 fn post(path: &str, body: &Value) -> (u16, Vec<u8>) {
-    let (rt, app) = service();
+    let (rt, app) = common::service();
     let r = rt.block_on(common::post(app, path, body));
     (r.status.as_u16(), r.body.to_vec())
 }

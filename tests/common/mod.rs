@@ -15,6 +15,21 @@ pub fn app() -> Router {
     gangue::app(Config::default())
 }
 
+/// The router and a runtime to drive it from synchronous code (a property test), made once
+/// per test binary.
+pub fn service() -> &'static (tokio::runtime::Runtime, Router) {
+    static APP: std::sync::OnceLock<(tokio::runtime::Runtime, Router)> = std::sync::OnceLock::new();
+    APP.get_or_init(|| {
+        let rt = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build()
+            .unwrap();
+        let app = rt.block_on(async { app() });
+        (rt, app)
+    })
+}
+
 /// A response: status, headers, body bytes.
 pub struct Reply {
     pub status: StatusCode,

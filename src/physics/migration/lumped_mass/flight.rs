@@ -190,24 +190,6 @@ impl Run<'_, '_> {
             s.v = v_after;
             lost += spin_loss;
         }
-        let s = &mut self.s;
-        s.spin = (0.0, Vector3::zeros());
-        s.ground = Some(facet);
-        if s.slide_start.is_none() {
-            s.slide_start = Some(self.mean.along(&s.p));
-        }
-        let ev = EventRec {
-            t: s.t,
-            kind: if roll {
-                EventKind::RollStart
-            } else {
-                EventKind::SlideStart
-            },
-            p: s.p,
-            speed_before,
-            speed_after: s.v.norm(),
-            lost,
-        };
-        self.push_event(ev);
+        self.ground_phase(facet, speed_before, lost);
     }
 }

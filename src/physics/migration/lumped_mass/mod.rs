@@ -560,29 +560,36 @@ impl<'a, 'r> Run<'a, 'r> {
 
     /// Starts the ground phase on facet f (slide, or roll with the spin-up ×5/7).
     fn enter_ground(&mut self, f: Facet) {
-        let roll = self.roll;
         let s = &mut self.s;
-        s.ground = Some(f);
-        if s.slide_start.is_none() {
-            s.slide_start = Some(self.mean.along(&s.p));
-        }
         let v2 = s.v.norm_squared();
         let mut lost = 0.0;
-        if roll {
+        if self.roll {
             lost = 0.5 * v2 * (2.0 / 7.0);
             s.e_trans += lost;
             s.v *= 5.0 / 7.0;
         }
+        self.ground_phase(f, v2.sqrt(), lost);
+    }
+
+    /// The rock is on facet f from now on, its velocity set: the spin of a flight dropped,
+    /// the run's slide start set if it is the first, and the `slide_start` (`roll_start`)
+    /// event recorded with the speed before (m/s) and the energy lost per kg.
+    fn ground_phase(&mut self, f: Facet, speed_before: f64, lost: f64) {
+        let s = &mut self.s;
+        s.ground = Some(f);
         s.spin = (0.0, Vector3::zeros());
+        if s.slide_start.is_none() {
+            s.slide_start = Some(self.mean.along(&s.p));
+        }
         let ev = EventRec {
             t: s.t,
-            kind: if roll {
+            kind: if self.roll {
                 EventKind::RollStart
             } else {
                 EventKind::SlideStart
             },
             p: s.p,
-            speed_before: v2.sqrt(),
+            speed_before,
             speed_after: s.v.norm(),
             lost,
         };
