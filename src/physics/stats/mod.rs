@@ -5,6 +5,8 @@
 //! [`interval`]'s Wilson score interval) spalling and the scenes' probabilities.
 
 pub mod interval;
+pub mod precision;
+pub mod quantile;
 
 /// Number of histogram bins (api.md: 20 equal bins, 21 edges).
 pub const HISTOGRAM_BINS: usize = 20;
