@@ -8,6 +8,7 @@ pub mod column;
 pub mod contact;
 pub mod control;
 pub mod coupled;
+pub mod design;
 pub mod error;
 pub mod material;
 pub mod migration;
