@@ -142,7 +142,7 @@ pub fn allowed_impact(
         step += 1;
         let m = match fb {
             // every fourth step bisects, so the bracket halves at least that often
-            Some(xb) if step % 4 != 0 => {
+            Some(xb) if !step.is_multiple_of(4) => {
                 let (ga, gb) = (fa - allowed, xb - allowed);
                 let m = a - ga * (b - a) / (gb - ga);
                 // keep the new point strictly inside, away from the ends by a little
@@ -165,10 +165,10 @@ pub fn allowed_impact(
             side = 1;
         } else if let Some(x) = x {
             (a, fa) = (m, x);
-            if side == -1 {
-                if let Some(xb) = fb {
-                    fb = Some(allowed + 0.5 * (xb - allowed));
-                }
+            if side == -1
+                && let Some(xb) = fb
+            {
+                fb = Some(allowed + 0.5 * (xb - allowed));
             }
             side = -1;
         }
