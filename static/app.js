@@ -303,7 +303,7 @@ function fillRecent() {
 function resultRows(tab) {
   const panel = document.querySelector(`[data-panel="${tab}"]`);
   const rows = [];
-  for (const table of panel.querySelectorAll('.results table')) {
+  for (const table of panel.querySelectorAll('.results table:not(.u-legend)')) {
     if (table.closest('[hidden]')) continue;
     const all = tableRows(table);
     const head = table.tHead ? all.shift() : null;

@@ -153,7 +153,9 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     xr = [0, model.length * Math.cos(model.dip)];
     yr = [Math.min(a, -1) - 2, Math.max(b, 1) + 2];
   }
-  const M = { l: 58, r: 160, t: 14, b: 58 };
+  // Narrow screens: the colour bars closer together.
+  const narrow = cssW < 560;
+  const M = { l: 58, r: narrow ? 118 : 160, t: 14, b: 58 };
   const plotW = cssW - M.l - M.r;
   const sx = plotW / (xr[1] - xr[0] || 1);
   // Equal scales unless the floor is a thin strip: then across is stretched, and said so.
@@ -352,8 +354,8 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     ctx.fillText('N ↑', M.l + plotW - 26, M.t + 14);
   }
   // Colour bars: elevation, and speed along the path.
-  colourBar(ctx, cssW - M.r + 16, M.t, plotH, zr, ELEV, 'elevation (m)');
-  if (tr) colourBar(ctx, cssW - M.r + 92, M.t, plotH, [v0, v1], SPEED, 'speed (m/s)');
+  colourBar(ctx, cssW - M.r + (narrow ? 12 : 16), M.t, plotH, zr, ELEV, narrow ? 'z (m)' : 'elevation (m)');
+  if (tr) colourBar(ctx, cssW - M.r + (narrow ? 66 : 92), M.t, plotH, [v0, v1], SPEED, narrow ? 'v (m/s)' : 'speed (m/s)');
   canvas.dataset.exaggeration = String(ex);
   canvas.dataset.stops = String(drawnStops.length);
   return { xr, yr, zr, speed: [v0, v1], stops: drawnStops.length, ex };
@@ -454,7 +456,7 @@ export function drawProfile(el, model, tr, { stops = [], supports = [], verdicts
   ];
   if (stopX.length) series.push({ label: 'where runs stopped', values: joined[k++], points: 'only', color: STOP, pointSize: 6 });
   linePlot(el, {
-    x: { label: 'horizontal distance down the dip (m); supports as vertical lines', values: joined[0] },
+    x: { label: 'horizontal distance down the dip (m)', values: joined[0] },
     y: { label: 'elevation (m)' },
     series,
     vlines: supports.map((p) => {
@@ -736,6 +738,15 @@ export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv,
     + `${tr ? `the nominal path (speed ${fmt(drawn.speed[0], 3)} to ${fmt(drawn.speed[1], 3)} m/s), ` : ''}${stops.length} stops marked.`);
   canvas.dataset.floor = model.uploaded ? 'uploaded' : 'plane';
   canvas.redraw = () => drawPlan(canvas, model, options);
+  // A new width (a turned phone, a resized window) draws the plan again at that width.
+  if (!canvas.resizeWatch) {
+    let width = canvas.parentElement.clientWidth;
+    canvas.resizeWatch = new ResizeObserver(() => {
+      const now = canvas.parentElement.clientWidth;
+      if (now > 0 && now !== width && canvas.redraw) { width = now; canvas.redraw(); }
+    });
+    canvas.resizeWatch.observe(canvas.parentElement);
+  }
   canvas.csv = () => [['run_stop_along_dip_m', 'across_m', 'stop_reason'], ...stops.map((s) => [s.s ?? length, s.across ?? '', s.reason ?? ''])];
   document.getElementById(`${prefix}-floor-legend`).replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts }));
   const profile = document.getElementById(`${prefix}-profile-plot`);

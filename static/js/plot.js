@@ -103,6 +103,8 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
   };
   const data = [x.values, ...series.map((s) => s.values)];
   const u = new uPlot(opts, data, el);
+  // uPlot writes "--" in every legend value until the cursor moves: nothing, rather than a dash that reads as a value.
+  for (const v of u.root.querySelectorAll('.u-legend .u-value')) if (v.firstChild && v.textContent === '--') v.firstChild.nodeValue = '';
   // The numbers drawn, as the plot's CSV (a caller may give a better one after this).
   el.csv = () => [[x.label, ...series.map((s) => s.label)], ...x.values.map((v, i) => [v, ...series.map((s) => s.values?.[i] ?? '')])];
   // A text alternative: what is plotted against what, over which ranges (the CSV button gives the numbers).

@@ -1232,6 +1232,8 @@ async function floorViewSection(page, context) {
     assert(/A: upper zone, 60 runs/.test(head) && /B: 80 runs/.test(head), `headings: ${head}`);
     const headline = await page.locator('#compare-table tr.headline').allTextContents();
     assert(headline.some((r) => /Runs60 \(seed/.test(r) && /80 \(seed/.test(r)) && headline.some((r) => /P\(a rock overloads some support\)/.test(r)), `headline rows: ${headline.join(' | ')}`);
+    const compared = await page.locator('#compare-table').textContent();
+    assert(!/--/.test(compared), 'a plot legend\'s "--" among the compared results');
     const labels = (await legendLabels(page, '#compare-plot')).slice(1);
     assert(labels.length === 2 && /A: upper zone/.test(labels[0]) && /B: 80 runs/.test(labels[1]), `overlay legend: ${labels.join(' | ')}`);
     await elementShot(page.locator('#compare'), 'compare.png');
@@ -1265,7 +1267,7 @@ async function floorViewSection(page, context) {
     await page.evaluate(() => window.dispatchEvent(new Event('afterprint')));
   });
 
-  await check('phone 390 px: the floor views fit the width', async () => {
+  await check('phone 390 px: the floor views fit the width, and are drawn again when the window widens', async () => {
     const phone = await context.newPage();
     await phone.setViewportSize({ width: 390, height: 844 });
     await open(phone, '#migration');
@@ -1276,6 +1278,9 @@ async function floorViewSection(page, context) {
     const w = await phone.evaluate(() => document.getElementById('migration-floor-plan').getBoundingClientRect().right);
     assert(w <= 390, `the plan reaches ${w} px`);
     await elementShot(phone.locator('#migration-floor'), 'phone-floor-view.png');
+    // a wider window draws the plan again at its new width
+    await phone.setViewportSize({ width: 1200, height: 900 });
+    await phone.waitForFunction(() => document.getElementById('migration-floor-plan').getBoundingClientRect().width > 700, null, { timeout: WAIT_MS });
     await phone.close();
   });
 }
