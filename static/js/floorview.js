@@ -83,10 +83,31 @@ export function floorModel(inputs, upload) {
   let height = null;
   if (!draw) height = (x) => -x * Math.tan(dip);
   else if (draw.kind === 'grid') height = (x, y) => gridHeight(draw, x, y);
+  // Where to put marks (release, stops, supports) on contours: between the two nearest lines.
+  const markHeight = height ?? ((x, y) => contourHeight(draw.lines, x, y));
   return {
     kind: draw ? draw.kind : 'plane', uploaded: Boolean(draw), name: upload?.name ?? null, sha256: upload?.sha256 ?? null,
-    serverSha256: floorIn.sha256 ?? null, map, dip, length, draw, path, face2view, height, x0,
+    serverSha256: floorIn.sha256 ?? null, map, dip, length, draw, path, face2view, height, markHeight, x0,
   };
+}
+
+/** Height at (x, y) between contour lines: the two nearest lines weighted by distance (for marks only). */
+export function contourHeight(lines, x, y) {
+  const near = lines.map((l) => {
+    let best = Infinity;
+    for (let i = 0; i < l.points.length; i++) {
+      const [ax, ay] = l.points[i];
+      const [bx, by] = l.points[Math.min(i + 1, l.points.length - 1)];
+      const dx = bx - ax;
+      const dy = by - ay;
+      const t = dx || dy ? Math.max(0, Math.min(1, ((x - ax) * dx + (y - ay) * dy) / (dx * dx + dy * dy))) : 0;
+      best = Math.min(best, Math.hypot(x - ax - t * dx, y - ay - t * dy));
+    }
+    return [best, l.z];
+  }).sort((a, b) => a[0] - b[0]);
+  if (!near.length) return null;
+  const [[d1, z1], [d2, z2] = near[0]] = near;
+  return d1 + d2 > 0 ? (z1 * d2 + z2 * d1) / (d1 + d2) : z1;
 }
 
 /** Bilinear height of a grid at (x, y) in the file's frame; null off the grid or at a hole. */
@@ -155,7 +176,7 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
   }
   // Narrow screens: the colour bars closer together.
   const narrow = cssW < 560;
-  const M = { l: 58, r: narrow ? 118 : 160, t: 14, b: 58 };
+  const M = { l: model.map ? 80 : 58, r: narrow ? 118 : 160, t: 14, b: 58 };
   const plotW = cssW - M.l - M.r;
   const sx = plotW / (xr[1] - xr[0] || 1);
   // Equal scales unless the floor is a thin strip: then across is stretched, and said so.
@@ -323,7 +344,9 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
   ctx.fillStyle = '#1c2430';
   ctx.font = '11px system-ui, sans-serif';
   ctx.textAlign = 'center';
-  for (const v of ticks(xr[0], xr[1], Math.max(3, Math.floor(plotW / 90)))) {
+  const xTicks = ticks(xr[0], xr[1], Math.max(3, Math.floor(plotW / 90)));
+  canvas.dataset.xticks = xTicks.map(tickText).join(' ');
+  for (const v of xTicks) {
     ctx.beginPath(); ctx.moveTo(px(v), M.t + plotH); ctx.lineTo(px(v), M.t + plotH + 4); ctx.stroke();
     ctx.fillText(tickText(v), px(v), M.t + plotH + 15);
   }
@@ -349,7 +372,7 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
   ctx.fillRect(bx, by - 3, barM * sx / 2, 4);
   ctx.strokeRect(bx + barM * sx / 2, by - 3, barM * sx / 2, 4);
   ctx.textAlign = 'left';
-  ctx.fillText(`${tickText(barM)} m`, bx + barM * sx + 6, by + 2);
+  ctx.fillText(`${fmt(barM, 3)} m`, bx + barM * sx + 6, by + 2);
   if (model.map || model.uploaded) {
     ctx.fillText('N ↑', M.l + plotW - 26, M.t + 14);
   }
@@ -390,18 +413,24 @@ function niceStep(raw) {
   return [1, 2, 2.5, 5, 10].map((m) => m * p).find((m) => m >= raw) ?? 10 * p;
 }
 
+/** Round values between lo and hi, about n of them; each carries the decimals its step needs. */
 function ticks(lo, hi, n) {
   if (!(hi > lo)) return [lo];
   const step = niceStep((hi - lo) / n);
+  const decimals = Math.max(0, -Math.floor(Math.log10(step) + 1e-9) + (String(step).includes('.5') ? 1 : 0));
   const out = [];
-  for (let v = Math.ceil(lo / step) * step; v <= hi + step * 1e-9; v += step) out.push(Math.abs(v) < step * 1e-9 ? 0 : v);
+  for (let k = Math.ceil(lo / step); k * step <= hi + step * 1e-9; k++) {
+    const v = new Number(k === 0 ? 0 : k * step);
+    v.decimals = decimals;
+    out.push(v);
+  }
   return out;
 }
 
+/** A tick's text: every digit of a map coordinate (500010, not 5.00e+5), the decimals of its step. */
 function tickText(v) {
-  const a = Math.abs(v);
-  if (a >= 1e5) return v.toExponential(2);
-  return String(Number(v.toPrecision(6)));
+  const d = v.decimals ?? (Math.abs(v) >= 100 ? 0 : 3);
+  return Number(v).toFixed(d).replace(/^-0(\.0*)?$/, '0');
 }
 
 /**
@@ -525,7 +554,7 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
 
   // Points in the view frame, centred on the floor (large map coordinates lose float precision).
   const pts = [];
-  const surfaceZ = (x, y) => (model.height ? model.height(x, y) : null);
+  const surfaceZ = (x, y) => model.markHeight(x, y);
   let centre = [0, 0, 0];
   const V = (x, y, z) => new THREE.Vector3(x - centre[0], y - centre[1], z - centre[2]);
   if (model.draw?.kind === 'grid') {

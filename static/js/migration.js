@@ -431,7 +431,7 @@ export function initMigration() {
     linePlot(plots.side, {
       x: { label: 'along the dip (m)', values: s, range: sRange },
       y: { label: 'height above the floor (m)' },
-      series: [{ label: 'height', values: tr.height_m }],
+      series: [{ label: floor.current() && data.inputs?.face?.floor?.kind !== 'plane' ? `height above the uploaded floor ${floor.current().name}` : 'height above the plane', values: tr.height_m }],
     });
 
     const xs = tr.position_m.map((p) => p[0]);
@@ -439,7 +439,7 @@ export function initMigration() {
     linePlot(plots.plan, {
       x: { label: 'x, horizontal in the dip direction (m)', values: xs, range: range(xs) },
       y: { label: 'y: across the face (m)', range: range(ys, 1) },
-      series: [{ label: 'path', values: ys }],
+      series: [{ label: floor.current() && data.inputs?.face?.floor?.kind !== 'plane' ? `path on the uploaded floor ${floor.current().name}` : 'path on the plane', values: ys }],
     });
 
     const kJ = (a) => a?.map((v) => v * 1e-3);

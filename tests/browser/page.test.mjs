@@ -1061,6 +1061,10 @@ async function floorViewSection(page, context) {
     assert(/uploaded grid plane45\.asc/.test(legend) && legend.includes(served.slice(0, 12)), `plan legend: ${legend}`);
     const labels = await legendLabels(page, '#migration-profile-plot');
     assert(labels.some((l) => /plane45\.asc \(grid, bilinear\)/.test(l)), `profile legend: ${labels.join(' | ')}`);
+    for (const plot of ['#migration-side-plot', '#migration-plan-plot']) {
+      const words = (await legendLabels(page, plot)).join(' | ');
+      assert(/uploaded floor plane45\.asc/.test(words), `${plot} legend: ${words}`);
+    }
     // the grid is the 45° plane in 5 m cells: the bilinear floor under the path is z = −x exactly
     const csv = await downloaded(page, page.locator('[data-csv="migration-profile-plot.csv"]'));
     assert(csv.header.some((l) => l === `# floor plane45.asc sha256 ${served}`), `CSV header: ${csv.header.join(' | ')}`);
@@ -1077,6 +1081,25 @@ async function floorViewSection(page, context) {
     assert(/uploaded floor plane45\.asc/.test(label), label);
     await page.locator('#tab-scene').click();
     assert(await page.locator('#case-summary [data-part="floor"].used').count() === 1, 'the Scene tab does not show the floor as used');
+  });
+
+  await check('floor view: uploaded contours in map coordinates are drawn in easting and northing with every digit; the 3-D view draws the lines', async () => {
+    await open(page, '#migration');
+    await page.locator('#floor-kind').selectOption('upload');
+    await page.locator('#floor-file').setInputFiles(path.join(REPO, 'tests/browser/fixtures/plane45.geojson'));
+    await page.locator('#floor-canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await page.locator('#floor-map-e').fill('500000');
+    await page.locator('#floor-map-n').fill('4200000');
+    await page.locator('#floor-map-a').fill('90');
+    const response = await submit(page, form, '/v1/migration');
+    assert(response.status() === 200, `status ${response.status()}`);
+    await page.waitForFunction(() => document.getElementById('migration-floor-plan').dataset.floor === 'uploaded', null, { timeout: WAIT_MS });
+    const legend = await page.locator('#migration-floor-legend').textContent();
+    assert(/uploaded contours plane45\.geojson \(sha256 [0-9a-f]{12}/.test(legend), legend);
+    const xticks = await page.locator('#migration-floor-plan').getAttribute('data-xticks');
+    assert(/\b500000\b/.test(xticks) && /\b500100\b/.test(xticks) && !/e\+/.test(xticks), `easting ticks: ${xticks}`);
+    await page.locator('#migration-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await elementShot(page.locator('#migration-floor'), 'floor-view-contours.png');
   });
 
   await check('floor view: without WebGL the 3-D view says so and the plan and profile are still drawn', async () => {
