@@ -611,7 +611,7 @@ function buildReport() {
     kv([
       ['Project', field('report-project') || '(not given)'], ['Face', field('report-face') || '(not given)'], ['Author', field('report-author') || '(not given)'],
       ['Case', recent()[0]?.name || '(unnamed)'], ['Date', new Date().toISOString()], ['Calculation', `${tab} (${settings} settings)`],
-      ['Model version', `gangue ${modelVersion || 'unknown'}`], ['Link to this case', link],
+      ['Model version', `gangue ${modelVersion || 'unknown'}`], ['Link to this case', h('span', { class: 'report-link' }, link)],
     ]),
     h('h2', {}, 'Floor'),
     kv(up
@@ -647,11 +647,17 @@ function buildReport() {
     const checks = [...panel.querySelectorAll('.checks-card table')].filter((t) => !t.closest('[hidden]'));
     if (checks.length) parts.push(h('h2', {}, 'Checks'), ...checks.map((t) => t.cloneNode(true)));
     const figs = [];
-    for (const el of panel.querySelectorAll('.results .plot, .results canvas.floor-plan')) {
+    for (const el of panel.querySelectorAll('.results .plot, .results canvas.floor-plan, .results .view3d canvas')) {
       if (el.closest('[hidden]')) continue;
-      const title = el.closest('.card')?.querySelector('h3')?.textContent.trim() ?? '';
+      const card = el.closest('.card');
+      const title = card?.querySelector('h3')?.textContent.trim() ?? '';
       const url = el.tagName === 'CANVAS' ? el.toDataURL('image/png') : plotDataUrl(el, title);
-      if (url) figs.push(h('figure', {}, h('img', { src: url, alt: el.getAttribute('aria-label') ?? title }), h('figcaption', {}, title)));
+      // the plan's legend is HTML beside it: its lines go under the image
+      const legend = el.classList.contains('floor-plan') ? [...card.querySelectorAll('.floor-legend li')].map((li) => li.textContent.trim()) : [];
+      if (url) {
+        figs.push(h('figure', {}, h('img', { src: url, alt: el.getAttribute('aria-label') ?? title }), h('figcaption', {}, title,
+          legend.length ? h('ul', {}, legend.map((t) => h('li', {}, t))) : null)));
+      }
     }
     if (figs.length) parts.push(h('h2', {}, 'Plots'), ...figs);
     const warnings = [...(data.warnings ?? []), ...(data.migration?.warnings ?? [])];

@@ -703,6 +703,9 @@ async function migrationSection(page) {
     assert(curves.length === 2 && curves.every(([, n]) => n > 10) && /lumped/.test(curves[0][0]) && /rigid/.test(curves[1][0]), `curves: ${JSON.stringify(curves)}`);
     // the form's own method (lumped mass) is shown in the main table, unchanged
     assertClose(await shown(page, 'arrival.speed_m_s'), EXPECTED.arrivalSpeed, 1e-3, 'main table arrival speed (m/s)');
+    // both paths over the floor's profile
+    const profile = (await page.locator('#migration-profile-plot .u-legend .u-label').allTextContents()).join(' | ');
+    assert(/the rock \(nominal run\)/.test(profile) && /the rock, rigid block \(DEM\)/.test(profile), `profile legend: ${profile}`);
   });
   await screenshot(page, 'migration-compare.png');
 
@@ -1079,6 +1082,13 @@ async function floorViewSection(page, context) {
     await page.locator('#migration-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
     const label = await page.locator('#migration-3d canvas').getAttribute('aria-label');
     assert(/uploaded floor plane45\.asc/.test(label), label);
+    // the report names the file, its kind and both hashes (the page's and the service's echo, equal)
+    await page.evaluate(() => { window.print = () => {}; });
+    await page.locator('#case-print').click();
+    const report = await page.locator('#report').textContent();
+    const hashes = [...report.matchAll(/sha256 \((computed in the page|echoed by the service)\)([0-9a-f]{64})/g)].map((m) => m[2]);
+    assert(/uploaded ESRI ASCII grid/.test(report) && /plane45\.asc \(490 bytes/.test(report) && hashes.length === 2 && hashes[0] === hashes[1], `report floor: ${report.slice(report.indexOf('Floor'), report.indexOf('Floor') + 300)}`);
+    await page.evaluate(() => window.dispatchEvent(new Event('afterprint')));
     await page.locator('#tab-scene').click();
     assert(await page.locator('#case-summary [data-part="floor"].used').count() === 1, 'the Scene tab does not show the floor as used');
   });
@@ -1281,6 +1291,7 @@ async function floorViewSection(page, context) {
     }
     assert(await report.locator('tbody tr:has-text("EXCEEDED")').count() >= 0, 'verdicts');
     assert(await report.locator('img').count() >= 4, `${await report.locator('img').count()} plots as images`);
+    assert(await report.locator('figure:has(img) figcaption li').count() >= 4, 'the plan\'s legend is not under its image');
     assert(await report.locator('input, select').count() === 0, 'form controls in the report');
     const legends = await page.evaluate(() => [...document.querySelectorAll('.u-legend')].map((l) => l.textContent).join(' '));
     assert(!/--/.test(legends), `"--" in a legend: ${legends.slice(0, 200)}`);
