@@ -1215,7 +1215,7 @@ async function floorViewSection(page, context) {
     assert(sent === 0, `${sent} requests sent with a release off the grid`);
   });
 
-  await check('exports: every CSV button of Migration and Scene downloads a non-empty file headed by version, date and case', async () => {
+  await check('exports: every CSV button of every tab downloads a non-empty file headed by version, date and case', async () => {
     await open(page, '#migration');
     await page.locator(`${form} input[name="monte_carlo"]`).check();
     await field(page, form, '/monte_carlo/runs').fill('30');
@@ -1223,7 +1223,14 @@ async function floorViewSection(page, context) {
     await page.locator('#migration-percentiles-card').waitFor({ state: 'visible', timeout: WAIT_MS });
     await page.locator('#migration-floor').waitFor({ state: 'visible', timeout: WAIT_MS });
     const names = [];
-    for (const tab of ['migration', 'scene']) {
+    for (const tab of ['migration', 'scene', 'impact', 'column', 'study', 'spalling']) {
+      if (!['migration', 'scene'].includes(tab)) {
+        await page.locator(`#tab-${tab}`).click();
+        const done = page.waitForResponse((r) => r.url().endsWith(`/v1/${tab}`) && r.request().method() === 'POST', { timeout: WAIT_MS });
+        await page.locator(`#${tab}-form button[type="submit"]`).click();
+        await done;
+        await page.waitForTimeout(300);
+      }
       if (tab === 'scene') {
         await page.locator('#tab-scene').click();
         await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('60');
@@ -1231,7 +1238,7 @@ async function floorViewSection(page, context) {
         await page.locator('#scene-floor').waitFor({ state: 'visible', timeout: WAIT_MS });
         await page.locator('#scene-dist-plot canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
       }
-      const buttons = page.locator(`#panel-${tab} .results button[data-csv]`);
+      const buttons = page.locator(`#panel-${tab} .results button[data-csv], #panel-${tab} .results a.csv`);
       const n = await buttons.count();
       for (let i = 0; i < n; i += 1) {
         const b = buttons.nth(i);
@@ -1241,10 +1248,14 @@ async function floorViewSection(page, context) {
         names.push(csv.name);
       }
     }
-    assert(names.length >= 12, `${names.length} CSV buttons downloaded: ${names.join(', ')}`);
+    assert(names.length >= 25, `${names.length} CSV buttons downloaded: ${names.join(', ')}`);
   });
 
   await check('case: cases can be named; "Compare two cases" picks two different ones, shows the headline figures and overlays the per-support plot', async () => {
+    await page.locator('#tab-scene').click();
+    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('60');
+    await submit(page, '#scene-form', '/v1/scene');
+    await page.waitForFunction(() => /60 runs/.test(document.querySelector('#case-recent option:nth-child(2)')?.textContent ?? ''), null, { timeout: WAIT_MS });
     await page.locator('#case-name').fill('upper zone, 60 runs');
     await page.locator('#case-name').dispatchEvent('change');
     await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('80');
