@@ -154,7 +154,7 @@ export function stopPositions(runsCsv, release, supports) {
  * Draws the plan of `model` into `canvas` (CSS width of its box): the floor, the supports,
  * the release, the path coloured by speed and the stops. Returns what it drew, for the legend.
  */
-export function drawPlan(canvas, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map(), offFloor = [] } = {}) {
+export function drawPlan(canvas, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map() } = {}) {
   const cssW = Math.max(280, Math.floor(canvas.parentElement?.clientWidth || 600));
   const pathXY = tr ? tr.position_m.map(model.path) : [];
   // The floor's extent in the view frame.
@@ -272,15 +272,6 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     ctx.lineWidth = 2.5;
     ctx.beginPath();
     ctx.arc(px(x), py(y), 6, 0, 2 * Math.PI);
-    ctx.stroke();
-  }
-  for (const o of offFloor) {
-    const [x, y] = model.face2view(o.s, o.across ?? 0);
-    ctx.strokeStyle = SUPPORT_OVER;
-    ctx.lineWidth = 2.5;
-    ctx.beginPath();
-    ctx.moveTo(px(x) - 7, py(y) - 7); ctx.lineTo(px(x) + 7, py(y) + 7);
-    ctx.moveTo(px(x) + 7, py(y) - 7); ctx.lineTo(px(x) - 7, py(y) + 7);
     ctx.stroke();
   }
   // Supports: columns as dots, spanning supports as lines across.

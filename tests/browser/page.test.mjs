@@ -1178,6 +1178,14 @@ async function floorViewSection(page, context) {
     `release_zones sent: ${JSON.stringify(body.release_zones)}`);
     assert(response.status() === 200, `status ${response.status()}`);
     await page.waitForFunction(() => /release zones: 0–40 m, 40–100 m, 110–118 m/.test(document.getElementById('scene-floor-legend').textContent), null, { timeout: WAIT_MS });
+    // the zones travel in the case's link
+    await page.waitForFunction(() => location.hash.includes('case='), null, { timeout: WAIT_MS });
+    const other = await context.newPage();
+    await other.goto(page.url(), { waitUntil: 'load' });
+    await other.waitForSelector('body[data-ready="true"]', { timeout: WAIT_MS });
+    const cells = await other.locator('#scene-zones tbody input').evaluateAll((els) => els.map((e) => e.value));
+    assert(cells.join() === '0,40,0.233,40,100,0.583,110,118,2' && await other.locator('#scene-zones').isVisible(), `zones from the link: ${cells.join()}`);
+    await other.close();
     // a single point off the face
     await page.locator('#scene-form [data-local="release_zones"]').selectOption('point');
     await page.locator('#scene-point-s').fill('-5');
