@@ -641,18 +641,36 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
   if (release.point) {
     const [x, y] = model.face2view(release.point.s, release.point.across);
     const ball = new THREE.Mesh(new THREE.SphereGeometry(0.35, 12, 8), new THREE.MeshLambertMaterial({ color: ZONE }));
+    ball.name = 'release';
     ball.position.copy(V(x, y, floorZ(x, y, centre[2]) + (release.point.drop ?? 0)));
     scene.add(ball);
   }
+  // Marks scale with the scene (a 0.3 m rock on a 120 m face would be a dot).
+  const floorBox = new THREE.Box3().setFromObject(scene).getBoundingSphere(new THREE.Sphere());
+  const mark = Math.max(0.2, floorBox.radius * 0.006);
   if (tr) {
     const [v0, v1] = extent(tr.speed_m_s);
-    const positions = tr.position_m.map((p) => { const [x, y] = model.path(p); return V(x, y, p[2]); });
-    const geo = new THREE.BufferGeometry().setFromPoints(positions);
-    const c3 = new THREE.Color();
-    const col = new Float32Array(positions.length * 3);
-    tr.speed_m_s.forEach((v, i) => { c3.setStyle(SPEED(v1 > v0 ? (v - v0) / (v1 - v0) : 0.5)); col.set([c3.r, c3.g, c3.b], i * 3); });
-    geo.setAttribute('color', new THREE.BufferAttribute(col, 3));
-    scene.add(new THREE.Line(geo, new THREE.LineBasicMaterial({ vertexColors: true, linewidth: 2 })));
+    // The path as a tube coloured by speed (WebGL draws lines one pixel wide).
+    const step = Math.max(1, Math.ceil(tr.position_m.length / 400));
+    const keep = tr.position_m.map((_, i) => i).filter((i) => i % step === 0 || i === tr.position_m.length - 1);
+    const positions = keep.map((i) => { const p = tr.position_m[i]; const [x, y] = model.path(p); return V(x, y, p[2]); });
+    if (positions.length > 1) {
+      const curve = new THREE.CatmullRomCurve3(positions, false, 'centripetal');
+      const segments = positions.length * 2;
+      const radial = 6;
+      const geo = new THREE.TubeGeometry(curve, segments, mark, radial, false);
+      const c3 = new THREE.Color();
+      const count = geo.attributes.position.count;
+      const col = new Float32Array(count * 3);
+      for (let k = 0; k < count; k++) {
+        const ring = Math.min(segments, Math.floor(k / (radial + 1)));
+        const v = tr.speed_m_s[keep[Math.min(keep.length - 1, Math.round((ring / segments) * (keep.length - 1)))]];
+        c3.setStyle(SPEED(v1 > v0 ? (v - v0) / (v1 - v0) : 0.5));
+        col.set([c3.r, c3.g, c3.b], k * 3);
+      }
+      geo.setAttribute('color', new THREE.BufferAttribute(col, 3));
+      scene.add(new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ vertexColors: true })));
+    }
   }
   if (stops.length) {
     const where = stops.map((st) => {
@@ -662,6 +680,8 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
     });
     scene.add(new THREE.Points(new THREE.BufferGeometry().setFromPoints(where), new THREE.PointsMaterial({ color: 0x1c2430, size: 4, sizeAttenuation: false })));
   }
+  const ball = scene.getObjectByName('release');
+  if (ball) ball.scale.setScalar(Math.max(1, (mark * 3) / 0.35));
   // The camera frames everything drawn: from the south-west, above, at the distance that fits its bounding sphere.
   const sphere = new THREE.Box3().setFromObject(scene).getBoundingSphere(new THREE.Sphere());
   const span = Math.max(sphere.radius, 5);
@@ -777,7 +797,7 @@ export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv,
     });
   } else {
     destroy(profile);
-    profile.append(h('p', { class: 'placeholder' }, 'Ask for the trajectory (Output) to see the profile under the path.'));
+    profile.append(h('p', { class: 'placeholder' }, 'No path to draw: the trajectory was not asked for (Output), or the migration was skipped.'));
   }
   const box3d = document.getElementById(`${prefix}-3d`);
   return draw3d(box3d, model, options);
