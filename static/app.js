@@ -5,10 +5,10 @@ import { getJson } from './js/api.js';
 import { initColumn } from './js/column.js';
 import { setFloorLimits } from './js/floor.js';
 import { applyServerDefaults, applyState, formState, setDefaults } from './js/form.js';
-import { csvButton, download, fmt, h, tableRows } from './js/format.js';
+import { csvButton, csvText, download, fmt, h, setCsvHeader, tableRows } from './js/format.js';
 import { initImpact } from './js/impact.js';
 import { initMigration } from './js/migration.js';
-import { plotPng } from './js/plot.js';
+import { destroy, joinSeries, linePlot, plotDataUrl, plotPng } from './js/plot.js';
 import { initScene, setSceneRanges } from './js/scene.js';
 import { initSpalling, setSpallingDefaults } from './js/spalling.js';
 import { initStudy, setStudyDefaults } from './js/study.js';
@@ -180,13 +180,25 @@ function part(form, pointer, prefix = '') {
 
 /** Which parts of the case each tab uses. */
 const USES = {
-  scene: ['rock', 'face', 'column', 'contact'],
+  scene: ['rock', 'face', 'floor', 'column', 'contact'],
   impact: ['rock', 'column', 'contact', 'velocity'],
   column: ['rock', 'column', 'contact', 'velocity'],
-  migration: ['rock', 'face'],
+  migration: ['rock', 'face', 'floor'],
   study: ['column'],
   spalling: [],
 };
+
+/** The uploaded floor in use ({name, sha256, summary, floor}), or null for the plane. */
+function uploadedFloor() {
+  return forms.migration?.floor?.current?.() ?? null;
+}
+
+/** The floor in words: the plane, or the uploaded file with its kind and sha256. */
+function floorWords() {
+  const up = uploadedFloor();
+  if (!up) return 'Floor: the plane of the face';
+  return `Floor: uploaded ${up.floor.kind === 'grid' ? 'ESRI ASCII grid' : 'GeoJSON contours'} ${up.name} (${up.summary}; sha256 ${up.sha256 ?? 'not computed'})`;
+}
 
 function caseParts() {
   const i = forms.impact;
@@ -197,6 +209,7 @@ function caseParts() {
     contact: `Contact: ${val(i, '/contact/law')}, E* ${val(i, '/contact/effective_modulus')}`,
     velocity: `Impact velocity ${part(i, '/velocity_m_s')}`,
     face: `Face: dip ${part(m, '/face/dip_deg')}, ${part(m, '/face/length_m')} long, μ ${val(m, '/face/friction_coefficient')}, ${val(m, '/method')}`,
+    floor: floorWords(),
   };
 }
 
@@ -208,7 +221,7 @@ function updateCaseSummary() {
   const parts = caseParts();
   box.replaceChildren(h('strong', {}, `Case (${tab} tab, ${settings} settings): `),
     ...Object.entries(parts).map(([key, text]) =>
-      h('span', { class: `case-part ${uses.includes(key) ? 'used' : 'unused'}`, dataset: { part: key } }, text)));
+      h('span', { class: `case-part ${uses.includes(key) ? 'used' : 'unused'}${key === 'floor' && uploadedFloor() ? ' floor-badge' : ''}`, dataset: { part: key } }, text)));
 }
 
 // ---- the case in the link, recent cases, comparison --------------------------
@@ -240,6 +253,8 @@ function linkFor(state) {
 }
 
 const panels = {};
+/** The last answer of each tab ({data, request, time}), for the report. */
+const lastResults = {};
 
 /** Puts a saved case into the forms; with `run`, computes its tab. */
 function openCase(state, { run = false } = {}) {
@@ -271,21 +286,24 @@ function remember(entry) {
 
 function fillRecent() {
   const list = recent();
-  const options = list.map((e, i) => h('option', { value: String(i) }, `${new Date(e.time).toLocaleTimeString()} ${e.tab}: ${e.headline}`));
+  const options = list.map((e, i) => h('option', { value: String(i) }, caseLabel(e)));
   document.getElementById('case-recent').replaceChildren(h('option', { value: '' }, list.length ? 'choose a case…' : '—'), ...options);
   for (const [id, pick] of [['compare-a', 1], ['compare-b', 0]]) {
     const sel = document.getElementById(id);
     const keep = sel.value;
-    sel.replaceChildren(...list.map((e, i) => h('option', { value: String(i) }, `${new Date(e.time).toLocaleTimeString()} ${e.tab}: ${e.headline}`)));
+    sel.replaceChildren(...list.map((e, i) => h('option', { value: String(i) }, caseLabel(e))));
     sel.value = keep && Number(keep) < list.length ? keep : String(Math.min(pick, Math.max(list.length - 1, 0)));
   }
+  const a = document.getElementById('compare-a');
+  const b = document.getElementById('compare-b');
+  if (list.length > 1 && a.value === b.value) { a.value = '1'; b.value = '0'; }
 }
 
 /** The rows a result shows, for the comparison: [label, text] from the panel's tables. */
 function resultRows(tab) {
   const panel = document.querySelector(`[data-panel="${tab}"]`);
   const rows = [];
-  for (const table of panel.querySelectorAll('.results table')) {
+  for (const table of panel.querySelectorAll('.results table:not(.u-legend)')) {
     if (table.closest('[hidden]')) continue;
     const all = tableRows(table);
     const head = table.tHead ? all.shift() : null;
@@ -332,16 +350,102 @@ function renderCompare() {
   const mapB = new Map(b.rows);
   const mapA = new Map(a.rows);
   const labels = [...new Set([...a.rows.map((r) => r[0]), ...b.rows.map((r) => r[0])])];
+  const figA = new Map(a.figures ?? []);
+  const figB = new Map(b.figures ?? []);
+  const figLabels = [...new Set([...figA.keys(), ...figB.keys()])];
   table.append(
-    h('thead', {}, h('tr', {}, h('th', {}, ''), h('th', {}, `A: ${a.tab} ${new Date(a.time).toLocaleTimeString()}`),
-      h('th', {}, `B: ${b.tab} ${new Date(b.time).toLocaleTimeString()}`))),
+    h('thead', {}, h('tr', {}, h('th', {}, ''), h('th', {}, `A: ${caseLabel(a)}`), h('th', {}, `B: ${caseLabel(b)}`))),
     h('tbody', {},
+      h('tr', { class: 'group' }, h('th', { colspan: 3 }, 'Headline figures')),
+      figLabels.map((l) => h('tr', { class: `headline${figA.get(l) !== figB.get(l) ? ' diff' : ''}` },
+        h('th', { scope: 'row' }, l), h('td', {}, figA.get(l) ?? '—'), h('td', {}, figB.get(l) ?? '—'))),
       h('tr', { class: 'group' }, h('th', { colspan: 3 }, inputs.length ? 'Inputs that differ' : 'Same inputs')),
       inputs.map(([k, x, y]) => h('tr', { class: 'diff' }, h('th', { scope: 'row' }, k), h('td', {}, String(x ?? '—')), h('td', {}, String(y ?? '—')))),
       h('tr', { class: 'group' }, h('th', { colspan: 3 }, 'Results')),
       labels.map((l) => h('tr', { class: mapA.get(l) !== mapB.get(l) ? 'diff' : '' },
         h('th', { scope: 'row' }, l), h('td', {}, mapA.get(l) ?? '—'), h('td', {}, mapB.get(l) ?? '—')))),
   );
+  overlaySupports(a, b);
+}
+
+/** The per-support risk of the two cases on one plot (scene cases), or a note why there is none. */
+function overlaySupports(a, b) {
+  const el = document.getElementById('compare-plot');
+  destroy(el);
+  if (!a.supports?.length || !b.supports?.length) {
+    el.append(h('p', { class: 'note' }, 'The per-support plot is overlaid when both cases are Scene cases.'));
+    return;
+  }
+  const ensemble = a.supports[0].length > 4 && b.supports[0].length > 4;
+  const xy = (list) => {
+    const cols = Math.max(1, ...list.map((r) => r[1] + 1));
+    const pairs = list.map((r) => [r[0] + r[1] / (cols + 1), r[3] * 100]).sort((p, q) => p[0] - q[0]);
+    return [pairs.map((p) => p[0]), pairs.map((p) => p[1])];
+  };
+  const joined = joinSeries([xy(a.supports), xy(b.supports)]);
+  linePlot(el, {
+    x: { label: 'support number', values: joined[0], ticks: (v) => (Number.isInteger(v) ? `#${v}` : '') },
+    y: { label: ensemble ? 'P(exceed) (%)' : 'largest utilisation (%)' },
+    series: [
+      { label: `A: ${caseLabel(a)}`, values: joined[1], points: true, color: '#1d5fa8' },
+      { label: `B: ${caseLabel(b)}`, values: joined[2], points: true, color: '#c8423b', dash: [5, 4] },
+    ],
+    height: 240,
+  });
+}
+
+/** A recent case in one line: its name (if given), time, tab and headline. */
+function caseLabel(e) {
+  return `${e.name ? `${e.name} — ` : ''}${new Date(e.time).toLocaleTimeString()} ${e.tab}: ${e.headline}`;
+}
+
+/** The headline figures of a result, [label, text], for the comparison and the report. */
+function figures(tab, data) {
+  const pct = (p) => `${fmt(p * 100, 3)} %`;
+  const ci = (x) => `${pct(x.probability)} [95 % interval ${fmt(x.ci95[0] * 100, 3)}–${fmt(x.ci95[1] * 100, 3)} %]`;
+  switch (tab) {
+    case 'scene': {
+      const st = data.statistics;
+      if (st) {
+        const over = (st.supports ?? []).filter((e) => e.verdict === 'exceeded');
+        return [
+          ['Runs', `${st.runs} (seed ${st.seed})`],
+          ['P(a rock overloads some support)', st.any_exceeded ? ci(st.any_exceeded) : '—'],
+          ['Supports exceeding', `${over.length} of ${(st.supports ?? []).length}`],
+          ['Reached the lower end', pct(st.outcomes?.lower_end ?? 0)],
+          ['Struck a support', pct(st.outcomes?.support ?? 0)],
+        ];
+      }
+      const imps = data.impacts ?? [];
+      return [['Supports struck', String(imps.length)], ['Exceeded', String(imps.filter((i) => i.verdict === 'exceeded').length)],
+        ...imps.slice(0, 3).map((i) => [`Support #${i.support} impact speed`, `${fmt(i.impact_velocity_m_s, 4)} m/s`])];
+    }
+    case 'migration':
+      return [['Arrival speed', `${fmt(data.arrival?.speed_m_s, 5)} m/s`], ['Outcome', data.arrival?.stop_reason ?? '—'],
+        ['Final position along the dip', `${fmt(data.arrival?.along_dip_m, 5)} m`],
+        ...(data.statistics ? [['Runs', String(data.statistics.runs)], ['Mean arrival speed', `${fmt(data.statistics.speed_m_s?.mean, 5)} m/s`], ['p95 arrival speed', `${fmt(data.statistics.speed_m_s?.p95, 5)} m/s`]] : [])];
+    case 'impact':
+      return [['Impact velocity', `${val(forms.impact, '/velocity_m_s')} m/s`], ['Max force Pmax', `${fmt(data.max_force_n * 1e-3, 5)} kN`], ['Max approach δmax', `${fmt(data.max_deformation_m * 1e3, 5)} mm`]];
+    case 'column':
+      return Object.entries(data).filter(([, d]) => d && typeof d === 'object' && (d.absorbed_energy_j !== undefined || d.column_energy_after_contact_j !== undefined))
+        .map(([m, d]) => [`${m}: column energy`, `${fmt(d.absorbed_energy_j ?? d.column_energy_after_contact_j, 5)} J`]);
+    default: return [];
+  }
+}
+
+/** Per-support [support, column, along_dip_m, risk, lo, hi] of a scene answer (for the overlay). */
+function supportRisks(data) {
+  if (data.statistics?.supports) {
+    return data.statistics.supports.map((e) => {
+      let worst = { probability: 0, ci95: [0, 0] };
+      for (const x of Object.values(e.exceedance ?? {})) if (x.probability > worst.probability || (x.probability === worst.probability && x.ci95[1] > worst.ci95[1])) worst = x;
+      return [e.support, e.column_index ?? 0, e.along_dip_m, worst.probability, worst.ci95[0], worst.ci95[1]];
+    });
+  }
+  if (Array.isArray(data.impacts) && data.impacts.length) {
+    return data.impacts.map((i) => [i.support, i.column_index ?? 0, i.along_dip_m, Math.max(0, ...(i.checks ?? []).map((c) => c.utilisation ?? 0))]);
+  }
+  return null;
 }
 
 function initCases() {
@@ -354,7 +458,9 @@ function initCases() {
     const version = data.model_version ?? Object.values(data).find((d) => d?.model_version)?.model_version;
     if (version) modelVersion = version;
     updatePrintHeader();
-    remember({ time: Date.now(), tab: name, headline: headline(name, data), link, state, rows: resultRows(name) });
+    lastResults[name] = { data, request: detail.request, time: new Date() };
+    document.getElementById('case-name').value = '';
+    remember({ time: Date.now(), tab: name, headline: headline(name, data), link, state, rows: resultRows(name), figures: figures(name, data), supports: supportRisks(data) });
     const floorNote = document.getElementById('case-link-note');
     const uploaded = document.querySelector('[data-floor-uploaded="true"]');
     floorNote.hidden = !uploaded;
@@ -387,7 +493,29 @@ function initCases() {
     }
   });
   document.getElementById('compare-close').addEventListener('click', () => { document.getElementById('compare').hidden = true; });
-  for (const id of ['compare-a', 'compare-b']) document.getElementById(id).addEventListener('change', renderCompare);
+  // Two different cases: choosing the other's case moves the other to the next one.
+  for (const [id, other] of [['compare-a', 'compare-b'], ['compare-b', 'compare-a']]) {
+    document.getElementById(id).addEventListener('change', () => {
+      const me = document.getElementById(id);
+      const them = document.getElementById(other);
+      const n = recent().length;
+      if (me.value === them.value && n > 1) them.value = String((Number(me.value) + 1) % n);
+      renderCompare();
+    });
+  }
+  const nameBox = document.getElementById('case-name');
+  nameBox.addEventListener('change', () => {
+    const list = recent();
+    if (!list.length) return;
+    list[0].name = nameBox.value.trim();
+    try {
+      localStorage.setItem(RECENT_KEY, JSON.stringify(list));
+    } catch {
+      // storage full or disabled
+    }
+    fillRecent();
+    if (!document.getElementById('compare').hidden) renderCompare();
+  });
   fillRecent();
 }
 
@@ -405,7 +533,14 @@ function initExports() {
     const bar = h('div', { class: 'export-bar' });
     const tables = [...card.querySelectorAll('table')];
     if (tables.length) {
-      bar.append(csvButton(`${panel}_${slug(title)}.csv`, () => tables.flatMap((t) => tableRows(t)), 'CSV'));
+      bar.append(csvButton(`${panel}_${slug(title)}.csv`, () => tables.flatMap((t) => (t.csv ? t.csv() : tableRows(t))), 'CSV'));
+    }
+    for (const canvas of card.querySelectorAll('canvas.floor-plan')) {
+      const png = h('button', { type: 'button', class: 'export', dataset: { png: canvas.id } }, 'PNG');
+      png.addEventListener('click', () => canvas.toBlob((blob) => blob && download(`${canvas.id}.png`, blob, 'image/png'), 'image/png'));
+      const data = h('button', { type: 'button', class: 'export', dataset: { csv: `${canvas.id}.csv` } }, 'CSV: where runs stopped');
+      data.addEventListener('click', () => { if (canvas.csv) download(`${canvas.id}.csv`, csvText(canvas.csv())); });
+      bar.append(png, data);
     }
     for (const plot of card.querySelectorAll('.plot')) {
       const png = h('button', { type: 'button', class: 'export', dataset: { png: plot.id } }, 'PNG');
@@ -415,7 +550,8 @@ function initExports() {
       });
       const data = h('button', { type: 'button', class: 'export', dataset: { csv: `${plot.id}.csv` } }, 'CSV: data');
       data.addEventListener('click', () => {
-        if (plot.csv) download(`${plot.id}.csv`, csvText(plot.csv()));
+        // a plot not drawn still gives a file that says why
+        download(`${plot.id}.csv`, csvText(plot.csv ? plot.csv() : [[`no data: ${plot.textContent.trim() || 'nothing drawn yet'}`]]));
       });
       bar.append(png, data);
     }
@@ -423,12 +559,6 @@ function initExports() {
   }
 }
 
-function csvText(rows) {
-  return rows.map((r) => r.map((c) => {
-    const s = c === null || c === undefined ? '' : String(c);
-    return /[",\n]/.test(s) ? `"${s.replaceAll('"', '""')}"` : s;
-  }).join(',')).join('\n') + '\n';
-}
 
 function updatePrintHeader() {
   const el = document.getElementById('print-header');
@@ -440,12 +570,160 @@ function updatePrintHeader() {
   );
 }
 
+const REPORT_KEY = 'gangue.report.v1';
+
+/** Every field of an `inputs` object as [JSON Pointer, value]; a floor file's text stands as its name and hash. */
+function flatten(obj, prefix = '', out = []) {
+  for (const [k, v] of Object.entries(obj ?? {})) {
+    const p = `${prefix}/${k}`;
+    if (k === 'esri_ascii' || k === 'geojson') out.push([p, `(the file's text: ${uploadedFloor()?.name ?? 'uploaded'})`]);
+    else if (v && typeof v === 'object' && !Array.isArray(v)) flatten(v, p, out);
+    else if (Array.isArray(v) && v.some((x) => x && typeof x === 'object')) v.forEach((x, i) => flatten(x, `${p}/${i}`, out));
+    else out.push([p, Array.isArray(v) ? v.join(', ') : v === null ? 'null (derived by the service)' : String(v)]);
+  }
+  return out;
+}
+
+/** What each part of the inputs is, for the report's headings. */
+const INPUT_GROUPS = [
+  ['/face', 'Face and floor (migration)'], ['/rock', 'Rock'], ['/release', 'Release'], ['/method', 'Migration method'], ['/lumped_mass', 'Lumped mass'],
+  ['/rigid_block', 'Rigid-block settings'], ['/monte_carlo', 'Ensemble: runs, seed and ranges'], ['/release_zones', 'Release zones'],
+  ['/support_rows', 'Supports'], ['/supports', 'Supports'], ['/column', 'Column'], ['/contact', 'Contact'], ['/galerkin', 'Galerkin'],
+  ['/design_limits', 'Design limits'], ['/column_model', 'Column model'], ['/impact_velocity_m_s', 'Impact velocity'],
+];
+
+/**
+ * The report for the safety file (what "Print report" prints): the heading fields, the case,
+ * the model version, the floor with its sha256, every input of the chain, the verdicts with
+ * probabilities and intervals, the plots as images and the warnings.
+ */
+function buildReport() {
+  const tab = currentTab();
+  const last = lastResults[tab];
+  const report = document.getElementById('report');
+  const field = (id) => document.getElementById(id).value.trim();
+  const link = linkFor(caseState(tab));
+  const kv = (rows) => h('table', {}, h('tbody', {}, rows.map(([k, v]) => h('tr', {}, h('th', { scope: 'row' }, k), h('td', {}, v)))));
+  const up = uploadedFloor();
+  const serverFloor = last?.data?.inputs?.face?.floor ?? last?.data?.migration?.inputs?.face?.floor;
+  const parts = [
+    h('h1', {}, 'Flying gangue: calculation report'),
+    kv([
+      ['Project', field('report-project') || '(not given)'], ['Face', field('report-face') || '(not given)'], ['Author', field('report-author') || '(not given)'],
+      ['Case', recent()[0]?.name || '(unnamed)'], ['Date', new Date().toISOString()], ['Calculation', `${tab} (${settings} settings)`],
+      ['Model version', `gangue ${modelVersion || 'unknown'}`], ['Link to this case', h('span', { class: 'report-link' }, link)],
+    ]),
+    h('h2', {}, 'Floor'),
+    kv(up
+      ? [['Floor', `uploaded ${up.floor.kind === 'grid' ? 'ESRI ASCII grid' : 'GeoJSON contours'}`], ['File', `${up.name} (${up.bytes ?? '?'} bytes; ${up.summary})`],
+        ['sha256 (computed in the page)', up.sha256 ?? 'not computed'], ['sha256 (echoed by the service)', serverFloor?.sha256 ?? '—'],
+        ['Map', serverFloor?.map ? `origin ${serverFloor.map.origin_m.join(', ')} m, dip direction ${serverFloor.map.dip_direction_deg}°` : 'the file\'s own frame']]
+      : [['Floor', 'the plane of the face (from the dip and the length)']]),
+  ];
+  if (!last) {
+    parts.push(h('p', {}, `Nothing computed on the ${tab} tab yet: compute it, then print the report.`));
+  } else {
+    const data = last.data;
+    const inputs = data.inputs ?? Object.values(data).find((d) => d?.inputs)?.inputs ?? {};
+    parts.push(h('h2', {}, 'Inputs of the chain (every default filled in by the service)'));
+    const all = flatten(inputs);
+    const used = new Set();
+    for (const [prefix, words] of INPUT_GROUPS) {
+      const rows = all.filter(([p]) => (p === prefix || p.startsWith(`${prefix}/`)) && !used.has(p));
+      if (!rows.length) continue;
+      rows.forEach(([p]) => used.add(p));
+      parts.push(h('h3', {}, words), kv(rows));
+    }
+    const rest = all.filter(([p]) => !used.has(p));
+    if (rest.length) parts.push(h('h3', {}, 'Other settings'), kv(rest));
+    parts.push(h('h2', {}, 'Headline figures'), kv(figures(tab, data)));
+    const verdicts = verdictRows(data);
+    if (verdicts) {
+      parts.push(h('h2', {}, 'Verdicts, worst first'), h('table', {},
+        h('thead', {}, h('tr', {}, verdicts.head.map((c) => h('th', { scope: 'col' }, c)))),
+        h('tbody', {}, verdicts.rows.map((r) => h('tr', { class: r[1] === 'EXCEEDED' ? 'verdict-exceeded' : '' }, r.map((c, i) => h('td', { class: i > 1 ? 'num' : '' }, c)))))));
+    }
+    const panel = document.querySelector(`[data-panel="${tab}"]`);
+    const checks = [...panel.querySelectorAll('.checks-card table')].filter((t) => !t.closest('[hidden]'));
+    if (checks.length) parts.push(h('h2', {}, 'Checks'), ...checks.map((t) => t.cloneNode(true)));
+    const figs = [];
+    for (const el of panel.querySelectorAll('.results .plot, .results canvas.floor-plan, .results .view3d canvas')) {
+      if (el.closest('[hidden]')) continue;
+      const card = el.closest('.card');
+      const title = card?.querySelector('h3')?.textContent.trim() ?? '';
+      const url = el.tagName === 'CANVAS' ? el.toDataURL('image/png') : plotDataUrl(el, title);
+      // the plan's legend is HTML beside it: its lines go under the image
+      const legend = el.classList.contains('floor-plan') ? [...card.querySelectorAll('.floor-legend li')].map((li) => li.textContent.trim()) : [];
+      if (url) {
+        figs.push(h('figure', {}, h('img', { src: url, alt: el.getAttribute('aria-label') ?? title }), h('figcaption', {}, title,
+          legend.length ? h('ul', {}, legend.map((t) => h('li', {}, t))) : null)));
+      }
+    }
+    if (figs.length) parts.push(h('h2', {}, 'Plots'), ...figs);
+    const warnings = [...(data.warnings ?? []), ...(data.migration?.warnings ?? [])];
+    parts.push(h('h2', {}, 'Warnings'), warnings.length
+      ? h('ul', {}, warnings.map((w) => h('li', {}, `${w.message} (${w.code})`)))
+      : h('p', {}, 'No warnings.'));
+  }
+  report.replaceChildren(...parts);
+  report.dataset.tab = tab;
+  return report;
+}
+
+/** The verdicts of a scene (per support, worst first) or of the checks of impact and column. */
+function verdictRows(data) {
+  const sup = data.statistics?.supports;
+  if (sup) {
+    const rows = sup.map((e) => {
+      let worst = { probability: 0, ci95: [0, 0] };
+      let limit = '';
+      for (const [l, x] of Object.entries(e.exceedance ?? {})) if (x.probability > worst.probability || (x.probability === worst.probability && x.ci95[1] > worst.ci95[1])) { worst = x; limit = l; }
+      return { e, worst, limit };
+    }).sort((a, b) => (b.e.verdict === 'exceeded') - (a.e.verdict === 'exceeded') || b.worst.probability - a.worst.probability || b.worst.ci95[1] - a.worst.ci95[1] || a.e.support - b.e.support);
+    return {
+      head: ['Support', 'Verdict', 'Along the dip (m)', 'P(exceed) (%)', '95 % interval (%)', 'Limit', 'Reached (%)'],
+      rows: rows.map(({ e, worst, limit }) => [`#${e.support}${e.column_index ? `.${e.column_index}` : ''}`, e.verdict === 'exceeded' ? 'EXCEEDED' : 'OK',
+        fmt(e.along_dip_m, 5), fmt(worst.probability * 100, 3), `${fmt(worst.ci95[0] * 100, 3)}–${fmt(worst.ci95[1] * 100, 3)}`, limit, fmt(e.reached_fraction * 100, 4)]),
+    };
+  }
+  if (Array.isArray(data.impacts) && data.impacts.length) {
+    return {
+      head: ['Support', 'Verdict', 'Along the dip (m)', 'Impact speed (m/s)', 'Largest utilisation (%)'],
+      rows: data.impacts.map((i) => [`#${i.support}`, i.verdict === 'exceeded' ? 'EXCEEDED' : 'OK', fmt(i.along_dip_m, 5), fmt(i.impact_velocity_m_s, 4),
+        fmt(Math.max(0, ...(i.checks ?? []).map((c) => c.utilisation ?? 0)) * 100, 4)]),
+    };
+  }
+  return null;
+}
+
 function initPrint() {
+  // The report's heading fields are kept in the browser.
+  let saved = {};
+  try {
+    saved = JSON.parse(localStorage.getItem(REPORT_KEY) ?? '{}');
+  } catch {
+    saved = {};
+  }
+  for (const id of ['report-project', 'report-face', 'report-author']) {
+    const el = document.getElementById(id);
+    el.value = saved[id] ?? '';
+    el.addEventListener('change', () => {
+      saved[id] = el.value;
+      try {
+        localStorage.setItem(REPORT_KEY, JSON.stringify(saved));
+      } catch {
+        // no storage
+      }
+    });
+  }
   document.getElementById('case-print').addEventListener('click', () => {
     updatePrintHeader();
+    buildReport();
+    document.body.classList.add('printing-report');
     window.print();
   });
   window.addEventListener('beforeprint', updatePrintHeader);
+  window.addEventListener('afterprint', () => document.body.classList.remove('printing-report'));
 }
 
 // ---- start -------------------------------------------------------------------
@@ -485,6 +763,12 @@ function initGuide() {
 
 async function main() {
   initGuide();
+  // Every saved CSV starts with what it is: the model version, the date, the case's link (and the floor file).
+  setCsvHeader(() => {
+    const up = uploadedFloor();
+    return [`gangue ${modelVersion || 'unknown'}`, `date ${new Date().toISOString()}`, `case ${linkFor(caseState(currentTab()))}`,
+      ...(up ? [`floor ${up.name} sha256 ${up.sha256 ?? 'not computed'}`] : [])];
+  });
   panels.impact = initImpact();
   panels.column = initColumn();
   panels.migration = initMigration();

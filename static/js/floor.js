@@ -110,6 +110,8 @@ export function initFloor(form) {
     try {
       const text = await f.text().finally(() => { submit.disabled = false; });
       loaded = /\.(geo)?json$/i.test(f.name) || text.trim().startsWith('{') ? readGeojson(f.name, text, elevation.value.trim()) : readAsc(f.name, text);
+      loaded.sha256 = await sha256Hex(text);
+      loaded.bytes = f.size;
       info.textContent = `${f.name}: ${loaded.summary}. An uploaded floor cannot travel in a link: whoever opens the link must upload the same file.`;
       canvas.hidden = false;
       canvas.setAttribute('aria-label', `the uploaded floor ${f.name}, north up: ${loaded.summary}`);
@@ -120,6 +122,8 @@ export function initFloor(form) {
       showRefusal(`${f.name} cannot be read: ${err.message}`);
     }
     sync();
+    // the case bar names the floor in use
+    form.dispatchEvent(new Event('input'));
   });
   sync();
 
@@ -154,7 +158,16 @@ export function initFloor(form) {
       draw(canvas, loaded.draw, path ?? null);
     },
     uploaded: () => Boolean(loaded),
+    /** The uploaded floor in use ({name, sha256, bytes, summary, draw}), or null for the plane. */
+    current: () => (kind.value === 'upload' && loaded ? loaded : null),
   };
+}
+
+/** SHA-256 of a text (its UTF-8 bytes, as sent in the request) in hex, computed in the page. */
+export async function sha256Hex(text) {
+  if (!globalThis.crypto?.subtle) return null;
+  const digest = await crypto.subtle.digest('SHA-256', new TextEncoder().encode(text));
+  return [...new Uint8Array(digest)].map((b) => b.toString(16).padStart(2, '0')).join('');
 }
 
 /** Face (x down the dip, y across) to map (E, N) for `map` {origin_m, dip_direction_deg}. */

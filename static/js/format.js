@@ -70,6 +70,7 @@ export function fillTable(tbody, rows, data, prefix = '') {
     const noise = row.noise ? row.noise(data) * (row.scale ?? 1) : 0;
     const text = row.words ? row.words(raw, data) : fmtValue(value, row.sig, noise);
     const cell = h('td', { class: row.words ? 'text' : 'num', dataset: { out: prefix + row.key } }, text);
+    if (!row.words && typeof value === 'number') cell.dataset.csv = csvNumber(value);
     const unit = h('td', { class: 'unit', html: row.unit ?? '' });
     if (row.alt && typeof raw === 'number') {
       unit.append(h('span', { class: 'alt' }, `= ${fmt(raw * row.alt.scale, row.sig)} ${row.alt.unit}`));
@@ -126,9 +127,22 @@ export function humanMessage(text) {
   return String(text ?? '').replace(/(-?\d+(?:\.\d+)?)e([+-]?\d+)/g, (_, m, e) => fmt(Number(`${m}e${e}`), 5));
 }
 
-/** CSV text of rows of cells (RFC 4180 quoting). */
+/** The lines that head every CSV the page saves ("# gangue <version>", "# date <ISO>", "# case <link>", …). */
+let csvHeader = () => [];
+
+/** Sets what heads every saved CSV: a function giving its comment lines (without "# "). */
+export function setCsvHeader(fn) {
+  csvHeader = fn;
+}
+
+/** The header block of a saved CSV, one "# …" line each. */
+export function csvHeaderText() {
+  return csvHeader().map((line) => `# ${String(line).replace(/\s*\n\s*/g, ' ')}\n`).join('');
+}
+
+/** CSV text of rows of cells (RFC 4180 quoting), after the header block. */
 export function csvText(rows) {
-  return rows.map((r) => r.map((c) => {
+  return csvHeaderText() + rows.map((r) => r.map((c) => {
     const s = c === null || c === undefined ? '' : String(c);
     return /[",\n]/.test(s) ? `"${s.replaceAll('"', '""')}"` : s;
   }).join(',')).join('\n') + '\n';
@@ -144,10 +158,18 @@ export function download(name, content, type = 'text/csv') {
   setTimeout(() => URL.revokeObjectURL(a.href), 10_000);
 }
 
-/** Rows of a rendered HTML table (header included), as shown on screen. */
+/**
+ * Rows of a rendered HTML table (header included); a cell's `data-csv` (a plain number, or
+ * empty) stands for its text, so that numeric columns stay numbers.
+ */
 export function tableRows(table) {
   return [...table.querySelectorAll('tr')].map((tr) =>
-    [...tr.children].map((c) => c.textContent.replace(/\s+/g, ' ').trim()));
+    [...tr.children].map((c) => (c.dataset.csv !== undefined ? c.dataset.csv : c.textContent.replace(/\s+/g, ' ').trim())));
+}
+
+/** A number as a CSV cell: shortest round-trip text, or empty for null / not a number. */
+export function csvNumber(v) {
+  return typeof v === 'number' && Number.isFinite(v) ? String(v) : '';
 }
 
 /** A small button that downloads the CSV that `rows()` gives. */

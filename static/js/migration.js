@@ -8,6 +8,7 @@ import { csvButton, fillTable, fmt, h, showWarnings } from './format.js';
 import { postJson } from './api.js';
 import { initPanel } from './panel.js';
 import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
+import { clearFloorViews, offFloor, floorModel, renderFloorViews } from './floorview.js';
 
 /** Why the friction spread starts from the page's own values. */
 const FRICTION_SPREAD = 'an example spread: the server has none unless one is sent';
@@ -216,6 +217,10 @@ export function initMigration() {
     build: ([own]) => {
       const request = own.request;
       floor.apply(request, own.local);
+      const model = floorModel({ face: request.face }, floor.current());
+      const r = request.release ?? {};
+      const off = offFloor(model, r.along_dip_m ?? 0, r.across_m ?? 0);
+      if (off) throw { fieldErrors: [{ field: '/release/along_dip_m', message: `the release ${off}: move it onto the floor` }] };
       const rigid = request.method === 'rigid_block';
       const mc = request.monte_carlo;
       if (mc && rigid) {
@@ -252,6 +257,7 @@ export function initMigration() {
       renderStatistics(null);
       renderTrajectory(null);
       renderComparison(null);
+      clearFloorViews('migration');
     },
   });
 
@@ -274,7 +280,7 @@ export function initMigration() {
 
   const tableTitle = document.getElementById('migration-table-title');
 
-  function render(data) {
+  function render(data, request) {
     empty.hidden = true;
     tableTitle.textContent = data.statistics
       ? 'Nominal run (the request without random draws), not the ensemble'
@@ -287,6 +293,11 @@ export function initMigration() {
     renderTrajectory(data.trajectory, data);
     renderComparison(data.comparison ?? null);
     floor.showPath(data);
+    const names = { lumped_mass: 'lumped mass', rigid_block: 'rigid block (DEM)' };
+    const extra = Object.entries(data.comparison ?? {})
+      .filter(([, d]) => d.trajectory && d.trajectory !== data.trajectory && d.method !== data.method)
+      .map(([method, d]) => ({ label: `the rock, ${names[method] ?? method}`, tr: d.trajectory }));
+    renderFloorViews('migration', { inputs: data.inputs, request, upload: floor.current(), tr: data.trajectory ?? null, runsCsv, arrival: data.arrival, extra });
   }
 
   function renderComparison(both) {
@@ -397,7 +408,7 @@ export function initMigration() {
       const noise = Math.max(Math.abs(s.mean ?? 0), Math.abs(s.max ?? 0), Math.abs(s.min ?? 0)) * scale;
       body.append(h('tr', {},
         h('th', { scope: 'row' }, label),
-        STAT_COLUMNS.map((c) => h('td', { class: 'num', dataset: { out: `statistics.${key}.${c}` } },
+        STAT_COLUMNS.map((c) => h('td', { class: 'num', dataset: { out: `statistics.${key}.${c}`, csv: typeof s[c] === 'number' ? String(s[c] * scale) : '' } },
           fmt(s[c] === null || s[c] === undefined ? s[c] : s[c] * scale, 5, noise))),
         h('td', { class: 'unit' }, unit)));
     }
@@ -420,7 +431,7 @@ export function initMigration() {
     linePlot(plots.side, {
       x: { label: 'along the dip (m)', values: s, range: sRange },
       y: { label: 'height above the floor (m)' },
-      series: [{ label: 'height', values: tr.height_m }],
+      series: [{ label: floor.current() && data.inputs?.face?.floor?.kind !== 'plane' ? `height above the uploaded floor ${floor.current().name}` : 'height above the plane', values: tr.height_m }],
     });
 
     const xs = tr.position_m.map((p) => p[0]);
@@ -428,7 +439,7 @@ export function initMigration() {
     linePlot(plots.plan, {
       x: { label: 'x, horizontal in the dip direction (m)', values: xs, range: range(xs) },
       y: { label: 'y: across the face (m)', range: range(ys, 1) },
-      series: [{ label: 'path', values: ys }],
+      series: [{ label: floor.current() && data.inputs?.face?.floor?.kind !== 'plane' ? `path on the uploaded floor ${floor.current().name}` : 'path on the plane', values: ys }],
     });
 
     const kJ = (a) => a?.map((v) => v * 1e-3);

@@ -80,7 +80,8 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
       }],
     },
     series: [
-      { label: x.label, ...(x.value ? { value: (u, v, si, i) => (i === null || i === undefined ? '—' : x.value(i)) } : {}) },
+      // With no point under the cursor a legend shows nothing (uPlot's default is "--", which reads as a value).
+      { label: x.label, value: x.value ? (u, v, si, i) => (i === null || i === undefined ? '' : x.value(i)) : legendValue },
       ...series.map((s, i) => {
         const color = s.color ?? COLORS[i % COLORS.length];
         return {
@@ -90,7 +91,7 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
           width: s.width ?? 1.75,
           dash: s.dash,
           spanGaps: true,
-          ...(s.value ? { value: (u, v, si, i) => (i === null || i === undefined ? '—' : s.value(v, i)) } : {}),
+          value: s.value ? (u, v, si, i) => (i === null || i === undefined ? '' : s.value(v, i)) : legendValue,
           fill: s.bars ? `${color}55` : undefined,
           paths: s.bars ? uPlot.paths.bars({ size: [0.92, Infinity], align: 0 }) : s.points === 'only' || s.points === 'none' ? () => null : undefined,
           points: s.points === 'only' || s.points === true
@@ -102,6 +103,10 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
   };
   const data = [x.values, ...series.map((s) => s.values)];
   const u = new uPlot(opts, data, el);
+  // uPlot writes "--" in every legend value until the cursor moves: nothing, rather than a dash that reads as a value.
+  for (const v of u.root.querySelectorAll('.u-legend .u-value')) if (v.firstChild && v.textContent === '--') v.firstChild.nodeValue = '';
+  // The numbers drawn, as the plot's CSV (a caller may give a better one after this).
+  el.csv = () => [[x.label, ...series.map((s) => s.label)], ...x.values.map((v, i) => [v, ...series.map((s) => s.values?.[i] ?? '')])];
   // A text alternative: what is plotted against what, over which ranges (the CSV button gives the numbers).
   el.setAttribute('role', 'img');
   el.setAttribute('aria-label', describe(x, y, series));
@@ -111,6 +116,11 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
   plots.set(el, u);
   resizer.observe(el);
   return u;
+}
+
+/** A legend's value: the number under the cursor, or nothing. */
+function legendValue(u, v) {
+  return v === null || v === undefined || !Number.isFinite(v) ? '' : short(v);
 }
 
 /** "Plot of A (from 1 to 5) and B (from 0 to 3) against x (m), from 0 to 120." */
@@ -164,8 +174,18 @@ function padFlat(min, max) {
  * and labels included) and the series names with their colours.
  */
 export function plotPng(el, title) {
+  const out = plotCanvas(el, title);
+  return out ? new Promise((resolve) => out.toBlob(resolve, 'image/png')) : Promise.resolve(null);
+}
+
+/** The plot in `el` as a PNG data URL (for the printed report), or null. */
+export function plotDataUrl(el, title) {
+  return plotCanvas(el, title)?.toDataURL('image/png') ?? null;
+}
+
+function plotCanvas(el, title) {
   const u = plots.get(el);
-  if (!u) return Promise.resolve(null);
+  if (!u) return null;
   const src = u.ctx.canvas;
   const ratio = src.width / u.width;
   const names = u.series.slice(1).filter((s) => s.show !== false && s.label).map((s) => [s.label, typeof s.stroke === 'function' ? s.stroke(u, 1) : s.stroke]);
@@ -188,7 +208,7 @@ export function plotPng(el, title) {
     ctx.fillStyle = '#1c2430';
     ctx.fillText(label, 30 * ratio, y);
   });
-  return new Promise((resolve) => out.toBlob(resolve, 'image/png'));
+  return out;
 }
 
 /** Puts a short message where a plot would be. */

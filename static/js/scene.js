@@ -6,9 +6,10 @@
 
 import { columnChecks, impactChecks, renderChecks } from './checks.js';
 import { buildForm, merge } from './form.js';
-import { csvButton, fmt, h, showWarnings } from './format.js';
+import { csvButton, csvNumber, fmt, h, showWarnings } from './format.js';
 import { initPanel } from './panel.js';
 import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
+import { clearFloorViews, floorModel, offFloor, renderFloorViews } from './floorview.js';
 
 /** Why the release across the face starts from the page's own range. */
 const RELEASE_ACROSS = 'an assumed range across the face (the server draws none unless asked)';
@@ -50,8 +51,8 @@ const SCENE_GROUPS = [
     fields: [
       {
         local: 'release_zones', label: 'Release points', kind: 'select', choice: { value: 'table1', why: 'an ensemble from the spalling zones; the server releases at the given point unless asked' },
-        options: [['table1', 'Table 1 spalling zones'], ['release', 'Migration tab\'s point']],
-        hint: 'Table 1: upper third 23.3 %, middle 58.3 %, lower 18.4 % (Monte Carlo only)',
+        options: [['table1', 'Table 1 spalling zones'], ['custom', 'my zones (a table of rows)'], ['point', 'a single point'], ['release', 'Migration tab\'s point']],
+        hint: 'Table 1: upper third 23.3 %, middle 58.3 %, lower 18.4 %; zones are drawn from in the ensemble (Monte Carlo only)',
       },
     ],
   },
@@ -168,6 +169,7 @@ export function initScene() {
   const sendStat = document.getElementById('scene-send-stat');
   const sourceNotes = [document.getElementById('impact-source'), document.getElementById('column-source')];
   buildForm(form, SCENE_GROUPS);
+  const releaseEditor = initReleaseEditor(form, migrationForm);
   // A velocity typed by hand no longer comes from the Scene.
   impactForm.addEventListener('input', (ev) => {
     if (ev.target.dataset?.pointer === '/velocity_m_s') for (const note of sourceNotes) note.hidden = true;
@@ -220,6 +222,7 @@ export function initScene() {
       Object.assign(request, own2);
       if (request.column_model === 'decoupled') delete request.galerkin.modes;
       else if (request.galerkin.mode_shapes && request.galerkin.mode_shapes !== 'exact') delete request.galerkin.mode_shapes;
+      releaseEditor.apply(request, own.local, migrationForm.floor?.current?.() ?? null);
       if (request.monte_carlo) {
         if (own.local.release_zones === 'table1') request.release_zones = 'table1';
         if (request.monte_carlo.release_across_m) request.monte_carlo.release_across_m = { distribution: 'uniform', ...request.monte_carlo.release_across_m };
@@ -227,7 +230,8 @@ export function initScene() {
           request.monte_carlo.side_length_m = { distribution: 'uniform', ...rockRanges['rock.side_length_m'] };
           request.monte_carlo.density_kg_m3 = { distribution: 'uniform', ...rockRanges['rock.density_kg_m3'] };
         }
-        request.migration_output = { runs_csv: true };
+        // the nominal run's path is drawn on the floor
+        request.migration_output = { runs_csv: true, trajectory: true, sample_interval_s: m.output?.sample_interval_s };
       } else {
         request.migration_output = { trajectory: true, sample_interval_s: m.output?.sample_interval_s };
       }
@@ -255,9 +259,10 @@ export function initScene() {
     planList.replaceChildren();
     showWarnings(warnings, []);
     Object.values(plots).forEach(destroy);
+    clearFloorViews('scene');
   }
 
-  function render(data) {
+  function render(data, request) {
     last = data;
     runsCsv = data.runs_csv ?? data.migration?.runs_csv ?? null;
     empty.hidden = true;
@@ -270,6 +275,11 @@ export function initScene() {
     renderTable(data, entries);
     renderSupportChart(entries, acceptableOf(data));
     renderFace(data, entries);
+    const verdicts = new Map(entries.map((e) => [`${e.support}.${e.column_index ?? 0}`, e.verdict]));
+    renderFloorViews('scene', {
+      inputs: data.inputs ?? data.migration?.inputs, request: request ?? data.inputs, upload: migrationForm.floor?.current?.() ?? null,
+      tr: data.migration?.trajectory ?? null, runsCsv, arrival: data.migration?.arrival ?? null, verdicts,
+    });
     distSelect.replaceChildren(...entries.map((e, i) => h('option', { value: String(i) }, label(e))));
     const worst = entries.reduce((b, e, i) => ((e.risk ?? -1) > (entries[b]?.risk ?? -1) ? i : b), 0);
     distSelect.value = String(worst);
@@ -439,6 +449,21 @@ export function initScene() {
         ...limits.map((l) => `${l}: value / allowed`), 'Send'];
     const rows = entries.map((e, i) => ({ e, i })).filter(({ e }) => FILTERS[filter.value].test(e));
     rows.sort((a, b) => SORTS[sort.value](a.e, b.e));
+    // The CSV: numbers only, each interval as two columns, empty where no run reached the support.
+    table.csv = () => {
+      const n = (v) => csvNumber(v);
+      if (ensemble) {
+        return [['support', 'column_index', 'along_dip_m', 'across_m', 'verdict', 'p_exceed', 'p_exceed_ci95_low', 'p_exceed_ci95_high', 'worst_limit',
+          'reached_fraction', 'capacity_exceeded_fraction', 'impact_speed_p50_m_s', `impact_speed_${stat}_m_s`, 'stress_utilisation_p95',
+          ...limits.flatMap((l) => [`p_${l}`, `p_${l}_ci95_low`, `p_${l}_ci95_high`])],
+        ...rows.map(({ e }) => [e.support, e.column_index ?? 0, n(e.along_dip_m), n(e.across_m), e.verdict, n(e.risk), n(e.riskCi[0]), n(e.riskCi[1]), e.riskLimit ?? '',
+          n(e.reached_fraction), n(e.capacity_exceeded_fraction ?? 0), n(e.impact_velocity_m_s?.p50), n(e.impact_velocity_m_s?.[stat]), n(e.stress_utilisation?.p95),
+          ...limits.flatMap((l) => [n(e.exceedance?.[l]?.probability), n(e.exceedance?.[l]?.ci95?.[0]), n(e.exceedance?.[l]?.ci95?.[1])])])];
+      }
+      return [['support', 'column_index', 'along_dip_m', 'across_m', 'verdict', 'largest_utilisation', 'impact_speed_m_s', ...limits.flatMap((l) => [`${l}_value`, `${l}_allowed`])],
+        ...rows.map(({ e }) => [e.support, e.column_index ?? 0, n(e.along_dip_m), n(e.across_m), e.verdict, n(e.risk), n(e.impact_velocity_m_s),
+          ...limits.flatMap((l) => { const c = (e.checks ?? []).find((x) => x.limit === l); return [n(c?.value), n(c?.allowed)]; })])];
+    };
     const ci = (x) => (x ? `${fmt(x.probability * 100, 3)} [${fmt(x.ci95[0] * 100, 2)}–${fmt(x.ci95[1] * 100, 2)}]` : '—');
     table.replaceChildren(
       h('caption', { class: 'table-count' }, `${rows.length} of ${entries.length} support entries shown (${FILTERS[filter.value].words}; ${SORT_WORDS[sort.value]})`),
@@ -609,7 +634,8 @@ export function initScene() {
     // The rock's height above the floor, measured along the normal, raises it by h / cos θ vertically.
     if (tr) tables.push(dedupe(tr.along_dip_m, tr.along_dip_m.map((s, i) => elevation(s) + tr.height_m[i] / Math.cos(dip))));
     const joined = joinSeries(tables);
-    const series = [{ label: 'floor (plane of the face)', values: joined[1], color: '#555e6b' }];
+    const up = migrationForm.floor?.current?.();
+    const series = [{ label: up && data.inputs?.face?.floor?.kind !== 'plane' ? `mean plane of the uploaded floor ${up.name}` : 'floor (plane of the face)', values: joined[1], color: '#555e6b' }];
     let k = 2;
     if (zones.length) series.push({ label: 'release zones (Table 1 thirds)', values: joined[k++], color: '#d88a1c', width: 7 });
     if (tr) series.push({ label: 'nominal run', values: joined[k++], color: '#1d5fa8' });
@@ -691,4 +717,110 @@ function dedupe(xs, ys) {
     out[1].push(y);
   }
   return out;
+}
+
+/**
+ * The release on the Scene form: the Table 1 zones, the engineer's own zones (a small table
+ * of rows: from, to along the dip, weight), a single point, or the Migration tab's point.
+ * Custom rows live in one hidden field (JSON) so that links and recent cases carry them.
+ */
+function initReleaseEditor(form, migrationForm) {
+  const choice = form.querySelector('[data-local="release_zones"]');
+  const group = choice.closest('fieldset');
+  const store = h('input', { type: 'hidden', dataset: { local: 'zones_json', kind: 'select' }, value: '' });
+  const body = h('tbody', {});
+  const table = h('table', { class: 'results-table zones-table', id: 'scene-zones' },
+    h('caption', {}, 'Release zones along the dip: a rock is released in zone i with probability weightᵢ / Σ weight, uniformly inside it.'),
+    h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, 'from (m)'), h('th', { scope: 'col' }, 'to (m)'), h('th', { scope: 'col' }, 'weight'), h('th', {}, ''))),
+    body);
+  const add = h('button', { type: 'button', class: 'chip', id: 'scene-zone-add' }, 'Add a zone');
+  const zonesBox = h('div', { class: 'zones-box', hidden: true }, h('div', { class: 'table-scroll' }, table), add);
+  const pointS = h('input', { type: 'text', inputmode: 'decimal', id: 'scene-point-s', value: '0', dataset: { local: 'point_s', kind: 'number', target: '/release/along_dip_m' } });
+  const pointY = h('input', { type: 'text', inputmode: 'decimal', id: 'scene-point-y', value: '0', dataset: { local: 'point_y', kind: 'number', target: '/release/across_m' } });
+  const row = (label, control, unit) => h('div', { class: 'field field-number' }, h('label', { for: control.id }, label),
+    h('div', { class: 'control' }, control, h('span', { class: 'unit' }, unit)), h('p', { class: 'field-error', hidden: true, role: 'alert' }));
+  const pointBox = h('div', { class: 'point-box', hidden: true }, row('Release along the dip', pointS, 'm'), row('Release across the face', pointY, 'm'));
+  group.append(store, zonesBox, pointBox);
+
+  const length = () => Number(migrationForm.querySelector('[data-pointer="/face/length_m"]')?.value) || 120;
+  const rowsNow = () => [...body.rows].map((tr) => [...tr.querySelectorAll('input')].map((i) => i.value));
+  const save = () => { store.value = JSON.stringify(rowsNow()); };
+  const addRow = (values = ['', '', '1']) => {
+    const i = body.rows.length;
+    const cells = ['from_along_dip_m', 'to_along_dip_m', 'weight'].map((key, k) => {
+      const input = h('input', { type: 'text', inputmode: 'decimal', value: values[k] ?? '', 'aria-label': `zone ${i + 1} ${['from', 'to', 'weight'][k]}`, dataset: { target: `/release_zones/${i}/${key}` } });
+      input.addEventListener('input', save);
+      return h('td', {}, input);
+    });
+    const remove = h('button', { type: 'button', class: 'link', 'aria-label': `remove zone ${i + 1}` }, 'remove');
+    remove.addEventListener('click', () => { tr.remove(); renumber(); save(); });
+    const tr = h('tr', {}, cells, h('td', {}, remove));
+    body.append(tr);
+  };
+  const renumber = () => [...body.rows].forEach((tr, i) => tr.querySelectorAll('input').forEach((input, k) => {
+    const key = ['from_along_dip_m', 'to_along_dip_m', 'weight'][k];
+    input.dataset.target = `/release_zones/${i}/${key}`;
+    input.setAttribute('aria-label', `zone ${i + 1} ${['from', 'to', 'weight'][k]}`);
+  }));
+  const fill = (rows) => { body.replaceChildren(); rows.forEach((r) => addRow(r)); };
+  const thirds = () => {
+    const L = length();
+    return [[0, L / 3, 0.233], [L / 3, (2 * L) / 3, 0.583], [(2 * L) / 3, L, 0.184]].map((r) => r.map((v) => String(Number(v.toPrecision(6)))));
+  };
+  add.addEventListener('click', () => { addRow(); save(); body.rows[body.rows.length - 1].querySelector('input').focus(); });
+  const sync = () => {
+    zonesBox.hidden = choice.value !== 'custom';
+    pointBox.hidden = choice.value !== 'point';
+    pointS.disabled = pointY.disabled = choice.value !== 'point';
+    if (choice.value === 'custom' && !body.rows.length) { fill(thirds()); save(); }
+  };
+  choice.addEventListener('change', sync);
+  // a link or a recent case sets the hidden field: the table follows it
+  store.addEventListener('change', () => {
+    try {
+      const rows = JSON.parse(store.value || '[]');
+      if (Array.isArray(rows)) fill(rows);
+    } catch {
+      // an old link without zones
+    }
+    sync();
+  });
+  form.addEventListener('reset', () => setTimeout(() => { body.replaceChildren(); store.value = ''; sync(); }));
+  sync();
+
+  return {
+    /** Puts the chosen release into the request; a zone or point off the floor is a field error (nothing is sent). */
+    apply(request, local, upload) {
+      const model = floorModel({ face: request.face }, upload);
+      const errors = [];
+      if (local.release_zones === 'point') {
+        request.release = { ...request.release, along_dip_m: local.point_s, across_m: local.point_y };
+        const off = offFloor(model, local.point_s, local.point_y);
+        if (off) errors.push({ field: '/release/along_dip_m', message: `the release point ${off}` });
+      }
+      if (local.release_zones === 'custom') {
+        const across = request.release?.across_m ?? 0;
+        const zones = [];
+        const rows = rowsNow();
+        if (!rows.length) errors.push({ field: '/release_zones/0/from_along_dip_m', message: 'add at least one zone' });
+        rows.forEach((r, i) => {
+          const [from, to, weight] = r.map((v) => (v.trim() === '' ? NaN : Number(v)));
+          const at = (k) => `/release_zones/${i}/${k}`;
+          if (!Number.isFinite(from)) errors.push({ field: at('from_along_dip_m'), message: `"${r[0]}" is not a number of metres` });
+          if (!Number.isFinite(to)) errors.push({ field: at('to_along_dip_m'), message: `"${r[1]}" is not a number of metres` });
+          if (!(weight > 0)) errors.push({ field: at('weight'), message: `the weight must be a number above 0, not "${r[2]}"` });
+          if (Number.isFinite(from) && Number.isFinite(to)) {
+            if (!(to > from)) errors.push({ field: at('to_along_dip_m'), message: `must be beyond "from" (${from} m)` });
+            for (const [k, s] of [['from_along_dip_m', from], ['to_along_dip_m', to]]) {
+              const off = offFloor(model, s, across);
+              if (off) errors.push({ field: at(k), message: `off the floor: ${off}` });
+            }
+          }
+          zones.push({ from_along_dip_m: from, to_along_dip_m: to, weight });
+        });
+        request.release_zones = zones;
+      }
+      if (errors.length) throw { fieldErrors: errors };
+    },
+  };
 }

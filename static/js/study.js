@@ -4,7 +4,7 @@
 // paper's, and a CSV of every table.
 
 import { parseNumber, toSi } from './form.js';
-import { fmt, h, showWarnings } from './format.js';
+import { csvText, fmt, h, showWarnings } from './format.js';
 import { initPanel } from './panel.js';
 import { destroy, linePlot } from './plot.js';
 
@@ -119,16 +119,11 @@ function readRequest(form, table) {
   return { base, parameters, points: points.value, grid: get('grid') };
 }
 
-/** CSV text of a table of rows (arrays of cells). */
-function csv(rows) {
-  return rows.map((r) => r.map((c) => {
-    const s = c === null || c === undefined ? '' : String(c);
-    return /[",\n]/.test(s) ? `"${s.replaceAll('"', '""')}"` : s;
-  }).join(',')).join('\n') + '\n';
-}
-
+/** A link that saves `rows` as CSV, headed (version, date, case) when it is clicked. */
 function csvLink(rows, name, words = 'this table') {
-  return h('a', { class: 'csv', download: name, title: `Download ${name}`, href: `data:text/csv;charset=utf-8,${encodeURIComponent(csv(rows))}` }, `CSV: ${words}`);
+  const a = h('a', { class: 'csv', download: name, title: `Download ${name}`, href: '#' }, `CSV: ${words}`);
+  a.addEventListener('click', () => { a.href = `data:text/csv;charset=utf-8,${encodeURIComponent(csvText(rows))}`; });
+  return a;
 }
 
 function tableOf(rows, name, { numeric = true } = {}) {

@@ -94,6 +94,13 @@ async function endpointStatus(endpoint) {
   return response.status;
 }
 
+/** A screenshot of one element (a card, a block of views), saved beside the page shots. */
+async function elementShot(locator, name) {
+  const file = path.join(ARTIFACTS, name);
+  await locator.screenshot({ path: file });
+  console.log(`      screenshot ${file.startsWith(REPO + path.sep) ? path.relative(REPO, file) : file}`);
+}
+
 async function screenshot(page, name) {
   const file = path.join(ARTIFACTS, name);
   await page.screenshot({ path: file, fullPage: true });
@@ -132,7 +139,23 @@ async function downloaded(page, button) {
   const download = await wait;
   const file = await download.path();
   const { readFileSync } = await import('node:fs');
-  return { name: download.suggestedFilename(), bytes: readFileSync(file) };
+  const bytes = readFileSync(file);
+  const name = download.suggestedFilename();
+  if (!name.endsWith('.csv')) return { name, bytes };
+  // A CSV: its "# …" header block, then the table.
+  const all = bytes.toString('utf8').split('\n');
+  const header = [];
+  while (all.length && all[0].startsWith('# ')) header.push(all.shift());
+  return { name, bytes, header, text: all.join('\n') };
+}
+
+/** The header block every saved CSV starts with: version, date, the case's link. */
+function assertCsvHeader(csv, what) {
+  const [version, date, link] = csv.header ?? [];
+  assert(/^# gangue \d+\.\d+\.\d+/.test(version ?? ''), `${what}: first line ${JSON.stringify(version)}, not "# gangue <version>"`);
+  assert(/^# date \d{4}-\d\d-\d\dT\d\d:\d\d/.test(date ?? '') && !Number.isNaN(Date.parse(date.slice(7))), `${what}: second line ${JSON.stringify(date)}`);
+  assert(/^# case https?:\/\/\S+#\w+&case=[\w-]+$/.test(link ?? ''), `${what}: third line ${JSON.stringify(link?.slice(0, 80))}`);
+  assert(csv.text.trim().length > 0, `${what}: no rows after the header`);
 }
 
 function field(page, form, pointer) {
@@ -587,8 +610,10 @@ async function columnSection(page) {
   await check('column: the plots are drawn and the history downloads as CSV', async () => {
     await page.locator('#column-wave-plot canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
     await page.locator('#column-energy-decoupled canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
-    const { name, bytes } = await downloaded(page, page.locator('[data-csv="column-wave-plot.csv"]'));
-    const head = bytes.toString('utf8').split('\n')[0];
+    const csv = await downloaded(page, page.locator('[data-csv="column-wave-plot.csv"]'));
+    const { name } = csv;
+    assertCsvHeader(csv, name);
+    const head = csv.text.split('\n')[0];
     assert(name === 'column-wave-plot.csv' && head.startsWith('model,time_s,midpoint_displacement_m'), `${name}: ${head}`);
   });
 
@@ -647,7 +672,8 @@ async function migrationSection(page) {
 
   await check('migration: the trajectory downloads as CSV and the side view as PNG', async () => {
     const csv = await downloaded(page, page.locator('[data-csv="migration-side-plot.csv"]'));
-    assert(csv.bytes.toString('utf8').split('\n')[0].startsWith('time_s,position_m_x,position_m_y,position_m_z'), `header ${csv.bytes.toString('utf8').split('\n')[0]}`);
+    assertCsvHeader(csv, csv.name);
+    assert(csv.text.split('\n')[0].startsWith('time_s,position_m_x,position_m_y,position_m_z'), `header ${csv.text.split('\n')[0]}`);
     const png = await downloaded(page, page.locator('[data-png="migration-side-plot"]'));
     assert(png.name.endsWith('.png') && png.bytes.length > 2000 && png.bytes[1] === 0x50, `${png.name}, ${png.bytes.length} bytes`);
   });
@@ -677,6 +703,9 @@ async function migrationSection(page) {
     assert(curves.length === 2 && curves.every(([, n]) => n > 10) && /lumped/.test(curves[0][0]) && /rigid/.test(curves[1][0]), `curves: ${JSON.stringify(curves)}`);
     // the form's own method (lumped mass) is shown in the main table, unchanged
     assertClose(await shown(page, 'arrival.speed_m_s'), EXPECTED.arrivalSpeed, 1e-3, 'main table arrival speed (m/s)');
+    // both paths over the floor's profile
+    const profile = (await page.locator('#migration-profile-plot .u-legend .u-label').allTextContents()).join(' | ');
+    assert(/the rock \(nominal run\)/.test(profile) && /the rock, rigid block \(DEM\)/.test(profile), `profile legend: ${profile}`);
   });
   await screenshot(page, 'migration-compare.png');
 
@@ -743,10 +772,16 @@ async function migrationSection(page) {
 
   await check('migration: the percentiles and every run download as CSV with their headers', async () => {
     const table = await downloaded(page, page.locator('#migration-percentiles-card .export-bar [data-csv]'));
-    const head = table.bytes.toString('utf8').split('\n')[0];
+    const head = table.text.split('\n')[0];
     assert(head.startsWith(',mean,std,min,p05,p50,p95,p99,max'), `percentiles header: ${head}`);
+    // numeric columns: every value of the table is a plain number (no "× 10⁻³", no units in the cells)
+    for (const row of table.text.trim().split('\n').slice(1)) {
+      const cells = row.split(',').slice(1, 9);
+      assert(cells.every((c) => c === '' || Number.isFinite(Number(c))), `percentiles row not numeric: ${row}`);
+    }
     const runs = await downloaded(page, page.locator('[data-csv="migration_runs.csv"]'));
-    const lines = runs.bytes.toString('utf8').trim().split('\n');
+    assertCsvHeader(runs, 'migration_runs.csv (made by the server)');
+    const lines = runs.text.trim().split('\n');
     assert(lines[0].startsWith('run,time_s,speed_m_s') && lines.length === 201, `${lines.length} lines, header ${lines[0]}`);
   });
 
@@ -922,6 +957,387 @@ async function caseSection(page, context) {
   });
 }
 
+// ---- the floor in the results, releases, the report, exports, cases ---------
+
+/** Pixels of a canvas that are not the background: how much was drawn. */
+async function drawnPixels(page, selector) {
+  return page.evaluate((sel) => {
+    const c = document.querySelector(sel);
+    const copy = document.createElement('canvas');
+    copy.width = c.width;
+    copy.height = c.height;
+    const ctx = copy.getContext('2d');
+    ctx.drawImage(c, 0, 0);
+    const d = ctx.getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) if (!(d[i] > 240 && d[i + 1] > 240 && d[i + 2] > 240)) n += 1;
+    return n;
+  }, selector);
+}
+
+/** The uPlot series labels of a plot. */
+async function legendLabels(page, plot) {
+  return page.locator(`${plot} .u-legend .u-series .u-label`).allTextContents();
+}
+
+async function floorViewSection(page, context) {
+  const form = '#migration-form';
+
+  await check('floor view: a migration draws the plan (axes in metres, scale bar, colour bars), the profile along the floor and a 3-D view', async () => {
+    await open(page, '#migration');
+    await submit(page, form, '/v1/migration');
+    await page.locator('#migration-floor').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const plan = '#migration-floor-plan';
+    assert(await drawnPixels(page, plan) > 20000, 'the plan is (almost) blank');
+    const alt = await page.locator(plan).getAttribute('aria-label');
+    assert(/plane floor/.test(alt) && /nominal path \(speed 0 to 36\.4 m\/s\)/.test(alt), `plan text alternative: ${alt}`);
+    const legend = await page.locator('#migration-floor-legend').textContent();
+    assert(/the plane of the face \(dip 45°, 120 m along the dip\)/.test(legend) && /release point at 0 m/.test(legend) && /coloured by speed, 0 to 36\.4 m\/s/.test(legend), `legend: ${legend}`);
+    assert(/1 run stopped where marked/.test(legend), `the nominal run's stop is not marked: ${legend}`);
+    const labels = await legendLabels(page, '#migration-profile-plot');
+    assert(labels.some((l) => /floor under the path: plane/.test(l)) && labels.some((l) => /the rock/.test(l)), `profile legend: ${labels.join(' | ')}`);
+    // the profile is the floor's line: on the 45° plane the floor under the path is z = −x (to 1e-9 m)
+    const csv = await downloaded(page, page.locator('[data-csv="migration-profile-plot.csv"]'));
+    assertCsvHeader(csv, 'profile CSV');
+    const rows = csv.text.trim().split('\n').slice(1).map((l) => l.split(',').map(Number));
+    const worst = Math.max(...rows.map(([x, z]) => Math.abs(z + x)));
+    assert(rows.length > 100 && worst < 1e-9, `${rows.length} profile rows, floor off the plane by ${worst} m`);
+    assert(rows.every(([, zf, zr]) => zr >= zf - 1e-9), 'the rock goes below the floor in the profile');
+    await page.locator('#migration-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(await page.locator('#migration-3d').getAttribute('data-webgl') === 'ok', 'no WebGL view');
+    await elementShot(page.locator('#migration-floor'), 'floor-view-migration.png');
+  });
+
+  await check('floor view: the 3-D view turns with a drag, zooms with the wheel and Reset brings the first view back', async () => {
+    const box = page.locator('#migration-3d canvas');
+    await box.scrollIntoViewIfNeeded();
+    const cam = () => page.evaluate(() => document.getElementById('migration-3d').view3d.camera.position.toArray());
+    const first = await cam();
+    const b = await box.boundingBox();
+    await page.mouse.move(b.x + b.width / 2, b.y + b.height / 2);
+    await page.mouse.down();
+    await page.mouse.move(b.x + b.width / 2 + 120, b.y + b.height / 2 + 30, { steps: 6 });
+    await page.mouse.up();
+    const turned = await cam();
+    const moved = Math.hypot(...turned.map((v, i) => v - first[i]));
+    assert(moved > 1, `a drag moved the camera by ${moved} m`);
+    const dist = async () => page.evaluate(() => { const v = document.getElementById('migration-3d').view3d; return v.camera.position.distanceTo(v.controls.target); });
+    const before = await dist();
+    await page.mouse.move(b.x + b.width / 2, b.y + b.height / 2);
+    await page.mouse.wheel(0, -600);
+    await page.waitForTimeout(200);
+    const after = await dist();
+    assert(after < before * 0.95, `the wheel did not zoom in: ${before} → ${after}`);
+    await page.locator('#migration-3d [data-action="reset-3d"]').click();
+    const back = await cam();
+    assert(Math.hypot(...back.map((v, i) => v - first[i])) < 1e-6, `Reset left the camera at ${back}, first ${first}`);
+  });
+
+  await check('floor view: an ensemble marks where each run stopped (along the dip from the runs\' table)', async () => {
+    await page.locator(`${form} input[name="monte_carlo"]`).check();
+    await field(page, form, '/monte_carlo/runs').fill('40');
+    await submit(page, form, '/v1/migration');
+    await page.waitForFunction(() => document.getElementById('migration-floor-plan').dataset.stops === '40', null, { timeout: WAIT_MS });
+    const legend = await page.locator('#migration-floor-legend').textContent();
+    assert(/40 runs stopped where marked/.test(legend), legend);
+    assert((await legendLabels(page, '#migration-profile-plot')).some((l) => /where runs stopped/.test(l)), 'the profile does not mark the stops');
+    const stops = await downloaded(page, page.locator('[data-csv="migration-floor-plan.csv"]'));
+    assertCsvHeader(stops, 'stops CSV');
+    const rows = stops.text.trim().split('\n').slice(1);
+    assert(rows.length === 40 && rows.every((r) => Math.abs(Number(r.split(',')[0]) - 120) < 1e-6), `stops: ${rows.slice(0, 3).join(' | ')}`);
+    await page.locator(`${form} input[name="monte_carlo"]`).uncheck();
+  });
+
+  await check('floor view: an uploaded floor says so in the case bar, the legends and the plots, with the sha256 the service echoes', async () => {
+    await open(page, '#migration');
+    await page.locator('#floor-kind').selectOption('upload');
+    await page.locator('#floor-file').setInputFiles(path.join(REPO, 'tests/browser/fixtures/plane45.asc'));
+    await page.locator('#floor-canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await page.waitForFunction(() => /sha256 [0-9a-f]{64}/.test(document.getElementById('case-summary').textContent), null, { timeout: WAIT_MS });
+    const response = await submit(page, form, '/v1/migration');
+    const answer = await response.json();
+    const served = answer.inputs?.face?.floor?.sha256;
+    const bar = await page.locator('#case-summary [data-part="floor"]').textContent();
+    assert(/uploaded ESRI ASCII grid plane45\.asc/.test(bar) && served && bar.includes(served), `case bar: ${bar}; the service's sha256 ${served}`);
+    await page.waitForFunction(() => document.getElementById('migration-floor-plan').dataset.floor === 'uploaded', null, { timeout: WAIT_MS });
+    const legend = await page.locator('#migration-floor-legend').textContent();
+    assert(/uploaded grid plane45\.asc/.test(legend) && legend.includes(served.slice(0, 12)), `plan legend: ${legend}`);
+    const labels = await legendLabels(page, '#migration-profile-plot');
+    assert(labels.some((l) => /plane45\.asc \(grid, bilinear\)/.test(l)), `profile legend: ${labels.join(' | ')}`);
+    for (const plot of ['#migration-side-plot', '#migration-plan-plot']) {
+      const words = (await legendLabels(page, plot)).join(' | ');
+      assert(/uploaded floor plane45\.asc/.test(words), `${plot} legend: ${words}`);
+    }
+    // the grid is the 45° plane in 5 m cells: the bilinear floor under the path is z = −x exactly
+    const csv = await downloaded(page, page.locator('[data-csv="migration-profile-plot.csv"]'));
+    assert(csv.header.some((l) => l === `# floor plane45.asc sha256 ${served}`), `CSV header: ${csv.header.join(' | ')}`);
+    const rows = csv.text.trim().split('\n').slice(1).map((l) => l.split(',').map(Number));
+    const worst = Math.max(...rows.map(([x, z]) => Math.abs(z + x)));
+    assert(worst < 1e-6, `the grid's floor line is off z = −x by ${worst} m`);
+    await page.locator('#migration-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await elementShot(page.locator('#migration-floor'), 'floor-view-uploaded.png');
+  });
+
+  await check('floor view: the 3-D view draws the uploaded grid; the case bar names the floor on the Scene tab too', async () => {
+    await page.locator('#migration-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const label = await page.locator('#migration-3d canvas').getAttribute('aria-label');
+    assert(/uploaded floor plane45\.asc/.test(label), label);
+    // the report names the file, its kind and both hashes (the page's and the service's echo, equal)
+    await page.evaluate(() => { window.print = () => {}; });
+    await page.locator('#case-print').click();
+    const report = await page.locator('#report').textContent();
+    const hashes = [...report.matchAll(/sha256 \((computed in the page|echoed by the service)\)([0-9a-f]{64})/g)].map((m) => m[2]);
+    assert(/uploaded ESRI ASCII grid/.test(report) && /plane45\.asc \(490 bytes/.test(report) && hashes.length === 2 && hashes[0] === hashes[1], `report floor: ${report.slice(report.indexOf('Floor'), report.indexOf('Floor') + 300)}`);
+    await page.evaluate(() => window.dispatchEvent(new Event('afterprint')));
+    await page.locator('#tab-scene').click();
+    assert(await page.locator('#case-summary [data-part="floor"].used').count() === 1, 'the Scene tab does not show the floor as used');
+  });
+
+  await check('floor view: uploaded contours in map coordinates are drawn in easting and northing with every digit; the 3-D view draws the lines', async () => {
+    await open(page, '#migration');
+    await page.locator('#floor-kind').selectOption('upload');
+    await page.locator('#floor-file').setInputFiles(path.join(REPO, 'tests/browser/fixtures/plane45.geojson'));
+    await page.locator('#floor-canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await page.locator('#floor-map-e').fill('500000');
+    await page.locator('#floor-map-n').fill('4200000');
+    await page.locator('#floor-map-a').fill('90');
+    const response = await submit(page, form, '/v1/migration');
+    assert(response.status() === 200, `status ${response.status()}`);
+    await page.waitForFunction(() => document.getElementById('migration-floor-plan').dataset.floor === 'uploaded', null, { timeout: WAIT_MS });
+    const legend = await page.locator('#migration-floor-legend').textContent();
+    assert(/uploaded contours plane45\.geojson \(sha256 [0-9a-f]{12}/.test(legend), legend);
+    const xticks = await page.locator('#migration-floor-plan').getAttribute('data-xticks');
+    assert(/\b500000\b/.test(xticks) && /\b500100\b/.test(xticks) && !/e\+/.test(xticks), `easting ticks: ${xticks}`);
+    await page.locator('#migration-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await elementShot(page.locator('#migration-floor'), 'floor-view-contours.png');
+  });
+
+  await check('floor view: without WebGL the 3-D view says so and the plan and profile are still drawn', async () => {
+    const other = await context.newPage();
+    await other.addInitScript(() => {
+      const original = HTMLCanvasElement.prototype.getContext;
+      HTMLCanvasElement.prototype.getContext = function getContext(kind, ...rest) {
+        return /webgl/i.test(kind) ? null : original.call(this, kind, ...rest);
+      };
+    });
+    await open(other, '#migration');
+    await submit(other, form, '/v1/migration');
+    await other.locator('#migration-floor').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await other.waitForFunction(() => document.getElementById('migration-3d').dataset.webgl === 'missing', null, { timeout: WAIT_MS });
+    assert(/no WebGL/.test(await other.locator('#migration-3d').textContent()), 'no words for the missing 3-D view');
+    assert(await other.locator('#migration-3d canvas').count() === 0, 'a 3-D canvas without WebGL');
+    assert(await drawnPixels(other, '#migration-floor-plan') > 20000, 'the plan is blank without WebGL');
+    assert(await other.locator('#migration-profile-plot canvas').count() > 0, 'no profile without WebGL');
+    await other.close();
+  });
+
+  await check('scene: the floor view draws the 62 supports where they stand, the Table 1 release zones, the nominal path and the stops', async () => {
+    await open(page, '#scene');
+    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
+    await submit(page, '#scene-form', '/v1/scene');
+    const body = JSON.parse((await request).postData());
+    assert(body.migration_output?.trajectory === true && body.migration_output.runs_csv === true, `migration_output: ${JSON.stringify(body.migration_output)}`);
+    await page.locator('#scene-floor').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const legend = await page.locator('#scene-floor-legend').textContent();
+    assert(/62 support columns where they stand/.test(legend) && /release zones \(Table 1 thirds\): 0–40 m, 40–80 m, 80–120 m/.test(legend), legend);
+    assert(/nominal path coloured by speed/.test(legend) && /100 runs stopped where marked/.test(legend), legend);
+    assert(await drawnPixels(page, '#scene-floor-plan') > 20000, 'the plan is blank');
+    await page.locator('#scene-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await elementShot(page.locator('#scene-floor'), 'floor-view-scene.png');
+  });
+
+  await check('scene: release zones are edited as rows and sent; a zone or a point off the floor is marked and nothing is sent', async () => {
+    await open(page, '#scene');
+    await page.locator('#scene-form [data-local="release_zones"]').selectOption('custom');
+    const rows = page.locator('#scene-zones tbody tr');
+    assert(await rows.count() === 3, `${await rows.count()} starting rows (the Table 1 thirds)`);
+    await rows.nth(2).locator('button').click();
+    await rows.nth(1).locator('input').nth(1).fill('100');
+    await page.locator('#scene-zone-add').click();
+    await rows.nth(2).locator('input').nth(0).fill('110');
+    await rows.nth(2).locator('input').nth(1).fill('130');
+    await rows.nth(2).locator('input').nth(2).fill('2');
+    let sent = 0;
+    const count = (r) => { if (r.url().endsWith('/v1/scene')) sent += 1; };
+    page.on('request', count);
+    await page.locator('#scene-form button[type="submit"]').click();
+    const err = page.locator('#scene-zones tbody tr:nth-child(3) td:nth-child(2) .field-error');
+    await err.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/off the floor: 130 m along the dip is off the face \(0 to 120 m\)/.test(await err.textContent()), await err.textContent());
+    assert(await rows.nth(2).locator('input').nth(1).getAttribute('aria-invalid') === 'true', 'the bad cell is not marked invalid');
+    await page.waitForTimeout(300);
+    assert(sent === 0, `${sent} requests sent with a zone off the floor`);
+    page.off('request', count);
+    await rows.nth(2).locator('input').nth(1).fill('118');
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
+    const response = await submit(page, '#scene-form', '/v1/scene');
+    const body = JSON.parse((await request).postData());
+    assert(JSON.stringify(body.release_zones) === JSON.stringify([
+      { from_along_dip_m: 0, to_along_dip_m: 40, weight: 0.233 }, { from_along_dip_m: 40, to_along_dip_m: 100, weight: 0.583 }, { from_along_dip_m: 110, to_along_dip_m: 118, weight: 2 }]),
+    `release_zones sent: ${JSON.stringify(body.release_zones)}`);
+    assert(response.status() === 200, `status ${response.status()}`);
+    await page.waitForFunction(() => /release zones: 0–40 m, 40–100 m, 110–118 m/.test(document.getElementById('scene-floor-legend').textContent), null, { timeout: WAIT_MS });
+    // the zones travel in the case's link
+    await page.waitForFunction(() => location.hash.includes('case='), null, { timeout: WAIT_MS });
+    const other = await context.newPage();
+    await other.goto(page.url(), { waitUntil: 'load' });
+    await other.waitForSelector('body[data-ready="true"]', { timeout: WAIT_MS });
+    const cells = await other.locator('#scene-zones tbody input').evaluateAll((els) => els.map((e) => e.value));
+    assert(cells.join() === '0,40,0.233,40,100,0.583,110,118,2' && await other.locator('#scene-zones').isVisible(), `zones from the link: ${cells.join()}`);
+    await other.close();
+    // a single point off the face
+    await page.locator('#scene-form [data-local="release_zones"]').selectOption('point');
+    await page.locator('#scene-point-s').fill('-5');
+    await page.locator('#scene-form button[type="submit"]').click();
+    const perr = page.locator('#scene-form .field:has(#scene-point-s) .field-error');
+    await perr.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/-5 m along the dip is off the face/.test(await perr.textContent()), await perr.textContent());
+    await page.locator('#scene-point-s').fill('20');
+    await page.locator('#scene-point-y').fill('0.9');
+    const req2 = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
+    await submit(page, '#scene-form', '/v1/scene');
+    const body2 = JSON.parse((await req2).postData());
+    assert(body2.release?.along_dip_m === 20 && body2.release.across_m === 0.9 && body2.release_zones === undefined, `point sent: ${JSON.stringify(body2.release)} zones ${JSON.stringify(body2.release_zones)}`);
+    await page.waitForFunction(() => /release point at 20 m along the dip, 0\.9 m across/.test(document.getElementById('scene-floor-legend').textContent), null, { timeout: WAIT_MS });
+  });
+
+  await check('scene: a release point off an uploaded grid is marked before sending', async () => {
+    await open(page, '#migration');
+    await page.locator('#floor-kind').selectOption('upload');
+    await page.locator('#floor-file').setInputFiles(path.join(REPO, 'tests/browser/fixtures/plane45.asc'));
+    await page.locator('#floor-canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await page.locator('#tab-scene').click();
+    await page.locator('#scene-form [data-local="release_zones"]').selectOption('point');
+    await page.locator('#scene-point-s').fill('20');
+    await page.locator('#scene-point-y').fill('15');
+    let sent = 0;
+    const count = (r) => { if (r.url().endsWith('/v1/scene')) sent += 1; };
+    page.on('request', count);
+    await page.locator('#scene-form button[type="submit"]').click();
+    const perr = page.locator('#scene-form .field:has(#scene-point-s) .field-error');
+    await perr.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/15 m across\) is off the uploaded grid/.test(await perr.textContent()), await perr.textContent());
+    await page.waitForTimeout(300);
+    page.off('request', count);
+    assert(sent === 0, `${sent} requests sent with a release off the grid`);
+  });
+
+  await check('exports: every CSV button of every tab downloads a non-empty file headed by version, date and case', async () => {
+    await open(page, '#migration');
+    await page.locator(`${form} input[name="monte_carlo"]`).check();
+    await field(page, form, '/monte_carlo/runs').fill('30');
+    await submit(page, form, '/v1/migration');
+    await page.locator('#migration-percentiles-card').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await page.locator('#migration-floor').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const names = [];
+    for (const tab of ['migration', 'scene', 'impact', 'column', 'study', 'spalling']) {
+      if (!['migration', 'scene'].includes(tab)) {
+        await page.locator(`#tab-${tab}`).click();
+        const done = page.waitForResponse((r) => r.url().endsWith(`/v1/${tab}`) && r.request().method() === 'POST', { timeout: WAIT_MS });
+        await page.locator(`#${tab}-form button[type="submit"]`).click();
+        await done;
+        await page.waitForTimeout(300);
+      }
+      if (tab === 'scene') {
+        await page.locator('#tab-scene').click();
+        await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('60');
+        await submit(page, '#scene-form', '/v1/scene');
+        await page.locator('#scene-floor').waitFor({ state: 'visible', timeout: WAIT_MS });
+        await page.locator('#scene-dist-plot canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
+      }
+      const buttons = page.locator(`#panel-${tab} .results button[data-csv], #panel-${tab} .results a.csv`);
+      const n = await buttons.count();
+      for (let i = 0; i < n; i += 1) {
+        const b = buttons.nth(i);
+        if (!(await b.isVisible())) continue;
+        const csv = await downloaded(page, b);
+        assertCsvHeader(csv, `${tab}: ${csv.name}`);
+        names.push(csv.name);
+      }
+    }
+    assert(names.length >= 25, `${names.length} CSV buttons downloaded: ${names.join(', ')}`);
+  });
+
+  await check('case: cases can be named; "Compare two cases" picks two different ones, shows the headline figures and overlays the per-support plot', async () => {
+    await page.locator('#tab-scene').click();
+    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('60');
+    await submit(page, '#scene-form', '/v1/scene');
+    await page.waitForFunction(() => /60 runs/.test(document.querySelector('#case-recent option:nth-child(2)')?.textContent ?? ''), null, { timeout: WAIT_MS });
+    await page.locator('#case-name').fill('upper zone, 60 runs');
+    await page.locator('#case-name').dispatchEvent('change');
+    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('80');
+    await submit(page, '#scene-form', '/v1/scene');
+    await page.locator('#scene-table tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
+    await page.waitForFunction(() => /80 runs/.test(document.querySelector('#case-recent option:nth-child(2)')?.textContent ?? ''), null, { timeout: WAIT_MS });
+    await page.locator('#case-name').fill('80 runs');
+    await page.locator('#case-name').dispatchEvent('change');
+    await page.locator('#case-compare').click();
+    const a = page.locator('#compare-a');
+    const b = page.locator('#compare-b');
+    assert(await a.inputValue() !== await b.inputValue(), 'A and B start as the same case');
+    await a.selectOption(await b.inputValue());
+    assert(await a.inputValue() !== await b.inputValue(), 'choosing B\'s case for A left both the same');
+    await a.selectOption('1');
+    await b.selectOption('0');
+    const head = await page.locator('#compare-table thead').textContent();
+    assert(/A: upper zone, 60 runs/.test(head) && /B: 80 runs/.test(head), `headings: ${head}`);
+    const headline = await page.locator('#compare-table tr.headline').allTextContents();
+    assert(headline.some((r) => /Runs60 \(seed/.test(r) && /80 \(seed/.test(r)) && headline.some((r) => /P\(a rock overloads some support\)/.test(r)), `headline rows: ${headline.join(' | ')}`);
+    const compared = await page.locator('#compare-table').textContent();
+    assert(!/--/.test(compared), 'a plot legend\'s "--" among the compared results');
+    const labels = (await legendLabels(page, '#compare-plot')).slice(1);
+    assert(labels.length === 2 && /A: upper zone/.test(labels[0]) && /B: 80 runs/.test(labels[1]), `overlay legend: ${labels.join(' | ')}`);
+    await elementShot(page.locator('#compare'), 'compare.png');
+    await page.locator('#compare-close').click();
+  });
+
+  await check('report: the printed report has project, face, author, every input, the model version, the floor, verdicts, plots and warnings; no "--" in legends', async () => {
+    await page.locator('#report-project').fill('North panel 2');
+    await page.locator('#report-face').fill('Face 3101');
+    await page.locator('#report-author').fill('A. Engineer');
+    await page.evaluate(() => { window.print = () => {}; });
+    await page.locator('#case-print').click();
+    await page.emulateMedia({ media: 'print' });
+    const report = page.locator('#report');
+    assert(await report.isVisible(), 'the report is not printed');
+    assert(!(await page.locator('#panel-scene').isVisible()), 'the page is printed beside the report');
+    const text = await report.textContent();
+    const version = (await (await fetch(`${BASE}/healthz`)).json()).version;
+    for (const want of ['North panel 2', 'Face 3101', 'A. Engineer', `gangue ${version}`, '/monte_carlo/runs', '/monte_carlo/restitution_normal/min',
+      '/rigid_block/time_step_safety', '/design_limits/acceptable_probability', '/support_rows/count', 'Verdicts, worst first', 'P(exceed) (%)', '95 % interval (%)', 'Warnings', 'the plane of the face']) {
+      assert(text.includes(want), `the report lacks "${want}"`);
+    }
+    assert(await report.locator('tbody tr:has-text("EXCEEDED")').count() >= 0, 'verdicts');
+    assert(await report.locator('img').count() >= 4, `${await report.locator('img').count()} plots as images`);
+    assert(await report.locator('figure:has(img) figcaption li').count() >= 4, 'the plan\'s legend is not under its image');
+    assert(await report.locator('input, select').count() === 0, 'form controls in the report');
+    const legends = await page.evaluate(() => [...document.querySelectorAll('.u-legend')].map((l) => l.textContent).join(' '));
+    assert(!/--/.test(legends), `"--" in a legend: ${legends.slice(0, 200)}`);
+    assert(!/--/.test(text.replace(/[\w-]*--[\w-]*/g, (m) => (m.includes('case=') ? '' : m))), '"--" in the report');
+    await screenshot(page, 'report.png');
+    await page.emulateMedia({ media: 'screen' });
+    await page.evaluate(() => window.dispatchEvent(new Event('afterprint')));
+  });
+
+  await check('phone 390 px: the floor views fit the width, and are drawn again when the window widens', async () => {
+    const phone = await context.newPage();
+    await phone.setViewportSize({ width: 390, height: 844 });
+    await open(phone, '#migration');
+    await submit(phone, form, '/v1/migration');
+    await phone.locator('#migration-floor').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await phone.locator('#migration-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await noHorizontalScroll(phone, 'migration with the floor views');
+    const w = await phone.evaluate(() => document.getElementById('migration-floor-plan').getBoundingClientRect().right);
+    assert(w <= 390, `the plan reaches ${w} px`);
+    await elementShot(phone.locator('#migration-floor'), 'phone-floor-view.png');
+    // a wider window draws the plan again at its new width
+    await phone.setViewportSize({ width: 1200, height: 900 });
+    await phone.waitForFunction(() => document.getElementById('migration-floor-plan').getBoundingClientRect().width > 700, null, { timeout: WAIT_MS });
+    await phone.close();
+  });
+}
+
 async function phoneSection(context) {
   await check('phone 390 px: no tab scrolls sideways; tables scroll inside their cards', async () => {
     const page = await context.newPage();
@@ -1065,9 +1481,17 @@ async function sceneSection(page) {
     assert(warned <= 6, `${warned} warning lines: repeated warnings are not folded`);
     assert(await page.locator('#scene-dist-table tbody tr').count() === 5, 'no distributions for the chosen support');
     const csv = await downloaded(page, page.locator('#panel-scene .card:has(#scene-table) .export-bar [data-csv]'));
-    assert(csv.bytes.toString('utf8').startsWith('Support,Verdict,P(exceed)'), `per-support CSV: ${csv.bytes.toString('utf8').slice(0, 60)}`);
+    assertCsvHeader(csv, 'per-support CSV');
+    // numbers only: each interval in two columns, empty where no run reached the support
+    const [head, ...rows] = csv.text.trim().split('\n').map((l) => l.split(','));
+    assert(head.slice(0, 8).join(',') === 'support,column_index,along_dip_m,across_m,verdict,p_exceed,p_exceed_ci95_low,p_exceed_ci95_high', `per-support CSV header: ${head.join(',')}`);
+    const speed = head.indexOf('impact_speed_p50_m_s');
+    assert(rows.length === 62 && rows.every((r) => [0, 1, 2, 5, 6, 7].every((i) => Number.isFinite(Number(r[i])) && r[i] !== '')), `per-support rows not numeric: ${rows[0]}`);
+    assert(rows.some((r) => r[speed] === '') && rows.every((r) => r[speed] === '' || Number(r[speed]) >= 0), 'a never-reached support is not an empty cell');
+    assert(!/never reached|\[|–/.test(csv.text), 'words or bracketed intervals in the per-support CSV');
     const runs = await downloaded(page, page.locator('[data-csv="scene_runs.csv"]'));
-    assert(runs.bytes.toString('utf8').startsWith('run,'), 'runs CSV header');
+    assertCsvHeader(runs, 'scene_runs.csv (made by the server)');
+    assert(runs.text.startsWith('run,'), 'runs CSV header');
   });
 
   await screenshot(page, 'scene.png');
@@ -1342,6 +1766,7 @@ async function main() {
     await sceneSection(page);
     await studySection(page);
     await spallingSection(page);
+    await floorViewSection(page, context);
     await phoneSection(context);
 
     await check('no JavaScript errors on the page', async () => {
