@@ -785,15 +785,12 @@ fn coupled(
     }
     let history = order.map(|idx| {
         let h = &r.history;
-        let mut out = ColumnHistory {
-            rock: Some(RockHistory::default()),
-            ..ColumnHistory::default()
-        };
+        let mut out = ColumnHistory::default();
+        let mut rock = RockHistory::default();
         let mut inverse = vec![0usize; idx.len()];
         for (k, &i) in idx.iter().enumerate() {
             inverse[i] = k;
         }
-        let rock = out.rock.as_mut().expect("set above");
         for &k in &inverse {
             out.time.push(h.time[k]);
             out.midpoint_displacement.push(h.midpoint_displacement[k]);
@@ -805,6 +802,7 @@ fn coupled(
             rock.contact_force.push(h.contact_force[k]);
             rock.contact_energy.push(h.contact_energy[k]);
         }
+        out.rock = Some(rock);
         out
     });
     let stress = stress_of(
