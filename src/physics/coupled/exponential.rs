@@ -30,7 +30,7 @@ use super::{capacity_exceeded, extremum_slot};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
 use crate::physics::numeric::expo::{PhiAction, phi_action};
-use crate::physics::ode::{OdeSystem, find_roots};
+use crate::physics::numeric::ode::{OdeSystem, find_roots};
 
 /// Dormand–Prince contact steps (t_c·rate/3.307) above which the exponential integrator takes
 /// the contact phases: it needs a few dozen steps per contact at any damping, each a few

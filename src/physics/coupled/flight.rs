@@ -14,7 +14,7 @@ use super::extremum_slot;
 use super::system::{Functional, ROCK_DISPLACEMENT, ROCK_VELOCITY, StateLayout, System};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
-use crate::physics::ode::{Dopri5, find_roots};
+use crate::physics::numeric::ode::{Dopri5, find_roots};
 
 /// Exact propagator of the free column (no contact): z = [w, ẇ], z′ = A z.
 ///

@@ -33,7 +33,7 @@ use super::extremum_slot;
 use super::flight::{FlightContext, Sink, count_flight_step, hermite, refuse_unreachable};
 use super::system::{Functional, ROCK_DISPLACEMENT, ROCK_VELOCITY, StateLayout};
 use crate::physics::error::PhysicsResult;
-use crate::physics::ode::{Dopri5, find_roots};
+use crate::physics::numeric::ode::{Dopri5, find_roots};
 
 type C64 = Complex<f64>;
 

@@ -20,7 +20,7 @@ use super::{
 use crate::physics::contact::ForceLaw;
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
-use crate::physics::ode::{Dopri5, OdeError, find_roots};
+use crate::physics::numeric::ode::{Dopri5, OdeError, find_roots};
 
 /// One integration over the window with relative tolerance `tol`, the column's modal states and
 /// energies controlled on the energy scale `energy_scale` (J): absolute tolerances

@@ -12,7 +12,7 @@ use super::flight::FreeFlight;
 use super::system::{ROCK_DISPLACEMENT, ROCK_VELOCITY, StateLayout};
 use super::*;
 use crate::physics::material::Column;
-use crate::physics::ode::{Dopri5, OdeSystem};
+use crate::physics::numeric::ode::{Dopri5, OdeSystem};
 
 /// The paper law of the base case (physics.md §A.5): k = πLE*, P_ref = e·πE*L³/R.
 pub(super) fn paper_law() -> ForceLaw {
