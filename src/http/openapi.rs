@@ -418,8 +418,8 @@ fn open_free_form_objects(value: &mut serde_json::Value) {
     }
 }
 
-/// Extension keyword that carries the default of an object-valued request field (see
-/// [`move_object_defaults`]).
+/// Extension keyword that carries the default of an object-valued request field: generators
+/// cannot give a typed model a `default`, so the document moves it here and into the description.
 pub const OBJECT_DEFAULT: &str = "x-default";
 
 /// Moves the non-null object defaults of `$ref` properties (an omitted `column` is the paper's
