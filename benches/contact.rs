@@ -8,8 +8,8 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use gangue::physics::contact::{impact_maxima, line_duration_integral, solve_impact};
-use gangue::physics::lambert::branch_u;
 use gangue::physics::material::{ContactLaw, ImpactCase, ModulusConvention};
+use gangue::physics::numeric::lambert::branch_u;
 
 fn case(law: ContactLaw, modulus: ModulusConvention, exact: bool) -> ImpactCase {
     let mut c = ImpactCase::default();

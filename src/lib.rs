@@ -4,9 +4,14 @@
 //! [`physics`] holds the pure numerics; [`http`] the REST service; [`config`] its settings;
 //! [`shard`] sharded computations merged into the service's answer.
 
-// No `unwrap` outside tests: a request must never panic the service (Cargo.toml holds the rest
-// of the lint set; this one is here because integration tests unwrap freely).
-#![cfg_attr(not(test), warn(clippy::unwrap_used))]
+// No `unwrap`, `expect` or `panic!` outside tests: a request must never panic the service, and
+// an invariant that cannot fail is a typed error or a restructuring (Cargo.toml holds the rest of
+// the lint set; these three are here, and in main.rs, so that `#[cfg(test)]` modules, integration
+// tests and benches unwrap freely).
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 
 pub mod config;
 pub mod http;

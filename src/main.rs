@@ -1,6 +1,12 @@
 //! gangue: the server (parse settings, start tracing, bind, serve, shut down gracefully), or a
 //! sharded computation (`gangue compute`, `gangue merge`).
 
+// As in lib.rs: no `unwrap`, `expect` or `panic!` in the server.
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
 use std::process::ExitCode;
 
 use clap::Parser;

@@ -14,7 +14,7 @@ use gangue::physics::contact::{ImpactDetail, ImpactResult, LineImpact};
 use gangue::physics::material::{
     Column, ContactLaw, ContactModel, Damping, ImpactCase, ModulusConvention, Rock,
 };
-use gangue::physics::ode::{Dopri5, OdeSystem};
+use gangue::physics::numeric::ode::{Dopri5, OdeSystem};
 
 fn rel(a: f64, b: f64) -> f64 {
     if b == 0.0 {

@@ -11,11 +11,11 @@ use std::f64::consts::{E, PI};
 use gangue::physics::contact::{
     HERTZ_DURATION_FACTOR, ImpactDetail, force_law, impact_maxima, solve_impact,
 };
-use gangue::physics::lambert::branch_u;
 use gangue::physics::material::{
     ContactLaw, ContactModel, ImpactCase, ModulusConvention, Rock, RockShape,
 };
-use gangue::physics::quadrature::{QuadOptions, integrate};
+use gangue::physics::numeric::lambert::branch_u;
+use gangue::physics::numeric::quadrature::{QuadOptions, integrate};
 use gangue::physics::{PhysicsError, contact::ForceLaw};
 use rand::{Rng, SeedableRng};
 use serde_json::{Value, json};

@@ -592,49 +592,6 @@ fn sphere_on_a_flat_grid_gives_the_planes_answer() {
     }
 }
 
-/// Prints the energy account's residual against the time step (run with `--ignored
-/// --nocapture`): the order at which it converges.
-#[test]
-#[ignore]
-fn energy_residual_against_time_step() {
-    use gangue::physics::migration::ContactModel;
-    for (name, hertz, drop, end) in [
-        ("linear drop 0.5 m, end 0.6 s", false, 0.5, 0.6),
-        (
-            "linear drop 0.5 m, end 0.3213 s (mid-impact)",
-            false,
-            0.5,
-            0.3213,
-        ),
-        ("hertz drop 0.5 m, end 0.6 s", true, 0.5, 0.6),
-        ("linear slide from rest 0.3 s", false, 0.0, 0.3),
-    ] {
-        println!("{name}");
-        for safety in [0.4, 0.2, 0.1, 0.05, 0.025] {
-            let mut c = block();
-            c.release.drop_height = drop;
-            c.end_time = Some(end);
-            c.output.events = false;
-            c.rigid_block.time_step_safety = safety;
-            if hertz {
-                c.rigid_block.contact_model = ContactModel::Hertz;
-            }
-            let r = solve(&c);
-            let e = r.energy;
-            let scale = r.mass * G * (r.arrival.along_dip + drop);
-            println!(
-                "  safety {safety}: dt {:.3e} residual {:+.3e} J ({:+.3e} of {scale:.3e} J) stored {:.3e} damping {:.3e} friction {:.3e}",
-                r.rigid_block.unwrap().time_step,
-                e.residual,
-                e.residual / scale,
-                e.stored,
-                e.damping,
-                e.friction
-            );
-        }
-    }
-}
-
 /// The 1-D oracle of a normal impact (physics.md §C.3's linear law): `n_c` equal contacts
 /// under a block of mass `m` (kg) striking at the normal speed `vn0` (m/s) with gravity `gn`
 /// (m/s², its normal component) pressing it on: m U'' = m gₙ − N_c max(0, kU + c U'),

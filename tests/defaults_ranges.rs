@@ -137,7 +137,8 @@ fn check_defaults(doc: &Value, schema: &Value, filled: &Value, at: &str, out: &m
         let pointer = format!("{at}/{name}");
         let (s, _) = resolve(doc, prop);
         let value = filled.get(name);
-        let documented = prop.get("default").or_else(|| s.get("default"));
+        let documented =
+            (prop.get("default").or_else(|| prop.get("x-default"))).or_else(|| s.get("default"));
         match documented {
             Some(d) => {
                 if !default_matches(d, value) {

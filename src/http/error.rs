@@ -163,7 +163,7 @@ impl ApiError {
     pub fn new(code: &str, detail: impl Into<String>) -> Self {
         let problem = problem_type(code).unwrap_or_else(|| {
             tracing::error!(code, "unknown problem code");
-            problem_type("internal").expect("internal is listed")
+            problem_type("internal").unwrap_or(&PROBLEM_TYPES[PROBLEM_TYPES.len() - 1]) // the last is internal
         });
         Self {
             problem,

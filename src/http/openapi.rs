@@ -39,6 +39,50 @@ pub struct FieldErrorDoc {
     pub message: String,
 }
 
+/// `GET /healthz`: the service is up.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct Health {
+    /// Always `ok`.
+    #[schema(example = "ok")]
+    pub status: String,
+    /// Version of the models behind the answers (the `model_version` of every result).
+    #[schema(example = "0.1.0")]
+    pub version: String,
+}
+
+/// `GET /v1/presets`: named defaults, presets, study ranges and limits, one object per section
+/// (what each holds: the description of `/v1/presets`).
+#[derive(Debug, Serialize, ToSchema)]
+pub struct Presets {
+    /// The rock block's named defaults (paper Table 2).
+    #[schema(value_type = Object)]
+    pub rock: serde_json::Map<String, serde_json::Value>,
+    /// The support column's named defaults (paper Table 4).
+    #[schema(value_type = Object)]
+    pub column: serde_json::Map<String, serde_json::Value>,
+    /// The face's named defaults (paper Table 3).
+    #[schema(value_type = Object)]
+    pub face: serde_json::Map<String, serde_json::Value>,
+    /// Named presets.
+    #[schema(value_type = Object)]
+    pub presets: serde_json::Map<String, serde_json::Value>,
+    /// The study's parameter ranges.
+    #[schema(value_type = Object)]
+    pub study: serde_json::Map<String, serde_json::Value>,
+    /// The service's limits.
+    #[schema(value_type = Object)]
+    pub limits: serde_json::Map<String, serde_json::Value>,
+    /// Numeric request fields by JSON Pointer: default and valid range.
+    #[schema(value_type = Object)]
+    pub fields: serde_json::Map<String, serde_json::Value>,
+    /// Numeric migration fields by JSON Pointer: default and valid range.
+    #[schema(value_type = Object)]
+    pub migration_fields: serde_json::Map<String, serde_json::Value>,
+    /// Each route's default request (what `{}` means).
+    #[schema(value_type = Object)]
+    pub defaults: serde_json::Map<String, serde_json::Value>,
+}
+
 /// The service's API document.
 #[derive(OpenApi)]
 #[openapi(
@@ -126,10 +170,15 @@ fn add_array_bounds(doc: &mut serde_json::Value) {
             continue;
         };
         if prop == "vertices_m" {
-            let point = item.as_object_mut().expect("a point is an array schema");
+            let Some(point) = item.as_object_mut() else {
+                continue;
+            };
             point.insert("minItems".into(), json!(3));
             point.insert("maxItems".into(), json!(3));
-            item = point.get_mut("items").expect("a point has item schema");
+            let Some(coordinate) = point.get_mut("items") else {
+                continue;
+            };
+            item = coordinate;
         }
         if let Some(item) = item.as_object_mut() {
             item.insert("minimum".into(), json!(lo));
@@ -187,39 +236,60 @@ fn add_post_responses(doc: &mut serde_json::Value) {
         .pointer_mut("/components/schemas")
         .and_then(|s| s.as_object_mut())
     {
+        // Each line shape is a named component, so that client generators name its model once.
+        schemas.insert(
+            "NdjsonProgress".into(),
+            json!({
+                "description": "Work done so far of a streamed computation.",
+                "type": "object",
+                "required": ["done", "total"],
+                "properties": {
+                    "done": {"type": "integer", "minimum": 0,
+                             "description": "Work units done (runs or steps)."},
+                    "total": {"type": "integer", "minimum": 1,
+                              "description": "Work units in all."}
+                }
+            }),
+        );
+        schemas.insert(
+            "NdjsonProgressLine".into(),
+            json!({
+                "description": "A progress line of an `application/x-ndjson` answer.",
+                "type": "object",
+                "required": ["progress"],
+                "properties": {"progress": {"$ref": "#/components/schemas/NdjsonProgress"}}
+            }),
+        );
+        schemas.insert(
+            "NdjsonResultLine".into(),
+            json!({
+                "description": "The result line of an `application/x-ndjson` answer.",
+                "type": "object",
+                "required": ["result"],
+                "properties": {"result": {
+                    "type": "object",
+                    "description": "The endpoint's 200 JSON result."
+                }}
+            }),
+        );
+        schemas.insert(
+            "NdjsonProblemLine".into(),
+            json!({
+                "description": "The problem line of an `application/x-ndjson` answer.",
+                "type": "object",
+                "required": ["problem"],
+                "properties": {"problem": {"$ref": "#/components/schemas/Problem"}}
+            }),
+        );
         schemas.insert(
             "NdjsonLine".into(),
             json!({
                 "description": "One line of an `application/x-ndjson` answer: progress, then \
                                 exactly one result or problem line.",
                 "oneOf": [
-                    {
-                        "type": "object",
-                        "required": ["progress"],
-                        "properties": {"progress": {
-                            "type": "object",
-                            "required": ["done", "total"],
-                            "properties": {
-                                "done": {"type": "integer", "minimum": 0,
-                                         "description": "Work units done (runs or steps)."},
-                                "total": {"type": "integer", "minimum": 1,
-                                          "description": "Work units in all."}
-                            }
-                        }}
-                    },
-                    {
-                        "type": "object",
-                        "required": ["result"],
-                        "properties": {"result": {
-                            "type": "object",
-                            "description": "The endpoint's 200 JSON result."
-                        }}
-                    },
-                    {
-                        "type": "object",
-                        "required": ["problem"],
-                        "properties": {"problem": {"$ref": "#/components/schemas/Problem"}}
-                    }
+                    {"$ref": "#/components/schemas/NdjsonProgressLine"},
+                    {"$ref": "#/components/schemas/NdjsonResultLine"},
+                    {"$ref": "#/components/schemas/NdjsonProblemLine"}
                 ]
             }),
         );
@@ -247,10 +317,10 @@ fn add_post_responses(doc: &mut serde_json::Value) {
             .and_then(|r| r.get_mut("content"))
             .and_then(|c| c.as_object_mut())
         {
-            content.insert(
-                crate::http::runner::NDJSON.into(),
-                json!({"schema": {"$ref": "#/components/schemas/NdjsonLine"}}),
-            );
+            // An endpoint that documents its own NDJSON lines (batch) keeps them.
+            content
+                .entry(crate::http::runner::NDJSON)
+                .or_insert_with(|| json!({"schema": {"$ref": "#/components/schemas/NdjsonLine"}}));
         }
         for &(status, description) in POST_PROBLEMS {
             let mut r = json!({
@@ -274,7 +344,16 @@ fn add_post_responses(doc: &mut serde_json::Value) {
 /// array bounds and the POST answers (NDJSON, explicit problem statuses) added.
 #[must_use]
 pub fn openapi_value() -> serde_json::Value {
-    let mut doc = serde_json::to_value(ApiDoc::openapi()).expect("the OpenAPI document serializes");
+    // utoipa's document is plain data with string keys; should it ever fail to serialize, the
+    // served document says so (and the committed-document test fails) instead of the server.
+    let mut doc = serde_json::to_value(ApiDoc::openapi()).unwrap_or_else(|e| {
+        serde_json::json!({
+            "openapi": "3.1.0",
+            "info": {"title": "gangue", "version": env!("CARGO_PKG_VERSION"),
+                     "description": format!("the API document failed to serialize: {e}")},
+            "paths": {}
+        })
+    });
     add_array_bounds(&mut doc);
     add_post_responses(&mut doc);
     if let Some(schemas) = doc
@@ -308,13 +387,94 @@ pub fn openapi_value() -> serde_json::Value {
             }
         }
     }
+    move_object_defaults(&mut doc);
+    open_free_form_objects(&mut doc);
     doc
+}
+
+/// Writes `"additionalProperties": true` on every object schema that names no properties (a
+/// batch item's `request`, the sections of `/v1/presets`, a streamed `result`). JSON Schema reads
+/// the two alike; client generators type the explicit form as a map of any values
+/// (openapi-typescript's `{ [key: string]: unknown }`) where the bare one becomes an object that
+/// accepts no key (`Record<string, never>`).
+fn open_free_form_objects(value: &mut serde_json::Value) {
+    match value {
+        serde_json::Value::Object(obj) => {
+            let is_object = match obj.get("type") {
+                Some(serde_json::Value::String(t)) => t == "object",
+                Some(serde_json::Value::Array(ts)) => ts.iter().any(|t| t == "object"),
+                _ => false,
+            };
+            if is_object
+                && !obj.contains_key("properties")
+                && !obj.contains_key("additionalProperties")
+            {
+                obj.insert("additionalProperties".into(), serde_json::Value::Bool(true));
+            }
+            obj.values_mut().for_each(open_free_form_objects);
+        }
+        serde_json::Value::Array(items) => items.iter_mut().for_each(open_free_form_objects),
+        _ => {}
+    }
+}
+
+/// Extension keyword that carries the default of an object-valued request field: generators
+/// cannot give a typed model a `default`, so the document moves it here and into the description.
+pub const OBJECT_DEFAULT: &str = "x-default";
+
+/// Moves the non-null object defaults of `$ref` properties (an omitted `column` is the paper's
+/// column, `{"density_kg_m3": 7850.0, …}`) from `default` to [`OBJECT_DEFAULT`] and appends them
+/// to the property's description. OpenAPI 3.1 allows `default` beside `$ref`, but client
+/// generators cannot give a typed model a default value and drop the whole request model
+/// (openapi-python-client: "ModelProperty cannot have a default value"); the value stays
+/// machine-readable under the extension and readable in the generated docstrings. Scalar and
+/// enum defaults (`"decoupled"`) and null defaults stay under `default`.
+fn move_object_defaults(doc: &mut serde_json::Value) {
+    let Some(schemas) = doc
+        .pointer_mut("/components/schemas")
+        .and_then(|s| s.as_object_mut())
+    else {
+        return;
+    };
+    for schema in schemas.values_mut() {
+        let Some(props) = schema.get_mut("properties").and_then(|p| p.as_object_mut()) else {
+            continue;
+        };
+        for prop in props.values_mut() {
+            let Some(obj) = prop.as_object_mut() else {
+                continue;
+            };
+            if !obj.get("default").is_some_and(serde_json::Value::is_object) {
+                continue;
+            }
+            let Some(default) = obj.remove("default") else {
+                continue;
+            };
+            let sentence = format!("Omitted: `{default}`.");
+            // utoipa writes the description beside the `$ref`, inside its one-member `oneOf`.
+            let described = match obj.get_mut("oneOf").and_then(|o| o.as_array_mut()) {
+                Some(members) => members
+                    .iter_mut()
+                    .find_map(|m| m.get_mut("description").filter(|d| d.is_string())),
+                None => obj.get_mut("description").filter(|d| d.is_string()),
+            };
+            match described {
+                Some(d) => {
+                    let text = d.as_str().unwrap_or_default();
+                    *d = serde_json::json!(format!("{text} {sentence}"));
+                }
+                None => {
+                    obj.insert("description".into(), serde_json::json!(sentence));
+                }
+            }
+            obj.insert(OBJECT_DEFAULT.into(), default);
+        }
+    }
 }
 
 /// The document as pretty JSON with a trailing newline (the committed `openapi/openapi.json`).
 #[must_use]
 pub fn openapi_json() -> String {
-    let mut s = serde_json::to_string_pretty(&openapi_value()).expect("the document serializes");
-    s.push('\n');
-    s
+    // `{:#}` is serde_json's pretty printer (two-space indent), infallible on a `Value`.
+    format!("{:#}\n", openapi_value())
 }

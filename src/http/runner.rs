@@ -141,7 +141,10 @@ impl AppState {
             .thread_name(|i| format!("gangue-solver-{i}"))
             .start_handler(move |_| lower_priority(nice))
             .build()
-            .expect("the solver thread pool can be built");
+            .unwrap_or_else(|e| {
+                tracing::error!(%e, "cannot start the solver threads");
+                std::process::exit(71)
+            }); // EX_OSERR
         Self {
             admission: Arc::new(Admission::new(
                 config.max_concurrent(),

@@ -485,18 +485,40 @@ fn validity_warnings(
     out
 }
 
-#[allow(clippy::too_many_arguments)] // private assembly of the shared fields
-fn assemble_result(
-    single: &SingleMode,
+/// What the decoupled and the coupled column share in their result, before assembly.
+struct ResultParts<'a> {
+    /// The single-mode (mode 1) quantities.
+    single: &'a SingleMode,
+    /// Kinetic energy of the rock at impact, J.
     ke: f64,
+    /// Largest bending stresses at the clamp and the midpoint, Pa.
     stress: BendingStress,
+    /// The column's yield stress, Pa.
     yield_stress: f64,
+    /// Natural frequencies of the modes used, Hz.
     frequencies: Vec<f64>,
+    /// Damping ratios of the modes used.
     damping_ratios: Vec<f64>,
+    /// The history, when asked for.
     history: Option<ColumnHistory>,
+    /// The model's own quantities.
     detail: ColumnDetail,
-    mut warnings: Vec<Warning>,
-) -> PhysicsResult<ColumnResult> {
+    /// Warnings so far.
+    warnings: Vec<Warning>,
+}
+
+fn assemble_result(parts: ResultParts<'_>) -> PhysicsResult<ColumnResult> {
+    let ResultParts {
+        single,
+        ke,
+        stress,
+        yield_stress,
+        frequencies,
+        damping_ratios,
+        history,
+        detail,
+        mut warnings,
+    } = parts;
     let utilisation = stress.clamp.max(stress.midpoint) / yield_stress;
     if !utilisation.is_finite() {
         return Err(PhysicsError::invalid(
@@ -664,15 +686,15 @@ fn decoupled(
         (w0 * mode.curvature(0.0) / (l * l)).abs(),
         (w0 * mode.curvature(0.5) / (l * l)).abs(),
     );
-    assemble_result(
+    assemble_result(ResultParts {
         single,
         ke,
         stress,
-        case.impact.column.yield_stress,
-        vec![f1],
-        vec![fv.zeta],
+        yield_stress: case.impact.column.yield_stress,
+        frequencies: vec![f1],
+        damping_ratios: vec![fv.zeta],
         history,
-        ColumnDetail::Decoupled(DecoupledDetail {
+        detail: ColumnDetail::Decoupled(DecoupledDetail {
             max_deformation: dmax,
             max_force: pmax,
             initial_modal_displacement: w0,
@@ -680,7 +702,7 @@ fn decoupled(
             energy_ratio: ratio,
         }),
         warnings,
-    )
+    })
 }
 
 fn coupled(
@@ -785,15 +807,12 @@ fn coupled(
     }
     let history = order.map(|idx| {
         let h = &r.history;
-        let mut out = ColumnHistory {
-            rock: Some(RockHistory::default()),
-            ..ColumnHistory::default()
-        };
+        let mut out = ColumnHistory::default();
+        let mut rock = RockHistory::default();
         let mut inverse = vec![0usize; idx.len()];
         for (k, &i) in idx.iter().enumerate() {
             inverse[i] = k;
         }
-        let rock = out.rock.as_mut().expect("set above");
         for &k in &inverse {
             out.time.push(h.time[k]);
             out.midpoint_displacement.push(h.midpoint_displacement[k]);
@@ -805,6 +824,7 @@ fn coupled(
             rock.contact_force.push(h.contact_force[k]);
             rock.contact_energy.push(h.contact_energy[k]);
         }
+        out.rock = Some(rock);
         out
     });
     let stress = stress_of(
@@ -812,15 +832,15 @@ fn coupled(
         r.max_curvature_clamp,
         r.max_curvature_midpoint,
     );
-    assemble_result(
+    assemble_result(ResultParts {
         single,
         ke,
         stress,
-        col.yield_stress,
-        freqs,
-        ratios,
+        yield_stress: col.yield_stress,
+        frequencies: freqs,
+        damping_ratios: ratios,
         history,
-        ColumnDetail::Coupled(CoupledDetail {
+        detail: ColumnDetail::Coupled(CoupledDetail {
             max_force: r.max_force,
             max_contact_deformation: r.max_contact_deformation,
             max_midpoint_displacement: r.max_midpoint_displacement,
@@ -839,7 +859,7 @@ fn coupled(
             estimated_error: r.estimated_error,
         }),
         warnings,
-    )
+    })
 }
 
 #[cfg(test)]

@@ -21,5 +21,3 @@ pub mod validity;
 
 pub use control::Control;
 pub use error::{Param, PhysicsError, PhysicsResult};
-/// The numeric building blocks at their former paths (`physics::ode`, `physics::quadrature`, …).
-pub use numeric::{elliptic, lambert, ode, quadrature};

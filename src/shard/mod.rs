@@ -540,8 +540,8 @@ fn encode_run(r: &RunSummary, out: &mut Vec<u8>) {
 }
 
 fn decode_run(b: &[u8; RUN_RECORD_BYTES as usize]) -> Result<RunSummary, String> {
-    let f = |k: usize| f64::from_le_bytes(b[8 * k..8 * k + 8].try_into().expect("8 bytes"));
-    let u = |k: usize| u64::from_le_bytes(b[8 * k..8 * k + 8].try_into().expect("8 bytes"));
+    let f = |k: usize| f64::from_le_bytes(std::array::from_fn(|i| b[8 * k + i]));
+    let u = |k: usize| u64::from_le_bytes(std::array::from_fn(|i| b[8 * k + i]));
     Ok(RunSummary {
         time: f(0),
         speed: f(1),
@@ -606,11 +606,10 @@ fn decode_scene_run(
     let summary = decode_run(
         b[..RUN_RECORD_BYTES as usize]
             .try_into()
-            .expect("a run record"),
+            .map_err(|_| "a scene record shorter than a run record".to_string())?,
     )?;
     let at = RUN_RECORD_BYTES as usize;
-    let f =
-        |k: usize| f64::from_le_bytes(b[at + 8 * k..at + 8 * k + 8].try_into().expect("8 bytes"));
+    let f = |k: usize| f64::from_le_bytes(std::array::from_fn(|i| b[at + 8 * k + i]));
     let flags = b[at + 32];
     if flags >> (2 + limits) != 0 {
         return Err(format!(
@@ -745,7 +744,7 @@ fn check_parts(parts: &mut [Part]) -> Result<(), Failure> {
             )));
         }
         if h.start < next && h.end > h.start {
-            let q = prev.expect("an earlier part");
+            let q = prev.ok_or_else(|| Failure::from("a part after no part".to_string()))?;
             return Err(Failure::from(format!(
                 "items {} to {} are in two parts, {} and {} (a part given twice, or parts of \
                  different splits)",
@@ -1048,10 +1047,10 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
             let mut results = Vec::with_capacity(plan.points() as usize);
             let p0 = part_zero(&parts, "the study's base point")?;
             let base = read_section(p0, 1)?;
-            let (len, values) = base.split_at_checked(8).ok_or_else(|| {
+            let (len, values) = base.split_first_chunk::<8>().ok_or_else(|| {
                 format!("{}: the stored base point is damaged", p0.path.display())
             })?;
-            let len = u64::from_le_bytes(len.try_into().expect("8 bytes"));
+            let len = u64::from_le_bytes(*len);
             if values.len() as u64 != len * 8 {
                 return Err(Failure::from(format!(
                     "{}: the stored base point is damaged",
@@ -1061,7 +1060,7 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
             results.push(
                 values
                     .chunks_exact(8)
-                    .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+                    .map(|b| f64::from_le_bytes(std::array::from_fn(|i| b[i])))
                     .collect(),
             );
             for p in &parts {

@@ -24,7 +24,7 @@ static STATIC: Dir<'_> = include_dir!("$CARGO_MANIFEST_DIR/static");
 
 /// Liveness: answers at once, even while solvers are busy.
 #[utoipa::path(get, path = "/healthz", tag = "service",
-    responses((status = 200, description = "The service is up", body = Value, example = json!({"status": "ok", "version": "0.1.0"}))))]
+    responses((status = 200, description = "The service is up", body = crate::http::openapi::Health, example = json!({"status": "ok", "version": "0.1.0"}))))]
 pub async fn healthz() -> Response {
     axum::Json(json!({"status": "ok", "version": MODEL_VERSION})).into_response()
 }
@@ -35,7 +35,7 @@ pub async fn healthz() -> Response {
 /// default request (`defaults`: what `{}` means, derived fields left out; `defaults.objects`: the
 /// defaults of objects used only when sent), from which the page fills its forms.
 #[utoipa::path(get, path = "/v1/presets", tag = "service",
-    responses((status = 200, description = "Tables 2–4, presets, study ranges, limits", body = Value)))]
+    responses((status = 200, description = "Tables 2–4, presets, study ranges, limits", body = crate::http::openapi::Presets)))]
 pub async fn presets(State(state): State<AppState>) -> Response {
     axum::Json(presets_value(&state)).into_response()
 }
@@ -160,7 +160,7 @@ fn to_value<T: serde::Serialize>(v: &T) -> Value {
 /// A short page explaining one problem type (the `type` of error responses).
 #[utoipa::path(get, path = "/problems/{code}", tag = "service",
     params(("code" = String, Path, description = "Problem code, e.g. capacity_exceeded")),
-    responses((status = 200, description = "HTML explanation", content_type = "text/html"),
+    responses((status = 200, description = "HTML explanation", body = String, content_type = "text/html"),
               (status = 404, description = "Unknown code", body = crate::http::openapi::Problem, content_type = "application/problem+json")))]
 pub async fn problem(Path(code): Path<String>) -> Response {
     match problem_type(&code) {

@@ -23,14 +23,14 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::estimate::DOPRI5_STABILITY_LIMIT;
-use super::flight::hermite;
+use super::flight::{Sink, hermite};
 use super::pass::Pass;
 use super::system::{Functional, ROCK_DISPLACEMENT, ROCK_VELOCITY, System, apply};
 use super::{capacity_exceeded, extremum_slot};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
 use crate::physics::numeric::expo::{PhiAction, phi_action};
-use crate::physics::ode::{OdeSystem, find_roots};
+use crate::physics::numeric::ode::{OdeSystem, find_roots};
 
 /// Dormand–Prince contact steps (t_c·rate/3.307) above which the exponential integrator takes
 /// the contact phases: it needs a few dozen steps per contact at any damping, each a few
@@ -335,17 +335,16 @@ impl Span<'_> {
 /// The contact phase from (t, y) until separation (δ ↓ 0, returns `true`) or `t_end`, by the
 /// exponential stepper: maxima of approach, extrema of w_mid and of the curvatures, history
 /// samples and the capacity check, as the Dormand–Prince contact phase does.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn exponential_contact(
     st: &mut ExpStepper,
     pass: &Pass,
     y: &mut [f64],
     mut t: f64,
-    res: &mut super::CoupledResult,
-    next_sample: &mut usize,
+    out: Sink<'_>,
     control: &Control,
     steps_before: u64,
 ) -> PhysicsResult<(bool, f64)> {
+    let Sink { res, next_sample } = out;
     let (sys, input, fs) = (pass.sys, pass.input, pass.fs);
     let t_end = input.end_time;
     let samples = &input.sample_times;

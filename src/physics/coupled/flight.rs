@@ -14,7 +14,7 @@ use super::extremum_slot;
 use super::system::{Functional, ROCK_DISPLACEMENT, ROCK_VELOCITY, StateLayout, System};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
-use crate::physics::ode::{Dopri5, find_roots};
+use crate::physics::numeric::ode::{Dopri5, find_roots};
 
 /// Exact propagator of the free column (no contact): z = [w, ẇ], z′ = A z.
 ///
@@ -213,6 +213,47 @@ pub(super) type Recorder<'a> = dyn Fn(&mut CoupledResult, f64, &[f64], bool) + '
 /// Applies a functional to a state.
 pub(super) type Apply<'a> = dyn Fn(&[(usize, f64)], &[f64]) -> f64 + 'a;
 
+/// Where a phase of the coupled solve writes: the result, and the index of the next history
+/// sample to take.
+pub(super) struct Sink<'a> {
+    /// The result being written.
+    pub(super) res: &'a mut CoupledResult,
+    /// Index of the next history sample time to take.
+    pub(super) next_sample: &'a mut usize,
+}
+
+/// What a free flight runs in: the system, the window's end (s), the history sample times (s)
+/// and how a sample is recorded, the control, the step budget and the bound on |w_mid| (m) of a
+/// column state.
+#[derive(Clone, Copy)]
+pub(super) struct FlightContext<'a> {
+    /// The coupled system.
+    pub(super) sys: &'a System,
+    /// End of the window, s.
+    pub(super) t_end: f64,
+    /// History sample times, s.
+    pub(super) samples: &'a [f64],
+    /// Records a history sample.
+    pub(super) record: &'a Recorder<'a>,
+    /// Cancel and time limit.
+    pub(super) control: &'a Control,
+    /// Step budget of the whole solve.
+    pub(super) max_steps: u64,
+    /// Bound on |w_mid| (m) of a column state.
+    pub(super) amplitude_bound: &'a dyn Fn(&[f64]) -> f64,
+}
+
+/// The functionals a flight tracks: w_mid and the two curvatures, their rates, and how one is
+/// applied to a state.
+pub(super) struct Tracked<'a> {
+    /// Applies a functional to a state.
+    pub(super) apply: &'a Apply<'a>,
+    /// w_mid (m), the clamp and midpoint curvatures (1/m).
+    pub(super) values: [&'a Functional; 3],
+    /// Their rates.
+    pub(super) rates: [&'a Functional; 3],
+}
+
 /// Cubic Hermite interpolant on θ ∈ [0, 1] from end values and end slopes (per unit θ).
 pub(super) fn hermite(g0: f64, d0: f64, g1: f64, d1: f64, th: f64) -> f64 {
     let t2 = th * th;
@@ -290,7 +331,6 @@ impl FreeFlight {
     /// The first re-contact (δ crossing 0 upward) within a flight step of size h from y0 to y1
     /// (slopes dy0, dy1), as θ ∈ (0, 1]: detected on the cubic Hermite interpolant of δ,
     /// located on the exact propagator.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn locate_recontact(
         &self,
         sys: &System,
@@ -342,18 +382,20 @@ impl FlightScratch {
 /// Extrema of w_mid and of the curvatures within θ ∈ [0, th_end] of a flight step of size h
 /// (states and slopes in `s`): roots of the rates detected on cubic Hermite interpolants, the
 /// values taken on the exact propagator.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn flight_extrema(
     ff: &FreeFlight,
     layout: StateLayout,
     res: &mut CoupledResult,
-    apply: &Apply,
-    values: &[&Functional; 3],
-    rates: &[&Functional; 3],
+    tracked: &Tracked<'_>,
     s: &mut FlightScratch,
     h: f64,
     th_end: f64,
 ) {
+    let Tracked {
+        apply,
+        values,
+        rates,
+    } = tracked;
     for k in 0..3 {
         let (r0, r1) = (apply(rates[k], &s.y0), apply(rates[k], &s.y1));
         let (q0, q1) = (h * apply(rates[k], &s.dy0), h * apply(rates[k], &s.dy1));
@@ -426,25 +468,25 @@ pub(super) fn count_flight_step(
 
 /// Free flight of the rock beside the freely vibrating column, from (t, y) until re-contact
 /// (δ ↑ 0, returns `true`) or `t_end`, by the exact propagator; records extrema and samples.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn free_flight(
     ff: &FreeFlight,
-    sys: &System,
+    cx: FlightContext<'_>,
+    tracked: &Tracked<'_>,
     y: &mut [f64],
     mut t: f64,
-    t_end: f64,
-    res: &mut CoupledResult,
-    next_sample: &mut usize,
-    samples: &[f64],
-    record: &Recorder,
-    apply: &Apply,
-    values: &[&Functional; 3],
-    rates: &[&Functional; 3],
+    out: Sink<'_>,
     st: &mut Dopri5,
-    control: &Control,
-    max_steps: u64,
-    amplitude_bound: &dyn Fn(&[f64]) -> f64,
 ) -> PhysicsResult<(bool, f64)> {
+    let FlightContext {
+        sys,
+        t_end,
+        samples,
+        record,
+        control,
+        max_steps,
+        amplitude_bound,
+    } = cx;
+    let Sink { res, next_sample } = out;
     let layout = sys.layout;
     let mut s = FlightScratch::new(layout);
     ff.derivative(layout, y, &mut s.dy0);
@@ -470,7 +512,7 @@ pub(super) fn free_flight(
         ff.derivative(layout, &s.y1, &mut s.dy1);
         let hit = ff.locate_recontact(sys, &s.y0, &s.y1, &s.dy0, &s.dy1, h);
         let th_end = hit.unwrap_or(1.0);
-        flight_extrema(ff, layout, res, apply, values, rates, &mut s, h, th_end);
+        flight_extrema(ff, layout, res, tracked, &mut s, h, th_end);
         let y_rc;
         let y_end: &[f64] = if hit.is_some() {
             y_rc = ff.state_at(layout, &s.y0, h, th_end, true);
@@ -496,7 +538,7 @@ pub(super) fn free_flight(
             *next_sample += 1;
         }
         for k in 0..3 {
-            let v = apply(values[k], y_end).abs();
+            let v = (tracked.apply)(tracked.values[k], y_end).abs();
             let target = extremum_slot(res, k);
             *target = target.max(v);
         }

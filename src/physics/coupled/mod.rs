@@ -176,31 +176,32 @@ pub fn solve_coupled(input: &CoupledInput, control: &Control) -> PhysicsResult<C
     )
 }
 
-/// Which integrator takes the contact phases.
+/// Which integrator takes the contact phases ([`solve_coupled_with`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum ContactIntegrator {
+pub enum ContactIntegrator {
     /// The exponential integrator when the damping rate would bound Dormand–Prince's steps
     /// (more than 300 of them per contact for stability alone), Dormand–Prince otherwise.
     Auto,
     /// Dormand–Prince always (the reference of the comparison tests).
-    #[cfg_attr(not(test), allow(dead_code))]
     DormandPrince,
 }
 
-/// Which propagator takes the free flights.
+/// Which propagator takes the free flights ([`solve_coupled_with`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum FlightPropagator {
+pub enum FlightPropagator {
     /// The modal propagator (O(n) per step) when its decomposition is accurate, the dense
     /// exact propagator otherwise.
     Auto,
     /// The dense exact propagator always (the reference of the comparison tests).
-    #[cfg_attr(not(test), allow(dead_code))]
     Dense,
 }
 
 /// [`solve_coupled`] with the contact integrator chosen by `contact` and the flight propagator
-/// by `flight`.
-fn solve_coupled_with(
+/// by `flight` (`Auto` and `Auto` is [`solve_coupled`]; the others are the references that tests
+/// and benches measure it against).
+///
+/// Errors: those of [`solve_coupled`].
+pub fn solve_coupled_with(
     input: &CoupledInput,
     control: &Control,
     contact: ContactIntegrator,

@@ -29,13 +29,11 @@
 
 use nalgebra::{Complex, DMatrix, Schur};
 
-use super::CoupledResult;
 use super::extremum_slot;
-use super::flight::{Recorder, count_flight_step, hermite, refuse_unreachable};
-use super::system::{Functional, ROCK_DISPLACEMENT, ROCK_VELOCITY, StateLayout, System};
-use crate::physics::control::Control;
+use super::flight::{FlightContext, Sink, count_flight_step, hermite, refuse_unreachable};
+use super::system::{Functional, ROCK_DISPLACEMENT, ROCK_VELOCITY, StateLayout};
 use crate::physics::error::PhysicsResult;
-use crate::physics::ode::{Dopri5, find_roots};
+use crate::physics::numeric::ode::{Dopri5, find_roots};
 
 type C64 = Complex<f64>;
 
@@ -389,23 +387,25 @@ fn write_state(
 /// Free flight of the rock beside the freely vibrating column in modal coordinates, from (t, y)
 /// until re-contact (δ ↑ 0, returns `true`) or `t_end`: the same steps, events and samples as
 /// [`super::flight::free_flight`], each step O(n).
-#[allow(clippy::too_many_arguments)]
 pub(super) fn modal_free_flight(
     mf: &ModalFlight,
     fl: &ModalFunctionals,
-    sys: &System,
+    cx: FlightContext<'_>,
     y: &mut [f64],
     mut t: f64,
-    t_end: f64,
-    res: &mut CoupledResult,
-    next_sample: &mut usize,
-    samples: &[f64],
-    record: &Recorder,
+    out: Sink<'_>,
     st: &mut Dopri5,
-    control: &Control,
-    max_steps: u64,
-    amplitude_bound: &dyn Fn(&[f64]) -> f64,
 ) -> PhysicsResult<(bool, f64)> {
+    let FlightContext {
+        sys,
+        t_end,
+        samples,
+        record,
+        control,
+        max_steps,
+        amplitude_bound,
+    } = cx;
+    let Sink { res, next_sample } = out;
     let layout = sys.layout;
     let zl = 2 * layout.n;
     let ud = y[ROCK_VELOCITY];

@@ -10,7 +10,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::estimate::CONTACT_MAX_STEP_FRACTION;
-use super::flight::{FreeFlight, free_flight};
+use super::flight::{FlightContext, FreeFlight, Sink, Tracked, free_flight};
 use super::modal::{ModalFlight, ModalFunctionals, modal_free_flight};
 use super::system::{Functionals, ROCK_DISPLACEMENT, ROCK_VELOCITY, System, apply};
 use super::{
@@ -20,7 +20,7 @@ use super::{
 use crate::physics::contact::ForceLaw;
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
-use crate::physics::ode::{Dopri5, OdeError, find_roots};
+use crate::physics::numeric::ode::{Dopri5, OdeError, find_roots};
 
 /// One integration over the window with relative tolerance `tol`, the column's modal states and
 /// energies controlled on the energy scale `energy_scale` (J): absolute tolerances
@@ -102,44 +102,30 @@ pub(super) fn run_pass(
                     .as_ref(),
                 _ => None,
             };
+            let cx = FlightContext {
+                sys: &sys,
+                t_end,
+                samples,
+                record: &record,
+                control,
+                max_steps: input.max_steps,
+                amplitude_bound: &amplitude_bound,
+            };
+            let out = Sink {
+                res: &mut walk.res,
+                next_sample: &mut walk.next_sample,
+            };
             let (recontact, t_new) = if let Some((mf, fl)) = modal {
-                modal_free_flight(
-                    mf,
-                    fl,
-                    &sys,
-                    &mut walk.y,
-                    walk.t,
-                    t_end,
-                    &mut walk.res,
-                    &mut walk.next_sample,
-                    samples,
-                    &record,
-                    &mut st,
-                    control,
-                    input.max_steps,
-                    &amplitude_bound,
-                )?
+                modal_free_flight(mf, fl, cx, &mut walk.y, walk.t, out, &mut st)?
             } else {
                 let ff =
                     free.get_or_insert_with(|| FreeFlight::new(&minv, &sys.k, &sys.c, omega_max));
-                free_flight(
-                    ff,
-                    &sys,
-                    &mut walk.y,
-                    walk.t,
-                    t_end,
-                    &mut walk.res,
-                    &mut walk.next_sample,
-                    samples,
-                    &record,
-                    &apply,
-                    &[&fs.wmid, &fs.c0, &fs.cm],
-                    &[&fs.wmid_rate, &fs.c0_rate, &fs.cm_rate],
-                    &mut st,
-                    control,
-                    input.max_steps,
-                    &amplitude_bound,
-                )?
+                let tracked = Tracked {
+                    apply: &apply,
+                    values: [&fs.wmid, &fs.c0, &fs.cm],
+                    rates: [&fs.wmid_rate, &fs.c0_rate, &fs.cm_rate],
+                };
+                free_flight(ff, cx, &tracked, &mut walk.y, walk.t, out, &mut st)?
             };
             walk.t = t_new;
             if recontact {
@@ -221,8 +207,10 @@ fn exponential_contact_phase(
         pass,
         &mut walk.y,
         walk.t,
-        &mut walk.res,
-        &mut walk.next_sample,
+        Sink {
+            res: &mut walk.res,
+            next_sample: &mut walk.next_sample,
+        },
         control,
         st.steps,
     )?;
@@ -362,8 +350,10 @@ pub(super) fn explicit_step(
     }
     pass.process(
         st,
-        &mut w.res,
-        &mut w.next_sample,
+        Sink {
+            res: &mut w.res,
+            next_sample: &mut w.next_sample,
+        },
         &w.ysave,
         &w.y,
         in_contact,
@@ -402,8 +392,10 @@ pub(super) fn redo_to_event(
             .map_err(|e| pass.map_ode(e, in_contact, sys.delta(&w.y)))?;
         pass.process(
             st,
-            &mut w.res,
-            &mut w.next_sample,
+            Sink {
+                res: &mut w.res,
+                next_sample: &mut w.next_sample,
+            },
             &w.ytmp,
             &w.y,
             in_contact,
@@ -451,17 +443,16 @@ impl Pass<'_> {
 
     /// Non-terminal events (maxima of approach in contact, extrema of w_mid and of the
     /// curvatures) and history samples over the last accepted step from y0 to y1, up to θ = 1.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn process(
         &self,
         st: &Dopri5,
-        res: &mut CoupledResult,
-        next_sample: &mut usize,
+        out: Sink<'_>,
         y0: &[f64],
         y1: &[f64],
         in_contact: bool,
         ytmp: &mut [f64],
     ) -> PhysicsResult<()> {
+        let Sink { res, next_sample } = out;
         let fs = self.fs;
         let samples = &self.input.sample_times;
         let (t0, h) = st.last_step();

@@ -12,7 +12,7 @@ use super::CoupledInput;
 use super::estimate::active_modes;
 use crate::physics::contact::ForceLaw;
 use crate::physics::error::{PhysicsError, PhysicsResult};
-use crate::physics::ode::OdeSystem;
+use crate::physics::numeric::ode::OdeSystem;
 
 /// Position of the rock displacement u (towards the column, m) in the coupled state.
 pub(super) const ROCK_DISPLACEMENT: usize = 0;

@@ -12,7 +12,7 @@ use super::flight::FreeFlight;
 use super::system::{ROCK_DISPLACEMENT, ROCK_VELOCITY, StateLayout};
 use super::*;
 use crate::physics::material::Column;
-use crate::physics::ode::{Dopri5, OdeSystem};
+use crate::physics::numeric::ode::{Dopri5, OdeSystem};
 
 /// The paper law of the base case (physics.md §A.5): k = πLE*, P_ref = e·πE*L³/R.
 pub(super) fn paper_law() -> ForceLaw {
@@ -191,66 +191,6 @@ fn doubled_propagator_of_a_heavily_damped_column_matches_integration_and_energy(
                 );
             }
             assert!(((y[2 * n] - d) / d).abs() < 1e-8, "{} vs {d}", y[2 * n]);
-        }
-    }
-}
-
-/// Prints one row of a run-time-against-error table: `solve` run `reps` times at tolerance
-/// `tol`, its mean time (ms) and the largest relative error of the quantities `key` picks
-/// against `reference`, with the steps, rejections, passes and estimated error of the run.
-fn print_time_and_error<const K: usize>(
-    tol: f64,
-    reps: usize,
-    reference: &[f64; K],
-    key: impl Fn(&CoupledResult) -> [f64; K],
-    mut solve: impl FnMut() -> CoupledResult,
-) {
-    let t0 = std::time::Instant::now();
-    let mut r = solve();
-    for _ in 1..reps {
-        r = solve();
-    }
-    let ms = t0.elapsed().as_secs_f64() * 1e3 / reps as f64;
-    let err = key(&r)
-        .iter()
-        .zip(reference)
-        .map(|(g, e)| ((g - e) / e).abs())
-        .fold(0.0f64, f64::max);
-    println!(
-        "| {tol:e} | {} | {} | {} | {ms:.2} | {err:.2e} | {:.2e} |",
-        r.steps, r.rejected_steps, r.passes, r.estimated_error
-    );
-}
-
-/// Run time against error of the c = 1e9 N·s/m² column (3 and 9 modes, base case): the
-/// largest relative error of Pmax, column energy after contact, first contact duration and
-/// max |w_mid| against a run at tolerance 1e-12. A measurement printed for BENCHMARKS.md, not a
-/// check: `cargo test --lib heavily_damped_time_against_error -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn heavily_damped_time_against_error() {
-    for n in [3usize, 9] {
-        let input = |tol: f64| {
-            let mut i = base_input(n, tol);
-            i.galerkin =
-                Galerkin::new(&crate::physics::material::Column::default(), n, 1e9, true).unwrap();
-            i
-        };
-        let key = |r: &CoupledResult| {
-            [
-                r.max_force,
-                r.column_energy_after_contact,
-                r.first_contact_duration.unwrap(),
-                r.max_midpoint_displacement,
-            ]
-        };
-        let reference = key(&solve_coupled(&input(1e-12), &Control::unlimited()).unwrap());
-        println!("{n} modes, c = 1e9 N·s/m²");
-        for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10] {
-            let inp = input(tol);
-            print_time_and_error(tol, 5, &reference, key, || {
-                solve_coupled(&inp, &Control::unlimited()).unwrap()
-            });
         }
     }
 }
@@ -563,79 +503,6 @@ fn modal_flight_matches_dense_flight_on_ten_and_fifty_modes() {
             "{}",
             modal.estimated_error
         );
-    }
-}
-
-/// Run time against error of the many-mode columns (10 and 50 modes, base case, light
-/// damping), modal and dense flights: the largest relative error of Pmax, column energy after
-/// contact, first contact duration, max |w_mid| and the clamp curvature against a run at
-/// tolerance 1e-11. A measurement printed for BENCHMARKS.md, not a check: `cargo test --lib
-/// many_modes_time_against_error -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn many_modes_time_against_error() {
-    for n in [10usize, 50] {
-        let key = |r: &CoupledResult| {
-            [
-                r.max_force,
-                r.column_energy_after_contact,
-                r.first_contact_duration.unwrap(),
-                r.max_midpoint_displacement,
-                r.max_curvature_clamp,
-            ]
-        };
-        let run = |tol: f64, flight| {
-            solve_coupled_with(
-                &base_input(n, tol),
-                &Control::unlimited(),
-                ContactIntegrator::Auto,
-                flight,
-            )
-            .unwrap()
-        };
-        let reference = key(&run(1e-11, FlightPropagator::Dense));
-        for (name, flight) in [
-            ("modal", FlightPropagator::Auto),
-            ("dense", FlightPropagator::Dense),
-        ] {
-            println!("{n} modes, {name} flight");
-            for tol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9] {
-                let reps = if n == 50 { 2 } else { 5 };
-                print_time_and_error(tol, reps, &reference, key, || run(tol, flight));
-            }
-        }
-    }
-}
-
-/// One run of 10 and of 50 modes at tolerance 1e-6 with the dense and with the modal flight,
-/// for a profiler (`valgrind --tool=callgrind <lib test binary> --ignored
-/// profile_many_mode_runs`): the inclusive costs of the flight (`free_flight`,
-/// `modal_free_flight`) and of the contact phases (`explicit_step`) split the run.
-/// `PROFILE_CASE=50-dense` (or `10-modal`, …) runs one case only.
-#[test]
-#[ignore]
-fn profile_many_mode_runs() {
-    let only = std::env::var("PROFILE_CASE").ok();
-    for n in [10usize, 50] {
-        for (name, flight) in [
-            ("dense", FlightPropagator::Dense),
-            ("modal", FlightPropagator::Auto),
-        ] {
-            if only.as_ref().is_some_and(|o| *o != format!("{n}-{name}")) {
-                continue;
-            }
-            let r = solve_coupled_with(
-                &base_input(n, 1e-6),
-                &Control::unlimited(),
-                ContactIntegrator::Auto,
-                flight,
-            )
-            .unwrap();
-            println!(
-                "{n} modes, {flight:?}: {} steps, {} passes",
-                r.steps, r.passes
-            );
-        }
     }
 }
 

@@ -46,7 +46,11 @@ where
     control.check()?;
     let runs = range.end.saturating_sub(range.start);
     let chunk = chunk.max(1) as u64;
-    let chunks = usize::try_from(runs.div_ceil(chunk)).expect("the chunk count fits in usize");
+    let chunks = usize::try_from(runs.div_ceil(chunk)).map_err(|_| {
+        E::from(PhysicsError::Numerical(
+            "more chunks than usize counts".into(),
+        ))
+    })?;
     let parts: Vec<Result<Vec<T>, E>> = (0..chunks)
         .into_par_iter()
         .map(|c| {
@@ -265,21 +269,24 @@ pub fn attach_ensemble<R: RunRecords + ?Sized>(
     records: &R,
 ) -> Result<(), R::Error> {
     let st = statistics_of(mc, records)?;
-    r.warnings
-        .extend(ensemble_warnings(mc, records.runs(), &st));
+    if let Some(st) = &st {
+        r.warnings.extend(ensemble_warnings(mc, records.runs(), st));
+    }
     if runs_csv {
         let mut runs = Vec::with_capacity(records.runs() as usize);
         records.for_each_run(&mut |x| runs.push(*x))?;
         r.runs = Some(runs);
     }
-    r.statistics = Some(st);
+    r.statistics = st;
     Ok(())
 }
 
+/// The statistics of the records; `None` for records of no run (an ensemble has at least one:
+/// every run has an impact count, a runout and a bounce height).
 pub(super) fn statistics_of<R: RunRecords + ?Sized>(
     mc: &MonteCarlo,
     records: &R,
-) -> Result<Statistics, R::Error> {
+) -> Result<Option<Statistics>, R::Error> {
     let mut first = [stats::FirstPass::default(); STATISTICS_COLUMNS];
     let mut reached = 0u64;
     records.for_each_run(&mut |r| {
@@ -309,8 +316,11 @@ pub(super) fn statistics_of<R: RunRecords + ?Sized>(
     let mut next = || s.next().flatten();
     let n = records.runs();
     let (speed, along_dip_velocity, kinetic_energy, time) = (next(), next(), next(), next());
-    let all = "an ensemble has at least one run";
-    Ok(Statistics {
+    let (Some(impact_count), Some(runout), Some(max_bounce_height)) = (next(), next(), next())
+    else {
+        return Ok(None);
+    };
+    Ok(Some(Statistics {
         runs: n,
         seed: mc.seed,
         reached_fraction: reached as f64 / n.max(1) as f64,
@@ -318,10 +328,10 @@ pub(super) fn statistics_of<R: RunRecords + ?Sized>(
         along_dip_velocity,
         kinetic_energy,
         time,
-        impact_count: next().expect(all),
-        runout: next().expect(all),
-        max_bounce_height: next().expect(all),
-    })
+        impact_count,
+        runout,
+        max_bounce_height,
+    }))
 }
 
 /// An ensemble's records in memory, read under a [`Control`]: the statistics of a large

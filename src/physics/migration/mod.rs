@@ -74,7 +74,8 @@ use super::material::RockShape;
 pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationResult> {
     let n = case.monte_carlo.map_or(0, |mc| mc.runs);
     let (r, runs) = run_part(case, 0..n, true, control)?;
-    let mut r = r.expect("the nominal run was asked for");
+    let mut r =
+        r.ok_or_else(|| PhysicsError::Numerical("the nominal run was not returned".into()))?;
     if let Some(mc) = &case.monte_carlo {
         let records = Polled {
             runs: &runs,

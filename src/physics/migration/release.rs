@@ -540,7 +540,7 @@ mod tests {
             .map(|_| (0..18).map(|j| -f64::from(j)).collect())
             .collect();
         let floor = Floor::grid(dip, [0.0, -3.0], 1.0, &heights).unwrap();
-        let shape = BlockShape::cuboid([0.3, 0.2, 0.5], 2700.0);
+        let shape = BlockShape::cuboid([0.3, 0.2, 0.5], 2700.0).unwrap();
         let r = shape.r_max;
         let (mut moved, mut kept) = (0, 0);
         for i in 0..=60 {

@@ -315,8 +315,8 @@ impl BlockShape {
     pub fn of_rock(rock: &Rock) -> PhysicsResult<Self> {
         let rho = rock.density;
         match &rock.shape {
-            RockShape::Cube => Ok(Self::cuboid([rock.side_length; 3], rho)),
-            RockShape::Cuboid { dimensions } => Ok(Self::cuboid(*dimensions, rho)),
+            RockShape::Cube => Self::cuboid([rock.side_length; 3], rho),
+            RockShape::Cuboid { dimensions } => Self::cuboid(*dimensions, rho),
             RockShape::Sphere { radius } => Ok(Self::sphere(*radius, rho)),
             RockShape::Polyhedron { vertices } => Self::hull(vertices, rho, Param::RockVertices),
             RockShape::RandomPolyhedron {
@@ -328,8 +328,9 @@ impl BlockShape {
     }
 
     /// A cuboid with edges [a, b, c] (m) along x, y, z.
-    #[must_use]
-    pub fn cuboid(d: [f64; 3], density: f64) -> Self {
+    ///
+    /// Errors: [`PhysicsError::InvalidInput`] on `RockDimensions` when an edge is zero (no volume).
+    pub fn cuboid(d: [f64; 3], density: f64) -> PhysicsResult<Self> {
         let mut pts = Vec::with_capacity(8);
         for i in 0..8 {
             pts.push([
@@ -338,7 +339,7 @@ impl BlockShape {
                 if i & 4 == 0 { -0.5 } else { 0.5 } * d[2],
             ]);
         }
-        Self::hull(&pts, density, Param::RockDimensions).expect("a cuboid has volume")
+        Self::hull(&pts, density, Param::RockDimensions)
     }
 
     /// A random polyhedron by the ellipsoid method (physics.md §C.3 "Further definitions"):
@@ -480,7 +481,7 @@ mod tests {
 
     #[test]
     fn cube_mass_properties_are_the_closed_forms() {
-        let s = BlockShape::cuboid([0.3; 3], 2500.0);
+        let s = BlockShape::cuboid([0.3; 3], 2500.0).unwrap();
         assert!((s.mass - 67.5).abs() < 1e-12);
         for i in 0..3 {
             assert!(
@@ -499,7 +500,7 @@ mod tests {
 
     #[test]
     fn cuboid_inertia_and_tetrahedron_hull() {
-        let s = BlockShape::cuboid([0.2, 0.4, 0.6], 1000.0);
+        let s = BlockShape::cuboid([0.2, 0.4, 0.6], 1000.0).unwrap();
         let m = 1000.0 * 0.048;
         let exp = [
             m * (0.16 + 0.36) / 12.0,

@@ -99,30 +99,6 @@ pub fn complete_elliptic(m: f64) -> (f64, f64) {
     (r.k, r.e)
 }
 
-/// Complete elliptic integral of the first kind K(m), dimensionless, 0 ≤ m < 1.
-///
-/// # Special cases
-/// * `m == 1`: +∞.
-///
-/// # References
-/// DLMF §19.8.
-#[must_use]
-pub fn ellip_k(m: f64) -> f64 {
-    complete_elliptic(m).0
-}
-
-/// Complete elliptic integral of the second kind E(m), dimensionless, 0 ≤ m ≤ 1.
-///
-/// # Special cases
-/// * `m == 1`: 1.
-///
-/// # References
-/// DLMF §19.8.
-#[must_use]
-pub fn ellip_e(m: f64) -> f64 {
-    complete_elliptic(m).1
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

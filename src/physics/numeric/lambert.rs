@@ -237,12 +237,6 @@ pub fn u_minus_ln1p(u: f64) -> f64 {
     }
 }
 
-/// W₋₁(−G/e) = −1 − u(G) for G ∈ [0, 1]; `None` outside.
-#[must_use]
-pub fn lambert_wm1_of_g(g: f64) -> Option<f64> {
-    branch_u(g).map(|u| -1.0 - u)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -189,8 +189,8 @@ impl SecondPass {
         let n = self.n as usize;
         let ranks = order_ranks(self.n);
         let at = |k: usize| {
-            let i = ranks.binary_search(&(k as u64)).expect("a listed rank");
-            order_values[i]
+            // order_ranks lists every rank read here: its position is the listed rank's index
+            order_values[ranks.partition_point(|&r| r < k as u64)]
         };
         let pct = |p: f64| {
             let h = (n - 1) as f64 * p;

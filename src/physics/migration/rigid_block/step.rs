@@ -353,7 +353,7 @@ mod tests {
     fn a_cube_face_limit_without_shear_is_its_rocking_mode_at_damping_root_six_beta() {
         // four contacts with negligible shear springs: heave ω² = 4k/m with ζ = 2β, rocking
         // ω² = 6k/m with ζ = √6 β; the set's limit is the smaller of the two
-        let s = BlockShape::cuboid([0.3; 3], 2500.0);
+        let s = BlockShape::cuboid([0.3; 3], 2500.0).unwrap();
         let (k, m) = (1e8, s.mass);
         for beta in [0.0, 0.35, 0.9] {
             let heave = single_limit(2.0 * beta) / (4.0 * k / m).sqrt();
