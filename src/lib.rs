@@ -1,13 +1,15 @@
 //! gangue: flying-gangue (rockfall) hazard calculations for longwall faces in steeply dipping
 //! coal seams — migration down the face, Hertz impact on a support column, column energy.
 //!
-//! [`physics`] holds the pure numerics; [`http`] the REST service; [`config`] its settings;
+//! [`physics`] holds the pure numerics; [`calc`] one calculation interface over physics types per
+//! endpoint; [`http`] the REST service; [`config`] its settings;
 //! [`shard`] sharded computations merged into the service's answer.
 
 // No `unwrap` outside tests: a request must never panic the service (Cargo.toml holds the rest
 // of the lint set; this one is here because integration tests unwrap freely).
 #![cfg_attr(not(test), warn(clippy::unwrap_used))]
 
+pub mod calc;
 pub mod config;
 pub mod http;
 pub mod physics;

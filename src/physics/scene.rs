@@ -29,6 +29,8 @@ use super::migration::{
 };
 use super::stats::interval::{Z_95, wilson_interval};
 use super::stats::{self, Summary};
+use super::plan::Stage;
+use super::validity::Warning;
 
 /// Impact speed below which a support counts as reached without an impact, m/s.
 pub const NO_IMPACT_SPEED: f64 = 1e-6;
@@ -173,17 +175,6 @@ impl From<PhysicsError> for SceneError {
 
 /// Result of a scene.
 pub type SceneResult<T> = Result<T, SceneError>;
-
-/// One stage of the plan.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Stage {
-    /// `release`, `migration`, `impact`, `column` or `checks`.
-    pub stage: &'static str,
-    /// Ran (true) or skipped.
-    pub ran: bool,
-    /// Why.
-    pub reason: String,
-}
 
 /// One design check of an impact.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -406,15 +397,6 @@ pub struct MethodSummary {
     pub entries: Vec<ComparedEntry>,
 }
 
-/// A warning of the scene.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SceneWarning {
-    /// Code.
-    pub code: &'static str,
-    /// Explanation.
-    pub message: String,
-}
-
 /// Everything a scene reports.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneReport {
@@ -431,7 +413,7 @@ pub struct SceneReport {
     /// Both methods side by side.
     pub comparison: Option<Vec<MethodSummary>>,
     /// Warnings of the scene (the migration's are in its result).
-    pub warnings: Vec<SceneWarning>,
+    pub warnings: Vec<Warning>,
 }
 
 /// Bounding radius of a rock (largest distance of a point from its centre of mass), m, and its
@@ -662,8 +644,8 @@ fn clip_zones(
 }
 
 /// The warning for release zones reaching where the rock does not fit on the floor.
-fn clipped_zones_warning(share: f64, span: (f64, f64)) -> SceneWarning {
-    SceneWarning {
+fn clipped_zones_warning(share: f64, span: (f64, f64)) -> Warning {
+    Warning {
         code: "release_zones_clipped",
         message: format!(
             "{:.2} % of the release zones' weight lies where the rock does not fit on the floor \
@@ -752,7 +734,7 @@ pub fn solve_nominal(
     let (r_rock, mass) = rock_extent(&case.migration.rock)?;
     let rock0 = impact_rock(&case.migration.rock, mass);
     if case.migration.rock.shape != RockShape::Cube {
-        warnings.push(SceneWarning {
+        warnings.push(Warning {
             code: "equivalent_cube",
             message: format!(
                 "the rock is not a cube: it enters the impact and column stages as the cube of \
@@ -762,14 +744,10 @@ pub fn solve_nominal(
         });
     }
     if let Some(v) = case.impact_velocity {
-        plan.push(stage(
-            false,
-            "release",
+        plan.push(Stage::skipped("release",
             "an impact velocity is given: no release",
         ));
-        plan.push(stage(
-            false,
-            "migration",
+        plan.push(Stage::skipped("migration",
             "an impact velocity is given: no migration",
         ));
         let mut impacts = Vec::with_capacity(case.supports.len());
@@ -795,9 +773,7 @@ pub fn solve_nominal(
         };
         return Ok((report, None));
     }
-    plan.push(stage(
-        true,
-        "release",
+    plan.push(Stage::ran("release",
         match (&case.migration.monte_carlo, &case.release_zones) {
             (Some(_), Some(_)) => "ensemble release points drawn from the release zones",
             _ => "the release of the request",
@@ -823,9 +799,7 @@ pub fn solve_nominal(
         None => 1 + 2 * compare,
     };
     control.set_total(total);
-    plan.push(stage(
-        true,
-        "migration",
+    plan.push(Stage::ran("migration",
         match (&mc, case.migration.method) {
             (Some(m), Method::LumpedMass) => format!(
                 "energy tracking method: the nominal run and a seeded ensemble of {} runs, each \
@@ -880,8 +854,8 @@ pub fn solve_nominal(
 }
 
 /// A release within a support's reach starts against it: reached at t = 0, no impact.
-fn within_reach_warning(at_start: u64, n: u64) -> SceneWarning {
-    SceneWarning {
+fn within_reach_warning(at_start: u64, n: u64) -> Warning {
+    Warning {
         code: "released_within_reach",
         message: format!(
             "{at_start} of {n} runs start within a support's reach (a column's outer radius \
@@ -894,7 +868,7 @@ fn within_reach_warning(at_start: u64, n: u64) -> SceneWarning {
 
 /// Warnings about the ensemble's migration draws, as `/v1/migration` gives them: friction drawn
 /// outside [0, 2] and clipped (μ is the first draw of each run's stream), a single run.
-fn draw_warnings(mc: &MonteCarlo) -> Vec<SceneWarning> {
+fn draw_warnings(mc: &MonteCarlo) -> Vec<Warning> {
     let mut w = Vec::new();
     if let Some(d) = &mc.friction_coefficient {
         let clipped = (0..mc.runs)
@@ -904,7 +878,7 @@ fn draw_warnings(mc: &MonteCarlo) -> Vec<SceneWarning> {
             })
             .count();
         if clipped > 0 {
-            w.push(SceneWarning {
+            w.push(Warning {
                 code: "friction_clipped",
                 message: format!(
                     "{clipped} of {} drawn friction coefficients fell outside [0, 2] and were \
@@ -915,7 +889,7 @@ fn draw_warnings(mc: &MonteCarlo) -> Vec<SceneWarning> {
         }
     }
     if mc.runs < 2 {
-        w.push(SceneWarning {
+        w.push(Warning {
             code: "single_run",
             message: "an ensemble of one run has no sample standard deviation: every std is \
                       null; ask for runs ≥ 2"
@@ -925,31 +899,19 @@ fn draw_warnings(mc: &MonteCarlo) -> Vec<SceneWarning> {
     w
 }
 
-fn stage(ran: bool, stage: &'static str, reason: impl Into<String>) -> Stage {
-    Stage {
-        stage,
-        ran,
-        reason: reason.into(),
-    }
-}
-
 /// The impact, column and checks stages: `struck` strikes, `capacity` when the nominal impact
 /// went past the contact capacity.
 fn push_strike_plan(case: &SceneCase, plan: &mut Vec<Stage>, struck: u64, capacity: bool) {
     if struck == 0 {
-        plan.push(stage(false, "impact", "no run reached a support"));
-        plan.push(stage(false, "column", "no run reached a support"));
-        plan.push(stage(false, "checks", "no run reached a support"));
+        plan.push(Stage::skipped("impact", "no run reached a support"));
+        plan.push(Stage::skipped("column", "no run reached a support"));
+        plan.push(Stage::skipped("checks", "no run reached a support"));
         return;
     }
-    plan.push(stage(
-        true,
-        "impact",
+    plan.push(Stage::ran("impact",
         format!("Hertz contact of /v1/impact for {struck} strike(s) at the first support reached"),
     ));
-    plan.push(stage(
-        true,
-        "column",
+    plan.push(Stage::ran("column",
         match case.column.model {
             ColumnModel::Decoupled => "decoupled column of /v1/column (closed form)",
             ColumnModel::Coupled => "coupled column of /v1/column (rock + contact + modes)",
@@ -962,11 +924,9 @@ fn push_strike_plan(case: &SceneCase, plan: &mut Vec<Stage>, struck: u64, capaci
             },
     ));
     if case.limits.active().is_empty() {
-        plan.push(stage(false, "checks", "every design limit is null"));
+        plan.push(Stage::skipped("checks", "every design limit is null"));
     } else {
-        plan.push(stage(
-            true,
-            "checks",
+        plan.push(Stage::ran("checks",
             "each design limit that is not null, for every impact",
         ));
     }
@@ -1154,7 +1114,7 @@ pub struct EnsembleReport {
     /// Both methods side by side (`compare_methods`).
     pub comparison: Option<Vec<MethodSummary>>,
     /// The ensemble's warnings.
-    pub warnings: Vec<SceneWarning>,
+    pub warnings: Vec<Warning>,
 }
 
 /// Counts of an ensemble besides its statistics.
@@ -1186,7 +1146,7 @@ pub fn ensemble_report<R: SceneRecords + ?Sized>(
     for (k, e) in statistics.entries.iter().enumerate() {
         if e.impact_velocity.is_none() {
             let s = &case.supports[k];
-            warnings.push(SceneWarning {
+            warnings.push(Warning {
                 code: "support_never_reached",
                 message: format!(
                     "support {} column {} at {} m: no run reached it within the contact \

@@ -961,13 +961,19 @@ impl Warning {
     }
 }
 
-impl From<crate::physics::validity::Warning> for Warning {
-    fn from(w: crate::physics::validity::Warning) -> Self {
+impl From<&crate::physics::validity::Warning> for Warning {
+    fn from(w: &crate::physics::validity::Warning) -> Self {
         Self {
             code: w.code.into(),
-            message: w.message,
+            message: w.message.clone(),
         }
     }
+}
+
+/// The wire form of physics warnings, in their order.
+#[must_use]
+pub fn warnings_of(w: &[crate::physics::validity::Warning]) -> Vec<Warning> {
+    w.iter().map(Warning::from).collect()
 }
 
 /// Whether a stage of the calculation ran.
@@ -989,6 +995,26 @@ pub struct PlanStep {
     pub status: StageStatus,
     /// Why it ran or was skipped.
     pub reason: String,
+}
+
+impl From<&crate::physics::plan::Stage> for PlanStep {
+    fn from(s: &crate::physics::plan::Stage) -> Self {
+        Self {
+            stage: s.stage.into(),
+            status: if s.ran {
+                StageStatus::Ran
+            } else {
+                StageStatus::Skipped
+            },
+            reason: s.reason.clone(),
+        }
+    }
+}
+
+/// The wire form of a plan, in its order.
+#[must_use]
+pub fn plan_of(plan: &[crate::physics::plan::Stage]) -> Vec<PlanStep> {
+    plan.iter().map(PlanStep::from).collect()
 }
 
 impl PlanStep {
