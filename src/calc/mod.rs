@@ -13,6 +13,7 @@ pub mod impact;
 pub mod migration;
 pub mod scene;
 pub mod spalling;
+pub mod study;
 
 use crate::physics::Control;
 pub use crate::physics::plan::Stage;
