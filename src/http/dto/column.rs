@@ -15,7 +15,7 @@ use crate::calc::Report;
 use crate::config::Config;
 use crate::http::error::ApiError;
 use crate::physics::Param;
-use crate::physics::beam::ModeShapes;
+use crate::physics::beam::{MAX_MODES, ModeShapes};
 use crate::physics::column::{
     ColumnCase, ColumnDetail, ColumnHistory, ColumnModel, ColumnResult, HistoryRequest,
 };
@@ -194,7 +194,7 @@ impl ColumnRequest {
                 "/galerkin/modes",
                 u64::from(modes),
                 1,
-                config.max_modes.min(50),
+                config.max_modes.min(MAX_MODES as u64),
                 "modes",
             );
             if self.galerkin.mode_shapes != ModeShapesDto::Exact {

@@ -5,6 +5,7 @@ use serde_json::{Value, json};
 use utoipa::ToSchema;
 
 use crate::http::error::{ApiError, FieldError};
+use crate::physics::material::defaults;
 use crate::physics::material::{
     Column, ContactLaw, ContactModel, Damping, ModulusConvention, Rock, RockShape,
 };
@@ -248,7 +249,7 @@ pub(crate) use number_schemas;
 /// The impact speed `velocity_m_s` (impact and column requests).
 pub const VELOCITY: NumberField = NumberField {
     description: "Normal impact speed v, m/s, in (0, 1000].",
-    default: FieldDefault::Value(5.0),
+    default: FieldDefault::Value(defaults::VELOCITY),
     lo: Bound::Open(0.0),
     hi: Bound::Closed(1000.0),
     unit: "m/s",
@@ -259,7 +260,7 @@ pub const VELOCITY: NumberField = NumberField {
 /// `rock.side_length_m`.
 pub const ROCK_SIDE_LENGTH: NumberField = NumberField {
     description: "Cube side L, m; also the contact length on the column.",
-    default: FieldDefault::Value(0.3),
+    default: FieldDefault::Value(defaults::ROCK_SIDE_LENGTH),
     lo: Bound::Closed(0.01),
     hi: Bound::Closed(5.0),
     unit: "m",
@@ -281,7 +282,7 @@ pub const ROCK_RADIUS: NumberField = NumberField {
 /// `rock.density_kg_m3`.
 pub const ROCK_DENSITY: NumberField = NumberField {
     description: "Density ρ, kg/m³.",
-    default: FieldDefault::Value(2500.0),
+    default: FieldDefault::Value(defaults::ROCK_DENSITY),
     lo: Bound::Closed(100.0),
     hi: Bound::Closed(20000.0),
     unit: "kg/m³",
@@ -292,7 +293,7 @@ pub const ROCK_DENSITY: NumberField = NumberField {
 /// `rock.elastic_modulus_pa`.
 pub const ROCK_ELASTIC_MODULUS: NumberField = NumberField {
     description: "Young's modulus E, Pa.",
-    default: FieldDefault::Value(5e9),
+    default: FieldDefault::Value(defaults::ROCK_ELASTIC_MODULUS),
     lo: Bound::Closed(1e7),
     hi: Bound::Closed(1e12),
     unit: "Pa",
@@ -303,7 +304,7 @@ pub const ROCK_ELASTIC_MODULUS: NumberField = NumberField {
 /// `rock.poisson_ratio`.
 pub const ROCK_POISSON_RATIO: NumberField = NumberField {
     description: "Poisson ratio ν, in [0, 0.5).",
-    default: FieldDefault::Value(0.28),
+    default: FieldDefault::Value(defaults::ROCK_POISSON_RATIO),
     lo: Bound::Closed(0.0),
     hi: Bound::Open(0.5),
     unit: "",
@@ -328,7 +329,7 @@ pub const ROCK_CORNER_RADIUS: NumberField = NumberField {
 /// `column.outer_diameter_m`.
 pub const COLUMN_OUTER_DIAMETER: NumberField = NumberField {
     description: "Outer diameter D₁, m.",
-    default: FieldDefault::Value(0.25),
+    default: FieldDefault::Value(defaults::COLUMN_OUTER_DIAMETER),
     lo: Bound::Closed(0.01),
     hi: Bound::Closed(2.0),
     unit: "m",
@@ -339,7 +340,7 @@ pub const COLUMN_OUTER_DIAMETER: NumberField = NumberField {
 /// `column.inner_diameter_m` (cross-field bound D₂ < D₁; the documented maximum is D₁'s).
 pub const COLUMN_INNER_DIAMETER: NumberField = NumberField {
     description: "Inner diameter D₂, m, in [0, D₁) (0 = solid).",
-    default: FieldDefault::Value(0.235),
+    default: FieldDefault::Value(defaults::COLUMN_INNER_DIAMETER),
     lo: Bound::Closed(0.0),
     hi: Bound::Closed(2.0),
     unit: "m (0 ≤ D₂ < D₁)",
@@ -350,7 +351,7 @@ pub const COLUMN_INNER_DIAMETER: NumberField = NumberField {
 /// `column.length_m` (cross-field bound: at least a cube's contact length L).
 pub const COLUMN_LENGTH: NumberField = NumberField {
     description: "Length between the clamps l, m; at least the contact length L of a cube.",
-    default: FieldDefault::Value(1.31),
+    default: FieldDefault::Value(defaults::COLUMN_LENGTH),
     lo: Bound::Closed(0.1),
     hi: Bound::Closed(20.0),
     unit: "m",
@@ -361,7 +362,7 @@ pub const COLUMN_LENGTH: NumberField = NumberField {
 /// `column.elastic_modulus_pa`.
 pub const COLUMN_ELASTIC_MODULUS: NumberField = NumberField {
     description: "Young's modulus E_s, Pa.",
-    default: FieldDefault::Value(208e9),
+    default: FieldDefault::Value(defaults::COLUMN_ELASTIC_MODULUS),
     lo: Bound::Closed(1e9),
     hi: Bound::Closed(1e12),
     unit: "Pa",
@@ -372,7 +373,7 @@ pub const COLUMN_ELASTIC_MODULUS: NumberField = NumberField {
 /// `column.poisson_ratio`.
 pub const COLUMN_POISSON_RATIO: NumberField = NumberField {
     description: "Poisson ratio ν_s, in [0, 0.5).",
-    default: FieldDefault::Value(0.3),
+    default: FieldDefault::Value(defaults::COLUMN_POISSON_RATIO),
     lo: Bound::Closed(0.0),
     hi: Bound::Open(0.5),
     unit: "",
@@ -383,7 +384,7 @@ pub const COLUMN_POISSON_RATIO: NumberField = NumberField {
 /// `column.density_kg_m3`.
 pub const COLUMN_DENSITY: NumberField = NumberField {
     description: "Density ρ_s, kg/m³.",
-    default: FieldDefault::Value(7850.0),
+    default: FieldDefault::Value(defaults::COLUMN_DENSITY),
     lo: Bound::Closed(100.0),
     hi: Bound::Closed(20000.0),
     unit: "kg/m³",
@@ -395,7 +396,7 @@ pub const COLUMN_DENSITY: NumberField = NumberField {
 pub const COLUMN_YIELD_STRESS: NumberField = NumberField {
     description: "Yield stress, Pa (16Mn steel), for the stress utilisation and the validity \
                   warnings (contact_pressure_above_yield, stress_utilisation_above_one).",
-    default: FieldDefault::Value(345e6),
+    default: FieldDefault::Value(defaults::COLUMN_YIELD_STRESS),
     lo: Bound::Open(0.0),
     hi: Bound::Closed(1e10),
     unit: "Pa",
@@ -418,7 +419,7 @@ pub const COLUMN_CONTACT_RADIUS: NumberField = NumberField {
 pub const COLUMN_DAMPING_COEFFICIENT: NumberField = NumberField {
     description: "Viscous damping per unit length c, N·s/m² (default 1.0, the paper's value; \
                   not filled in when damping_ratio is given).",
-    default: FieldDefault::Value(1.0),
+    default: FieldDefault::Value(defaults::COLUMN_DAMPING_COEFFICIENT),
     lo: Bound::Closed(0.0),
     hi: Bound::Closed(1e9),
     unit: "N·s/m²",
