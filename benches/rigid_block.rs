@@ -6,9 +6,9 @@
 #![allow(missing_docs)]
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use gangue::physics::Control;
 use gangue::calc::Calculation;
 use gangue::calc::migration::Migration;
+use gangue::physics::Control;
 use gangue::physics::migration::{Distribution, FloorSpec, Method, MigrationCase, MonteCarlo};
 use std::time::Duration;
 

@@ -6,12 +6,12 @@
 #![allow(missing_docs)]
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use gangue::calc::Calculation;
+use gangue::calc::scene::Scene;
 use gangue::physics::Control;
 use gangue::physics::column::{ColumnCase, ColumnModel};
 use gangue::physics::material::Column;
 use gangue::physics::migration::{Method, MigrationCase, MonteCarlo};
-use gangue::calc::Calculation;
-use gangue::calc::scene::Scene;
 use gangue::physics::scene::{DesignLimits, SceneCase, SceneDraws, SupportEntry};
 use std::time::Duration;
 

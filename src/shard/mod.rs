@@ -24,7 +24,7 @@
 //!
 //! The merge checks that the parts come from one request and one build and that their ranges
 //! tile 0..N exactly (no index missing, none twice), then feeds the records to the same response
-//! builder as the service ([`migration::attach_ensemble`], [`scene::ensemble_report`],
+//! builder as the service ([`calc::migration::merge`], [`calc::scene::merge`],
 //! [`study::StudyPlan::finish`]): sums stream the records in index order (run order, the
 //! summation order of the contract) and order statistics come from a k-way merge of the per-part
 //! sorted columns, so the merge holds O(parts) records, not O(runs) (a `runs_csv` answer is
@@ -54,8 +54,7 @@ use crate::http::routes::{batch, study};
 use crate::http::runner::to_json_bytes;
 use crate::physics::Control;
 use crate::physics::migration::{
-    MigrationCase, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason,
-    run_columns,
+    MigrationCase, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason, run_columns,
 };
 use crate::physics::scene::{
     ENTRY_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun, StrikeValues, entry_columns,
@@ -984,12 +983,11 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
     let ctl = control(args.time_limit_s);
     let bytes = match r.prepared {
         Prepared::Migration { case, req } => {
-            let report = calc::migration::merge(&case, &PartRuns(&parts), &ctl).map_err(
-                |e| match e {
+            let report =
+                calc::migration::merge(&case, &PartRuns(&parts), &ctl).map_err(|e| match e {
                     MergeError::Physics(e) => Failure::from(ApiError::from(e)),
                     MergeError::Records(e) => Failure::from(e),
-                },
-            )?;
+                })?;
             to_json_bytes(&MigrationResponse::new(report, *req))?
         }
         Prepared::Scene { case, req, .. } => {

@@ -4,9 +4,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 use utoipa::ToSchema;
 
-use super::common::{
-    Checker, MODEL_VERSION, Meta, PlanStep, Warning, plan_of, some, warnings_of,
-};
+use super::common::{Checker, MODEL_VERSION, Meta, PlanStep, Warning, plan_of, some, warnings_of};
 use crate::calc::Report;
 use crate::calc::spalling::Case as SpallingCase;
 use crate::http::error::{ApiError, num};
@@ -371,12 +369,20 @@ impl SpallingResponse {
     /// Builds the response from the calculation's report, the case's zone names and the
     /// resolved request.
     #[must_use]
-    pub fn new(report: Report<SpallingResult>, case: &SpallingCase, inputs: SpallingRequest) -> Self {
-        let r = &report.result;
+    pub fn new(
+        report: Report<SpallingResult>,
+        case: &SpallingCase,
+        inputs: SpallingRequest,
+    ) -> Self {
+        let Report {
+            result: r,
+            plan,
+            warnings,
+        } = report;
         let meta = Meta {
             model_version: MODEL_VERSION.into(),
-            plan: plan_of(&report.plan),
-            warnings: warnings_of(&report.warnings),
+            plan: plan_of(&plan),
+            warnings: warnings_of(&warnings),
         };
         Self {
             zones: r

@@ -4,12 +4,12 @@ use axum::extract::State;
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 
+use crate::calc::Calculation;
+use crate::calc::column::Column;
 use crate::http::dto::column::{ColumnRequest, ColumnResponse};
 use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
-use crate::calc::Calculation;
-use crate::calc::column::Column;
 use crate::physics::Control;
 use crate::physics::column::ColumnCase;
 

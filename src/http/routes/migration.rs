@@ -4,13 +4,13 @@ use axum::extract::State;
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 
+use crate::calc::Calculation;
+use crate::calc::migration::Migration;
 use crate::http::dto::migration::{MigrationRequest, MigrationResponse};
 use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
 use crate::physics::Control;
-use crate::calc::Calculation;
-use crate::calc::migration::Migration;
 use crate::physics::migration::MigrationCase;
 
 /// Rockfall migration down the face: one trajectory, or a seeded Monte Carlo ensemble.
@@ -43,5 +43,8 @@ pub fn solve(
     req: MigrationRequest,
     control: &Control,
 ) -> Result<MigrationResponse, ApiError> {
-    Ok(MigrationResponse::new(Migration::solve(case, control)?, req))
+    Ok(MigrationResponse::new(
+        Migration::solve(case, control)?,
+        req,
+    ))
 }

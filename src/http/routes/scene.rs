@@ -4,13 +4,13 @@ use axum::extract::State;
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 
+use crate::calc::Calculation;
+use crate::calc::scene::Scene;
 use crate::http::dto::scene::{SceneContext, SceneRequest, SceneResponse, scene_error};
 use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
 use crate::physics::Control;
-use crate::calc::Calculation;
-use crate::calc::scene::Scene;
 use crate::physics::scene::SceneCase;
 
 /// The whole chain along the face: release → migration → impact on the first support reached →
