@@ -6,8 +6,10 @@
 #![allow(missing_docs)]
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use gangue::calc::Calculation;
+use gangue::calc::migration::Migration;
 use gangue::physics::Control;
-use gangue::physics::migration::{FloorSpec, MigrationCase, MonteCarlo, run};
+use gangue::physics::migration::{FloorSpec, MigrationCase, MonteCarlo};
 use std::time::Duration;
 
 /// A grid of the face (0 ≤ x ≤ S cos θ + 2 m, |y| ≤ 5 m) about the plane, with a deterministic
@@ -78,7 +80,7 @@ fn bench(c: &mut Criterion) {
             g.bench_with_input(
                 BenchmarkId::new(name, format!("{n}_threads")),
                 &case,
-                |b, case| b.iter(|| pool.install(|| run(case, &ctl).unwrap())),
+                |b, case| b.iter(|| pool.install(|| Migration::solve(case, &ctl).unwrap())),
             );
         }
     }
@@ -94,7 +96,7 @@ fn bench(c: &mut Criterion) {
             let case = ensemble(runs, floor, length);
             g.throughput(Throughput::Elements(runs));
             g.bench_with_input(BenchmarkId::new(name, length), &case, |b, case| {
-                b.iter(|| pools[0].1.install(|| run(case, &ctl).unwrap()))
+                b.iter(|| pools[0].1.install(|| Migration::solve(case, &ctl).unwrap()))
             });
         }
     }
@@ -107,7 +109,7 @@ fn bench(c: &mut Criterion) {
         let case = ensemble(runs, face_grid(120.0, d, 0.1), 120.0);
         g.throughput(Throughput::Elements(runs));
         g.bench_with_input(BenchmarkId::new("rough_0.1m", d), &case, |b, case| {
-            b.iter(|| pools[0].1.install(|| run(case, &ctl).unwrap()))
+            b.iter(|| pools[0].1.install(|| Migration::solve(case, &ctl).unwrap()))
         });
     }
     g.finish();

@@ -6,8 +6,10 @@
 #![allow(missing_docs)]
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use gangue::calc::Calculation;
+use gangue::calc::migration::Migration;
 use gangue::physics::Control;
-use gangue::physics::migration::{Distribution, FloorSpec, Method, MigrationCase, MonteCarlo, run};
+use gangue::physics::migration::{Distribution, FloorSpec, Method, MigrationCase, MonteCarlo};
 use std::time::Duration;
 
 fn block(length: f64, drop: f64) -> MigrationCase {
@@ -36,8 +38,9 @@ fn plane_grid(length: f64, d: f64) -> FloorSpec {
 }
 
 fn steps_of(c: &MigrationCase) -> u64 {
-    run(c, &Control::unlimited())
+    Migration::solve(c, &Control::unlimited())
         .unwrap()
+        .result
         .rigid_block
         .unwrap()
         .steps
@@ -53,9 +56,9 @@ fn accuracy_table() {
     for safety in [0.4, 0.2, 0.1, 0.05] {
         let mut c = block(120.0, 0.0);
         c.rigid_block.time_step_safety = safety;
-        let full = run(&c, &Control::unlimited()).unwrap();
+        let full = Migration::solve(&c, &Control::unlimited()).unwrap().result;
         c.end_time = Some(1.0);
-        let one = run(&c, &Control::unlimited()).unwrap();
+        let one = Migration::solve(&c, &Control::unlimited()).unwrap().result;
         let rb1 = one.rigid_block.unwrap();
         println!(
             "{safety} | {:.3e} | {} | {:.2e} | {} | {:.2e}",
@@ -95,7 +98,7 @@ fn bench(c: &mut Criterion) {
     ] {
         g.throughput(Throughput::Elements(steps_of(&case)));
         g.bench_with_input(BenchmarkId::new(name, "plane"), &case, |b, case| {
-            b.iter(|| run(case, &ctl).unwrap())
+            b.iter(|| Migration::solve(case, &ctl).unwrap())
         });
     }
     g.finish();
@@ -121,7 +124,7 @@ fn bench(c: &mut Criterion) {
         g.bench_with_input(
             BenchmarkId::new("paper_scene_mc", format!("{n}_threads")),
             &mc,
-            |b, case| b.iter(|| pool.install(|| run(case, &ctl).unwrap())),
+            |b, case| b.iter(|| pool.install(|| Migration::solve(case, &ctl).unwrap())),
         );
     }
     g.finish();
@@ -133,7 +136,7 @@ fn bench(c: &mut Criterion) {
         let case = block(length, 0.0);
         g.throughput(Throughput::Elements(steps_of(&case)));
         g.bench_with_input(BenchmarkId::new("plane", length), &case, |b, case| {
-            b.iter(|| run(case, &ctl).unwrap())
+            b.iter(|| Migration::solve(case, &ctl).unwrap())
         });
     }
     g.finish();
@@ -147,7 +150,7 @@ fn bench(c: &mut Criterion) {
         case.rigid_block.shear_stiffness = kn;
         g.throughput(Throughput::Elements(steps_of(&case)));
         g.bench_with_input(BenchmarkId::new("slide_1s", kn), &case, |b, case| {
-            b.iter(|| run(case, &ctl).unwrap())
+            b.iter(|| Migration::solve(case, &ctl).unwrap())
         });
     }
     g.finish();
@@ -162,7 +165,7 @@ fn bench(c: &mut Criterion) {
         case.face.floor = plane_grid(30.0, d);
         g.throughput(Throughput::Elements(steps_of(&case)));
         g.bench_with_input(BenchmarkId::new("flat_slide_1s", d), &case, |b, case| {
-            b.iter(|| run(case, &ctl).unwrap())
+            b.iter(|| Migration::solve(case, &ctl).unwrap())
         });
     }
     g.finish();

@@ -6,11 +6,13 @@
 #![allow(missing_docs)]
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use gangue::calc::Calculation;
+use gangue::calc::scene::Scene;
 use gangue::physics::Control;
 use gangue::physics::column::{ColumnCase, ColumnModel};
 use gangue::physics::material::Column;
 use gangue::physics::migration::{Method, MigrationCase, MonteCarlo};
-use gangue::physics::scene::{DesignLimits, SceneCase, SceneDraws, SupportEntry, solve};
+use gangue::physics::scene::{DesignLimits, SceneCase, SceneDraws, SupportEntry};
 use std::time::Duration;
 
 /// The paper's rock dropped 3.27 m at the top of a 30 m face with a spanning support at its lower
@@ -68,12 +70,12 @@ fn bench(c: &mut Criterion) {
         ] {
             let sc = case(method, model, runs);
             // every run reaches the support and is struck
-            let r = solve(&sc, &Control::unlimited()).unwrap();
-            let st = r.statistics.as_ref().unwrap();
+            let r = Scene::solve(&sc, &Control::unlimited()).unwrap();
+            let st = r.result.statistics.as_ref().unwrap();
             assert_eq!(st.entries[0].reached_fraction, 1.0, "{mname} {cname}");
             g.throughput(Throughput::Elements(runs));
             g.bench_with_input(BenchmarkId::new(mname, cname), &sc, |b, sc| {
-                b.iter(|| pool.install(|| solve(sc, &Control::unlimited()).unwrap()))
+                b.iter(|| pool.install(|| Scene::solve(sc, &Control::unlimited()).unwrap()))
             });
         }
     }

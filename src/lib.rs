@@ -1,7 +1,8 @@
 //! gangue: flying-gangue (rockfall) hazard calculations for longwall faces in steeply dipping
 //! coal seams — migration down the face, Hertz impact on a support column, column energy.
 //!
-//! [`physics`] holds the pure numerics; [`http`] the REST service; [`config`] its settings;
+//! [`physics`] holds the pure numerics; [`calc`] one calculation interface over physics types per
+//! endpoint; [`http`] the REST service; [`config`] its settings;
 //! [`shard`] sharded computations merged into the service's answer.
 
 // No `unwrap`, `expect` or `panic!` outside tests: a request must never panic the service, and
@@ -13,6 +14,7 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+pub mod calc;
 pub mod config;
 pub mod http;
 pub mod physics;

@@ -53,14 +53,45 @@ pub struct Rock {
     pub corner_radius: f64,
 }
 
+/// The documented defaults of the impact case (api.md, the shared request objects): the
+/// `Default`s below and the request fields' defaults are these constants.
+pub mod defaults {
+    /// Normal impact speed v, m/s.
+    pub const VELOCITY: f64 = 5.0;
+    /// Rock side length L, m.
+    pub const ROCK_SIDE_LENGTH: f64 = 0.3;
+    /// Rock density ρ, kg/m³.
+    pub const ROCK_DENSITY: f64 = 2500.0;
+    /// Rock Young's modulus E, Pa.
+    pub const ROCK_ELASTIC_MODULUS: f64 = 5.0e9;
+    /// Rock Poisson's ratio ν, dimensionless.
+    pub const ROCK_POISSON_RATIO: f64 = 0.28;
+    /// Column outer diameter D₁, m.
+    pub const COLUMN_OUTER_DIAMETER: f64 = 0.250;
+    /// Column inner diameter D₂, m.
+    pub const COLUMN_INNER_DIAMETER: f64 = 0.235;
+    /// Column length l, m.
+    pub const COLUMN_LENGTH: f64 = 1.310;
+    /// Column Young's modulus E_s, Pa.
+    pub const COLUMN_ELASTIC_MODULUS: f64 = 208e9;
+    /// Column Poisson's ratio ν_s, dimensionless.
+    pub const COLUMN_POISSON_RATIO: f64 = 0.3;
+    /// Column density ρ_s, kg/m³.
+    pub const COLUMN_DENSITY: f64 = 7850.0;
+    /// Column yield stress σ_y, Pa.
+    pub const COLUMN_YIELD_STRESS: f64 = 345e6;
+    /// Column damping coefficient c, N·s/m².
+    pub const COLUMN_DAMPING_COEFFICIENT: f64 = 1.0;
+}
+
 impl Default for Rock {
     fn default() -> Self {
         Self {
             shape: RockShape::Cube,
-            side_length: 0.3,
-            density: 2500.0,
-            elastic_modulus: 5.0e9,
-            poisson_ratio: 0.28,
+            side_length: defaults::ROCK_SIDE_LENGTH,
+            density: defaults::ROCK_DENSITY,
+            elastic_modulus: defaults::ROCK_ELASTIC_MODULUS,
+            poisson_ratio: defaults::ROCK_POISSON_RATIO,
             corner_radius: 0.02,
         }
     }
@@ -121,15 +152,15 @@ pub struct Column {
 impl Default for Column {
     fn default() -> Self {
         Self {
-            outer_diameter: 0.250,
-            inner_diameter: 0.235,
-            length: 1.310,
-            elastic_modulus: 208e9,
-            poisson_ratio: 0.3,
-            density: 7850.0,
-            yield_stress: 345e6,
-            contact_radius: 0.125,
-            damping: Damping::Coefficient(1.0),
+            outer_diameter: defaults::COLUMN_OUTER_DIAMETER,
+            inner_diameter: defaults::COLUMN_INNER_DIAMETER,
+            length: defaults::COLUMN_LENGTH,
+            elastic_modulus: defaults::COLUMN_ELASTIC_MODULUS,
+            poisson_ratio: defaults::COLUMN_POISSON_RATIO,
+            density: defaults::COLUMN_DENSITY,
+            yield_stress: defaults::COLUMN_YIELD_STRESS,
+            contact_radius: defaults::COLUMN_OUTER_DIAMETER / 2.0,
+            damping: Damping::Coefficient(defaults::COLUMN_DAMPING_COEFFICIENT),
         }
     }
 }
@@ -223,7 +254,7 @@ pub struct ImpactCase {
 impl Default for ImpactCase {
     fn default() -> Self {
         Self {
-            velocity: 5.0,
+            velocity: defaults::VELOCITY,
             rock: Rock::default(),
             column: Column::default(),
             contact: ContactModel::default(),

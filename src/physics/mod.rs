@@ -13,6 +13,7 @@ pub mod error;
 pub mod material;
 pub mod migration;
 pub mod numeric;
+pub mod plan;
 pub mod scene;
 pub mod spalling;
 pub mod stats;

@@ -24,7 +24,7 @@
 //!
 //! The merge checks that the parts come from one request and one build and that their ranges
 //! tile 0..N exactly (no index missing, none twice), then feeds the records to the same response
-//! builder as the service ([`migration::attach_ensemble`], [`scene::ensemble_report`],
+//! builder as the service ([`calc::migration::merge`], [`calc::scene::merge`],
 //! [`study::StudyPlan::finish`]): sums stream the records in index order (run order, the
 //! summation order of the contract) and order statistics come from a k-way merge of the per-part
 //! sorted columns, so the merge holds O(parts) records, not O(runs) (a `runs_csv` answer is
@@ -41,6 +41,9 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use sha2::{Digest, Sha256};
 
+use crate::calc::migration::{MergeError, Migration};
+use crate::calc::scene::Scene;
+use crate::calc::{self, Ensemble};
 use crate::config::{ComputeArgs, Config, Kind, MergeArgs};
 use crate::http::dto::batch::{json_items, ndjson_items};
 use crate::http::dto::migration::{MigrationRequest, MigrationResponse};
@@ -51,11 +54,10 @@ use crate::http::routes::{batch, study};
 use crate::http::runner::to_json_bytes;
 use crate::physics::Control;
 use crate::physics::migration::{
-    self, MigrationCase, MonteCarlo, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason,
-    run_columns,
+    MigrationCase, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason, run_columns,
 };
 use crate::physics::scene::{
-    self, ENTRY_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun, StrikeValues, entry_columns,
+    ENTRY_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun, StrikeValues, entry_columns,
 };
 
 /// Name of the part file format.
@@ -264,7 +266,7 @@ fn resolve(kind: Kind, request: &[u8], config: &Config) -> Result<Resolved, Fail
             let case = req.resolve(config)?;
             let hash = inputs_hash(kind, &serde_json::to_vec(&req).map_err(ApiError::internal)?);
             Ok(Resolved {
-                items: case.monte_carlo.map_or(0, |mc| mc.runs),
+                items: Migration::items(&case),
                 prepared: Prepared::Migration {
                     case: Box::new(case),
                     req: Box::new(req),
@@ -278,7 +280,7 @@ fn resolve(kind: Kind, request: &[u8], config: &Config) -> Result<Resolved, Fail
             let (case, ctx) = req.resolve(config)?;
             let hash = inputs_hash(kind, &serde_json::to_vec(&req).map_err(ApiError::internal)?);
             Ok(Resolved {
-                items: scene_ensemble(&case).map_or(0, |mc| mc.runs),
+                items: Scene::items(&case),
                 prepared: Prepared::Scene {
                     case: Box::new(case),
                     ctx: Box::new(ctx),
@@ -332,14 +334,6 @@ fn resolve(kind: Kind, request: &[u8], config: &Config) -> Result<Resolved, Fail
     }
 }
 
-/// The ensemble of a scene, if it has one (not with `impact_velocity`).
-fn scene_ensemble(case: &SceneCase) -> Option<MonteCarlo> {
-    case.impact_velocity
-        .is_none()
-        .then_some(case.migration.monte_carlo)
-        .flatten()
-}
-
 fn control(limit: Option<f64>) -> Control {
     Control::with_deadline(limit.map(|s| Instant::now() + Duration::from_secs_f64(s)))
 }
@@ -360,7 +354,7 @@ pub fn compute(args: &ComputeArgs) -> Result<PathBuf, Failure> {
     match &r.prepared {
         Prepared::Migration { case, .. } => {
             let ctl = control(args.time_limit_s);
-            let (_, runs) = migration::run_part(case, range.clone(), false, &ctl)
+            let runs = Migration::part(case, range.clone(), &ctl)
                 .map_err(|e| Failure::from(ApiError::from(e)))?;
             for run in &runs {
                 encode_run(run, &mut body);
@@ -379,15 +373,15 @@ pub fn compute(args: &ComputeArgs) -> Result<PathBuf, Failure> {
             let ctl = control(args.time_limit_s);
             let fail = |e: SceneError| Failure::from(scene_error(e, ctx));
             // part 0: what is not an item, computed first (a refused request fails here)
+            let ensemble = calc::scene::ensemble(case).is_some();
             let head = if i == 0 {
-                let (report, mc) = scene::solve_nominal(case, &ctl).map_err(fail)?;
-                Some(SceneHead::new(&report, mc.is_some(), case, ctx, req)?)
+                let report = calc::scene::nominal(case, &ctl).map_err(fail)?;
+                Some(SceneHead::new(&report, ensemble, case, ctx, req)?)
             } else {
                 None
             };
-            if let Some(mc) = scene_ensemble(case) {
-                let (runs, other) =
-                    scene::ensemble_part(case, &mc, range.clone(), &ctl).map_err(fail)?;
+            if ensemble {
+                let (runs, other) = Scene::part(case, range.clone(), &ctl).map_err(fail)?;
                 for stream in std::iter::once(&runs).chain(other.as_ref()) {
                     let before = body.len();
                     stream.iter().for_each(|r| encode_scene_run(r, &mut body));
@@ -988,16 +982,15 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
     let ctl = control(args.time_limit_s);
     let bytes = match r.prepared {
         Prepared::Migration { case, req } => {
-            let (nominal, _) = migration::run_part(&case, 0..0, true, &ctl)
-                .map_err(|e| Failure::from(ApiError::from(e)))?;
-            let mut res = nominal.ok_or("no nominal run")?;
-            if let Some(mc) = &case.monte_carlo {
-                migration::attach_ensemble(&mut res, mc, case.output.runs_csv, &PartRuns(&parts))?;
-            }
-            to_json_bytes(&MigrationResponse::new(res, *req))?
+            let report =
+                calc::migration::merge(&case, &PartRuns(&parts), &ctl).map_err(|e| match e {
+                    MergeError::Physics(e) => Failure::from(ApiError::from(e)),
+                    MergeError::Records(e) => Failure::from(e),
+                })?;
+            to_json_bytes(&MigrationResponse::new(report, *req))?
         }
         Prepared::Scene { case, req, .. } => {
-            let ensemble = scene_ensemble(&case);
+            let ensemble = calc::scene::ensemble(&case);
             let per = 1 + case.supports.len() * ENTRY_COLUMNS;
             let streams = match ensemble {
                 Some(_) => 1 + usize::from(case.compare_methods),
@@ -1016,30 +1009,24 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
                         p0.path.display()
                     )
                 })?;
-            let tail = match ensemble {
-                Some(mc) => {
-                    let limits = case.limits.active().len();
-                    let main = SceneRuns {
-                        parts: &parts,
-                        first: 0,
-                        limits,
-                    };
-                    let other = case.compare_methods.then_some(SceneRuns {
-                        parts: &parts,
-                        first: per,
-                        limits,
-                    });
-                    Some(scene::ensemble_report(
-                        &case,
-                        &mc,
-                        head.nominal_capacity,
-                        &main,
-                        other.as_ref(),
-                        req.migration_output.runs_csv,
-                    )?)
-                }
-                None => None,
+            let limits = case.limits.active().len();
+            let main = SceneRuns {
+                parts: &parts,
+                first: 0,
+                limits,
             };
+            let other = case.compare_methods.then_some(SceneRuns {
+                parts: &parts,
+                first: per,
+                limits,
+            });
+            let tail = calc::scene::merge(
+                &case,
+                head.nominal_capacity,
+                &main,
+                other.as_ref(),
+                req.migration_output.runs_csv,
+            )?;
             head.finish(tail, &case, *req)?
         }
         Prepared::Study(plan) => {

@@ -5,15 +5,17 @@ use serde_json::{Value, json};
 use utoipa::ToSchema;
 
 use super::common::{
-    Bound, Checker, ColumnDto, ContactDto, FieldDefault, Meta, NumberField, PlanStep, RockDto,
-    VELOCITY, Warning, non_null, number_schemas, velocity_schema,
+    Bound, Checker, ColumnDto, ContactDto, FieldDefault, MODEL_VERSION, Meta, NumberField,
+    PlanStep, RockDto, VELOCITY, Warning, non_null, number_schemas, plan_of, velocity_schema,
+    warnings_of,
 };
 use super::impact::resolve_impact_case;
 use super::param::Layout;
+use crate::calc::Report;
 use crate::config::Config;
 use crate::http::error::ApiError;
 use crate::physics::Param;
-use crate::physics::beam::ModeShapes;
+use crate::physics::beam::{MAX_MODES, ModeShapes};
 use crate::physics::column::{
     ColumnCase, ColumnDetail, ColumnHistory, ColumnModel, ColumnResult, HistoryRequest,
 };
@@ -192,7 +194,7 @@ impl ColumnRequest {
                 "/galerkin/modes",
                 u64::from(modes),
                 1,
-                config.max_modes.min(50),
+                config.max_modes.min(MAX_MODES as u64),
                 "modes",
             );
             if self.galerkin.mode_shapes != ModeShapesDto::Exact {
@@ -526,31 +528,18 @@ pub struct ColumnResponse {
 }
 
 impl ColumnResponse {
-    /// Builds the response from the physics result and the resolved request.
-    pub fn new(r: ColumnResult, inputs: ColumnRequest) -> Self {
-        let coupled = matches!(r.detail, ColumnDetail::Coupled(_));
-        let mut plan = vec![
-            PlanStep::ran("impact", "rigid-column contact maxima and duration"),
-            PlanStep::ran(
-                "column",
-                if coupled {
-                    "rock + contact + Galerkin modes, adaptive Dormand–Prince with event location"
-                } else {
-                    "mode 1 free vibration from w_mid(0), closed form"
-                },
-            ),
-        ];
-        plan.push(if r.history.is_some() {
-            PlanStep::ran("history", "sampled as output asks")
-        } else {
-            PlanStep::skipped("history", "output is null")
-        });
-        let mut meta = Meta::new(plan);
-        meta.warnings = r
-            .warnings
-            .iter()
-            .map(|w| Warning::new(w.code, w.message.clone()))
-            .collect();
+    /// Builds the response from the calculation's report and the resolved request.
+    pub fn new(report: Report<ColumnResult>, inputs: ColumnRequest) -> Self {
+        let Report {
+            result: r,
+            plan,
+            warnings,
+        } = report;
+        let meta = Meta {
+            model_version: MODEL_VERSION.into(),
+            plan: plan_of(&plan),
+            warnings: warnings_of(&warnings),
+        };
         let mut out = Self {
             model: inputs.model,
             natural_frequencies_hz: r.natural_frequencies_hz,

@@ -5,6 +5,7 @@ use serde_json::{Value, json};
 use utoipa::ToSchema;
 
 use crate::http::error::{ApiError, FieldError};
+use crate::physics::material::defaults;
 use crate::physics::material::{
     Column, ContactLaw, ContactModel, Damping, ModulusConvention, Rock, RockShape,
 };
@@ -252,7 +253,7 @@ pub(crate) use number_schemas;
 /// The impact speed `velocity_m_s` (impact and column requests).
 pub const VELOCITY: NumberField = NumberField {
     description: "Normal impact speed v, m/s, in (0, 1000].",
-    default: FieldDefault::Value(5.0),
+    default: FieldDefault::Value(defaults::VELOCITY),
     lo: Bound::Open(0.0),
     hi: Bound::Closed(1000.0),
     unit: "m/s",
@@ -263,7 +264,7 @@ pub const VELOCITY: NumberField = NumberField {
 /// `rock.side_length_m`.
 pub const ROCK_SIDE_LENGTH: NumberField = NumberField {
     description: "Cube side L, m; also the contact length on the column.",
-    default: FieldDefault::Value(0.3),
+    default: FieldDefault::Value(defaults::ROCK_SIDE_LENGTH),
     lo: Bound::Closed(0.01),
     hi: Bound::Closed(5.0),
     unit: "m",
@@ -285,7 +286,7 @@ pub const ROCK_RADIUS: NumberField = NumberField {
 /// `rock.density_kg_m3`.
 pub const ROCK_DENSITY: NumberField = NumberField {
     description: "Density ρ, kg/m³.",
-    default: FieldDefault::Value(2500.0),
+    default: FieldDefault::Value(defaults::ROCK_DENSITY),
     lo: Bound::Closed(100.0),
     hi: Bound::Closed(20000.0),
     unit: "kg/m³",
@@ -296,7 +297,7 @@ pub const ROCK_DENSITY: NumberField = NumberField {
 /// `rock.elastic_modulus_pa`.
 pub const ROCK_ELASTIC_MODULUS: NumberField = NumberField {
     description: "Young's modulus E, Pa.",
-    default: FieldDefault::Value(5e9),
+    default: FieldDefault::Value(defaults::ROCK_ELASTIC_MODULUS),
     lo: Bound::Closed(1e7),
     hi: Bound::Closed(1e12),
     unit: "Pa",
@@ -307,7 +308,7 @@ pub const ROCK_ELASTIC_MODULUS: NumberField = NumberField {
 /// `rock.poisson_ratio`.
 pub const ROCK_POISSON_RATIO: NumberField = NumberField {
     description: "Poisson ratio ν, in [0, 0.5).",
-    default: FieldDefault::Value(0.28),
+    default: FieldDefault::Value(defaults::ROCK_POISSON_RATIO),
     lo: Bound::Closed(0.0),
     hi: Bound::Open(0.5),
     unit: "",
@@ -332,7 +333,7 @@ pub const ROCK_CORNER_RADIUS: NumberField = NumberField {
 /// `column.outer_diameter_m`.
 pub const COLUMN_OUTER_DIAMETER: NumberField = NumberField {
     description: "Outer diameter D₁, m.",
-    default: FieldDefault::Value(0.25),
+    default: FieldDefault::Value(defaults::COLUMN_OUTER_DIAMETER),
     lo: Bound::Closed(0.01),
     hi: Bound::Closed(2.0),
     unit: "m",
@@ -343,7 +344,7 @@ pub const COLUMN_OUTER_DIAMETER: NumberField = NumberField {
 /// `column.inner_diameter_m` (cross-field bound D₂ < D₁; the documented maximum is D₁'s).
 pub const COLUMN_INNER_DIAMETER: NumberField = NumberField {
     description: "Inner diameter D₂, m, in [0, D₁) (0 = solid).",
-    default: FieldDefault::Value(0.235),
+    default: FieldDefault::Value(defaults::COLUMN_INNER_DIAMETER),
     lo: Bound::Closed(0.0),
     hi: Bound::Closed(2.0),
     unit: "m (0 ≤ D₂ < D₁)",
@@ -354,7 +355,7 @@ pub const COLUMN_INNER_DIAMETER: NumberField = NumberField {
 /// `column.length_m` (cross-field bound: at least a cube's contact length L).
 pub const COLUMN_LENGTH: NumberField = NumberField {
     description: "Length between the clamps l, m; at least the contact length L of a cube.",
-    default: FieldDefault::Value(1.31),
+    default: FieldDefault::Value(defaults::COLUMN_LENGTH),
     lo: Bound::Closed(0.1),
     hi: Bound::Closed(20.0),
     unit: "m",
@@ -365,7 +366,7 @@ pub const COLUMN_LENGTH: NumberField = NumberField {
 /// `column.elastic_modulus_pa`.
 pub const COLUMN_ELASTIC_MODULUS: NumberField = NumberField {
     description: "Young's modulus E_s, Pa.",
-    default: FieldDefault::Value(208e9),
+    default: FieldDefault::Value(defaults::COLUMN_ELASTIC_MODULUS),
     lo: Bound::Closed(1e9),
     hi: Bound::Closed(1e12),
     unit: "Pa",
@@ -376,7 +377,7 @@ pub const COLUMN_ELASTIC_MODULUS: NumberField = NumberField {
 /// `column.poisson_ratio`.
 pub const COLUMN_POISSON_RATIO: NumberField = NumberField {
     description: "Poisson ratio ν_s, in [0, 0.5).",
-    default: FieldDefault::Value(0.3),
+    default: FieldDefault::Value(defaults::COLUMN_POISSON_RATIO),
     lo: Bound::Closed(0.0),
     hi: Bound::Open(0.5),
     unit: "",
@@ -387,7 +388,7 @@ pub const COLUMN_POISSON_RATIO: NumberField = NumberField {
 /// `column.density_kg_m3`.
 pub const COLUMN_DENSITY: NumberField = NumberField {
     description: "Density ρ_s, kg/m³.",
-    default: FieldDefault::Value(7850.0),
+    default: FieldDefault::Value(defaults::COLUMN_DENSITY),
     lo: Bound::Closed(100.0),
     hi: Bound::Closed(20000.0),
     unit: "kg/m³",
@@ -399,7 +400,7 @@ pub const COLUMN_DENSITY: NumberField = NumberField {
 pub const COLUMN_YIELD_STRESS: NumberField = NumberField {
     description: "Yield stress, Pa (16Mn steel), for the stress utilisation and the validity \
                   warnings (contact_pressure_above_yield, stress_utilisation_above_one).",
-    default: FieldDefault::Value(345e6),
+    default: FieldDefault::Value(defaults::COLUMN_YIELD_STRESS),
     lo: Bound::Open(0.0),
     hi: Bound::Closed(1e10),
     unit: "Pa",
@@ -422,7 +423,7 @@ pub const COLUMN_CONTACT_RADIUS: NumberField = NumberField {
 pub const COLUMN_DAMPING_COEFFICIENT: NumberField = NumberField {
     description: "Viscous damping per unit length c, N·s/m² (default 1.0, the paper's value; \
                   not filled in when damping_ratio is given).",
-    default: FieldDefault::Value(1.0),
+    default: FieldDefault::Value(defaults::COLUMN_DAMPING_COEFFICIENT),
     lo: Bound::Closed(0.0),
     hi: Bound::Closed(1e9),
     unit: "N·s/m²",
@@ -965,13 +966,19 @@ impl Warning {
     }
 }
 
-impl From<crate::physics::validity::Warning> for Warning {
-    fn from(w: crate::physics::validity::Warning) -> Self {
+impl From<&crate::physics::validity::Warning> for Warning {
+    fn from(w: &crate::physics::validity::Warning) -> Self {
         Self {
             code: w.code.into(),
-            message: w.message,
+            message: w.message.clone(),
         }
     }
+}
+
+/// The wire form of physics warnings, in their order.
+#[must_use]
+pub fn warnings_of(w: &[crate::physics::validity::Warning]) -> Vec<Warning> {
+    w.iter().map(Warning::from).collect()
 }
 
 /// Whether a stage of the calculation ran.
@@ -993,6 +1000,26 @@ pub struct PlanStep {
     pub status: StageStatus,
     /// Why it ran or was skipped.
     pub reason: String,
+}
+
+impl From<&crate::physics::plan::Stage> for PlanStep {
+    fn from(s: &crate::physics::plan::Stage) -> Self {
+        Self {
+            stage: s.stage.into(),
+            status: if s.ran {
+                StageStatus::Ran
+            } else {
+                StageStatus::Skipped
+            },
+            reason: s.reason.clone(),
+        }
+    }
+}
+
+/// The wire form of a plan, in its order.
+#[must_use]
+pub fn plan_of(plan: &[crate::physics::plan::Stage]) -> Vec<PlanStep> {
+    plan.iter().map(PlanStep::from).collect()
 }
 
 impl PlanStep {

@@ -4,12 +4,13 @@ use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
 
 use super::common::{
-    Checker, ColumnDto, ContactDto, LawDto, Meta, ModulusDto, RockDto, ShapeKind, VELOCITY,
-    velocity_schema,
+    Checker, ColumnDto, ContactDto, LawDto, MODEL_VERSION, ModulusDto, RockDto, ShapeKind,
+    VELOCITY, plan_of, velocity_schema, warnings_of,
 };
+use crate::calc::{self, Report};
 use crate::config::Config;
 use crate::http::error::ApiError;
-use crate::physics::contact::{ImpactDetail, ImpactResult};
+use crate::physics::contact::ImpactDetail;
 use crate::physics::material::ImpactCase;
 
 /// Optional outputs of an impact.
@@ -101,7 +102,7 @@ pub fn resolve_impact_case(
 
 impl ImpactRequest {
     /// Range checks, derived defaults and conversion; `self` becomes the resolved request.
-    pub fn resolve(&mut self, config: &Config) -> Result<ImpactCase, ApiError> {
+    pub fn resolve(&mut self, config: &Config) -> Result<calc::impact::Case, ApiError> {
         let mut checker = Checker::new();
         checker.count(
             "/output/curve_points",
@@ -118,7 +119,10 @@ impl ImpactRequest {
             &mut checker,
         );
         checker.finish()?;
-        Ok(case)
+        Ok(calc::impact::Case {
+            impact: case,
+            curve_points: self.output.curve_points as usize,
+        })
     }
 }
 
@@ -206,15 +210,11 @@ pub struct ImpactResponse {
 }
 
 impl ImpactResponse {
-    /// Builds the response from the physics result, the optional curve and the resolved request.
+    /// Builds the response from the calculation's report and the resolved request.
     #[must_use]
-    pub fn new(
-        r: &ImpactResult,
-        curve: Option<CurveDto>,
-        inputs: ImpactRequest,
-        meta: Meta,
-    ) -> Self {
+    pub fn new(report: Report<calc::impact::Outcome>, inputs: ImpactRequest) -> Self {
         let contact = inputs.contact;
+        let r = &report.result.impact;
         let mut out = Self {
             mass_kg: r.mass,
             kinetic_energy_j: r.kinetic_energy,
@@ -238,11 +238,14 @@ impl ImpactResponse {
             contact_ellipse_axis_ratio: None,
             contact_semi_axes_m: None,
             contact_duration_s: r.contact_duration,
-            curve,
-            warnings: meta.warnings,
-            plan: meta.plan,
+            curve: report.result.curve.map(|c| CurveDto {
+                deformation_m: c.deformation,
+                force_n: c.force,
+            }),
+            warnings: warnings_of(&report.warnings),
+            plan: plan_of(&report.plan),
             inputs,
-            model_version: meta.model_version,
+            model_version: MODEL_VERSION.into(),
         };
         match &r.detail {
             ImpactDetail::Line(l) => {

@@ -5,7 +5,10 @@ use serde_json::{Value, json};
 use utoipa::ToSchema;
 
 use super::column::{ColumnModelDto, ColumnOutputDto, ColumnRequest, ColumnResponse, GalerkinDto};
-use super::common::{Checker, ColumnDto, ContactDto, LawDto, Meta, PlanStep, RockDto, ShapeKind};
+use super::common::{
+    Checker, ColumnDto, ContactDto, LawDto, Meta, PlanStep, RockDto, ShapeKind, plan_of,
+    warnings_of,
+};
 use super::impact::{ImpactRequest, ImpactResponse};
 use super::migration::monte_carlo_dto;
 use super::migration::{
@@ -13,6 +16,7 @@ use super::migration::{
     MigrationResponse, MonteCarloDto, ReleaseDto, RigidBlockDto, SummaryDto,
 };
 use super::param::{Layout, scene_pointer};
+use crate::calc::{self, Report};
 use crate::config::Config;
 use crate::http::error::{ApiError, FieldError, num};
 use crate::http::runner::to_json_bytes;
@@ -955,27 +959,6 @@ pub struct SceneResponse {
     pub model_version: String,
 }
 
-fn plan_of(plan: &[scene::Stage]) -> Vec<PlanStep> {
-    plan.iter()
-        .map(|s| {
-            if s.ran {
-                PlanStep::ran(s.stage, s.reason.clone())
-            } else {
-                PlanStep::skipped(s.stage, s.reason.clone())
-            }
-        })
-        .collect()
-}
-
-fn warnings_of(w: &[scene::SceneWarning]) -> Vec<super::Warning> {
-    w.iter()
-        .map(|w| super::Warning {
-            code: w.code.to_string(),
-            message: w.message.clone(),
-        })
-        .collect()
-}
-
 /// A piece of the answer: built here, or serialized earlier by the same code (the part 0 of a
 /// sharded computation stores the pieces its ensemble does not change) and written back
 /// verbatim in place of a placeholder ([`Piece::Stored`]'s index) by [`SceneHead::finish`].
@@ -1076,34 +1059,20 @@ fn impact_dto(
         Strike::CapacityExceeded { max_velocity } => {
             ("capacity_exceeded", *max_velocity, None, None)
         }
-        Strike::Solved { impact, column, .. } => {
+        Strike::Solved {
+            impact_case,
+            impact,
+            column,
+            ..
+        } => {
             let mut rock = ctx.impact_rock.clone();
-            rock.side_length_m = match &o.strike {
-                Strike::Solved { impact_case, .. } => impact_case.rock.side_length,
-                _ => rock.side_length_m,
-            };
+            rock.side_length_m = impact_case.rock.side_length;
             let ireq = ImpactRequest {
                 velocity_m_s: o.velocity,
                 rock: rock.clone(),
                 column: ctx.entry_column[o.entry].clone(),
                 contact: req.contact,
                 output: Default::default(),
-            };
-            let mut meta = Meta::new(vec![
-                PlanStep::ran(
-                    "impact",
-                    "closed-form maxima on the W₋₁ branch (log laws) or Hertz; duration t_c = (2mv/Pmax)·J(u₀)",
-                ),
-                PlanStep::skipped("curve", "output.curve_points = 0"),
-            ]);
-            meta.warnings = match &o.strike {
-                Strike::Solved { impact_case, .. } => {
-                    crate::physics::validity::impact_warnings(impact_case, impact)
-                        .into_iter()
-                        .map(super::common::Warning::from)
-                        .collect()
-                }
-                _ => Vec::new(),
             };
             let creq = ColumnRequest {
                 velocity_m_s: o.velocity,
@@ -1119,8 +1088,14 @@ fn impact_dto(
             (
                 "struck",
                 None,
-                Some(ImpactResponse::new(impact, None, ireq, meta)),
-                Some(ColumnResponse::new((**column).clone(), creq)),
+                Some(ImpactResponse::new(
+                    calc::impact::report(impact_case, (**impact).clone(), None, 0),
+                    ireq,
+                )),
+                Some(ColumnResponse::new(
+                    calc::column::report((**column).clone()),
+                    creq,
+                )),
             )
         }
     };
@@ -1173,9 +1148,15 @@ impl SceneResponse {
         clippy::needless_pass_by_value,
         reason = "the route hands over the report and context it no longer needs"
     )]
-    pub fn new(r: SceneReport, case: &SceneCase, ctx: SceneContext, inputs: SceneRequest) -> Self {
-        let plan = plan_of(&r.plan);
-        let mut warnings = warnings_of(&r.warnings);
+    pub fn new(
+        report: Report<SceneReport>,
+        case: &SceneCase,
+        ctx: SceneContext,
+        inputs: SceneRequest,
+    ) -> Self {
+        let plan = plan_of(&report.plan);
+        let mut warnings = warnings_of(&report.warnings);
+        let r = report.result;
         let impacts = r
             .impacts
             .iter()
@@ -1187,7 +1168,10 @@ impl SceneResponse {
             _ => None,
         };
         let migration = r.migration.clone().map(|m| {
-            let mut resp = MigrationResponse::new(m, ctx.migration.clone());
+            let mut resp = MigrationResponse::new(
+                calc::migration::report(&case.migration, m),
+                ctx.migration.clone(),
+            );
             resp.runs_csv = csv;
             resp
         });
@@ -1241,21 +1225,22 @@ impl SceneHead {
     ///
     /// Errors: a non-finite number in a piece (as the service's answer would).
     pub fn new(
-        r: &SceneReport,
+        report: &Report<SceneReport>,
         ensemble: bool,
         case: &SceneCase,
         ctx: &SceneContext,
         inputs: &SceneRequest,
     ) -> Result<Self, ApiError> {
         let text = |b: Vec<u8>| String::from_utf8(b).map_err(ApiError::internal);
+        let r = &report.result;
         let mut head = Self {
             complete: None,
-            plan: r
+            plan: report
                 .plan
                 .iter()
                 .map(|s| (s.stage.to_string(), s.ran, s.reason.clone()))
                 .collect(),
-            warnings: r
+            warnings: report
                 .warnings
                 .iter()
                 .map(|w| (w.code.to_string(), w.message.clone()))
@@ -1266,12 +1251,15 @@ impl SceneHead {
             nominal_capacity: scene::nominal_capacity(r),
         };
         if !ensemble {
-            let resp = SceneResponse::new(r.clone(), case, ctx.clone(), inputs.clone());
+            let resp = SceneResponse::new(report.clone(), case, ctx.clone(), inputs.clone());
             head.complete = Some(text(to_json_bytes(&resp)?)?);
             return Ok(head);
         }
         if let Some(m) = &r.migration {
-            let mut resp = MigrationResponse::new(m.clone(), ctx.migration.clone());
+            let mut resp = MigrationResponse::new(
+                calc::migration::report(&case.migration, m.clone()),
+                ctx.migration.clone(),
+            );
             if inputs.migration_output.runs_csv {
                 resp.runs_csv = Some(placeholder("runs-csv"));
             }

@@ -4,11 +4,13 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 use utoipa::ToSchema;
 
-use super::common::{Checker, Meta, PlanStep, Warning, some};
+use super::common::{Checker, MODEL_VERSION, Meta, PlanStep, Warning, plan_of, some, warnings_of};
+use crate::calc::Report;
+use crate::calc::spalling::Case as SpallingCase;
 use crate::http::error::{ApiError, num};
 use crate::physics::spalling::{
-    CountError, Event, EventError, SpallingResult, Undefined, ZoneCounts, ZoneRange,
-    ZoneStatistics, check_counts, count_events, spalling_statistics,
+    CountError, Event, EventError, SpallingResult, ZoneCounts, ZoneRange, ZoneStatistics,
+    check_counts, count_events,
 };
 
 /// Largest count of one event in one zone.
@@ -136,15 +138,6 @@ impl ZoneCountsDto {
     }
 }
 
-/// A resolved spalling case: zone names and their counts.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SpallingCase {
-    /// Zone names, in request order.
-    pub names: Vec<String>,
-    /// Counts, in request order.
-    pub counts: Vec<ZoneCounts>,
-}
-
 impl SpallingRequest {
     /// Range and consistency checks; fills the defaults so that `self` echoes as `inputs`.
     pub fn resolve(&mut self) -> Result<SpallingCase, ApiError> {
@@ -224,6 +217,7 @@ impl SpallingRequest {
             return Ok(SpallingCase {
                 names: zones.iter().map(|z| z.name.clone()).collect(),
                 counts,
+                from_events: true,
             });
         }
         for (f, present) in [
@@ -292,6 +286,7 @@ impl SpallingRequest {
         Ok(SpallingCase {
             names: zones.iter().map(|z| z.name.clone()).collect(),
             counts,
+            from_events: false,
         })
     }
 }
@@ -370,40 +365,25 @@ pub struct SpallingResponse {
     pub model_version: String,
 }
 
-fn undefined_warning(names: &[String], at: Option<usize>, u: Undefined) -> Warning {
-    let zone = at.map_or("total", |i| names[i].as_str());
-    let message = match u {
-        Undefined::Share(event) => format!(
-            "zone `{zone}`: the share of {event} is null: the event never occurs in any zone"
-        ),
-        Undefined::Conditional("spalling") => format!(
-            "zone `{zone}`: high_given_spalling_pct and low_given_spalling_pct are null: no spalling counted"
-        ),
-        Undefined::Conditional(event) => format!(
-            "zone `{zone}`: the probability given {event} (and its interval) is null: no {event} events counted"
-        ),
-    };
-    Warning::new("zero_denominator", message)
-}
-
 impl SpallingResponse {
-    /// Computes the statistics of a resolved case and builds the response.
+    /// Builds the response from the calculation's report, the case's zone names and the
+    /// resolved request.
     #[must_use]
-    pub fn compute(case: &SpallingCase, inputs: SpallingRequest) -> Self {
-        let r: SpallingResult = spalling_statistics(&case.counts);
-        let mut meta = Meta::new(vec![PlanStep::ran(
-            "spalling",
-            if inputs.events.is_some() {
-                "event log counted into zones; shares, P(A|B), P(A|C), Wilson 95 % intervals"
-            } else {
-                "zone counts; shares, P(A|B), P(A|C), Wilson 95 % intervals"
-            },
-        )]);
-        meta.warnings = r
-            .undefined
-            .iter()
-            .map(|&(at, u)| undefined_warning(&case.names, at, u))
-            .collect();
+    pub fn new(
+        report: Report<SpallingResult>,
+        case: &SpallingCase,
+        inputs: SpallingRequest,
+    ) -> Self {
+        let Report {
+            result: r,
+            plan,
+            warnings,
+        } = report;
+        let meta = Meta {
+            model_version: MODEL_VERSION.into(),
+            plan: plan_of(&plan),
+            warnings: warnings_of(&warnings),
+        };
         Self {
             zones: r
                 .zones

@@ -60,19 +60,14 @@ pub enum StudyGrid {
 /// The paper's study ranges (physics.md §D.1): each a ratio of 1.5.
 #[must_use]
 pub fn paper_parameters() -> Vec<StudyParameterDto> {
-    [
-        ("velocity_m_s", 4.0, 6.0),
-        ("rock.side_length_m", 0.2, 0.3),
-        ("rock.elastic_modulus_pa", 4e9, 6e9),
-        ("rock.density_kg_m3", 2000.0, 3000.0),
-    ]
-    .iter()
-    .map(|&(n, min, max)| StudyParameterDto {
-        name: n.into(),
-        min,
-        max,
-    })
-    .collect()
+    crate::calc::study::PAPER_PARAMETERS
+        .iter()
+        .map(|&(n, min, max)| StudyParameterDto {
+            name: n.into(),
+            min,
+            max,
+        })
+        .collect()
 }
 
 /// The paper's Figure 21 abscissae x = p/p_max: 2/3, 3/4, 5/6, 11/12, 1.

@@ -251,7 +251,7 @@ pub fn run_item(
         BatchKind::Impact => {
             let mut req: ImpactRequest = from_value(&item.request).map_err(nest)?;
             let case = req.resolve(config).map_err(nest)?;
-            to_json_bytes(&impact::solve(&case, req).map_err(nest)?)
+            to_json_bytes(&impact::solve(&case, req, control).map_err(nest)?)
         }
         BatchKind::Column => {
             let mut req: ColumnRequest = from_value(&item.request).map_err(nest)?;
@@ -265,7 +265,7 @@ pub fn run_item(
         }
         BatchKind::Spalling => {
             let req: SpallingRequest = from_value(&item.request).map_err(nest)?;
-            to_json_bytes(&spalling::solve(req).map_err(nest)?)
+            to_json_bytes(&spalling::solve(req, control).map_err(nest)?)
         }
         BatchKind::Study => {
             let req: StudyRequest = from_value(&item.request).map_err(nest)?;

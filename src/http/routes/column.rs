@@ -4,12 +4,14 @@ use axum::extract::State;
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 
+use crate::calc::Calculation;
+use crate::calc::column::Column;
 use crate::http::dto::column::{ColumnRequest, ColumnResponse};
 use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
 use crate::physics::Control;
-use crate::physics::column::{ColumnCase, solve_column};
+use crate::physics::column::ColumnCase;
 
 /// Column vibration after an impact: midpoint history, energies, absorbed energy, stress.
 #[utoipa::path(
@@ -41,12 +43,12 @@ pub fn solve(
     req: ColumnRequest,
     control: &Control,
 ) -> Result<ColumnResponse, ApiError> {
-    let r = solve_column(case, control).map_err(|e| {
+    let report = Column::solve(case, control).map_err(|e| {
         let e = ApiError::from(e).with_capacity_velocity(case.impact.velocity);
         match req.end_time_s {
             Some(t) => e.with_step_field("/end_time_s", t),
             None => e,
         }
     })?;
-    Ok(ColumnResponse::new(r, req))
+    Ok(ColumnResponse::new(report, req))
 }

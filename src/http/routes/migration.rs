@@ -4,12 +4,14 @@ use axum::extract::State;
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 
+use crate::calc::Calculation;
+use crate::calc::migration::Migration;
 use crate::http::dto::migration::{MigrationRequest, MigrationResponse};
 use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
 use crate::physics::Control;
-use crate::physics::migration::{self, MigrationCase};
+use crate::physics::migration::MigrationCase;
 
 /// Rockfall migration down the face: one trajectory, or a seeded Monte Carlo ensemble.
 #[utoipa::path(
@@ -41,6 +43,8 @@ pub fn solve(
     req: MigrationRequest,
     control: &Control,
 ) -> Result<MigrationResponse, ApiError> {
-    let r = migration::run(case, control)?;
-    Ok(MigrationResponse::new(r, req))
+    Ok(MigrationResponse::new(
+        Migration::solve(case, control)?,
+        req,
+    ))
 }

@@ -4,12 +4,14 @@ use axum::extract::State;
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 
+use crate::calc::Calculation;
+use crate::calc::scene::Scene;
 use crate::http::dto::scene::{SceneContext, SceneRequest, SceneResponse, scene_error};
 use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
 use crate::physics::Control;
-use crate::physics::scene::{self, SceneCase};
+use crate::physics::scene::SceneCase;
 
 /// The whole chain along the face: release → migration → impact on the first support reached →
 /// column energy → design checks, for one run or a seeded Monte Carlo ensemble.
@@ -46,6 +48,6 @@ pub fn solve(
     req: SceneRequest,
     control: &Control,
 ) -> Result<SceneResponse, ApiError> {
-    let r = scene::solve(case, control).map_err(|e| scene_error(e, &ctx))?;
+    let r = Scene::solve(case, control).map_err(|e| scene_error(e, &ctx))?;
     Ok(SceneResponse::new(r, case, ctx, req))
 }

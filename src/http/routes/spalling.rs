@@ -4,10 +4,13 @@ use axum::extract::State;
 use axum::http::HeaderMap;
 use axum::response::Response;
 
+use crate::calc::Calculation;
+use crate::calc::spalling::Spalling;
 use crate::http::dto::spalling::{SpallingRequest, SpallingResponse};
 use crate::http::error::ApiError;
 use crate::http::json::AppJson;
 use crate::http::runner::{AppState, respond};
+use crate::physics::Control;
 
 /// Coal-wall spalling statistics by face zone (paper Table 1).
 #[utoipa::path(
@@ -26,11 +29,12 @@ pub async fn spalling(
     headers: HeaderMap,
     AppJson(req): AppJson<SpallingRequest>,
 ) -> Response {
-    respond(&state, &headers, move |_control| solve(req)).await
+    respond(&state, &headers, move |control| solve(req, control)).await
 }
 
 /// Resolves and computes a spalling request (also used by batch).
-pub fn solve(mut req: SpallingRequest) -> Result<SpallingResponse, ApiError> {
+pub fn solve(mut req: SpallingRequest, control: &Control) -> Result<SpallingResponse, ApiError> {
     let case = req.resolve()?;
-    Ok(SpallingResponse::compute(&case, req))
+    let report = Spalling::solve(&case, control)?;
+    Ok(SpallingResponse::new(report, &case, req))
 }

@@ -13,14 +13,15 @@ use axum::response::Response;
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
+use crate::calc;
 use crate::config::Config;
 use crate::http::dto::column::{ColumnModelDto, ColumnRequest};
-use crate::http::dto::common::{LawDto, Meta, PlanStep, ShapeKind, Warning};
+use crate::http::dto::common::{LawDto, Meta, ModulusDto, ShapeKind, Warning, plan_of};
 use crate::http::dto::study::{
     CANONICAL, ENERGY_PROPORTION_UNDEFINED, EnergyProportionDto, MeasuresDto, OrderedMap,
     OrderingDto, OutputSensitivityDto, PaperComparisonDto, StudyGrid, StudyGridDto,
-    StudyParameterDto, StudyRequest, StudyResponse, default_outputs, paper_parameters, pointer_of,
-    set_pointer, study_outputs,
+    StudyParameterDto, StudyRequest, StudyResponse, default_outputs, pointer_of, set_pointer,
+    study_outputs,
 };
 use crate::http::error::{ApiError, FieldError};
 use crate::http::json::{AppJson, from_value};
@@ -133,16 +134,6 @@ fn extract(resp: &Value, outputs: &[String]) -> Result<Vec<f64>, ApiError> {
         .collect()
 }
 
-fn symbol(name: &str) -> &str {
-    match name {
-        "velocity_m_s" => "v",
-        "rock.side_length_m" => "L",
-        "rock.density_kg_m3" => "ρ",
-        "rock.elastic_modulus_pa" => "E",
-        other => other,
-    }
-}
-
 fn ordering_names(groups: &[Vec<usize>], params: &[Param]) -> Vec<String> {
     groups
         .iter()
@@ -153,19 +144,6 @@ fn ordering_names(groups: &[Vec<usize>], params: &[Param]) -> Vec<String> {
                 .join("=")
         })
         .collect()
-}
-
-fn ordering_symbols(groups: &[Vec<usize>], params: &[Param]) -> String {
-    groups
-        .iter()
-        .map(|g| {
-            g.iter()
-                .map(|&i| symbol(&params[i].name))
-                .collect::<Vec<_>>()
-                .join(" = ")
-        })
-        .collect::<Vec<_>>()
-        .join(" > ")
 }
 
 /// Checks and runs a study (also used by batch).
@@ -808,27 +786,46 @@ fn finish_study(
             .map(|g| ordering_names(g, params))
             .collect(),
     };
-    let paper_comparison = compare_with_paper(
-        &req,
-        params,
+    let swept: Vec<(&str, f64, f64)> = params
+        .iter()
+        .map(|p| (p.name.as_str(), p.min, p.max))
+        .collect();
+    let paper_comparison: Vec<PaperComparisonDto> = calc::study::compare_with_paper(
+        &swept,
+        req.base.contact.effective_modulus == ModulusDto::TwoBody,
         coupled,
         &groups_by_output,
+        &req.x_values,
         &prop_groups,
         y.base[ie],
-    );
+    )
+    .into_iter()
+    .map(|c| PaperComparisonDto {
+        item: c.item,
+        paper: c.paper,
+        ours: c.ours,
+        reproduced: c.reproduced,
+        note: c.note,
+    })
+    .collect();
     if paper_comparison.is_empty() {
         warnings.push(Warning::new(
             "no_paper_comparison",
             "paper_comparison is empty: it needs the paper's four parameters with the paper's ranges (physics.md §D.1)",
         ));
     }
-    let mut meta = Meta::new(study_plan_steps(
-        params,
+    let analytic: Vec<&str> = params
+        .iter()
+        .filter(|p| p.analytic.is_some())
+        .map(|p| p.name.as_str())
+        .collect();
+    let mut meta = Meta::new(plan_of(&calc::study::plan(
+        &analytic,
         slots.len(),
         coupled,
         pairs.len(),
         n,
-    ));
+    )));
     meta.warnings = warnings;
     req.base = base_resolved;
     Ok(StudyResponse {
@@ -931,187 +928,4 @@ fn output_sensitivity(
         },
     };
     (dto, [g_span, g_ratio, g_el])
-}
-
-/// The study's plan: `points` column solutions, the analytic elasticities (or why none),
-/// the `n_pairs` pair grids of n × n (or why none).
-fn study_plan_steps(
-    params: &[Param],
-    points: usize,
-    coupled: bool,
-    n_pairs: usize,
-    n: usize,
-) -> Vec<PlanStep> {
-    let analytic_names: Vec<&str> = params
-        .iter()
-        .filter(|p| p.analytic.is_some())
-        .map(|p| p.name.as_str())
-        .collect();
-    vec![
-        PlanStep::ran(
-            "points",
-            format!(
-                "{} column solutions ({} model), the same code as POST /v1/column",
-                points,
-                if coupled { "coupled" } else { "decoupled" }
-            ),
-        ),
-        if analytic_names.is_empty() {
-            PlanStep::skipped(
-                "analytic_elasticities",
-                "no parameter has an analytic elasticity here (physics.md §D.2: decoupled model, cube, v, L, ρ, E)",
-            )
-        } else {
-            PlanStep::ran(
-                "analytic_elasticities",
-                format!(
-                    "physics.md §D.2 for {} (outputs max_deformation_m, max_force_n, absorbed_energy_j, energy_ratio); others by central differences with one Richardson step",
-                    analytic_names.join(", ")
-                ),
-            )
-        },
-        if n_pairs == 0 {
-            PlanStep::skipped("grids", "grid = one_at_a_time")
-        } else {
-            PlanStep::ran("grids", format!("{n_pairs} pair grids of {n}×{n}"))
-        },
-    ]
-}
-
-const MEASURES: [&str; 3] = ["span_over_base", "ratio", "elasticity"];
-
-fn compare_with_paper(
-    req: &StudyRequest,
-    params: &[Param],
-    coupled: bool,
-    groups: &[(String, [Vec<Vec<usize>>; 3])],
-    prop_groups: &[Vec<Vec<usize>>],
-    base_ratio: f64,
-) -> Vec<PaperComparisonDto> {
-    let paper = paper_parameters();
-    let same = params.len() == paper.len()
-        && paper.iter().all(|q| {
-            params
-                .iter()
-                .any(|p| p.name == q.name && p.min == q.min && p.max == q.max)
-        });
-    if !same {
-        return Vec::new();
-    }
-    let (d_name, u_name) = if coupled {
-        ("max_contact_deformation_m", "column_energy_after_contact_j")
-    } else {
-        ("max_deformation_m", "absorbed_energy_j")
-    };
-    let claims = [
-        ("Figure 12–14 δmax ordering", d_name, "v > L > ρ > E"),
-        (
-            "Figures 12–20 Pmax ordering",
-            "max_force_n",
-            "L > v > ρ > E",
-        ),
-        (
-            "Figures 12–20 absorbed-energy ordering",
-            u_name,
-            "v > L > ρ > E",
-        ),
-    ];
-    let two_body =
-        req.base.contact.effective_modulus == crate::http::dto::common::ModulusDto::TwoBody;
-    let mut out = Vec::new();
-    for (item, output, claim) in claims {
-        let Some((_, g)) = groups.iter().find(|(n, _)| n == output) else {
-            continue;
-        };
-        for (m, measure) in MEASURES.iter().enumerate() {
-            let ours = ordering_symbols(&g[m], params);
-            let reproduced = ours == claim;
-            let note = if output == "max_force_n" {
-                if reproduced {
-                    "Reproduced: Pmax L > v > ρ > E holds by every measure for both E* conventions and both laws (physics.md §D.3).".to_string()
-                } else {
-                    "Not reproduced with this base; physics.md §D.3 finds Pmax L > v > ρ > E by every measure with the paper's defaults.".to_string()
-                }
-            } else {
-                let mut s = String::new();
-                if *measure == "span_over_base" {
-                    s.push_str("v > L comes only from the span measure: it compares output ranges at a base where L sits at the top of its range. ");
-                } else {
-                    s.push_str("Elasticity and ratio rank L above v (elasticity of δmax 1.054 against 0.946 for the paper's law): the paper's v > L comes only from the span measure, at a base where L sits at the top of its range. ");
-                }
-                s.push_str("The ρ-versus-E order is within 0–2 % under every measure, so the paper's claim there is not robust");
-                if !two_body && *measure == "elasticity" && !coupled {
-                    s.push_str(" (with the paper's E*, δmax depends on ρ and E only through ρ/E*: their elasticities tie exactly)");
-                }
-                s.push_str(". No single measure reproduces all three of the paper's orderings (physics.md §D.3).");
-                if coupled {
-                    s.push_str(" The paper's orderings are of the decoupled model; the coupled outputs are compared in their place.");
-                }
-                s
-            };
-            out.push(PaperComparisonDto {
-                item: format!("{item} ({measure})"),
-                paper: claim.into(),
-                ours,
-                reproduced,
-                note,
-            });
-        }
-    }
-    // Table 5: orderings of the energy-proportion curves on the two intervals.
-    let x = &req.x_values;
-    for (item, claim, lo, hi) in [
-        (
-            "Table 5 order on (0.667, 0.833)",
-            "L > E > v > ρ",
-            2.0 / 3.0 - 1e-12,
-            5.0 / 6.0 - 1e-9,
-        ),
-        (
-            "Table 5 order on (0.833, 1)",
-            "L > ρ > v > E",
-            5.0 / 6.0 + 1e-9,
-            1.0 + 1e-12,
-        ),
-    ] {
-        let at: Vec<String> = x
-            .iter()
-            .enumerate()
-            .filter(|(_, xv)| (lo..=hi).contains(*xv))
-            .map(|(k, _)| ordering_symbols(&prop_groups[k], params))
-            .collect();
-        if at.is_empty() {
-            continue;
-        }
-        let mut distinct = at.clone();
-        distinct.dedup();
-        let reproduced = distinct.iter().all(|s| s == claim);
-        let note = if coupled {
-            "The coupled transfer's trends contradict Figure 21: the L curve is not monotone (physics.md §B.7, §D.4).".to_string()
-        } else if reproduced {
-            "Reproduced by the decoupled ratio, with every qualitative statement of Section 5.5; the level is not (physics.md §D.4).".to_string()
-        } else {
-            "Not reproduced with this base (physics.md §D.4 reproduces Table 5 with the paper's law and E*).".to_string()
-        };
-        out.push(PaperComparisonDto {
-            item: item.into(),
-            paper: claim.into(),
-            ours: distinct.join(" | "),
-            reproduced,
-            note,
-        });
-    }
-    let reproduced = (base_ratio / 0.101 - 1.0).abs() <= 0.05;
-    out.push(PaperComparisonDto {
-        item: "Figure 21 level at the crossing x = 5/6 (the base case)".into(),
-        paper: "0.101".into(),
-        ours: format!("{base_ratio:.4}"),
-        reproduced,
-        note: if coupled {
-            "The coupled transfer is the closest level (about 0.11) but its trends contradict Figure 21; no variant reproduces both the level 0.101 and the trends (physics.md §D.4). The decoupled ratio is the `paper` method, the coupled transfer the `recommended` one, and they differ.".into()
-        } else {
-            "The decoupled level is wrong by a factor of about 0.0687, the same for every curve (1.471 against 0.101 with the paper's law and E*); no variant reproduces both the level and the trends (physics.md §D.4). The decoupled ratio is the `paper` method, the coupled transfer (about 0.11) the `recommended` one, and they differ.".into()
-        },
-    });
-    out
 }

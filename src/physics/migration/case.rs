@@ -67,15 +67,34 @@ pub struct Face {
     pub restitution_tangential: f64,
 }
 
+/// The documented defaults of a migration case (api.md `POST /v1/migration`): the `Default`s
+/// below and the request fields' defaults are these constants.
+pub mod defaults {
+    /// Dip θ, degrees.
+    pub const DIP_DEG: f64 = 45.0;
+    /// Face length along the dip S, m.
+    pub const FACE_LENGTH: f64 = 120.0;
+    /// Coulomb friction μ, dimensionless.
+    pub const FRICTION_COEFFICIENT: f64 = 0.2;
+    /// Normal restitution e_n, dimensionless.
+    pub const RESTITUTION_NORMAL: f64 = 0.3;
+    /// Tangential restitution e_t, dimensionless.
+    pub const RESTITUTION_TANGENTIAL: f64 = 0.8;
+    /// Monte Carlo runs.
+    pub const RUNS: u64 = 200;
+    /// Monte Carlo seed.
+    pub const SEED: u64 = 42;
+}
+
 impl Default for Face {
     fn default() -> Self {
         Self {
-            dip_deg: 45.0,
-            length: 120.0,
+            dip_deg: defaults::DIP_DEG,
+            length: defaults::FACE_LENGTH,
             floor: FloorSpec::Plane,
-            friction_coefficient: 0.2,
-            restitution_normal: 0.3,
-            restitution_tangential: 0.8,
+            friction_coefficient: defaults::FRICTION_COEFFICIENT,
+            restitution_normal: defaults::RESTITUTION_NORMAL,
+            restitution_tangential: defaults::RESTITUTION_TANGENTIAL,
         }
     }
 }
@@ -141,8 +160,8 @@ pub struct MonteCarlo {
 impl Default for MonteCarlo {
     fn default() -> Self {
         Self {
-            runs: 200,
-            seed: 42,
+            runs: defaults::RUNS,
+            seed: defaults::SEED,
             restitution_normal: Distribution::Uniform { min: 0.2, max: 0.4 },
             restitution_tangential: Distribution::Uniform { min: 0.7, max: 0.9 },
             friction_coefficient: None,

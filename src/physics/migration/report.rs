@@ -160,14 +160,8 @@ pub struct Statistics {
     pub max_bounce_height: Summary,
 }
 
-/// A named warning (api.md `warnings`).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Warning {
-    /// Machine-readable code.
-    pub code: &'static str,
-    /// Explanation.
-    pub message: String,
-}
+/// A named warning (api.md `warnings`): the one physics warning type.
+pub use crate::physics::validity::Warning;
 
 /// Result of a migration.
 #[derive(Debug, Clone, PartialEq)]

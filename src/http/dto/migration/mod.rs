@@ -14,6 +14,7 @@ use super::param::Layout;
 use crate::config::Config;
 use crate::http::error::{ApiError, num};
 use crate::physics::Param;
+use crate::physics::migration::defaults;
 use crate::physics::migration::{
     self, ContactModel, ContourLine, Distribution, EventKind, Face, FloorMaterial, FloorSpec,
     LumpedMassOptions, MapFrame, Method, MigrationCase, MigrationResult, MonteCarlo, Motion,
@@ -55,20 +56,20 @@ number_fields! {
         FieldDefault::Value(9.81), Closed(0.1), Closed(100.0), "m/s²", 9.81;
     /// `face.dip_deg`.
     FACE_DIP, face_dip_schema: "Dip θ, degrees, in [5, 80].",
-        FieldDefault::Value(45.0), Closed(5.0), Closed(80.0), "°", 45.0;
+        FieldDefault::Value(defaults::DIP_DEG), Closed(5.0), Closed(80.0), "°", 45.0;
     /// `face.length_m`.
     FACE_LENGTH, face_length_schema: "Face length along dip S, m, in (0, 10000].",
-        FieldDefault::Value(120.0), Open(0.0), Closed(10000.0), "m", 120.0;
+        FieldDefault::Value(defaults::FACE_LENGTH), Open(0.0), Closed(10000.0), "m", 120.0;
     /// `face.friction_coefficient`.
     FACE_FRICTION, face_friction_schema: "Coulomb friction μ, in [0, 2].",
-        FieldDefault::Value(0.2), Closed(0.0), Closed(2.0), "", 0.2;
+        FieldDefault::Value(defaults::FRICTION_COEFFICIENT), Closed(0.0), Closed(2.0), "", 0.2;
     /// `face.restitution_normal`.
     FACE_RESTITUTION_NORMAL, face_restitution_normal_schema: "Normal restitution e_n, in [0, 1].",
-        FieldDefault::Value(0.3), Closed(0.0), Closed(1.0), "", 0.3;
+        FieldDefault::Value(defaults::RESTITUTION_NORMAL), Closed(0.0), Closed(1.0), "", 0.3;
     /// `face.restitution_tangential`.
     FACE_RESTITUTION_TANGENTIAL, face_restitution_tangential_schema:
         "Tangential restitution e_t, in [0, 1].",
-        FieldDefault::Value(0.8), Closed(0.0), Closed(1.0), "", 0.8;
+        FieldDefault::Value(defaults::RESTITUTION_TANGENTIAL), Closed(0.0), Closed(1.0), "", 0.8;
     /// `face.normal_stiffness_n_m` (rigid block).
     FACE_NORMAL_STIFFNESS, face_normal_stiffness_schema:
         "Normal contact stiffness k_n (rigid block), N/m, in [1e3, 1e12].",
@@ -721,8 +722,8 @@ macro_rules! monte_carlo_dto {
         impl Default for $name {
             fn default() -> Self {
                 Self {
-                    runs: 200,
-                    seed: 42,
+                    runs: $crate::physics::migration::defaults::RUNS,
+                    seed: $crate::physics::migration::defaults::SEED,
                     restitution_normal: $crate::http::dto::common::Sent::default_value(
                         DistributionDto::uniform(0.2, 0.4),
                     ),

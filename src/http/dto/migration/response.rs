@@ -2,6 +2,8 @@
 //! rigid block's numbers, and the runs CSV.
 
 use super::*;
+use crate::calc::Report;
+use crate::http::dto::common::{plan_of, warnings_of};
 
 /// The state at the end of the (nominal) run.
 #[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
@@ -261,24 +263,6 @@ fn event_name(k: EventKind) -> &'static str {
     }
 }
 
-fn rigid_plan(mc: bool, trajectory: bool) -> Vec<PlanStep> {
-    vec![
-        PlanStep::ran(
-            "migration",
-            if mc {
-                "rigid-block DEM, seeded Monte Carlo ensemble (contact steps, closed-form free flights)"
-            } else {
-                "rigid-block DEM, one deterministic run (contact steps, closed-form free flights)"
-            },
-        ),
-        if trajectory {
-            PlanStep::ran("trajectory", "sampled during the run")
-        } else {
-            PlanStep::skipped("trajectory", "output.trajectory is false")
-        },
-    ]
-}
-
 /// The api.md name of a stop reason.
 #[must_use]
 pub fn stop_name(s: StopReason) -> &'static str {
@@ -315,36 +299,16 @@ pub fn runs_csv(runs: &[RunSummary]) -> String {
 }
 
 impl MigrationResponse {
-    /// Builds the response from the physics result and the resolved request.
-    pub fn new(r: MigrationResult, inputs: MigrationRequest) -> Self {
-        let mc = inputs.monte_carlo.is_some();
-        let plan = vec![
-            PlanStep::ran(
-                "migration",
-                if mc {
-                    "energy tracking method, seeded Monte Carlo ensemble (closed-form flights and slides)"
-                } else {
-                    "energy tracking method, one deterministic run (closed-form flights and slides)"
-                },
-            ),
-            if r.trajectory.is_some() {
-                PlanStep::ran("trajectory", "sampled from the closed forms")
-            } else {
-                PlanStep::skipped("trajectory", "output.trajectory is false")
-            },
-        ];
+    /// Builds the response from the calculation's report and the resolved request.
+    pub fn new(report: Report<MigrationResult>, inputs: MigrationRequest) -> Self {
+        let Report {
+            result: r,
+            plan,
+            warnings,
+        } = report;
         let rigid = r.rigid_block.is_some();
-        let plan = if rigid {
-            rigid_plan(mc, r.trajectory.is_some())
-        } else {
-            plan
-        };
-        let mut meta = Meta::new(plan);
-        meta.warnings = r
-            .warnings
-            .iter()
-            .map(|w| Warning::new(w.code, w.message.clone()))
-            .collect();
+        let mut meta = Meta::new(plan_of(&plan));
+        meta.warnings = warnings_of(&warnings);
         if inputs.face.floor.geographic {
             meta.warnings.push(Warning::new(
                 "geographic_coordinates",

@@ -1,0 +1,118 @@
+//! `/v1/migration`: one run down the face, or the nominal run and a seeded Monte Carlo
+//! ensemble (items: the runs).
+
+use super::{Calculation, Ensemble, Report, Stage};
+use crate::physics::migration::{
+    self, Method, MigrationCase, MigrationResult, RunRecords, RunSummary,
+};
+use crate::physics::{Control, PhysicsError};
+
+/// The migration calculation.
+#[derive(Debug, Clone, Copy)]
+pub struct Migration;
+
+impl Calculation for Migration {
+    type Case = MigrationCase;
+    type Result = MigrationResult;
+    type Error = PhysicsError;
+
+    fn solve(
+        case: &MigrationCase,
+        control: &Control,
+    ) -> Result<Report<MigrationResult>, PhysicsError> {
+        Ok(report(case, migration::run(case, control)?))
+    }
+}
+
+impl Ensemble for Migration {
+    type Part = Vec<RunSummary>;
+
+    fn items(case: &MigrationCase) -> u64 {
+        case.monte_carlo.map_or(0, |mc| mc.runs)
+    }
+
+    fn part(
+        case: &MigrationCase,
+        range: std::ops::Range<u64>,
+        control: &Control,
+    ) -> Result<Vec<RunSummary>, PhysicsError> {
+        Ok(migration::run_part(case, range, false, control)?.1)
+    }
+}
+
+/// The report of `case` from the records of its runs (computed here or read back from the
+/// parts of a sharded computation): the nominal run is run here, the statistics are those of
+/// the records, so any split gives the bytes of [`Migration::solve`].
+///
+/// # Errors
+/// The nominal run's, or those of reading the records.
+pub fn merge<R: RunRecords + ?Sized>(
+    case: &MigrationCase,
+    records: &R,
+    control: &Control,
+) -> Result<Report<MigrationResult>, MergeError<R::Error>> {
+    let (nominal, _) =
+        migration::run_part(case, 0..0, true, control).map_err(MergeError::Physics)?;
+    let mut r = nominal.ok_or(MergeError::Physics(PhysicsError::Numerical(
+        "no nominal run".into(),
+    )))?;
+    if let Some(mc) = &case.monte_carlo {
+        migration::attach_ensemble(&mut r, mc, case.output.runs_csv, records)
+            .map_err(MergeError::Records)?;
+    }
+    Ok(report(case, r))
+}
+
+/// The failure of a merge: the nominal run's or the records'.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MergeError<E> {
+    /// The nominal run failed.
+    Physics(PhysicsError),
+    /// The records could not be read.
+    Records(E),
+}
+
+/// The report of a solved migration of `case`: its plan and its warnings (taken out of the
+/// result).
+#[must_use]
+pub fn report(case: &MigrationCase, mut r: MigrationResult) -> Report<MigrationResult> {
+    let mc = case.monte_carlo.is_some();
+    let trajectory = r.trajectory.is_some();
+    let plan = match case.method {
+        Method::RigidBlock => vec![
+            Stage::ran(
+                "migration",
+                if mc {
+                    "rigid-block DEM, seeded Monte Carlo ensemble (contact steps, closed-form free flights)"
+                } else {
+                    "rigid-block DEM, one deterministic run (contact steps, closed-form free flights)"
+                },
+            ),
+            if trajectory {
+                Stage::ran("trajectory", "sampled during the run")
+            } else {
+                Stage::skipped("trajectory", "output.trajectory is false")
+            },
+        ],
+        Method::LumpedMass => vec![
+            Stage::ran(
+                "migration",
+                if mc {
+                    "energy tracking method, seeded Monte Carlo ensemble (closed-form flights and slides)"
+                } else {
+                    "energy tracking method, one deterministic run (closed-form flights and slides)"
+                },
+            ),
+            if trajectory {
+                Stage::ran("trajectory", "sampled from the closed forms")
+            } else {
+                Stage::skipped("trajectory", "output.trajectory is false")
+            },
+        ],
+    };
+    Report {
+        warnings: std::mem::take(&mut r.warnings),
+        result: r,
+        plan,
+    }
+}
