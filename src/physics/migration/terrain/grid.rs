@@ -2,7 +2,7 @@
 //! triangular facets; its facet ids, corners, planes and neighbours, the filling of nodes
 //! without data (holes), its memory estimate (bytes) and [`Floor::grid`].
 
-use super::facet::FacetPlane;
+use super::facet::{FacetPlane, inside_tri};
 use super::patches::Patch;
 use super::walk::CellGrid;
 use super::{Facet, Floor, FloorKind, MAX_TABLED_FACETS, MeanPlane};
@@ -62,7 +62,7 @@ impl GridFloor {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub(super) fn plane(&self, f: Facet) -> FacetPlane {
         match self.planes.get(f as usize) {
             Some(p) => *p,
@@ -108,6 +108,103 @@ impl GridFloor {
             (_, 1) => (i + 1 < ncy).then(|| self.facet(j, i + 1, 0)),
             _ => (j > 0).then(|| self.facet(j - 1, i, 0)),
         }
+    }
+}
+
+impl GridFloor {
+    /// Whether (x, y) (m), at (gx, gy) in units of the spacing from the lower corner of facet
+    /// f's cell (column ni, row nj), lies in f's triangle or within `tol` m of it: the decision
+    /// [`inside_tri`] takes on f's corners. Each edge of a grid triangle is axis-parallel or the
+    /// cell's diagonal, so the signed distances beyond the three edge lines are differences of
+    /// gx and gy; when the largest is clear of `t` = tol / spacing by more than 1e-3 t plus 1e-14
+    /// of the coordinates' size in cells (far more than the rounding of either form) the answer
+    /// is the same, and otherwise [`inside_tri`] takes it on the corners.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn near_facet(
+        &self,
+        f: Facet,
+        (ni, nj): (usize, usize),
+        (x, y): (f64, f64),
+        (gx, gy): (f64, f64),
+        tol: f64,
+        t: f64,
+    ) -> bool {
+        let beyond = if f & 1 == 0 {
+            // corners (0, 0), (1, 0), (1, 1): edges gy = 0, gx = 1 and the diagonal
+            (-gy)
+                .max(gx - 1.0)
+                .max((gy - gx) * std::f64::consts::FRAC_1_SQRT_2)
+        } else {
+            // corners (0, 0), (1, 1), (0, 1): the diagonal, gy = 1 and gx = 0
+            (-gx)
+                .max(gy - 1.0)
+                .max((gx - gy) * std::f64::consts::FRAC_1_SQRT_2)
+        };
+        let c = &self.cells;
+        let size = (x.abs() + y.abs() + c.x0.abs() + c.y0.abs()) / c.d + gx.abs() + gy.abs();
+        let eps = 1e-3 * t + 1e-14 * (1.0 + size);
+        if beyond < t - eps {
+            true
+        } else if beyond > t + eps {
+            false
+        } else {
+            inside_tri(&self.corners_at(f, nj, ni).0, x, y, tol)
+        }
+    }
+
+    /// [`Floor::top_height_near`] on the grid: the highest plane at (x, y) (m) among the
+    /// facets (holes excepted) whose closed triangle comes within `tol` m of it in plan.
+    pub(super) fn top_height_near(&self, x: f64, y: f64, tol: f64) -> Option<f64> {
+        let c = &self.cells;
+        let ux = (x - c.x0) / c.d;
+        let uy = (y - c.y0) / c.d;
+        let (Some(ci), Some(cj)) = (
+            CellGrid::axis_cell(ux, 0.0, c.ncx),
+            CellGrid::axis_cell(uy, 0.0, c.ncy),
+        ) else {
+            return None;
+        };
+        let is_hole = |f: Facet| self.holes.get(f as usize).copied().unwrap_or(false);
+        // only the facets whose closed triangles can come within tol of (x, y): inside_tri
+        // accepts no point farther than tol / sin 22.5° < 2.7 tol from its triangle (at a 45°
+        // corner), so a cell farther than `margin` (4 tol, in cell units here, where rounding is
+        // below 1e-13 of a cell) holds none it would accept
+        let t = tol / c.d;
+        let margin = 4.0 * t;
+        let (fx, fy) = (ux - ci as f64, uy - cj as f64);
+        let (near_lo_x, near_hi_x) = (fx <= margin, 1.0 - fx <= margin);
+        let (near_lo_y, near_hi_y) = (fy <= margin, 1.0 - fy <= margin);
+        if !(near_lo_x || near_hi_x || near_lo_y || near_hi_y)
+            && (fx - fy).abs() * std::f64::consts::FRAC_1_SQRT_2 > margin
+        {
+            // inside one triangle by more than the margin: its plane alone (inside_tri accepts
+            // the point, and refuses it for every other facet)
+            let f = self.facet(ci, cj, u32::from(fx <= fy));
+            return (!is_hole(f)).then(|| self.plane(f).z(x, y));
+        }
+        // the cells along one axis: cell k, and a neighbour only within the margin
+        let span = |near_lo: bool, near_hi: bool, k: usize, n: usize| {
+            let first = if near_lo { k.saturating_sub(1) } else { k };
+            let last = if near_hi { (k + 1).min(n - 1) } else { k };
+            (first, last)
+        };
+        let (i0, i1) = span(near_lo_x, near_hi_x, ci, c.ncx);
+        let (j0, j1) = span(near_lo_y, near_hi_y, cj, c.ncy);
+        let mut top: Option<f64> = None;
+        for nj in j0..=j1 {
+            for ni in i0..=i1 {
+                let g = (ux - ni as f64, uy - nj as f64);
+                for half in 0..2 {
+                    let f = self.facet(ni, nj, half);
+                    if !is_hole(f) && self.near_facet(f, (ni, nj), (x, y), g, tol, t) {
+                        let z = self.plane(f).z(x, y);
+                        top = Some(top.map_or(z, |t: f64| t.max(z)));
+                    }
+                }
+            }
+        }
+        top
     }
 }
 
