@@ -141,7 +141,8 @@ impl Floor {
                                     (qx - gr.cells.x0) * inv_d - ni as f64,
                                     (qy - gr.cells.y0) * inv_d - nj as f64,
                                 );
-                                if gr.near_facet(f, (ni, nj), (qx, qy), gq, tol, t_cells) {
+                                let te = (t_cells, gr.clear_margin(qx, qy, t_cells));
+                                if gr.near_facet(f, (ni, nj), (qx, qy), gq, tol, te) {
                                     best = Some((r.max(0.0), f));
                                 }
                             }

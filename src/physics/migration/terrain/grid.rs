@@ -116,11 +116,10 @@ impl GridFloor {
     /// f's cell (column ni, row nj), lies in f's triangle or within `tol` m of it: the decision
     /// [`inside_tri`] takes on f's corners. Each edge of a grid triangle is axis-parallel or the
     /// cell's diagonal, so the signed distances beyond the three edge lines are differences of
-    /// gx and gy; when the largest is clear of `t` = tol / spacing by more than 1e-3 t plus 1e-14
-    /// of the coordinates' size in cells (far more than the rounding of either form) the answer
-    /// is the same, and otherwise [`inside_tri`] takes it on the corners.
+    /// gx and gy; when the largest is clear of `t` = tol / spacing by more than
+    /// [`GridFloor::clear_margin`] (far more than the rounding of either form) the answer is the
+    /// same, and otherwise [`inside_tri`] takes it on the corners.
     #[inline]
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn near_facet(
         &self,
         f: Facet,
@@ -128,7 +127,7 @@ impl GridFloor {
         (x, y): (f64, f64),
         (gx, gy): (f64, f64),
         tol: f64,
-        t: f64,
+        (t, eps): (f64, f64),
     ) -> bool {
         let beyond = if f & 1 == 0 {
             // corners (0, 0), (1, 0), (1, 1): edges gy = 0, gx = 1 and the diagonal
@@ -141,9 +140,6 @@ impl GridFloor {
                 .max(gy - 1.0)
                 .max((gx - gy) * std::f64::consts::FRAC_1_SQRT_2)
         };
-        let c = &self.cells;
-        let size = (x.abs() + y.abs() + c.x0.abs() + c.y0.abs()) / c.d + gx.abs() + gy.abs();
-        let eps = 1e-3 * t + 1e-14 * (1.0 + size);
         if beyond < t - eps {
             true
         } else if beyond > t + eps {
@@ -151,6 +147,16 @@ impl GridFloor {
         } else {
             inside_tri(&self.corners_at(f, nj, ni).0, x, y, tol)
         }
+    }
+
+    /// The margin, in cells, by which [`GridFloor::near_facet`] takes its decision from the cell
+    /// coordinates of a point near (x, y) (m): 1e-3 of `t` (the tolerance in cells) plus 1e-14
+    /// of the coordinates' size in cells, beyond the rounding of both forms (a few ulps).
+    #[inline]
+    pub(super) fn clear_margin(&self, x: f64, y: f64, t: f64) -> f64 {
+        let c = &self.cells;
+        let size = (x.abs() + y.abs() + c.x0.abs() + c.y0.abs()) / c.d;
+        1e-3 * t + 1e-14 * (1.0 + 2.0 * size)
     }
 
     /// [`Floor::top_height_near`] on the grid: the highest plane at (x, y) (m) among the
@@ -191,18 +197,23 @@ impl GridFloor {
         };
         let (i0, i1) = span(near_lo_x, near_hi_x, ci, c.ncx);
         let (j0, j1) = span(near_lo_y, near_hi_y, cj, c.ncy);
+        let te = (t, self.clear_margin(x, y, t));
         let mut top: Option<f64> = None;
-        for nj in j0..=j1 {
-            for ni in i0..=i1 {
+        let mut nj = j0;
+        while nj <= j1 {
+            let mut ni = i0;
+            while ni <= i1 {
                 let g = (ux - ni as f64, uy - nj as f64);
                 for half in 0..2 {
                     let f = self.facet(ni, nj, half);
-                    if !is_hole(f) && self.near_facet(f, (ni, nj), (x, y), g, tol, t) {
+                    if !is_hole(f) && self.near_facet(f, (ni, nj), (x, y), g, tol, te) {
                         let z = self.plane(f).z(x, y);
                         top = Some(top.map_or(z, |t: f64| t.max(z)));
                     }
                 }
+                ni += 1;
             }
+            nj += 1;
         }
         top
     }
