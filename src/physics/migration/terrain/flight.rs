@@ -5,6 +5,8 @@
 
 use nalgebra::Vector3;
 
+use super::walk::fl;
+
 use super::facet::{FacetPlane, inside_tri};
 use super::{Facet, Floor, FloorKind};
 
@@ -138,8 +140,8 @@ impl Floor {
                                     (p.x + v.x * r, p.y + v.y * r)
                                 };
                                 let gq = (
-                                    (qx - gr.cells.x0) * inv_d - ni as f64,
-                                    (qy - gr.cells.y0) * inv_d - nj as f64,
+                                    (qx - gr.cells.x0) * inv_d - fl(ni),
+                                    (qy - gr.cells.y0) * inv_d - fl(nj),
                                 );
                                 let te = (t_cells, gr.clear_margin(qx, qy, t_cells));
                                 if gr.near_facet(f, (ni, nj), (qx, qy), gq, tol, te) {

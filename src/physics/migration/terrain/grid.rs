@@ -4,7 +4,7 @@
 
 use super::facet::{FacetPlane, inside_tri};
 use super::patches::Patch;
-use super::walk::CellGrid;
+use super::walk::{CellGrid, fl};
 use super::{Facet, Floor, FloorKind, MAX_TABLED_FACETS, MeanPlane};
 use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 
@@ -45,12 +45,9 @@ impl GridFloor {
     #[inline]
     pub(super) fn corners_at(&self, f: Facet, i: usize, j: usize) -> ([[f64; 2]; 3], [f64; 3]) {
         let d = self.cells.d;
-        let x = self.cells.x0 + j as f64 * d;
-        let y = self.cells.y0 + i as f64 * d;
-        let (xe, ye) = (
-            self.cells.x0 + (j + 1) as f64 * d,
-            self.cells.y0 + (i + 1) as f64 * d,
-        );
+        let x = self.cells.x0 + fl(j) * d;
+        let y = self.cells.y0 + fl(i) * d;
+        let (xe, ye) = (self.cells.x0 + fl(j + 1) * d, self.cells.y0 + fl(i + 1) * d);
         let z00 = self.z[i * self.nx + j];
         let z10 = self.z[i * self.nx + j + 1];
         let z01 = self.z[(i + 1) * self.nx + j];
@@ -83,8 +80,8 @@ impl GridFloor {
             ((z11 - z01) / d, (z01 - z00) / d)
         };
         FacetPlane::new(
-            self.cells.x0 + j as f64 * d,
-            self.cells.y0 + i as f64 * d,
+            self.cells.x0 + fl(j) * d,
+            self.cells.y0 + fl(i) * d,
             z00,
             bx,
             by,
@@ -178,7 +175,7 @@ impl GridFloor {
         // below 1e-13 of a cell) holds none it would accept
         let t = tol / c.d;
         let margin = 4.0 * t;
-        let (fx, fy) = (ux - ci as f64, uy - cj as f64);
+        let (fx, fy) = (ux - fl(ci), uy - fl(cj));
         let (near_lo_x, near_hi_x) = (fx <= margin, 1.0 - fx <= margin);
         let (near_lo_y, near_hi_y) = (fy <= margin, 1.0 - fy <= margin);
         if !(near_lo_x || near_hi_x || near_lo_y || near_hi_y)
@@ -203,7 +200,7 @@ impl GridFloor {
         while nj <= j1 {
             let mut ni = i0;
             while ni <= i1 {
-                let g = (ux - ni as f64, uy - nj as f64);
+                let g = (ux - fl(ni), uy - fl(nj));
                 for half in 0..2 {
                     let f = self.facet(ni, nj, half);
                     if !is_hole(f) && self.near_facet(f, (ni, nj), (x, y), g, tol, te) {

@@ -4,7 +4,7 @@
 
 use super::facet::inside_tri;
 use super::grid::GridFloor;
-use super::walk::CellGrid;
+use super::walk::{CellGrid, fl};
 use super::{Facet, Floor, FloorKind};
 
 impl Floor {
@@ -121,7 +121,7 @@ impl Floor {
         let uy = (y - c.y0) / c.d;
         let ci = CellGrid::axis_cell(ux, dx, c.ncx)?;
         let cj = CellGrid::axis_cell(uy, dy, c.ncy)?;
-        let (fx, fy) = (ux - ci as f64, uy - cj as f64);
+        let (fx, fy) = (ux - fl(ci), uy - fl(cj));
         let half = if fx > fy || (fx == fy && dx > dy) {
             0
         } else {

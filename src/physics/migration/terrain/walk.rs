@@ -5,6 +5,14 @@
 
 use super::{Facet, FlightEnd};
 
+/// A cell index or count as f64, exact (below 2⁵³): through i64, one cvtsi2sd on x86-64,
+/// where a usize takes the unsigned conversion's longer sequence.
+#[inline(always)]
+#[allow(clippy::cast_possible_wrap, clippy::cast_precision_loss)]
+pub(super) fn fl(k: usize) -> f64 {
+    k as i64 as f64
+}
+
 /// Uniform cell grid over a rectangle, used to walk a straight horizontal line cell by cell.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct CellGrid {
@@ -29,18 +37,18 @@ impl CellGrid {
         // points a rounding error outside the extent count as on its boundary
         let u = if u < 0.0 && u > -1e-9 {
             0.0
-        } else if u > n as f64 && u < n as f64 + 1e-9 {
-            n as f64
+        } else if u > fl(n) && u < fl(n) + 1e-9 {
+            fl(n)
         } else {
             u
         };
-        if !(u >= 0.0 && u <= n as f64) {
+        if !(u >= 0.0 && u <= fl(n)) {
             return None;
         }
         // u ≥ 0 here, so truncation is the floor (and avoids a libm call on baseline x86-64);
         // one conversion, through i64 (a single cvttsd2si; u ≤ n < 2⁶³ is exact)
         let mut c = u as i64 as usize;
-        if c as f64 == u && r < 0.0 {
+        if fl(c) == u && r < 0.0 {
             // on a cell boundary moving back: the cell before it (none before the first)
             c = c.checked_sub(1)?;
         }
@@ -77,8 +85,8 @@ impl CellGrid {
         };
         let (xa, xb) = span(x, vx);
         let (ya, yb) = span(y, vy);
-        let lo_x = self.x0 + ci as f64 * self.d;
-        let lo_y = self.y0 + cj as f64 * self.d;
+        let lo_x = self.x0 + fl(ci) * self.d;
+        let lo_y = self.y0 + fl(cj) * self.d;
         let dx: &'static [isize] = match (
             ci > 0 && xa <= lo_x + tol,
             ci + 1 < self.ncx && xb >= lo_x + self.d - tol,
@@ -124,16 +132,16 @@ impl CellGrid {
         let mut t0 = 0.0_f64;
         loop {
             let tx = if rx > 0.0 {
-                ((ci + 1) as f64 - ux) / rx
+                (fl(ci + 1) - ux) / rx
             } else if rx < 0.0 {
-                (ci as f64 - ux) / rx
+                (fl(ci) - ux) / rx
             } else {
                 f64::INFINITY
             };
             let ty = if ry > 0.0 {
-                ((cj + 1) as f64 - uy) / ry
+                (fl(cj + 1) - uy) / ry
             } else if ry < 0.0 {
-                (cj as f64 - uy) / ry
+                (fl(cj) - uy) / ry
             } else {
                 f64::INFINITY
             };
