@@ -399,6 +399,89 @@ impl Floor {
 mod tests {
     use super::super::facet::plane_of;
     use super::*;
+    use proptest::prelude::*;
+
+    /// A rough grid of 6 × 5 nodes, spacing `d` m, origin (x0, y0) m.
+    fn rough(x0: f64, y0: f64, d: f64) -> GridFloor {
+        let h: Vec<Vec<f64>> = (0..5)
+            .map(|i| {
+                (0..6)
+                    .map(|j| (1.3 * i as f64 + 0.7 * j as f64).sin() * d - 0.8 * j as f64 * d)
+                    .collect()
+            })
+            .collect();
+        let fl = Floor::grid(0.7, [x0, y0], d, &h).unwrap();
+        let FloorKind::Grid(g) = fl.kind else {
+            panic!("a grid")
+        };
+        g
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 4000, ..ProptestConfig::default() })]
+
+        /// The grid's point-in-triangle decision from cell coordinates is inside_tri's on the
+        /// facet's corners, for points anywhere in and around a cell and for points within a few
+        /// tolerances of its edge lines and corners (where the two forms must agree to the bit
+        /// of the decision), near the origin and 1e5 m from it.
+        #[test]
+        fn near_facet_decides_as_inside_tri(
+            far in prop_oneof![Just(0.0), Just(1e5)],
+            d in prop_oneof![Just(0.1), Just(0.5), Just(2.0)],
+            ci in 0usize..5, cj in 0usize..4, half in 0u32..2,
+            base in prop_oneof![
+                (-0.2..1.2f64, -0.2..1.2f64),
+                (prop_oneof![Just(0.0), Just(1.0)], -0.1..1.1f64),
+                (-0.1..1.1f64, prop_oneof![Just(0.0), Just(1.0)]),
+                (0.0..1.0f64).prop_map(|u| (u, u)),
+            ],
+            off in (-5.0..5.0f64, -5.0..5.0f64),
+        ) {
+            let g = rough(far, -far, d);
+            let tol = 2e-9 * d;
+            // the point: a base in cell units, moved by up to 5 tol each way
+            let x = far + (ci as f64 + base.0) * d + off.0 * tol;
+            let y = -far + (cj as f64 + base.1) * d + off.1 * tol;
+            let f = g.facet(ci, cj, half);
+            let gx = (x - far) / d - ci as f64;
+            let gy = (y + far) / d - cj as f64;
+            let t = tol / d;
+            let te = (t, g.clear_margin(x, y, t));
+            let fast = g.near_facet(f, (ci, cj), (x, y), (gx, gy), tol, te);
+            let exact = inside_tri(&g.corners_at(f, cj, ci).0, x, y, tol);
+            prop_assert_eq!(fast, exact, "({}, {}) in facet {} of cell ({}, {})", x, y, f, ci, cj);
+        }
+
+        /// The floor-surface height near a point is the highest plane among every facet of the
+        /// grid whose triangle inside_tri puts within tol of it (all facets searched).
+        #[test]
+        fn top_height_near_is_the_highest_plane_within_tol(
+            d in prop_oneof![Just(0.1), Just(0.5)],
+            base in prop_oneof![
+                (0.0..5.0f64, 0.0..4.0f64),
+                ((0usize..=5).prop_map(|k| k as f64), 0.0..4.0f64),
+                (0.0..5.0f64, (0usize..=4).prop_map(|k| k as f64)),
+                ((0usize..=5).prop_map(|k| k as f64), (0usize..=4).prop_map(|k| k as f64)),
+                (0.0..4.0f64).prop_map(|u| (u.floor() + u.fract(), u.floor() + u.fract())),
+            ],
+            off in (-5.0..5.0f64, -5.0..5.0f64),
+        ) {
+            let g = rough(0.0, 0.0, d);
+            let tol = 2e-9 * d;
+            let (x, y) = (base.0 * d + off.0 * tol, base.1 * d + off.1 * tol);
+            let mut brute: Option<f64> = None;
+            for f in 0..(2 * g.cells.ncx * g.cells.ncy) as Facet {
+                if inside_tri(&g.corners(f).0, x, y, tol) {
+                    let z = g.plane(f).z(x, y);
+                    brute = Some(brute.map_or(z, |b: f64| b.max(z)));
+                }
+            }
+            let inside = (0.0..=g.cells.x_max()).contains(&x) && (0.0..=g.cells.y_max()).contains(&y);
+            if inside {
+                prop_assert_eq!(g.top_height_near(x, y, tol), brute, "at ({}, {})", x, y);
+            }
+        }
+    }
 
     #[test]
     fn tabled_planes_equal_planes_set_up_on_demand() {
