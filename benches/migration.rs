@@ -52,7 +52,35 @@ fn ensemble(runs: u64, floor: FloorSpec, length: f64) -> MigrationCase {
     c
 }
 
+/// With `GANGUE_BENCH_PROBE=1`: the closed-form pieces and impacts per run of the first 2 000
+/// runs of each floor of `migration_threads` (seed 42), printed before the timings, so that
+/// ns per piece follows from a run rate (`RunSummary::steps`, `impact_count`).
+fn probe() {
+    if std::env::var_os("GANGUE_BENCH_PROBE").is_none() {
+        return;
+    }
+    for (name, floor) in [
+        ("plane", FloorSpec::Plane),
+        ("grid_0.5m_flat", face_grid(120.0, 0.5, 0.0)),
+        ("grid_0.5m_rough_0.1m", face_grid(120.0, 0.5, 0.1)),
+    ] {
+        let runs = 2_000u64;
+        let mut case = ensemble(runs, floor, 120.0);
+        case.output.runs_csv = true;
+        let r = run(&case, &Control::unlimited()).unwrap();
+        let rs = r.runs.expect("runs_csv asks for the runs");
+        let pieces: u64 = rs.iter().map(|x| x.steps).sum();
+        let impacts: u64 = rs.iter().map(|x| x.impact_count).sum();
+        println!(
+            "probe {name}: {:.2} pieces per run, {:.2} impacts per run ({runs} runs)",
+            pieces as f64 / runs as f64,
+            impacts as f64 / runs as f64
+        );
+    }
+}
+
 fn bench(c: &mut Criterion) {
+    probe();
     let pools: Vec<_> = [1usize, 2]
         .iter()
         .map(|&n| {

@@ -5,6 +5,8 @@
 
 use nalgebra::Vector3;
 
+use super::walk::fl;
+
 use super::facet::{FacetPlane, inside_tri};
 use super::{Facet, Floor, FloorKind};
 
@@ -113,12 +115,17 @@ impl Floor {
                     return hit;
                 }
                 let tol = 1e-9 * gr.cells.d;
+                let (inv_d, t_cells) = (1.0 / gr.cells.d, 1e-9);
                 let near = 1e-6 * gr.cells.d;
                 let path = (p.x, p.y, v.x, v.y);
                 gr.cells.walk(p.x, p.y, v.x, v.y, t_max, |ci, cj, t0, t1| {
                     let mut best: Option<(f64, Facet)> = None;
-                    let (cells, n) = gr.cells.near_cells(ci, cj, path, t0, t1, near);
-                    for &(ni, nj) in &cells[..n] {
+                    let (dx, dy) = gr.cells.near_cells(ci, cj, path, t0, t1, near);
+                    for (ni, nj) in dy.iter().flat_map(|&oy| {
+                        dx.iter().map(move |&ox| {
+                            (ci.wrapping_add_signed(ox), cj.wrapping_add_signed(oy))
+                        })
+                    }) {
                         for half in 0..2 {
                             let f = gr.facet(ni, nj, half);
                             let pl = gr.plane(f);
@@ -127,13 +134,17 @@ impl Floor {
                                 && r <= t1 + 1e-12 * (1.0 + t1)
                                 && best.is_none_or(|b| r < b.0)
                             {
-                                let (c, _) = gr.corners_at(f, nj, ni);
                                 let (qx, qy) = if now {
                                     ahead(gr.cells.d)
                                 } else {
                                     (p.x + v.x * r, p.y + v.y * r)
                                 };
-                                if inside_tri(&c, qx, qy, tol) {
+                                let gq = (
+                                    (qx - gr.cells.x0) * inv_d - fl(ni),
+                                    (qy - gr.cells.y0) * inv_d - fl(nj),
+                                );
+                                let te = (t_cells, gr.clear_margin(qx, qy, t_cells));
+                                if gr.near_facet(f, (ni, nj), (qx, qy), gq, tol, te) {
                                     best = Some((r.max(0.0), f));
                                 }
                             }
@@ -148,8 +159,12 @@ impl Floor {
                 let path = (p.x, p.y, v.x, v.y);
                 m.cells.walk(p.x, p.y, v.x, v.y, t_max, |ci, cj, t0, t1| {
                     let mut best: Option<(f64, Facet)> = None;
-                    let (cells, n) = m.cells.near_cells(ci, cj, path, t0, t1, near);
-                    for &(ni, nj) in &cells[..n] {
+                    let (dx, dy) = m.cells.near_cells(ci, cj, path, t0, t1, near);
+                    for (ni, nj) in dy.iter().flat_map(|&oy| {
+                        dx.iter().map(move |&ox| {
+                            (ci.wrapping_add_signed(ox), cj.wrapping_add_signed(oy))
+                        })
+                    }) {
                         for &f in m.bucket(ni, nj) {
                             let pl = m.plane(f);
                             if let Some((r, now)) = root(&pl)

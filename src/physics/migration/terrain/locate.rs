@@ -3,12 +3,24 @@
 //! hole or beyond a grid's extent).
 
 use super::facet::inside_tri;
-use super::walk::CellGrid;
+use super::grid::GridFloor;
+use super::walk::{CellGrid, fl};
 use super::{Facet, Floor, FloorKind};
 
 impl Floor {
     /// Height of the floor under (x, y), m, or None off the floor.
+    #[inline]
     pub(crate) fn height_at(&self, x: f64, y: f64) -> Option<f64> {
+        match &self.kind {
+            FloorKind::Plane(p) => return Some(p.z(x, y)),
+            // the grid's facet under (x, y) as `locate` finds it, in one pass
+            FloorKind::Grid(g) => {
+                let f = Self::grid_facet(g, x, y, 0.0, 0.0)?;
+                return (!g.holes.get(f as usize).copied().unwrap_or(false))
+                    .then(|| g.plane(f).z(x, y));
+            }
+            FloorKind::Mesh(_) => {}
+        }
         self.locate(x, y, 0.0, 0.0)
             .map(|f| self.facet_plane(f).z(x, y))
     }
@@ -17,7 +29,16 @@ impl Floor {
     /// within `tol` m of it in plan; None when there is none. At a node or on an edge this is
     /// the highest of the planes meeting there: a point at that height is on or above every
     /// facet a flight from it can strike, so none is missed from underneath.
+    #[inline]
     pub(crate) fn top_height_near(&self, x: f64, y: f64, tol: f64) -> Option<f64> {
+        match &self.kind {
+            FloorKind::Plane(p) => Some(p.z(x, y)),
+            _ => self.top_height_near_facets(x, y, tol),
+        }
+    }
+
+    /// [`Floor::top_height_near`] on a floor of several facets (a grid or a mesh).
+    fn top_height_near_facets(&self, x: f64, y: f64, tol: f64) -> Option<f64> {
         let mut top: Option<f64> = None;
         let mut take = |f: Facet, c: &[[f64; 2]; 3]| {
             if !self.is_hole(f) && inside_tri(c, x, y, tol) {
@@ -27,47 +48,7 @@ impl Floor {
         };
         match &self.kind {
             FloorKind::Plane(p) => return Some(p.z(x, y)),
-            FloorKind::Grid(g) => {
-                let c = &g.cells;
-                let ux = (x - c.x0) / c.d;
-                let uy = (y - c.y0) / c.d;
-                let (Some(ci), Some(cj)) = (
-                    CellGrid::axis_cell(ux, 0.0, c.ncx),
-                    CellGrid::axis_cell(uy, 0.0, c.ncy),
-                ) else {
-                    return None;
-                };
-                // only the cells whose closed triangles can come within tol of (x, y): a
-                // triangle of the column left of ci lies at x ≤ x₀ + ci d, and inside_tri
-                // refuses a point farther than (1 + √2) tol beyond it (the same holds for the
-                // other sides), so the cells skipped here are those it would refuse
-                let margin = 4.0 * tol;
-                // the cells along one axis: cell k, and a neighbour only within the margin
-                let span = |u: f64, origin: f64, k: usize, n: usize| {
-                    let (lo, hi) = (origin + k as f64 * c.d, origin + (k + 1) as f64 * c.d);
-                    let first = if u - lo > margin {
-                        k
-                    } else {
-                        k.saturating_sub(1)
-                    };
-                    let last = if hi - u > margin {
-                        k
-                    } else {
-                        (k + 1).min(n - 1)
-                    };
-                    (first, last)
-                };
-                let (i0, i1) = span(x, c.x0, ci, c.ncx);
-                let (j0, j1) = span(y, c.y0, cj, c.ncy);
-                for nj in j0..=j1 {
-                    for ni in i0..=i1 {
-                        for half in 0..2 {
-                            let f = g.facet(ni, nj, half);
-                            take(f, &g.corners_at(f, nj, ni).0);
-                        }
-                    }
-                }
-            }
+            FloorKind::Grid(g) => return g.top_height_near(x, y, tol),
             FloorKind::Mesh(m) => {
                 let c = &m.cells;
                 let ci = CellGrid::axis_cell((x - c.x0) / c.d, 0.0, c.ncx)?;
@@ -93,6 +74,7 @@ impl Floor {
 
     /// The facet under (x, y), preferring the one the direction (dx, dy) moves into; None off
     /// the floor or over a hole.
+    #[inline]
     pub(crate) fn locate(&self, x: f64, y: f64, dx: f64, dy: f64) -> Option<Facet> {
         self.locate_any(x, y, dx, dy).filter(|&f| !self.is_hole(f))
     }
@@ -101,20 +83,7 @@ impl Floor {
     fn locate_any(&self, x: f64, y: f64, dx: f64, dy: f64) -> Option<Facet> {
         match &self.kind {
             FloorKind::Plane(_) => Some(0),
-            FloorKind::Grid(g) => {
-                let c = &g.cells;
-                let ux = (x - c.x0) / c.d;
-                let uy = (y - c.y0) / c.d;
-                let ci = CellGrid::axis_cell(ux, dx, c.ncx)?;
-                let cj = CellGrid::axis_cell(uy, dy, c.ncy)?;
-                let (fx, fy) = (ux - ci as f64, uy - cj as f64);
-                let half = if fx > fy || (fx == fy && dx > dy) {
-                    0
-                } else {
-                    1
-                };
-                Some(g.facet(ci, cj, half))
-            }
+            FloorKind::Grid(g) => Self::grid_facet(g, x, y, dx, dy),
             FloorKind::Mesh(m) => {
                 let c = &m.cells;
                 let ci = CellGrid::axis_cell((x - c.x0) / c.d, dx, c.ncx)?;
@@ -142,6 +111,23 @@ impl Floor {
                 None
             }
         }
+    }
+
+    /// The grid's facet (hole or not) under (x, y), preferring the one (dx, dy) moves into.
+    #[inline]
+    fn grid_facet(g: &GridFloor, x: f64, y: f64, dx: f64, dy: f64) -> Option<Facet> {
+        let c = &g.cells;
+        let ux = (x - c.x0) / c.d;
+        let uy = (y - c.y0) / c.d;
+        let ci = CellGrid::axis_cell(ux, dx, c.ncx)?;
+        let cj = CellGrid::axis_cell(uy, dy, c.ncy)?;
+        let (fx, fy) = (ux - fl(ci), uy - fl(cj));
+        let half = if fx > fy || (fx == fy && dx > dy) {
+            0
+        } else {
+            1
+        };
+        Some(g.facet(ci, cj, half))
     }
 
     /// Height (m) of the floor's level at a point (x, y) off the floor: over a hole, its facet's

@@ -121,7 +121,7 @@ impl Floor {
     }
 
     /// The facet's plane.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn facet_plane(&self, f: Facet) -> FacetPlane {
         match &self.kind {
             FloorKind::Plane(p) => *p,

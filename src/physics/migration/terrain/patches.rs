@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use super::flight::descent_root;
 use super::grid::GridFloor;
 use super::slide::outward_root;
-use super::walk::CellGrid;
+use super::walk::{CellGrid, fl};
 use super::{Facet, FlightEnd, Floor, FloorKind, NONE};
 
 /// Largest difference, in each of ∂z/∂x and ∂z/∂y, between the slopes of the facets of one
@@ -105,8 +105,8 @@ impl GridFloor {
         t_max: f64,
     ) -> Option<(f64, Option<Facet>, [[f64; 2]; 2])> {
         let c = &self.cells;
-        let xs = [c.x0 + pa.ci[0] as f64 * c.d, c.x0 + pa.ci[1] as f64 * c.d];
-        let ys = [c.y0 + pa.cj[0] as f64 * c.d, c.y0 + pa.cj[1] as f64 * c.d];
+        let xs = [c.x0 + fl(pa.ci[0]) * c.d, c.x0 + fl(pa.ci[1]) * c.d];
+        let ys = [c.y0 + fl(pa.cj[0]) * c.d, c.y0 + fl(pa.cj[1]) * c.d];
         // sides in the order of the facet edges they are made of: bottom (edge 0 of lower
         // halves), right (edge 1 of lower halves), top (edge 1 of upper halves), left (edge 2
         // of upper halves); each as the outward distance and its rates
@@ -187,17 +187,17 @@ impl GridFloor {
         let (qx, qy) = (p.x + v.x * t, p.y + v.y * t);
         let hair = 1e-6 * c.d;
         let inside = |x: f64, y: f64| {
-            x > c.x0 + pa.ci[0] as f64 * c.d + hair
-                && x < c.x0 + pa.ci[1] as f64 * c.d - hair
-                && y > c.y0 + pa.cj[0] as f64 * c.d + hair
-                && y < c.y0 + pa.cj[1] as f64 * c.d - hair
+            x > c.x0 + fl(pa.ci[0]) * c.d + hair
+                && x < c.x0 + fl(pa.ci[1]) * c.d - hair
+                && y > c.y0 + fl(pa.cj[0]) * c.d + hair
+                && y < c.y0 + fl(pa.cj[1]) * c.d - hair
         };
         if !(inside(p.x, p.y) && inside(qx, qy)) {
             return None;
         }
         let qi = CellGrid::axis_cell((qx - c.x0) / c.d, v.x, c.ncx)?;
         let qj = CellGrid::axis_cell((qy - c.y0) / c.d, v.y, c.ncy)?;
-        let (fx, fy) = ((qx - c.x0) / c.d - qi as f64, (qy - c.y0) / c.d - qj as f64);
+        let (fx, fy) = ((qx - c.x0) / c.d - fl(qi), (qy - c.y0) / c.d - fl(qj));
         let half = if fx > fy || (fx == fy && v.x > v.y) {
             0
         } else {

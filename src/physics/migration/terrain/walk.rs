@@ -5,6 +5,14 @@
 
 use super::{Facet, FlightEnd};
 
+/// A cell index or count as f64, exact (below 2⁵³): through i64, one cvtsi2sd on x86-64,
+/// where a usize takes the unsigned conversion's longer sequence.
+#[inline(always)]
+#[allow(clippy::cast_possible_wrap, clippy::cast_precision_loss)]
+pub(super) fn fl(k: usize) -> f64 {
+    k as i64 as f64
+}
+
 /// Uniform cell grid over a rectangle, used to walk a straight horizontal line cell by cell.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct CellGrid {
@@ -24,41 +32,44 @@ impl CellGrid {
     }
 
     /// Cell index along one axis for coordinate u (in cells) moving with rate r, or None outside.
+    #[inline]
     pub(super) fn axis_cell(u: f64, r: f64, n: usize) -> Option<usize> {
         // points a rounding error outside the extent count as on its boundary
         let u = if u < 0.0 && u > -1e-9 {
             0.0
-        } else if u > n as f64 && u < n as f64 + 1e-9 {
-            n as f64
+        } else if u > fl(n) && u < fl(n) + 1e-9 {
+            fl(n)
         } else {
             u
         };
-        if !(u >= 0.0 && u <= n as f64) {
+        if !(u >= 0.0 && u <= fl(n)) {
             return None;
         }
-        // u ≥ 0 here, so truncation is the floor (and avoids a libm call on baseline x86-64)
-        let mut c = (u as u64) as f64;
-        if c == u && r < 0.0 {
-            c -= 1.0;
+        // u ≥ 0 here, so truncation is the floor (and avoids a libm call on baseline x86-64);
+        // one conversion, through i64 (a single cvttsd2si; u ≤ n < 2⁶³ is exact)
+        let mut c = u as i64 as usize;
+        if fl(c) == u && r < 0.0 {
+            // on a cell boundary moving back: the cell before it (none before the first)
+            c = c.checked_sub(1)?;
         }
-        if c >= n as f64 {
+        if c >= n {
             // on the far boundary: inside only when moving back in (or not moving)
             if r > 0.0 {
                 return None;
             }
-            c = n as f64 - 1.0;
+            c = n - 1;
         }
-        if c < 0.0 {
-            return None;
-        }
-        Some(c as usize)
+        Some(c)
     }
 
     /// The cell (ci, cj) and those of its neighbours whose shared boundary (edge or corner) the
     /// straight path (x, y) + (vx, vy) t over [t0, t1] comes within `tol` of, m: a path running
     /// along a grid line is in both cells at once as far as rounding can tell, and the instant it
-    /// crosses the line is then ill-conditioned, so both cells' facets are candidates.
+    /// crosses the line is then ill-conditioned, so both cells' facets are candidates. Returned
+    /// as the offsets along x and along y (the cell itself first, then −1, then +1); the cells
+    /// are visited row by row, (ci + ox, cj + oy) for oy in the y offsets, ox in the x offsets.
     #[allow(clippy::too_many_arguments)]
+    #[inline]
     pub(super) fn near_cells(
         &self,
         ci: usize,
@@ -67,16 +78,16 @@ impl CellGrid {
         t0: f64,
         t1: f64,
         tol: f64,
-    ) -> ([(usize, usize); 9], usize) {
+    ) -> (&'static [isize], &'static [isize]) {
         let span = |u: f64, r: f64| {
             let (a, b) = (u + r * t0, u + r * t1.min(1e300));
             (a.min(b), a.max(b))
         };
         let (xa, xb) = span(x, vx);
         let (ya, yb) = span(y, vy);
-        let lo_x = self.x0 + ci as f64 * self.d;
-        let lo_y = self.y0 + cj as f64 * self.d;
-        let dx: &[isize] = match (
+        let lo_x = self.x0 + fl(ci) * self.d;
+        let lo_y = self.y0 + fl(cj) * self.d;
+        let dx: &'static [isize] = match (
             ci > 0 && xa <= lo_x + tol,
             ci + 1 < self.ncx && xb >= lo_x + self.d - tol,
         ) {
@@ -85,7 +96,7 @@ impl CellGrid {
             (false, true) => &[0, 1],
             _ => &[0],
         };
-        let dy: &[isize] = match (
+        let dy: &'static [isize] = match (
             cj > 0 && ya <= lo_y + tol,
             cj + 1 < self.ncy && yb >= lo_y + self.d - tol,
         ) {
@@ -94,15 +105,7 @@ impl CellGrid {
             (false, true) => &[0, 1],
             _ => &[0],
         };
-        let mut out = [(ci, cj); 9];
-        let mut n = 0;
-        for &oy in dy {
-            for &ox in dx {
-                out[n] = ((ci as isize + ox) as usize, (cj as isize + oy) as usize);
-                n += 1;
-            }
-        }
-        (out, n)
+        (dx, dy)
     }
 
     /// Walks the cells crossed by (x, y) + (vx, vy) t for t in [0, t_max]; `visit(ci, cj, t0, t1)`
@@ -129,16 +132,16 @@ impl CellGrid {
         let mut t0 = 0.0_f64;
         loop {
             let tx = if rx > 0.0 {
-                ((ci + 1) as f64 - ux) / rx
+                (fl(ci + 1) - ux) / rx
             } else if rx < 0.0 {
-                (ci as f64 - ux) / rx
+                (fl(ci) - ux) / rx
             } else {
                 f64::INFINITY
             };
             let ty = if ry > 0.0 {
-                ((cj + 1) as f64 - uy) / ry
+                (fl(cj + 1) - uy) / ry
             } else if ry < 0.0 {
-                (cj as f64 - uy) / ry
+                (fl(cj) - uy) / ry
             } else {
                 f64::INFINITY
             };
