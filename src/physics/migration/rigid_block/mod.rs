@@ -101,6 +101,7 @@ use super::{
 use crate::physics::control::Control;
 use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 
+mod columns;
 mod contacts;
 mod run;
 mod settled;
@@ -298,8 +299,10 @@ struct Model<'a> {
     length: f64,
     /// The spanning support standing at `length`, if any (scene).
     span_support: Option<usize>,
-    /// Supports of a scene (columns are checked along every flight and step).
+    /// Supports of a scene (columns are checked along every flight, step and skipped slide).
     supports: Vec<super::SupportStop>,
+    /// The columns among `supports`, by along-dip position.
+    columns: columns::Columns,
     end_time: Option<f64>,
     c0: Vector3<f64>,
     v0: Vector3<f64>,
@@ -723,6 +726,7 @@ impl<'a> Model<'a> {
             length: case.stop_length().0,
             span_support: case.stop_length().1,
             supports: case.supports.clone(),
+            columns: columns::Columns::new(&case.supports),
             end_time: case.end_time,
             c0,
             v0: pr.v0,

@@ -19,7 +19,7 @@ impl Model<'_> {
             mu,
             beta,
             end_t: self.end_time.unwrap_or(f64::INFINITY),
-            has_columns: self.supports.iter().any(|c| c.across.is_some()),
+            has_columns: !self.columns.is_empty(),
             plane_normal: match &self.floor.kind {
                 FloorKind::Plane(pl) => Some(pl.normal()),
                 _ => None,
@@ -243,13 +243,14 @@ impl Model<'_> {
         let cross = self.along_cross(&st, tau);
         // a column reached inside the flight ends it there
         let column = if cfg.has_columns {
-            super::super::first_column_reach(
+            self.columns.first_reach(
                 &self.mean,
                 &self.supports,
                 &st.c,
                 &st.v,
                 &gravity,
                 cross.unwrap_or(tau),
+                0.0,
             )
         } else {
             None
@@ -816,13 +817,14 @@ impl Model<'_> {
         let st = &mut run.st;
         if cfg.has_columns {
             let c_prev = st.c - st.v * h;
-            if let Some((tc, k)) = super::super::first_column_reach(
+            if let Some((tc, k)) = self.columns.first_reach(
                 &self.mean,
                 &self.supports,
                 &c_prev,
                 &st.v,
                 &Vector3::zeros(),
                 h,
+                0.0,
             ) {
                 st.t -= h - tc;
                 st.c = c_prev + st.v * tc;
