@@ -18,6 +18,10 @@ pub(super) struct Columns {
     reach_max: f64,
 }
 
+/// How far along the dip (m, beyond the largest reach) [`Columns::clearance`] looks for the
+/// nearest column: the most a clearance can be.
+const CLEARANCE_SEARCH_M: f64 = 3.0;
+
 /// Candidates in index order that fit on the stack (a window of more is sorted on the heap).
 const STACK_CANDIDATES: usize = 16;
 
@@ -46,6 +50,24 @@ impl Columns {
     /// True when the scene has no column.
     pub(super) fn is_empty(&self) -> bool {
         self.order.is_empty()
+    }
+
+    /// The distance (m) from the point (along-dip `u`, across `y`) of the mean plane to the
+    /// nearest column's reach, less a rounding margin, at most [`CLEARANCE_SEARCH_M`]; None
+    /// when not positive. Only the columns within that search distance of `u` along the dip
+    /// (and the largest reach) are measured: any other is farther.
+    pub(super) fn clearance(&self, supports: &[SupportStop], u: f64, y: f64) -> Option<f64> {
+        let w = CLEARANCE_SEARCH_M + self.reach_max;
+        let lo = self.along.partition_point(|&s| s < u - w);
+        let hi = self.along.partition_point(|&s| s <= u + w);
+        let mut d = CLEARANCE_SEARCH_M;
+        for &k in &self.order[lo..hi] {
+            let s = &supports[k];
+            let yc = s.across.unwrap_or(y);
+            d = d.min((u - s.along_dip).hypot(y - yc) - s.reach);
+        }
+        let d = d - 1e-9 * (1.0 + u.abs() + y.abs() + self.reach_max);
+        (d > 0.0).then_some(d)
     }
 
     /// The first column reached by the centre's piece p + v τ + ½ a τ², τ in [0, `dt`] (s or
@@ -179,5 +201,27 @@ mod tests {
         }
         // both outcomes are exercised
         assert!(hits > 1000 && checked - hits > 1000, "{hits} of {checked}");
+        // the clearance: no column's reach nearer, and the nearest one that near
+        let mut clear = 0;
+        for _ in 0..20_000 {
+            let u: f64 = rng.random_range(0.0..140.0);
+            let y: f64 = rng.random_range(-3.0..3.0);
+            let nearest = supports
+                .iter()
+                .filter_map(|s| s.across.map(|yc| (u - s.along_dip).hypot(y - yc) - s.reach))
+                .fold(f64::INFINITY, f64::min);
+            match cols.clearance(&supports, u, y) {
+                Some(d) => {
+                    clear += 1;
+                    assert!(d > 0.0 && d < nearest, "u {u} y {y}: {d} against {nearest}");
+                    assert!(
+                        d > nearest.min(CLEARANCE_SEARCH_M) - 1e-6,
+                        "u {u} y {y}: {d} against {nearest}"
+                    );
+                }
+                None => assert!(nearest < 1e-6, "u {u} y {y}: none against {nearest}"),
+            }
+        }
+        assert!(clear > 10_000, "{clear}");
     }
 }

@@ -543,6 +543,10 @@ struct Run {
     /// (centre, distance): a settled slide that met the edge of its flat patch tries again
     /// only once the centre has moved that far.
     patch_wait: Option<(Vector3<f64>, f64)>,
+    /// (along-dip, across, clearance), m: a point of the mean plane and the distance from it
+    /// to the nearest column's reach; a step whose drift starts and ends within that distance
+    /// of the point reaches no column.
+    column_clear: Option<(f64, f64, f64)>,
     /// The half step (s) the velocities lag the positions by (leapfrog); None: in step.
     half_step: Option<f64>,
     /// Time since the last force evaluation: the drift the shear springs have not yet seen, s.
