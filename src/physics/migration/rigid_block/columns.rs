@@ -77,6 +77,7 @@ impl Columns {
     /// the earliest reach found, but only those whose along-dip position lies within the reach
     /// of the along-dip interval the piece sweeps (|Δs| ≤ |v·d| τ + ½|a·d| τ², padded); the
     /// others are the ones that function rejects before solving.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn first_reach(
         &self,
         mean: &MeanPlane,
@@ -87,7 +88,7 @@ impl Columns {
         dt: f64,
         margin: f64,
     ) -> Option<(f64, usize)> {
-        if self.order.is_empty() || !(dt > 0.0) {
+        if self.order.is_empty() || dt.is_nan() || dt <= 0.0 {
             return None;
         }
         let dip = mean.dip_dir();
