@@ -67,7 +67,9 @@ fn probe() {
         let runs = 2_000u64;
         let mut case = ensemble(runs, floor, 120.0);
         case.output.runs_csv = true;
-        let r = run(&case, &Control::unlimited()).unwrap();
+        let r = Migration::solve(&case, &Control::unlimited())
+            .unwrap()
+            .result;
         let rs = r.runs.expect("runs_csv asks for the runs");
         let pieces: u64 = rs.iter().map(|x| x.steps).sum();
         let impacts: u64 = rs.iter().map(|x| x.impact_count).sum();

@@ -101,6 +101,7 @@ use super::{
 use crate::physics::control::Control;
 use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 
+mod columns;
 mod contacts;
 mod run;
 mod settled;
@@ -298,8 +299,10 @@ struct Model<'a> {
     length: f64,
     /// The spanning support standing at `length`, if any (scene).
     span_support: Option<usize>,
-    /// Supports of a scene (columns are checked along every flight and step).
+    /// Supports of a scene (columns are checked along every flight, step and skipped slide).
     supports: Vec<super::SupportStop>,
+    /// The columns among `supports`, by along-dip position.
+    columns: columns::Columns,
     end_time: Option<f64>,
     c0: Vector3<f64>,
     v0: Vector3<f64>,
@@ -540,6 +543,10 @@ struct Run {
     /// (centre, distance): a settled slide that met the edge of its flat patch tries again
     /// only once the centre has moved that far.
     patch_wait: Option<(Vector3<f64>, f64)>,
+    /// (along-dip, across, clearance), m: a point of the mean plane and the distance from it
+    /// to the nearest column's reach; a step whose drift starts and ends within that distance
+    /// of the point reaches no column.
+    column_clear: Option<(f64, f64, f64)>,
     /// The half step (s) the velocities lag the positions by (leapfrog); None: in step.
     half_step: Option<f64>,
     /// Time since the last force evaluation: the drift the shear springs have not yet seen, s.
@@ -723,6 +730,7 @@ impl<'a> Model<'a> {
             length: case.stop_length().0,
             span_support: case.stop_length().1,
             supports: case.supports.clone(),
+            columns: columns::Columns::new(&case.supports),
             end_time: case.end_time,
             c0,
             v0: pr.v0,

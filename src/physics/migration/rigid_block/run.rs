@@ -19,7 +19,7 @@ impl Model<'_> {
             mu,
             beta,
             end_t: self.end_time.unwrap_or(f64::INFINITY),
-            has_columns: self.supports.iter().any(|c| c.across.is_some()),
+            has_columns: !self.columns.is_empty(),
             plane_normal: match &self.floor.kind {
                 FloorKind::Plane(pl) => Some(pl.normal()),
                 _ => None,
@@ -169,6 +169,7 @@ impl Model<'_> {
             support: None,
             steady_since: None,
             patch_wait: None,
+            column_clear: None,
             half_step: None,
             drift_h: 0.0,
             off_floor: false,
@@ -243,13 +244,14 @@ impl Model<'_> {
         let cross = self.along_cross(&st, tau);
         // a column reached inside the flight ends it there
         let column = if cfg.has_columns {
-            super::super::first_column_reach(
+            self.columns.first_reach(
                 &self.mean,
                 &self.supports,
                 &st.c,
                 &st.v,
                 &gravity,
                 cross.unwrap_or(tau),
+                0.0,
             )
         } else {
             None
@@ -816,19 +818,36 @@ impl Model<'_> {
         let st = &mut run.st;
         if cfg.has_columns {
             let c_prev = st.c - st.v * h;
-            if let Some((tc, k)) = super::super::first_column_reach(
+            // the drift is a segment: with both its ends within the clearance of the last
+            // checked point, it is all farther than every column's reach
+            let (u, u_prev) = (self.mean.along(&st.c), self.mean.along(&c_prev));
+            let within = |(u0, y0, d): (f64, f64, f64), uu: f64, yy: f64| {
+                (uu - u0) * (uu - u0) + (yy - y0) * (yy - y0) < d * d
+            };
+            let clear = run
+                .column_clear
+                .is_some_and(|cl| within(cl, u, st.c.y) && within(cl, u_prev, c_prev.y));
+            if clear {
+                // nothing to test
+            } else if let Some((tc, k)) = self.columns.first_reach(
                 &self.mean,
                 &self.supports,
                 &c_prev,
                 &st.v,
                 &Vector3::zeros(),
                 h,
+                0.0,
             ) {
                 st.t -= h - tc;
                 st.c = c_prev + st.v * tc;
                 run.drift_h = tc;
                 run.support = Some(k);
                 return Some(StopReason::Support);
+            } else {
+                run.column_clear = self
+                    .columns
+                    .clearance(&self.supports, u, st.c.y)
+                    .map(|d| (u, st.c.y, d));
             }
         }
         let along = self.mean.along(&st.c);

@@ -22,6 +22,15 @@ impl Model<'_> {
         if n_skip < 8 {
             return;
         }
+        // never past a column: the skip ends two steps before the first step whose drift would
+        // reach one, and the steps from there find the reach as they do everywhere
+        if cfg.has_columns {
+            match self.steps_before_column(&run.st, n_skip, &v_t, &a_t) {
+                Some(n) if n >= 8 => n_skip = n,
+                Some(_) => return,
+                None => {}
+            }
+        }
         // on a mesh floor, only as far as the footprint stays on the flat patch
         if cfg.plane_normal.is_none() {
             match self.steps_on_patch(run, n_skip, &v_t, &a_t) {
@@ -64,6 +73,36 @@ impl Model<'_> {
         run.prev_along = self.mean.along(&st.c);
     }
 
+    /// Steps a settled slide from `st` (velocity `v_t`, acceleration `a_t`) may skip of `n_skip`
+    /// before a column: None when none of the steps' drifts comes within a column's reach, else
+    /// the whole steps before the first that might, less two (0 when fewer). After k steps the
+    /// centre is at c + v Δt k + a Δt² k(k + 1)/2, the parabola c + (v Δt + a Δt²/2) k +
+    /// (a Δt²/2) k² in k; the steps' drifts are its chords, which stray from it by at most
+    /// |a| Δt²/8, so the columns' reach is widened by |a| Δt² (and rounding) for the test.
+    fn steps_before_column(
+        &self,
+        st: &State,
+        n_skip: u64,
+        v_t: &Vector3<f64>,
+        a_t: &Vector3<f64>,
+    ) -> Option<u64> {
+        let dt = self.dt;
+        let vk = v_t * dt + a_t * (0.5 * dt * dt);
+        let ak = a_t * (dt * dt);
+        let margin = ak.norm() + 1e-9 * (1.0 + self.shape.r_max);
+        let (k_hit, _) = self.columns.first_reach(
+            &self.mean,
+            &self.supports,
+            &st.c,
+            &vk,
+            &ak,
+            n_skip as f64,
+            margin,
+        )?;
+        let n = k_hit.floor() - 2.0;
+        Some(if n > 0.0 { (n as u64).min(n_skip) } else { 0 })
+    }
+
     /// Whether the block, translated along the skipped path of `n_skip` steps (velocity `v_t`,
     /// acceleration `a_t`, no rotation), keeps every vertex out of the floor beyond the deepest
     /// overlap its contacts carry now (twice that, plus rounding), at 16 points of the path and
@@ -96,8 +135,8 @@ impl Model<'_> {
 
     /// The tangential velocity and acceleration (m/s, m/s²) of a slide settled for two
     /// contact times: every contact (three or more) slipping on one plane (the floor's, or a
-    /// flat patch's with vertex–face contacts only), no local damping and no column to meet,
-    /// no normal motion, no spin, and the acceleration along the velocity, all within
+    /// flat patch's with vertex–face contacts only), no local damping, no normal motion, no
+    /// spin, and the acceleration along the velocity, all within
     /// STEADY_TOLERANCE.
     pub(super) fn settled_slide(
         &self,
@@ -108,7 +147,6 @@ impl Model<'_> {
         let contacts = &run.contacts;
         let one_plane = if self.skip_slides
             && self.alpha == 0.0
-            && !cfg.has_columns
             && contacts.len() >= 3
             && fo.slipping == contacts.len()
         {
