@@ -200,14 +200,18 @@ async fn geojson_contours_give_the_same_bits_as_the_contours_form() {
     )
     .await;
     assert!(plain["impact_count"].as_u64().unwrap() >= 1, "{plain}");
-    // the sample is in metres near the origin: within ±180 × ±90, so it is warned about
-    let mut geo_results = results(geo.clone());
-    let w = geo_results["warnings"].as_array_mut().unwrap();
-    let k = w
-        .iter()
-        .position(|w| w["code"] == "geographic_coordinates")
-        .expect("geographic_coordinates warning");
-    w.remove(k);
+    // the sample is in metres near the origin (within ±180 × ±90, but as wide as it is high):
+    // not taken for longitude/latitude, so the answers are the same, warnings included
+    let geo_results = results(geo.clone());
+    assert!(
+        geo_results["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|w| w["code"] != "geographic_coordinates"),
+        "{}",
+        geo_results["warnings"]
+    );
     assert_eq!(geo_results, results(plain.clone()));
     // echo: the hash of the floor object with sorted keys and defaults filled in
     let canonical = json!({"elevation_property": "elevation", "geojson": g,
@@ -637,5 +641,35 @@ async fn an_esri_grid_is_measured_from_its_header_before_its_data_are_read() {
     assert!(
         p["errors"][0]["message"].as_str().unwrap().contains("MB"),
         "{p}"
+    );
+}
+
+/// The same contours in degrees (about 9e-6 ° per metre, near 8.7° E 46.6° N) are 100 times
+/// steeper than any face in metres: they are taken for longitude/latitude and warned about.
+#[tokio::test]
+async fn contours_in_degrees_are_warned_about_as_geographic() {
+    let app = common::app();
+    let mut g: Value = serde_json::from_str(&data("face_contours.geojson")).unwrap();
+    for f in g["features"].as_array_mut().unwrap() {
+        for q in f["geometry"]["coordinates"].as_array_mut().unwrap() {
+            let (x, y) = (q[0].as_f64().unwrap(), q[1].as_f64().unwrap());
+            *q = json!([8.7 + 9e-6 * x, 46.6 + 9e-6 * y]);
+        }
+    }
+    let r = post(
+        &app,
+        "/v1/migration",
+        &json!({
+            "face": {"dip_deg": 30, "length_m": 18, "floor": {"kind": "contours", "geojson": g}},
+            "release": {"along_dip_m": 1.0, "drop_height_m": 1.5, "across_m": 46.6}
+        }),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let b = r.json();
+    let w = b["warnings"].as_array().unwrap();
+    assert!(
+        w.iter().any(|w| w["code"] == "geographic_coordinates"),
+        "{w:?}"
     );
 }

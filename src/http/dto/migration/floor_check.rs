@@ -434,11 +434,7 @@ impl FloorCheck<'_> {
         match formats::geojson_lines(g, &prop) {
             Ok(ls) => {
                 f.geographic = self.map.is_none()
-                    && ls.iter().all(|l| {
-                        l.points
-                            .iter()
-                            .all(|q| q[0].abs() <= 180.0 && q[1].abs() <= 90.0)
-                    });
+                    && looks_geographic(ls.iter().map(|l| (l.elevation, l.points.as_slice())));
                 Some(
                     ls.into_iter()
                         .map(|l| {
@@ -780,4 +776,82 @@ fn find_crossing(lines: &[ContourDto]) -> Option<Crossing> {
         }
     }
     best
+}
+
+/// Ratio of the contours' elevation range to their horizontal extent above which coordinates
+/// within ±180 × ±90 are taken for longitude/latitude: a face 100 times higher than wide
+/// (steeper than 89.4°) does not exist, while a face of a few hundred metres spans thousandths
+/// of a degree.
+const GEOGRAPHIC_RELIEF_RATIO: f64 = 100.0;
+
+/// Whether contour lines (elevation in metres, points) look like longitude/latitude: every
+/// point within ±180 × ±90, and the horizontal extent less than the elevation range divided by
+/// [`GEOGRAPHIC_RELIEF_RATIO`] — in metres such a floor would be a wall. Contours in a local
+/// metric frame near the origin (within ±180 × ±90 too) are not flagged.
+fn looks_geographic<'a>(lines: impl Iterator<Item = (f64, &'a [[f64; 2]])>) -> bool {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    let (mut z_lo, mut z_hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (z, points) in lines {
+        z_lo = z_lo.min(z);
+        z_hi = z_hi.max(z);
+        for q in points {
+            if q[0].abs() > 180.0 || q[1].abs() > 90.0 {
+                return false;
+            }
+            for k in 0..2 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+    }
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    let relief = z_hi - z_lo;
+    extent.is_finite() && relief > 0.0 && extent * GEOGRAPHIC_RELIEF_RATIO < relief
+}
+
+#[cfg(test)]
+mod geographic_tests {
+    use super::looks_geographic;
+
+    fn lines(scale: f64, offset: [f64; 2]) -> Vec<(f64, Vec<[f64; 2]>)> {
+        // a 45° face 120 m along the dip: contours every 10 m of elevation, 20 m across
+        (0..9)
+            .map(|i| {
+                let x = 10.0 * i as f64;
+                let pts = vec![
+                    [offset[0] + scale * x, offset[1] - scale * 10.0],
+                    [offset[0] + scale * x, offset[1] + scale * 10.0],
+                ];
+                (-x, pts)
+            })
+            .collect()
+    }
+
+    fn check(ls: &[(f64, Vec<[f64; 2]>)]) -> bool {
+        looks_geographic(ls.iter().map(|(z, p)| (*z, p.as_slice())))
+    }
+
+    #[test]
+    fn metres_near_the_origin_are_not_geographic() {
+        assert!(!check(&lines(1.0, [0.0, 0.0])));
+        assert!(!check(&lines(1.0, [-60.0, 40.0])));
+        // a small face: 1 m of relief over 1.4 m
+        assert!(!check(
+            &lines(0.01, [0.0, 0.0])
+                .iter()
+                .map(|(z, p)| (z / 100.0, p.clone()))
+                .collect::<Vec<_>>()
+        ));
+    }
+
+    #[test]
+    fn degrees_are_geographic_and_map_metres_are_not() {
+        // the same face in degrees near 8.7° E 46.6° N: 1 m ≈ 9e-6 °
+        assert!(check(&lines(9e-6, [8.7, 46.6])));
+        assert!(check(&lines(9e-6, [-179.9, -89.9])));
+        // in map metres (easting, northing): outside ±180 × ±90
+        assert!(!check(&lines(1.0, [500_000.0, 5_160_000.0])));
+        // one elevation only: no relief, nothing to judge by
+        assert!(!check(&[(0.0, vec![[8.7, 46.6], [8.7001, 46.6]])]));
+    }
 }

@@ -291,7 +291,8 @@ pub struct FloorDto {
     #[serde(skip)]
     #[schema(ignore)]
     pub sha256: Option<String>,
-    /// Whether GeoJSON contours without `map` lie within ±180 × ±90 (set when resolved).
+    /// Whether GeoJSON contours without `map` look like longitude/latitude: within ±180 × ±90 and
+    /// far steeper than any face in metres (set when resolved).
     #[serde(skip)]
     #[schema(ignore)]
     pub geographic: bool,

@@ -312,8 +312,9 @@ impl MigrationResponse {
         if inputs.face.floor.geographic {
             meta.warnings.push(Warning::new(
                 "geographic_coordinates",
-                "every coordinate of the GeoJSON contours lies within ±180 × ±90: they look like \
-                 longitude/latitude (RFC 7946), which are not metres; the floor was taken in \
+                "every coordinate of the GeoJSON contours lies within ±180 × ±90 and their \
+                 horizontal extent is less than a hundredth of their elevation range: they look \
+                 like longitude/latitude (RFC 7946), which are not metres; the floor was taken in \
                  metres as sent. Project it (e.g. to UTM) and give map.origin_m",
             ));
         }
