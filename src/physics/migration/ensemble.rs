@@ -56,7 +56,8 @@ where
         .map(|c| {
             let start = range.start + c as u64 * chunk;
             let end = (start + chunk).min(range.end);
-            let mut out = Vec::new();
+            // a chunk's length is known: one allocation, no growth by copying
+            let mut out = Vec::with_capacity(usize::try_from(end - start).unwrap_or(0));
             for i in start..end {
                 control.check()?;
                 out.push(one(i)?);
