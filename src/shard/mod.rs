@@ -25,7 +25,7 @@
 //! The merge checks that the parts come from one request and one build and that their ranges
 //! tile 0..N exactly (no index missing, none twice), then feeds the records to the same response
 //! builder as the service ([`calc::migration::merge`], [`calc::scene::merge`],
-//! [`study::StudyPlan::finish`]): sums stream the records in index order (run order, the
+//! [`Wire::study_answer`]): sums stream the records in index order (run order, the
 //! summation order of the contract) and order statistics come from a k-way merge of the per-part
 //! sorted columns, so the merge holds O(parts) records, not O(runs) (a `runs_csv` answer is
 //! itself O(runs)).
@@ -45,13 +45,6 @@ use crate::calc::migration::{MergeError, Migration};
 use crate::calc::scene::Scene;
 use crate::calc::{self, Ensemble};
 use crate::config::{ComputeArgs, Config, Kind, MergeArgs};
-use crate::http::dto::batch::{json_items, ndjson_items};
-use crate::http::dto::migration::{MigrationRequest, MigrationResponse};
-use crate::http::dto::scene::{SceneContext, SceneHead, SceneRequest, scene_error};
-use crate::http::error::ApiError;
-use crate::http::json::{from_value, parse_json};
-use crate::http::routes::{batch, study};
-use crate::http::runner::to_json_bytes;
 use crate::physics::Control;
 use crate::physics::migration::{
     MigrationCase, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason, run_columns,
@@ -59,6 +52,9 @@ use crate::physics::migration::{
 use crate::physics::scene::{
     ENTRY_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun, StrikeValues, entry_columns,
 };
+
+mod wire;
+pub use wire::Wire;
 
 /// Name of the part file format.
 pub const FORMAT: &str = "gangue-part";
@@ -223,11 +219,13 @@ impl From<&str> for Failure {
     }
 }
 
-impl From<ApiError> for Failure {
-    fn from(e: ApiError) -> Self {
+impl Failure {
+    /// The failure of a refused request: `message` (the refusal) and its problem+json body.
+    #[must_use]
+    pub fn refused(message: impl std::fmt::Display, problem: Value) -> Self {
         Self {
-            message: format!("the request was refused: {e}"),
-            problem: Some(e.to_problem()),
+            message: format!("the request was refused: {message}"),
+            problem: Some(problem),
         }
     }
 }
@@ -238,97 +236,68 @@ fn io_err(path: &Path, e: std::io::Error) -> Failure {
 }
 
 /// The request of a part: parsed, resolved and counted.
-enum Prepared {
+enum Prepared<W: Wire> {
     Migration {
         case: Box<MigrationCase>,
-        req: Box<MigrationRequest>,
+        req: Box<W::Migration>,
     },
     Scene {
         case: Box<SceneCase>,
-        ctx: Box<SceneContext>,
-        req: Box<SceneRequest>,
+        req: Box<W::Scene>,
     },
-    Study(Box<study::StudyPlan>),
-    Batch(Vec<Result<Value, ApiError>>),
+    Study(Box<W::Study>),
+    Batch(Vec<W::Item>),
 }
 
-struct Resolved {
-    prepared: Prepared,
+struct Resolved<W: Wire> {
+    prepared: Prepared<W>,
     items: u64,
     hash: String,
 }
 
-fn resolve(kind: Kind, request: &[u8], config: &Config) -> Result<Resolved, Failure> {
+fn resolve<W: Wire>(
+    wire: &W,
+    kind: Kind,
+    request: &[u8],
+    config: &Config,
+) -> Result<Resolved<W>, Failure> {
     match kind {
         Kind::Migration => {
-            let v = parse_json(request)?;
-            let mut req: MigrationRequest = from_value(&v)?;
-            let case = req.resolve(config)?;
-            let hash = inputs_hash(kind, &serde_json::to_vec(&req).map_err(ApiError::internal)?);
+            let (case, req, inputs) = wire.migration(request, config)?;
             Ok(Resolved {
                 items: Migration::items(&case),
                 prepared: Prepared::Migration {
                     case: Box::new(case),
                     req: Box::new(req),
                 },
-                hash,
+                hash: inputs_hash(kind, &inputs),
             })
         }
         Kind::Scene => {
-            let v = parse_json(request)?;
-            let mut req: SceneRequest = from_value(&v)?;
-            let (case, ctx) = req.resolve(config)?;
-            let hash = inputs_hash(kind, &serde_json::to_vec(&req).map_err(ApiError::internal)?);
+            let (case, req, inputs) = wire.scene(request, config)?;
             Ok(Resolved {
                 items: Scene::items(&case),
                 prepared: Prepared::Scene {
                     case: Box::new(case),
-                    ctx: Box::new(ctx),
                     req: Box::new(req),
                 },
-                hash,
+                hash: inputs_hash(kind, &inputs),
             })
         }
         Kind::Study => {
-            let v = parse_json(request)?;
-            let plan = study::plan(config, from_value(&v)?)?;
-            let inputs = serde_json::to_vec(&plan.inputs()).map_err(ApiError::internal)?;
+            let (plan, inputs) = wire.study(request, config)?;
             Ok(Resolved {
-                items: plan.points() - 1,
+                items: W::study_points(&plan) - 1,
                 hash: inputs_hash(kind, &inputs),
                 prepared: Prepared::Study(Box::new(plan)),
             })
         }
         Kind::Batch => {
-            // a JSON envelope {"items": [...]}, or one item per line (NDJSON)
-            let items: Vec<Result<Value, ApiError>> = match parse_json(request) {
-                Ok(body) if body.is_object() => json_items(&body)?.into_iter().map(Ok).collect(),
-                _ => ndjson_items(request),
-            };
-            let limit = config.max_batch_items;
-            if items.len() as u64 > limit {
-                return Err(ApiError::invalid(
-                    "/items",
-                    serde_json::json!(items.len()),
-                    format!("at most {limit} items in one batch (see limits in /v1/presets)"),
-                )
-                .into());
-            }
-            let canon: Vec<Value> = items
-                .iter()
-                .map(|r| match r {
-                    Ok(v) => v.clone(),
-                    Err(e) => e.to_problem(),
-                })
-                .collect();
-            let hash = inputs_hash(
-                kind,
-                &serde_json::to_vec(&canon).map_err(ApiError::internal)?,
-            );
+            let (items, inputs) = wire.batch(request, config)?;
             Ok(Resolved {
                 items: items.len() as u64,
                 prepared: Prepared::Batch(items),
-                hash,
+                hash: inputs_hash(kind, &inputs),
             })
         }
     }
@@ -339,23 +308,23 @@ fn control(limit: Option<f64>) -> Control {
 }
 
 /// `gangue compute`: computes the items of one shard and writes its part file. Returns the path
-/// written.
-pub fn compute(args: &ComputeArgs) -> Result<PathBuf, Failure> {
+/// written. `wire` reads the request and writes the answer pieces part 0 stores.
+pub fn compute<W: Wire>(args: &ComputeArgs, wire: &W) -> Result<PathBuf, Failure> {
     args.limits.validate()?;
     let (i, k) = shard_of(args, &|n| std::env::var(n).ok())?;
     let request = std::fs::read(&args.request).map_err(|e| io_err(&args.request, e))?;
     let request_text = String::from_utf8(request.clone())
         .map_err(|_| format!("{}: the request is not UTF-8", args.request.display()))?;
     let config = &args.limits;
-    let r = resolve(args.kind, &request, config)?;
+    let r = resolve(wire, args.kind, &request, config)?;
     let range = shard_range(i, k, r.items);
     let mut sections = Vec::new();
     let mut body: Vec<u8> = Vec::new();
     match &r.prepared {
         Prepared::Migration { case, .. } => {
             let ctl = control(args.time_limit_s);
-            let runs = Migration::part(case, range.clone(), &ctl)
-                .map_err(|e| Failure::from(ApiError::from(e)))?;
+            let runs =
+                Migration::part(case, range.clone(), &ctl).map_err(|e| wire.physics_failure(e))?;
             for run in &runs {
                 encode_run(run, &mut body);
             }
@@ -369,14 +338,14 @@ pub fn compute(args: &ComputeArgs) -> Result<PathBuf, Failure> {
                 sections.push((body.len() - before) as u64);
             }
         }
-        Prepared::Scene { case, ctx, req } => {
+        Prepared::Scene { case, req } => {
             let ctl = control(args.time_limit_s);
-            let fail = |e: SceneError| Failure::from(scene_error(e, ctx));
+            let fail = |e: SceneError| wire.scene_failure(e, req);
             // part 0: what is not an item, computed first (a refused request fails here)
             let ensemble = calc::scene::ensemble(case).is_some();
             let head = if i == 0 {
                 let report = calc::scene::nominal(case, &ctl).map_err(fail)?;
-                Some(SceneHead::new(&report, ensemble, case, ctx, req)?)
+                Some(wire.scene_head(&report, ensemble, case, req)?)
             } else {
                 None
             };
@@ -411,7 +380,7 @@ pub fn compute(args: &ComputeArgs) -> Result<PathBuf, Failure> {
             let ctl = control(args.time_limit_s);
             let out: Vec<Vec<f64>> = (range.start..range.end)
                 .into_par_iter()
-                .map(|g| plan.eval(config, g as usize + 1, &ctl))
+                .map(|g| wire.study_point(plan, config, g as usize + 1, &ctl))
                 .collect::<Result<_, _>>()?;
             let values = |v: &[f64], body: &mut Vec<u8>| {
                 body.extend_from_slice(&(v.len() as u64).to_le_bytes());
@@ -425,7 +394,7 @@ pub fn compute(args: &ComputeArgs) -> Result<PathBuf, Failure> {
             // part 0: the base point, not an item
             let before = body.len();
             if i == 0 {
-                values(&plan.eval(config, 0, &ctl)?, &mut body);
+                values(&wire.study_point(plan, config, 0, &ctl)?, &mut body);
             }
             sections.push((body.len() - before) as u64);
         }
@@ -436,13 +405,7 @@ pub fn compute(args: &ComputeArgs) -> Result<PathBuf, Failure> {
                 .map(|g| {
                     let g = g as usize;
                     let ctl = control(args.time_limit_s);
-                    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        batch::run_item(g, &items[g], config, &ctl)
-                    }))
-                    .unwrap_or_else(|_| {
-                        Err(ApiError::internal(format!("batch item {g} panicked")))
-                    });
-                    batch::line(g, out)
+                    wire.batch_line(g, &items[g], config, &ctl)
                 })
                 .collect();
             for l in &lines {
@@ -952,8 +915,9 @@ impl SceneRecords for SceneRuns<'_> {
     }
 }
 
-/// `gangue merge`: checks the parts and writes the response body to `out`.
-pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
+/// `gangue merge`: checks the parts and writes the response body to `out`; `wire` reads the
+/// request and writes the answer.
+pub fn merge<W: Wire>(args: &MergeArgs, wire: &W, out: &mut dyn Write) -> Result<(), Failure> {
     args.limits.validate()?;
     let mut parts = args
         .parts
@@ -971,7 +935,7 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
         )));
     }
     let config = &args.limits;
-    let r = resolve(kind, h.request.as_bytes(), config)?;
+    let r = resolve(wire, kind, h.request.as_bytes(), config)?;
     if r.hash != h.inputs_sha256 {
         return Err(Failure::from(
             "the request resolves to other inputs under this merge's limits than under the \
@@ -984,10 +948,10 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
         Prepared::Migration { case, req } => {
             let report =
                 calc::migration::merge(&case, &PartRuns(&parts), &ctl).map_err(|e| match e {
-                    MergeError::Physics(e) => Failure::from(ApiError::from(e)),
+                    MergeError::Physics(e) => wire.physics_failure(e),
                     MergeError::Records(e) => Failure::from(e),
                 })?;
-            to_json_bytes(&MigrationResponse::new(report, *req))?
+            wire.migration_answer(report, *req)?
         }
         Prepared::Scene { case, req, .. } => {
             let ensemble = calc::scene::ensemble(&case);
@@ -1002,7 +966,7 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
                 ensemble.map(|_| SCENE_RECORD_BYTES),
             )?;
             let p0 = part_zero(&parts, "the nominal run and its impacts")?;
-            let head: SceneHead = serde_json::from_slice(&read_section(p0, streams * per)?)
+            let head: W::SceneHead = serde_json::from_slice(&read_section(p0, streams * per)?)
                 .map_err(|e| {
                     format!(
                         "{}: the stored nominal part is damaged: {e}",
@@ -1022,16 +986,16 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
             });
             let tail = calc::scene::merge(
                 &case,
-                head.nominal_capacity,
+                W::nominal_capacity(&head),
                 &main,
                 other.as_ref(),
-                req.migration_output.runs_csv,
+                W::keep_runs(&req),
             )?;
-            head.finish(tail, &case, *req)?
+            wire.scene_answer(head, tail, &case, *req)?
         }
         Prepared::Study(plan) => {
             check_sections(&parts, 2, None)?;
-            let mut results = Vec::with_capacity(plan.points() as usize);
+            let mut results = Vec::with_capacity(W::study_points(&plan) as usize);
             let p0 = part_zero(&parts, "the study's base point")?;
             let base = read_section(p0, 1)?;
             let (len, values) = base.split_first_chunk::<8>().ok_or_else(|| {
@@ -1061,7 +1025,7 @@ pub fn merge(args: &MergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
                     results.push(v);
                 }
             }
-            to_json_bytes(&(*plan).finish(results)?)?
+            wire.study_answer(*plan, results)?
         }
         Prepared::Batch(_) => {
             // the answer lines, streamed in index order
@@ -1233,55 +1197,5 @@ mod tests {
         for bad in ["3", "1/0", "a/3", "3/3"] {
             assert!(shard_of(&args(Some(bad), None, 0), &none).is_err(), "{bad}");
         }
-    }
-
-    /// More shards than runs leaves some parts empty (and sorted columns of zero or one value);
-    /// every split of a five-run ensemble merges to the service's bytes.
-    #[test]
-    fn any_split_including_empty_parts_gives_the_service_bytes() {
-        let dir = std::env::temp_dir().join(format!("gangue-shard-unit-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let body = serde_json::json!({
-            "face": {"dip_deg": 35.0, "length_m": 60.0, "friction_coefficient": 0.45},
-            "monte_carlo": {"runs": 5, "seed": 3,
-                "friction_coefficient": {"distribution": "normal", "mean": 0.45, "std": 0.2}},
-            "output": {"runs_csv": true, "events": false}
-        });
-        let request = dir.join("case.json");
-        std::fs::write(&request, serde_json::to_vec(&body).unwrap()).unwrap();
-        let config = Config::default();
-        let mut req: MigrationRequest = from_value(&body).unwrap();
-        let case = req.resolve(&config).unwrap();
-        let want = to_json_bytes(
-            &crate::http::routes::migration::solve(&case, req, &Control::unlimited()).unwrap(),
-        )
-        .unwrap();
-        for k in [1u64, 2, 5, 7, 13] {
-            let parts: Vec<PathBuf> = (0..k)
-                .map(|i| {
-                    let mut a = args(Some(&format!("{i}/{k}")), None, 0);
-                    a.request = request.clone();
-                    a.out = dir
-                        .join(format!("k{k}-part-{{shard}}"))
-                        .display()
-                        .to_string();
-                    compute(&a).map_err(|e| e.message).unwrap()
-                })
-                .collect();
-            let mut out = Vec::new();
-            let m = MergeArgs {
-                parts,
-                time_limit_s: None,
-                limits: Config::default(),
-            };
-            merge(&m, &mut out).map_err(|e| e.message).unwrap();
-            assert_eq!(
-                String::from_utf8(out).unwrap(),
-                String::from_utf8(want.clone()).unwrap(),
-                "{k} shards"
-            );
-        }
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
