@@ -11,6 +11,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use gangue::config::{Cli, Command, Config};
+use gangue::http::parts::HttpWire;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -19,7 +20,7 @@ fn main() -> ExitCode {
         Some(Command::Serve(config)) => serve(config),
         Some(Command::Compute(args)) => {
             solver_pool(&args.limits);
-            match gangue::shard::compute(&args) {
+            match gangue::shard::compute(&args, &HttpWire) {
                 Ok(path) => {
                     eprintln!("gangue: wrote {}", path.display());
                     ExitCode::SUCCESS
@@ -31,7 +32,7 @@ fn main() -> ExitCode {
             solver_pool(&args.limits);
             let stdout = std::io::stdout();
             let mut out = std::io::BufWriter::with_capacity(1 << 16, stdout.lock());
-            match gangue::shard::merge(&args, &mut out) {
+            match gangue::shard::merge(&args, &HttpWire, &mut out) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => fail(e),
             }

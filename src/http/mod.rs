@@ -5,6 +5,7 @@ pub mod error;
 pub mod finite;
 pub mod json;
 pub mod openapi;
+pub mod parts;
 pub mod routes;
 pub mod runner;
 pub mod server;

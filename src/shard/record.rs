@@ -1,0 +1,131 @@
+//! The binary run records of a part's body: a migration run (81 bytes), a scene run (114).
+
+use super::*;
+
+pub(super) fn encode_run(r: &RunSummary, out: &mut Vec<u8>) {
+    // every field, so that a new one fails to compile here
+    let RunSummary {
+        time,
+        speed,
+        kinetic_energy,
+        impact_count,
+        runout,
+        max_bounce_height,
+        stop_reason,
+        steps,
+        along_dip_velocity,
+        support,
+        impact_speed,
+    } = *r;
+    for x in [
+        time,
+        speed,
+        kinetic_energy,
+        runout,
+        max_bounce_height,
+        along_dip_velocity,
+        impact_speed,
+    ] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    out.extend_from_slice(&impact_count.to_le_bytes());
+    out.extend_from_slice(&steps.to_le_bytes());
+    out.extend_from_slice(&support.map_or(u64::MAX, |k| k as u64).to_le_bytes());
+    out.push(match stop_reason {
+        StopReason::LowerEnd => 0,
+        StopReason::AtRest => 1,
+        StopReason::EndTime => 2,
+        StopReason::LeftFloor => 3,
+        StopReason::Support => 4,
+    });
+}
+
+pub(super) fn decode_run(b: &[u8; RUN_RECORD_BYTES as usize]) -> Result<RunSummary, String> {
+    let f = |k: usize| f64::from_le_bytes(std::array::from_fn(|i| b[8 * k + i]));
+    let u = |k: usize| u64::from_le_bytes(std::array::from_fn(|i| b[8 * k + i]));
+    Ok(RunSummary {
+        time: f(0),
+        speed: f(1),
+        kinetic_energy: f(2),
+        runout: f(3),
+        max_bounce_height: f(4),
+        along_dip_velocity: f(5),
+        impact_speed: f(6),
+        impact_count: u(7),
+        steps: u(8),
+        support: match u(9) {
+            u64::MAX => None,
+            k => Some(usize::try_from(k).map_err(|_| format!("support index {k} out of range"))?),
+        },
+        stop_reason: match b[80] {
+            0 => StopReason::LowerEnd,
+            1 => StopReason::AtRest,
+            2 => StopReason::EndTime,
+            3 => StopReason::LeftFloor,
+            4 => StopReason::Support,
+            x => return Err(format!("unknown stop reason code {x}")),
+        },
+    })
+}
+
+pub(super) fn encode_scene_run(r: &SceneRun, out: &mut Vec<u8>) {
+    // every field, so that a new one fails to compile here
+    let SceneRun {
+        summary,
+        values,
+        capacity_exceeded,
+        exceeded,
+    } = r;
+    encode_run(summary, out);
+    let StrikeValues {
+        max_deformation,
+        max_force,
+        absorbed_energy,
+        stress_utilisation,
+    } = values.unwrap_or_default();
+    for x in [
+        max_deformation,
+        max_force,
+        absorbed_energy,
+        stress_utilisation,
+    ] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    // bit 0: values present, bit 1: past the capacity, bits 2…: exceeded per active limit (≤ 3)
+    debug_assert!(exceeded.len() <= 6);
+    let mut flags = u8::from(values.is_some()) | (u8::from(*capacity_exceeded) << 1);
+    for (j, &e) in exceeded.iter().enumerate() {
+        flags |= u8::from(e) << (2 + j);
+    }
+    out.push(flags);
+}
+
+pub(super) fn decode_scene_run(
+    b: &[u8; SCENE_RECORD_BYTES as usize],
+    limits: usize,
+) -> Result<SceneRun, String> {
+    let summary = decode_run(
+        b[..RUN_RECORD_BYTES as usize]
+            .try_into()
+            .map_err(|_| "a scene record shorter than a run record".to_string())?,
+    )?;
+    let at = RUN_RECORD_BYTES as usize;
+    let f = |k: usize| f64::from_le_bytes(std::array::from_fn(|i| b[at + 8 * k + i]));
+    let flags = b[at + 32];
+    if flags >> (2 + limits) != 0 {
+        return Err(format!(
+            "scene record flags {flags:#04x} do not fit {limits} limits"
+        ));
+    }
+    Ok(SceneRun {
+        summary,
+        values: (flags & 1 != 0).then(|| StrikeValues {
+            max_deformation: f(0),
+            max_force: f(1),
+            absorbed_energy: f(2),
+            stress_utilisation: f(3),
+        }),
+        capacity_exceeded: flags & 2 != 0,
+        exceeded: (0..limits).map(|j| flags & (4 << j) != 0).collect(),
+    })
+}
