@@ -136,7 +136,11 @@ async function post(endpoint, body) {
 async function downloaded(page, button) {
   const wait = page.waitForEvent('download', { timeout: WAIT_MS });
   await button.click();
-  const download = await wait;
+  const download = await wait.catch(async (e) => {
+    // name the button that gave no file: its text, its data-csv and its card
+    const what = await button.evaluate((b) => `${b.textContent.trim()} [data-csv=${b.dataset.csv ?? ''}] in #${b.closest('[id]')?.id ?? '?'}`);
+    throw new Error(`no download from "${what}": ${e.message}`);
+  });
   const file = await download.path();
   const { readFileSync } = await import('node:fs');
   const bytes = readFileSync(file);
