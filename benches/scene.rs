@@ -21,7 +21,6 @@ use gangue::physics::material::Column;
 use gangue::physics::migration::{Distribution, Method, MigrationCase, MonteCarlo, run};
 use gangue::physics::scene::{
     DesignLimits, ReleaseZone, SceneCase, SceneDraws, SupportEntry, TABLE1_SHARES, ensemble_part,
-    solve,
 };
 use std::time::{Duration, Instant};
 
@@ -60,6 +59,7 @@ fn case(method: Method, model: ColumnModel, runs: u64) -> SceneCase {
         draws: SceneDraws::default(),
         limits: DesignLimits::default(),
         compare_methods: false,
+        allowed_impacts: false,
     }
 }
 
@@ -122,6 +122,7 @@ fn paper_face(runs: u64, columns: bool) -> SceneCase {
         },
         limits: DesignLimits::default(),
         compare_methods: false,
+        allowed_impacts: false,
     }
 }
 
@@ -160,8 +161,8 @@ fn paper_face_timing(runs: u64, only_threads: Option<usize>, what: &str) {
             let r = pool.install(|| run(&mig, &Control::unlimited()).unwrap());
             (0.0, format!("{r:?}"))
         } else {
-            let r = pool.install(|| solve(&sc, &Control::unlimited()).unwrap());
-            let st = r.statistics.as_ref().unwrap();
+            let r = pool.install(|| Scene::solve(&sc, &Control::unlimited()).unwrap());
+            let st = r.result.statistics.as_ref().unwrap();
             let reached = st.entries.iter().map(|e| e.reached_fraction).sum::<f64>();
             (reached, format!("{r:?}"))
         };
@@ -243,7 +244,7 @@ fn paper_face_bench(c: &mut Criterion) {
     for (name, columns) in [("scene_spanning", false), ("scene_62_columns", true)] {
         let sc = paper_face(runs, columns);
         g.bench_with_input(BenchmarkId::new(name, runs), &sc, |b, sc| {
-            b.iter(|| pool.install(|| solve(sc, &Control::unlimited()).unwrap()))
+            b.iter(|| pool.install(|| Scene::solve(sc, &Control::unlimited()).unwrap()))
         });
     }
     g.finish();

@@ -1,11 +1,13 @@
 //! `/v1/scene`: release → migration → impact on the first support reached → column → design
 //! checks, for one run or the nominal run and a seeded ensemble (items: the runs).
 
-use super::{Calculation, Ensemble, Report};
+use super::{Calculation, Ensemble, Report, Stage};
 use crate::physics::Control;
+use crate::physics::design::{self, EntryAllowed};
 use crate::physics::migration::MonteCarlo;
 use crate::physics::scene::{
     self, EnsembleReport, SceneCase, SceneError, SceneRecords, SceneReport, SceneRun,
+    SceneStatistics,
 };
 
 /// The scene calculation.
@@ -18,7 +20,22 @@ impl Calculation for Scene {
     type Error = SceneError;
 
     fn solve(case: &SceneCase, control: &Control) -> Result<Report<SceneReport>, SceneError> {
-        Ok(report(scene::solve(case, control)?))
+        let (mut r, mc) = nominal_report(case, control)?;
+        if let Some(mc) = mc {
+            let (runs, other) = scene::ensemble_part(case, &mc, 0..mc.runs, control)?;
+            let capacity = scene::nominal_capacity(&r);
+            let Ok(tail) = scene::ensemble_report(
+                case,
+                &mc,
+                capacity,
+                runs.as_slice(),
+                other.as_deref(),
+                false,
+            );
+            attach(&mut r, tail);
+            r.runs = Some(runs);
+        }
+        Ok(report(r))
     }
 }
 
@@ -52,12 +69,73 @@ pub fn ensemble(case: &SceneCase) -> Option<MonteCarlo> {
 }
 
 /// What is not an item: the nominal run with its strikes (the whole scene without an
-/// ensemble), computed once (by shard 0 of a sharded computation).
+/// ensemble) and the allowed impacts, computed once (by shard 0 of a sharded computation).
 ///
 /// # Errors
 /// As [`Scene::solve`].
 pub fn nominal(case: &SceneCase, control: &Control) -> Result<Report<SceneReport>, SceneError> {
-    Ok(report(scene::solve_nominal(case, control)?.0))
+    Ok(report(nominal_report(case, control)?.0))
+}
+
+/// [`scene::solve_nominal`] with the allowed impacts (their stage after the nominal ones), and
+/// the ensemble still to run.
+fn nominal_report(
+    case: &SceneCase,
+    control: &Control,
+) -> Result<(SceneReport, Option<MonteCarlo>), SceneError> {
+    let (mut r, mc) = scene::solve_nominal(case, control)?;
+    if let Some((allowed, stage)) = allowed_impacts(case, control)? {
+        r.plan.push(stage);
+        r.allowed = Some(allowed);
+    }
+    Ok((r, mc))
+}
+
+/// Adds the ensemble's `tail` to the nominal report `r` ([`SceneReport::attach`]) and gives the
+/// allowed impacts their design speeds ([`design_speeds`]).
+pub fn attach(r: &mut SceneReport, tail: EnsembleReport) {
+    r.attach(tail);
+    if let (Some(a), Some(st)) = (r.allowed.as_mut(), r.statistics.as_ref()) {
+        design_speeds(a, st);
+    }
+}
+
+/// Sets each entry's design impact speed from the ensemble's statistics: the p95 of the impact
+/// speeds of the runs that reached it within the contact capacity (None: none did).
+pub fn design_speeds(allowed: &mut [EntryAllowed], statistics: &SceneStatistics) {
+    for (a, e) in allowed.iter_mut().zip(&statistics.entries) {
+        a.design_speed = e.impact_velocity.as_ref().map(|s| s.p95);
+    }
+}
+
+/// The allowed impacts of every support entry and the plan's stage for them (None: not asked
+/// for), without design speeds.
+///
+/// # Errors
+/// The chain's ([`design::allowed_for_entries`]).
+pub fn allowed_impacts(
+    case: &SceneCase,
+    control: &Control,
+) -> Result<Option<(Vec<EntryAllowed>, Stage)>, SceneError> {
+    if !case.allowed_impacts {
+        return Ok(None);
+    }
+    let limits = case.limits.active().len();
+    if limits == 0 {
+        let stage = Stage::skipped("allowed_impacts", "no design limit is checked");
+        return Ok(Some((Vec::new(), stage)));
+    }
+    let allowed = design::allowed_for_entries(case, control)?;
+    let columns = design::distinct_columns(case);
+    let stage = Stage::ran(
+        "allowed_impacts",
+        format!(
+            "the inverse of the chain for {limits} design limit(s) on {columns} distinct \
+             column(s), the case's nominal rock, to a relative {:e}",
+            design::RELATIVE_TOLERANCE
+        ),
+    );
+    Ok(Some((allowed, stage)))
 }
 
 /// The ensemble's part of the report from the records of all runs (computed here or read back

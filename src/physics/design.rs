@@ -208,6 +208,68 @@ pub fn allowed_impacts(
         .collect()
 }
 
+/// The allowed impacts of one support entry, and (for an ensemble) the margin of its design
+/// impact speed against each.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EntryAllowed {
+    /// Per active design limit, in api.md order.
+    pub limits: Vec<AllowedImpact>,
+    /// The design impact speed of the runs that reached the entry, m/s (None: no ensemble, or
+    /// no run reached it).
+    pub design_speed: Option<f64>,
+}
+
+impl EntryAllowed {
+    /// Design impact speed ÷ allowed speed per limit (≤ 1: within; None without a design
+    /// speed, or where nothing is allowed).
+    #[must_use]
+    pub fn utilisation(&self) -> Vec<Option<f64>> {
+        self.limits
+            .iter()
+            .map(|a| {
+                self.design_speed
+                    .filter(|_| a.speed > 0.0)
+                    .map(|v| v / a.speed)
+            })
+            .collect()
+    }
+}
+
+/// The allowed impacts of every support entry of `case` for its active design limits, for the
+/// case's nominal rock (as the impact takes it). Entries whose columns are equal share one
+/// computation (the chain depends on the entry only through its column).
+///
+/// Errors: the chain's, tagged with the first entry of the column concerned.
+pub fn allowed_for_entries(case: &SceneCase, control: &Control) -> SceneResult<Vec<EntryAllowed>> {
+    let (_, mass) = scene::rock_extent(&case.migration.rock)?;
+    let rock = scene::impact_rock(&case.migration.rock, mass);
+    let mut out: Vec<EntryAllowed> = Vec::with_capacity(case.supports.len());
+    for (k, e) in case.supports.iter().enumerate() {
+        control.check()?;
+        let same = case.supports[..k].iter().position(|p| p.column == e.column);
+        let limits = match same {
+            Some(j) => out[j].limits.clone(),
+            None => allowed_impacts(case, k, &rock, mass, &case.limits, control)?,
+        };
+        out.push(EntryAllowed {
+            limits,
+            design_speed: None,
+        });
+    }
+    Ok(out)
+}
+
+/// The distinct columns among the support entries of `case` (the columns
+/// [`allowed_for_entries`] computes).
+#[must_use]
+pub fn distinct_columns(case: &SceneCase) -> usize {
+    case.supports
+        .iter()
+        .enumerate()
+        .filter(|(k, e)| !case.supports[..*k].iter().any(|p| p.column == e.column))
+        .count()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -238,6 +300,7 @@ mod tests {
             draws: SceneDraws::default(),
             limits: DesignLimits::default(),
             compare_methods: false,
+            allowed_impacts: false,
         }
     }
 

@@ -8,6 +8,7 @@ pub mod floor;
 pub mod impact;
 pub mod migration;
 pub mod param;
+pub mod protection;
 pub mod scene;
 pub mod spalling;
 pub mod study;

@@ -16,6 +16,7 @@ use super::migration::{
     MigrationResponse, MonteCarloDto, ReleaseDto, RigidBlockDto, SummaryDto,
 };
 use super::param::{Layout, scene_pointer};
+use super::protection::{AllowedImpactsDto, StoredLimit, allowed_dto, limit_name, restore, store};
 use crate::calc::{self, Report};
 use crate::config::Config;
 use crate::http::error::{ApiError, FieldError, num};
@@ -219,6 +220,10 @@ pub struct SceneRequest {
     /// Run both migration methods and compare them.
     #[schema(default = false, example = false)]
     pub compare_methods: bool,
+    /// Report each support's allowed impact per design limit (`allowed_impacts` of the answer):
+    /// the impact speed and energy of the case's rock at which the check reaches its limit.
+    #[schema(default = true, example = true)]
+    pub allowed_impacts: bool,
     /// Migration outputs (the nominal run's events and trajectory; the per-run CSV).
     pub migration_output: MigrationOutputDto,
     /// Column history of each impact (null: none).
@@ -248,6 +253,7 @@ impl Default for SceneRequest {
             release_zones: None,
             design_limits: DesignLimitsDto::default(),
             compare_methods: false,
+            allowed_impacts: true,
             migration_output: MigrationOutputDto::default(),
             column_output: None,
         }
@@ -507,6 +513,7 @@ impl SceneRequest {
             draws,
             limits,
             compare_methods: self.compare_methods,
+            allowed_impacts: self.allowed_impacts,
         };
         let ctx = SceneContext {
             migration: mreq,
@@ -748,14 +755,6 @@ pub struct CheckDto {
     pub exceeded: bool,
 }
 
-fn limit_name(l: Limit) -> &'static str {
-    match l {
-        Limit::StressUtilisation => "stress_utilisation",
-        Limit::MaxForce => "max_force_n",
-        Limit::AbsorbedEnergy => "absorbed_energy_j",
-    }
-}
-
 impl From<&Check> for CheckDto {
     fn from(c: &Check) -> Self {
         Self {
@@ -935,7 +934,8 @@ pub struct MethodComparisonDto {
 /// The answer of `POST /v1/scene`.
 #[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
 pub struct SceneResponse {
-    /// Stages `release`, `migration`, `impact`, `column`, `checks`: ran or skipped, and why.
+    /// Stages `release`, `migration`, `impact`, `column`, `checks`, `allowed_impacts`: ran or
+    /// skipped, and why.
     pub plan: Vec<PlanStep>,
     /// The migration response of the (nominal) run (omitted with impact_velocity_m_s).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -950,6 +950,11 @@ pub struct SceneResponse {
     /// Both methods side by side (compare_methods).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub comparison: Option<Vec<MethodComparisonDto>>,
+    /// Per support entry, what its column can take: the allowed impact speed and energy of the
+    /// case's nominal rock per design limit, and the margin of the ensemble's design impact
+    /// speed against it (omitted with `allowed_impacts: false`; empty when no limit is checked).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub allowed_impacts: Option<Vec<AllowedImpactsDto>>,
     /// Named warnings, among them `release_zones_clipped` (the share of the release zones'
     /// weight where the rock does not fit on the floor, clipped off) and those of the migration.
     pub warnings: Vec<super::Warning>,
@@ -1189,6 +1194,7 @@ impl SceneResponse {
             impacts: Piece::Built(impacts),
             statistics,
             comparison,
+            allowed_impacts: r.allowed.as_ref().map(|a| allowed_dto(case, a)),
             warnings,
             inputs,
             model_version: meta.model_version,
@@ -1216,6 +1222,9 @@ pub struct SceneHead {
     migration_warnings: Vec<(String, String)>,
     /// The impacts.
     impacts: String,
+    /// The allowed impacts (without design speeds), when asked for.
+    #[serde(default)]
+    allowed: Option<Vec<Vec<StoredLimit>>>,
     /// The nominal impact went past the contact capacity.
     pub nominal_capacity: bool,
 }
@@ -1248,6 +1257,7 @@ impl SceneHead {
             migration: None,
             migration_warnings: Vec::new(),
             impacts: String::new(),
+            allowed: r.allowed.as_deref().map(store),
             nominal_capacity: scene::nominal_capacity(r),
         };
         if !ensemble {
@@ -1318,6 +1328,15 @@ impl SceneHead {
         warnings.extend(warnings_of(&tail.warnings));
         warnings.extend(self.migration_warnings.iter().map(warning));
         let meta = Meta::new(plan);
+        let mut allowed = self
+            .allowed
+            .as_deref()
+            .map(restore)
+            .transpose()
+            .map_err(|e| ApiError::internal(format!("the stored allowed impacts: {e}")))?;
+        if let Some(a) = allowed.as_mut() {
+            calc::scene::design_speeds(a, &tail.statistics);
+        }
         let resp = SceneResponse {
             plan: meta.plan,
             migration: self.migration.as_ref().map(|_| Piece::Stored(0)),
@@ -1327,6 +1346,7 @@ impl SceneHead {
                 .comparison
                 .as_ref()
                 .map(|c| c.iter().map(|m| comparison_dto(case, m)).collect()),
+            allowed_impacts: allowed.as_ref().map(|a| allowed_dto(case, a)),
             warnings,
             inputs,
             model_version: meta.model_version,

@@ -13,9 +13,9 @@ fn other_method(m: Method) -> Method {
 
 /// The runs with global indices in `range` of the ensemble `mc` of `case`, in run order, and
 /// with `compare_methods` those of the other migration method. Run i is seeded by (seed, i)
-/// whatever the range, so the runs of any split of 0..runs are those of [`solve`].
+/// whatever the range, so the runs of any split of 0..runs are those of `calc::scene::Scene::solve`.
 ///
-/// Errors: as [`solve`] (the first error in run order).
+/// Errors: as `calc::scene::Scene::solve` (the first error in run order).
 pub fn ensemble_part(
     case: &SceneCase,
     mc: &MonteCarlo,

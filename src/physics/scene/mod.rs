@@ -20,6 +20,7 @@
 use super::column::{self, ColumnCase, ColumnDetail, ColumnModel, ColumnResult};
 use super::contact::{self, ImpactResult};
 use super::control::Control;
+use super::design::EntryAllowed;
 use super::error::{Param, PhysicsError};
 use super::material::{Column, ImpactCase, Rock, RockShape};
 use super::migration::shape::BlockShape;
@@ -165,6 +166,8 @@ pub struct SceneCase {
     pub limits: DesignLimits,
     /// Run both migration methods and compare.
     pub compare_methods: bool,
+    /// Compute each support's allowed impact per design limit ([`allowed_for_entries`](super::design::allowed_for_entries)).
+    pub allowed_impacts: bool,
 }
 
 /// The failure of a scene: the stage's error and the support entry it concerns (its fields are
@@ -422,6 +425,8 @@ pub struct SceneReport {
     pub runs: Option<Vec<SceneRun>>,
     /// Both methods side by side.
     pub comparison: Option<Vec<MethodSummary>>,
+    /// Per entry: the allowed impacts and the design speed's margins (None: not asked for).
+    pub allowed: Option<Vec<EntryAllowed>>,
     /// Warnings of the scene (the migration's are in its result).
     pub warnings: Vec<Warning>,
 }
@@ -683,32 +688,6 @@ fn scale_rock(rock: &mut Rock, l: f64) {
     rock.corner_radius = rock.corner_radius.min(l / 2.0);
 }
 
-/// Solves a scene: [`solve_nominal`], then (with an ensemble) the runs of [`ensemble_part`] over
-/// all indices and [`ensemble_report`] of them.
-///
-/// Errors: the migration's (tagged with no entry) and a strike's (tagged with its entry).
-///
-/// # References
-/// api.md `POST /v1/scene`.
-pub fn solve(case: &SceneCase, control: &Control) -> SceneResult<SceneReport> {
-    let (mut report, mc) = solve_nominal(case, control)?;
-    if let Some(mc) = mc {
-        let (runs, other) = ensemble_part(case, &mc, 0..mc.runs, control)?;
-        let capacity = nominal_capacity(&report);
-        let Ok(tail) = ensemble_report(
-            case,
-            &mc,
-            capacity,
-            runs.as_slice(),
-            other.as_deref(),
-            false,
-        );
-        report.attach(tail);
-        report.runs = Some(runs);
-    }
-    Ok(report)
-}
-
 /// True when an impact of the report went past the contact capacity (the plan says so).
 #[must_use]
 pub fn nominal_capacity(report: &SceneReport) -> bool {
@@ -734,7 +713,7 @@ impl SceneReport {
 /// ensemble (a single run or `impact_velocity`), the whole report. Returns the ensemble still to
 /// run, if any (then [`ensemble_part`] and [`ensemble_report`] complete the report).
 ///
-/// Errors: as [`solve`].
+/// Errors: as `calc::scene::Scene::solve`.
 pub fn solve_nominal(
     case: &SceneCase,
     control: &Control,
@@ -781,6 +760,7 @@ pub fn solve_nominal(
             statistics: None,
             runs: None,
             comparison: None,
+            allowed: None,
             warnings,
         };
         return Ok((report, None));
@@ -845,6 +825,7 @@ pub fn solve_nominal(
         statistics: None,
         runs: None,
         comparison: None,
+        allowed: None,
         warnings,
     };
     if mc.is_none() {

@@ -1,0 +1,173 @@
+//! What protection must take, in a scene's answer: each support's allowed impact per design
+//! limit and the margin of the ensemble's design impact speed against it.
+
+use serde::Serialize;
+use utoipa::ToSchema;
+
+use crate::physics::design::{AllowedBy, AllowedImpact, EntryAllowed};
+use crate::physics::scene::{Limit, SceneCase};
+
+/// The name of a design limit on the wire.
+#[must_use]
+pub fn limit_name(l: Limit) -> &'static str {
+    match l {
+        Limit::StressUtilisation => "stress_utilisation",
+        Limit::MaxForce => "max_force_n",
+        Limit::AbsorbedEnergy => "absorbed_energy_j",
+    }
+}
+
+/// The allowed impact of a support for one design limit: the largest impact speed of the case's
+/// rock at which the check does not exceed its limit (to a relative 1e-9).
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct AllowedLimitDto {
+    /// `stress_utilisation`, `max_force_n` or `absorbed_energy_j`.
+    pub limit: String,
+    /// The limit's allowed value (its unit: 1, N or J).
+    pub allowed: f64,
+    /// Largest impact speed that does not exceed the limit, m/s (0 when `ended_by` is
+    /// `nothing`).
+    pub impact_velocity_m_s: f64,
+    /// Translational kinetic energy of the case's rock at that speed, J.
+    pub kinetic_energy_j: f64,
+    /// The check's value at that speed (omitted when `ended_by` is `nothing`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value: Option<f64>,
+    /// What ends the allowed speed: `limit` (the check reaches its limit), `capacity` (the
+    /// contact law's capacity is passed first), `speed_range` (within the limit up to 1000 m/s,
+    /// the fastest impact computed) or `nothing` (even 1e-6 m/s exceeds it).
+    pub ended_by: String,
+    /// The design impact speed ÷ this allowed speed (≤ 1: the design impact is within the
+    /// limit; omitted without a design speed or when nothing is allowed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub design_utilisation: Option<f64>,
+}
+
+/// One support entry's allowed impacts.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct AllowedImpactsDto {
+    /// Support number (from 1).
+    pub support: u32,
+    /// Column of that support (from 0).
+    pub column_index: u32,
+    /// Along-dip position, m.
+    pub along_dip_m: f64,
+    /// Across position of the column, m (null: the support spans the face).
+    pub across_m: Option<f64>,
+    /// The design impact speed: the p95 of the impact speeds of the ensemble's runs that reached
+    /// the support within the contact capacity, m/s (omitted without an ensemble, or when no run
+    /// reached it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub design_impact_velocity_m_s: Option<f64>,
+    /// Per checked design limit, in the order of `design_limits`.
+    pub limits: Vec<AllowedLimitDto>,
+}
+
+/// The allowed impacts of every support entry of `case`.
+#[must_use]
+pub fn allowed_dto(case: &SceneCase, allowed: &[EntryAllowed]) -> Vec<AllowedImpactsDto> {
+    allowed
+        .iter()
+        .zip(&case.supports)
+        .map(|(a, e)| AllowedImpactsDto {
+            support: e.support,
+            column_index: e.column_index,
+            along_dip_m: e.along_dip,
+            across_m: e.across,
+            design_impact_velocity_m_s: a.design_speed,
+            limits: a
+                .limits
+                .iter()
+                .zip(a.utilisation())
+                .map(|(l, u)| AllowedLimitDto {
+                    limit: limit_name(l.limit).into(),
+                    allowed: l.allowed,
+                    impact_velocity_m_s: l.speed,
+                    kinetic_energy_j: l.energy,
+                    value: l.value,
+                    ended_by: by_name(l.by).into(),
+                    design_utilisation: u,
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// One limit's allowed impact as a sharded computation's part 0 stores it: limit, allowed
+/// value, speed (m/s), energy (J), the check's value, what ends it.
+pub type StoredLimit = (String, f64, f64, f64, Option<f64>, String);
+
+/// The allowed impacts as part 0 stores them (design speeds are the merge's).
+#[must_use]
+pub fn store(allowed: &[EntryAllowed]) -> Vec<Vec<StoredLimit>> {
+    allowed
+        .iter()
+        .map(|a| {
+            a.limits
+                .iter()
+                .map(|l| {
+                    (
+                        limit_name(l.limit).to_string(),
+                        l.allowed,
+                        l.speed,
+                        l.energy,
+                        l.value,
+                        by_name(l.by).to_string(),
+                    )
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The allowed impacts from part 0's record ([`store`]); errors name what does not parse.
+pub fn restore(stored: &[Vec<StoredLimit>]) -> Result<Vec<EntryAllowed>, String> {
+    stored
+        .iter()
+        .map(|limits| {
+            let limits = limits
+                .iter()
+                .map(|(limit, allowed, speed, energy, value, by)| {
+                    Ok(AllowedImpact {
+                        limit: [
+                            Limit::StressUtilisation,
+                            Limit::MaxForce,
+                            Limit::AbsorbedEnergy,
+                        ]
+                        .into_iter()
+                        .find(|l| limit_name(*l) == limit)
+                        .ok_or_else(|| format!("unknown design limit {limit:?}"))?,
+                        allowed: *allowed,
+                        speed: *speed,
+                        energy: *energy,
+                        value: *value,
+                        by: [
+                            AllowedBy::Limit,
+                            AllowedBy::Capacity,
+                            AllowedBy::SpeedRange,
+                            AllowedBy::Nothing,
+                        ]
+                        .into_iter()
+                        .find(|b| by_name(*b) == by)
+                        .ok_or_else(|| format!("unknown end of an allowed speed {by:?}"))?,
+                        evaluations: 0,
+                    })
+                })
+                .collect::<Result<Vec<_>, String>>()?;
+            Ok(EntryAllowed {
+                limits,
+                design_speed: None,
+            })
+        })
+        .collect()
+}
+
+/// The wire name of what ends an allowed speed.
+fn by_name(by: AllowedBy) -> &'static str {
+    match by {
+        AllowedBy::Limit => "limit",
+        AllowedBy::Capacity => "capacity",
+        AllowedBy::SpeedRange => "speed_range",
+        AllowedBy::Nothing => "nothing",
+    }
+}
