@@ -60,6 +60,7 @@ fn case(method: Method, model: ColumnModel, runs: u64) -> SceneCase {
         limits: DesignLimits::default(),
         compare_methods: false,
         allowed_impacts: false,
+        release_rate: None,
     }
 }
 
@@ -123,6 +124,7 @@ fn paper_face(runs: u64, columns: bool) -> SceneCase {
         limits: DesignLimits::default(),
         compare_methods: false,
         allowed_impacts: false,
+        release_rate: None,
     }
 }
 

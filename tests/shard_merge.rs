@@ -359,7 +359,19 @@ async fn scene_ensemble_shards_merge_to_the_http_answer() {
     let ex = st["any_exceeded"]["probability"].as_f64().unwrap();
     assert!(ex > 0.0 && ex < reached, "exceedance {ex}");
     assert!(v["migration"]["runs_csv"].as_str().unwrap().lines().count() == 62);
+    // the allowed impacts (part 0's) with the design speeds (the merge's) are in the answer
+    let allowed = v["allowed_impacts"].as_array().unwrap();
+    assert!(
+        allowed
+            .iter()
+            .any(|a| a["design_impact_velocity_m_s"].is_number()),
+        "{allowed:?}"
+    );
     same_bytes_for_any_split("scene", "scene", &body).await;
+    // and the frequencies of a release rate observed as a count
+    let mut counted = body.clone();
+    counted["release_rate"] = json!({"observed_events": 643, "observed_period_years": 0.75});
+    same_bytes_for_any_split("scene-rate", "scene", &counted).await;
 }
 
 #[tokio::test]

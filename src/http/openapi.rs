@@ -143,6 +143,10 @@ const NULL_DEFAULTS: &[&str] = &[
     "absorbed_energy_j",
     "time_step_s",
     "floor_material",
+    "release_rate",
+    "rocks_per_year",
+    "observed_events",
+    "observed_period_years",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot

@@ -301,6 +301,7 @@ mod tests {
             limits: DesignLimits::default(),
             compare_methods: false,
             allowed_impacts: false,
+            release_rate: None,
         }
     }
 

@@ -1,11 +1,15 @@
 //! What protection must take, in a scene's answer: each support's allowed impact per design
-//! limit and the margin of the ensemble's design impact speed against it.
+//! limit and the margin of the ensemble's design impact speed against it; and from probability
+//! to frequency: the release rate and the overloads per year.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
 use utoipa::ToSchema;
 
+use super::common::{Bound, Checker, FieldDefault, NumberField, number_schemas};
 use crate::physics::design::{AllowedBy, AllowedImpact, EntryAllowed};
 use crate::physics::scene::{Limit, SceneCase};
+use crate::physics::stats::rate::{Frequency, ReleaseRate};
 
 /// The name of a design limit on the wire.
 #[must_use]
@@ -169,5 +173,120 @@ fn by_name(by: AllowedBy) -> &'static str {
         AllowedBy::Capacity => "capacity",
         AllowedBy::SpeedRange => "speed_range",
         AllowedBy::Nothing => "nothing",
+    }
+}
+
+/// `release_rate.rocks_per_year`.
+pub const ROCKS_PER_YEAR: NumberField = NumberField {
+    description: "Rocks released per year on the face, 1/year, in (0, 1e9] (null: give \
+                  observed_events and observed_period_years instead).",
+    default: FieldDefault::Null,
+    lo: Bound::Open(0.0),
+    hi: Bound::Closed(1e9),
+    unit: "1/year",
+    example: 850.0,
+    nullable: true,
+};
+
+/// `release_rate.observed_period_years`.
+pub const OBSERVED_PERIOD: NumberField = NumberField {
+    description: "Period over which observed_events were counted, years, in (0, 1000] (the \
+                  paper's Table 1: 643 spalling events in 9 months, 0.75).",
+    default: FieldDefault::Null,
+    lo: Bound::Open(0.0),
+    hi: Bound::Closed(1000.0),
+    unit: "years",
+    example: 0.75,
+    nullable: true,
+};
+
+/// Most events `release_rate.observed_events` takes.
+pub const MAX_OBSERVED_EVENTS: u64 = 1_000_000_000;
+
+number_schemas! {
+    rocks_per_year_schema => ROCKS_PER_YEAR;
+    observed_period_schema => OBSERVED_PERIOD;
+}
+
+/// How many rocks are released on the face: a rate, or events counted over a period. Give
+/// `rocks_per_year`, or `observed_events` with `observed_period_years` (the rate is then
+/// estimated from the count, and its own uncertainty widens the intervals).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReleaseRateDto {
+    /// Rocks released per year, 1/year.
+    #[schema(schema_with = rocks_per_year_schema)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rocks_per_year: Option<f64>,
+    /// Release events counted (e.g. the Spalling tab's spalling count), in [0, 1e9].
+    #[schema(default = json!(null), minimum = 0, maximum = 1_000_000_000, example = 643)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub observed_events: Option<u64>,
+    /// Period of the count, years.
+    #[schema(schema_with = observed_period_schema)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub observed_period_years: Option<f64>,
+}
+
+impl ReleaseRateDto {
+    /// The release rate, its fields checked against their ranges and against each other
+    /// (`base`: the object's JSON Pointer).
+    pub fn resolve(&self, base: &str, ck: &mut Checker) -> Option<ReleaseRate> {
+        match (
+            self.rocks_per_year,
+            self.observed_events,
+            self.observed_period_years,
+        ) {
+            (Some(r), None, None) => ROCKS_PER_YEAR
+                .check(ck, &format!("{base}/rocks_per_year"), r)
+                .then_some(ReleaseRate::PerYear(r)),
+            (None, Some(events), Some(years)) => {
+                let ok =
+                    ck.count(
+                        &format!("{base}/observed_events"),
+                        events,
+                        0,
+                        MAX_OBSERVED_EVENTS,
+                        "events",
+                    ) & OBSERVED_PERIOD.check(ck, &format!("{base}/observed_period_years"), years);
+                ok.then_some(ReleaseRate::Observed { events, years })
+            }
+            _ => {
+                ck.push(
+                    base,
+                    serde_json::to_value(self).unwrap_or(Value::Null),
+                    "give rocks_per_year, or observed_events with observed_period_years (one \
+                     form only)",
+                );
+                None
+            }
+        }
+    }
+}
+
+/// Expected overloads per year, with a 95 % interval and the return period.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct FrequencyDto {
+    /// Expected overloads per year: the release rate × the probability per released rock,
+    /// 1/year.
+    pub per_year: f64,
+    /// Its interval, 1/year: the Wilson 95 % interval of the probability times a given rate;
+    /// with an observed count, the exact Poisson (Garwood) 97.5 % interval of the rate times the
+    /// Wilson 97.5 % interval of the probability (at least 95 % jointly).
+    pub ci95_per_year: [f64; 2],
+    /// Mean time between overloads, years (null: none expected).
+    pub return_period_years: Option<f64>,
+    /// Its interval, years: [1 / upper, 1 / lower] (null: unbounded).
+    pub return_period_ci95_years: [Option<f64>; 2],
+}
+
+impl From<&Frequency> for FrequencyDto {
+    fn from(f: &Frequency) -> Self {
+        Self {
+            per_year: f.per_year,
+            ci95_per_year: f.ci95,
+            return_period_years: f.return_period,
+            return_period_ci95_years: f.return_period_ci95,
+        }
     }
 }

@@ -16,7 +16,10 @@ use super::migration::{
     MigrationResponse, MonteCarloDto, ReleaseDto, RigidBlockDto, SummaryDto,
 };
 use super::param::{Layout, scene_pointer};
-use super::protection::{AllowedImpactsDto, StoredLimit, allowed_dto, limit_name, restore, store};
+use super::protection::{
+    AllowedImpactsDto, FrequencyDto, ReleaseRateDto, StoredLimit, allowed_dto, limit_name, restore,
+    store,
+};
 use crate::calc::{self, Report};
 use crate::config::Config;
 use crate::http::error::{ApiError, FieldError, num};
@@ -27,6 +30,7 @@ use crate::physics::scene::{
     SceneDraws, SceneError, SceneReport, SceneRun, SceneStatistics, Strike, SupportEntry,
     TABLE1_SHARES,
 };
+use crate::physics::stats::rate::ReleaseRate;
 
 /// A support along the face: spanning (`across_m` null) or one column at (`along_dip_m`,
 /// `across_m`) in the mean plane.
@@ -220,6 +224,11 @@ pub struct SceneRequest {
     /// Run both migration methods and compare them.
     #[schema(default = false, example = false)]
     pub compare_methods: bool,
+    /// Rocks released per year, or events counted over a period: each support's expected
+    /// overloads per year and return period (needs `monte_carlo`; null: none).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub release_rate: Option<ReleaseRateDto>,
     /// Report each support's allowed impact per design limit (`allowed_impacts` of the answer):
     /// the impact speed and energy of the case's rock at which the check reaches its limit.
     #[schema(default = true, example = true)]
@@ -253,6 +262,7 @@ impl Default for SceneRequest {
             release_zones: None,
             design_limits: DesignLimitsDto::default(),
             compare_methods: false,
+            release_rate: None,
             allowed_impacts: true,
             migration_output: MigrationOutputDto::default(),
             column_output: None,
@@ -503,6 +513,7 @@ impl SceneRequest {
         let release_zones = self.resolve_release_zones(length, &mut ck);
         let draws = self.resolve_draws(&mut ck);
         let limits = self.resolve_design_limits(&mut ck);
+        let release_rate = self.resolve_release_rate(&mut ck);
         ck.finish()?;
         let case = SceneCase {
             migration,
@@ -514,6 +525,7 @@ impl SceneRequest {
             limits,
             compare_methods: self.compare_methods,
             allowed_impacts: self.allowed_impacts,
+            release_rate,
         };
         let ctx = SceneContext {
             migration: mreq,
@@ -698,6 +710,22 @@ impl SceneRequest {
             );
         }
         draws
+    }
+
+    /// The release rate (only with an ensemble: its frequencies are the rate × the ensemble's
+    /// probabilities).
+    fn resolve_release_rate(&self, ck: &mut Checker) -> Option<ReleaseRate> {
+        let r = self.release_rate.as_ref()?;
+        if self.monte_carlo.is_none() || self.impact_velocity_m_s.is_some() {
+            ck.push(
+                "/release_rate",
+                serde_json::to_value(r).unwrap_or(Value::Null),
+                "needs an ensemble (monte_carlo, without impact_velocity_m_s): overloads per \
+                 year are the release rate × the ensemble's probabilities",
+            );
+            return None;
+        }
+        r.resolve("/release_rate", ck)
     }
 
     /// The design limits: utilisation in (0, 100], force (N) and energy (J) in (0, 1e12],
@@ -888,6 +916,10 @@ pub struct SupportStatisticsDto {
     pub exceedance: ExceedanceDto,
     /// `exceeded` when a probability is above acceptable_probability, else `ok`.
     pub verdict: String,
+    /// Expected strikes of this support past some checked limit per year, with a 95 % interval
+    /// and the return period (with `release_rate`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub overloads_per_year: Option<FrequencyDto>,
 }
 
 /// Ensemble statistics of a scene.
@@ -903,6 +935,9 @@ pub struct SceneStatisticsDto {
     pub supports: Vec<SupportStatisticsDto>,
     /// Probability that a run overloads some support.
     pub any_exceeded: ProbabilityDto,
+    /// Expected overloads of some support per year (with `release_rate`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub any_overloads_per_year: Option<FrequencyDto>,
 }
 
 /// One entry of one method in a comparison.
@@ -1045,10 +1080,12 @@ fn statistics_dto(st: &SceneStatistics, case: &SceneCase) -> SceneStatisticsDto 
                     stress_utilisation: s.stress_utilisation.as_ref().map(Into::into),
                     exceedance: ex,
                     verdict: if s.exceeded { "exceeded" } else { "ok" }.into(),
+                    overloads_per_year: s.overloads_per_year.as_ref().map(FrequencyDto::from),
                 }
             })
             .collect(),
         any_exceeded: (&st.any_exceeded).into(),
+        any_overloads_per_year: st.any_overloads_per_year.as_ref().map(FrequencyDto::from),
     }
 }
 

@@ -292,6 +292,7 @@ fn statistics_of<R: SceneRecords + ?Sized>(
     let mut stops = [0u64; 5];
     let mut at = vec![0u64; e];
     let mut exceeded = vec![vec![0u64; limits.len()]; e];
+    let mut overloaded = vec![0u64; e];
     let mut any = 0u64;
     let mut counts = Counts {
         struck: 0,
@@ -307,6 +308,7 @@ fn statistics_of<R: SceneRecords + ?Sized>(
             for (c, &x) in exceeded[k].iter_mut().zip(&r.exceeded) {
                 *c += u64::from(x);
             }
+            overloaded[k] += u64::from(r.exceeded.iter().any(|&x| x));
         }
         any += u64::from(r.exceeded.iter().any(|&x| x));
         if let Some((k, x)) = entry_columns(r) {
@@ -363,6 +365,7 @@ fn statistics_of<R: SceneRecords + ?Sized>(
                 .iter()
                 .any(|(_, p)| p.probability > case.limits.acceptable_probability),
             exceedance,
+            overloads_per_year: case.release_rate.map(|r| frequency(overloaded[k], n, r)),
         });
     }
     let statistics = SceneStatistics {
@@ -377,6 +380,7 @@ fn statistics_of<R: SceneRecords + ?Sized>(
         },
         entries,
         any_exceeded: probability(any, n),
+        any_overloads_per_year: case.release_rate.map(|r| frequency(any, n, r)),
     };
     Ok((statistics, counts))
 }

@@ -30,6 +30,7 @@ use super::migration::{
 };
 use super::plan::Stage;
 use super::stats::interval::{Z_95, wilson_interval};
+use super::stats::rate::{Frequency, ReleaseRate, frequency};
 use super::stats::{self, Summary};
 use super::validity::Warning;
 
@@ -166,6 +167,8 @@ pub struct SceneCase {
     pub limits: DesignLimits,
     /// Run both migration methods and compare.
     pub compare_methods: bool,
+    /// Rocks released per year, or counted over a period (None: no frequencies).
+    pub release_rate: Option<ReleaseRate>,
     /// Compute each support's allowed impact per design limit ([`allowed_for_entries`](super::design::allowed_for_entries)).
     pub allowed_impacts: bool,
 }
@@ -377,6 +380,8 @@ pub struct EntryStatistics {
     pub exceedance: Vec<(Limit, Probability)>,
     /// Some exceedance probability above the acceptable one.
     pub exceeded: bool,
+    /// Expected strikes of this entry past some limit per year (with a release rate).
+    pub overloads_per_year: Option<Frequency>,
 }
 
 /// Ensemble statistics of a scene.
@@ -392,6 +397,8 @@ pub struct SceneStatistics {
     pub entries: Vec<EntryStatistics>,
     /// Probability that a run overloads some support.
     pub any_exceeded: Probability,
+    /// Expected overloads of some support per year (with a release rate).
+    pub any_overloads_per_year: Option<Frequency>,
 }
 
 /// One entry of a method in a comparison: reached fraction, median impact speed (None: never

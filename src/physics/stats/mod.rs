@@ -7,6 +7,7 @@
 pub mod interval;
 pub mod precision;
 pub mod quantile;
+pub mod rate;
 
 /// Number of histogram bins (api.md: 20 equal bins, 21 edges).
 pub const HISTOGRAM_BINS: usize = 20;
