@@ -73,6 +73,20 @@ const SCENE_GROUPS = [
     ],
   },
   {
+    legend: 'Release rate (overloads per year)',
+    pointer: '/release_rate',
+    toggle: { name: 'scene_release_rate', checked: false },
+    note: 'Give the rocks released per year, or events counted over a period (the Spalling tab sends its count). Needs the ensemble.',
+    fields: [
+      { pointer: '/release_rate/rocks_per_year', label: 'Rocks released per year', unit: '1/year', placeholder: 'from the count' },
+      { pointer: '/release_rate/observed_events', label: 'Events counted', kind: 'integer', placeholder: 'none' },
+      {
+        pointer: '/release_rate/observed_period_years', label: 'over', unit: 'years', placeholder: 'none',
+        hint: 'e.g. Table 1: 643 spalling events in 9 months (0.75 years); the count\'s own uncertainty widens the intervals',
+      },
+    ],
+  },
+  {
     legend: 'Design limits',
     pointer: '/design_limits',
     fields: [
@@ -256,6 +270,7 @@ export function initScene() {
     table.replaceChildren();
     supportSummary.textContent = '';
     distTable.replaceChildren();
+    renderProtection(null);
     planList.replaceChildren();
     showWarnings(warnings, []);
     Object.values(plots).forEach(destroy);
@@ -273,6 +288,7 @@ export function initScene() {
     const entries = supportEntries(data);
     renderSummary(data, entries);
     renderTable(data, entries);
+    renderProtection(data);
     renderSupportChart(entries, acceptableOf(data));
     renderFace(data, entries);
     const verdicts = new Map(entries.map((e) => [`${e.support}.${e.column_index ?? 0}`, e.verdict]));
@@ -496,6 +512,62 @@ export function initScene() {
           }),
           h('td', {}, sendButton(e.impact_velocity_m_s, `the single run's impact speed at support ${label(e)}`, `${fmt(e.impact_velocity_m_s, 4)} m/s`)));
       })),
+    );
+  }
+
+  /**
+   * What each column can take: per support and design limit, the allowed impact speed and
+   * energy of the case's rock, the ensemble's design speed (p95) against it, and with a release
+   * rate the expected overloads per year and the return period.
+   */
+  function renderProtection(data) {
+    const card = document.getElementById('scene-protection-card');
+    const el = document.getElementById('scene-protection');
+    const note = document.getElementById('scene-protection-note');
+    const allowed = data?.allowed_impacts ?? [];
+    card.hidden = !allowed.length;
+    el.replaceChildren();
+    if (!allowed.length) return;
+    const stats = new Map((data.statistics?.supports ?? []).map((s) => [`${s.support}.${s.column_index ?? 0}`, s]));
+    const rock = data.inputs?.rock ?? {};
+    const face = data.statistics?.any_overloads_per_year;
+    const years = (t) => (t === null || t === undefined ? 'never' : t >= 1 ? `${fmt(t, 3)} years` : t * 365.25 >= 1 ? `${fmt(t * 365.25, 3)} days` : `${fmt(t * 8766, 3)} hours`);
+    note.textContent = `Allowed: the fastest impact of the case's rock (side ${fmt(rock.side_length_m, 3)} m, ${fmt(rock.density_kg_m3, 4)} kg/m³) each column takes `
+      + 'within the limit (the inverse of the chain, to 1e-9).'
+      + (data.statistics ? ' Design speed: the p95 of the impact speeds of the runs that reached the support; design ÷ allowed above 100 % means the design impact exceeds the limit.' : '')
+      + (face ? ` Overloads of some support: ${fmt(face.per_year, 4)} per year [${fmt(face.ci95_per_year[0], 3)}–${fmt(face.ci95_per_year[1], 3)}], one every ${years(face.return_period_years)}.` : '');
+    const ENDS = { limit: 'the limit', capacity: 'the contact capacity', speed_range: 'none up to 1000 m/s', nothing: 'exceeded at any speed' };
+    const rows = allowed.flatMap((a) => {
+      const f = stats.get(`${a.support}.${a.column_index ?? 0}`)?.overloads_per_year ?? null;
+      return a.limits.map((l) => ({ a, l, f }));
+    });
+    // the most loaded first: overloads per year, then design ÷ allowed, then the support number
+    const key = (r) => [-(r.f?.per_year ?? -1), -(r.l.design_utilisation ?? -1), r.a.support, r.a.column_index ?? 0];
+    rows.sort((x, y) => { const [a, b] = [key(x), key(y)]; const i = a.findIndex((v, k) => v !== b[k]); return i < 0 ? 0 : a[i] - b[i]; });
+    const rate = rows.some((r) => r.f);
+    el.csv = () => [['support', 'column_index', 'along_dip_m', 'limit', 'allowed', 'allowed_impact_speed_m_s', 'allowed_kinetic_energy_j', 'ended_by',
+      'design_impact_speed_m_s', 'design_over_allowed', 'overloads_per_year', 'overloads_per_year_ci95_low', 'overloads_per_year_ci95_high', 'return_period_years'],
+    ...rows.map(({ a, l, f }) => [a.support, a.column_index ?? 0, csvNumber(a.along_dip_m), l.limit, csvNumber(l.allowed), csvNumber(l.impact_velocity_m_s),
+      csvNumber(l.kinetic_energy_j), l.ended_by, csvNumber(a.design_impact_velocity_m_s), csvNumber(l.design_utilisation), csvNumber(f?.per_year),
+      csvNumber(f?.ci95_per_year?.[0]), csvNumber(f?.ci95_per_year?.[1]), csvNumber(f?.return_period_years)])];
+    el.append(
+      h('thead', {}, h('tr', {}, ['Support', 'Design limit', 'Allowed impact speed (m/s)', 'Allowed energy (J)', 'Ended by',
+        ...(data.statistics ? ['Design speed p95 (m/s)', 'Design ÷ allowed (%)'] : []),
+        ...(rate ? ['Overloads per year [95 % CI]', 'One every'] : [])].map((c) => h('th', { scope: 'col' }, c)))),
+      h('tbody', {}, rows.map(({ a, l, f }) => h('tr', { class: l.design_utilisation > 1 ? 'verdict-exceeded' : '' },
+        h('th', { scope: 'row' }, label(a)),
+        h('td', {}, LIMIT_WORDS[l.limit] ?? l.limit),
+        h('td', { class: 'num' }, fmt(l.impact_velocity_m_s, 4)),
+        h('td', { class: 'num' }, fmt(l.kinetic_energy_j, 4)),
+        h('td', {}, ENDS[l.ended_by] ?? l.ended_by),
+        ...(data.statistics ? [
+          h('td', { class: 'num' }, a.design_impact_velocity_m_s === undefined ? 'never reached' : fmt(a.design_impact_velocity_m_s, 4)),
+          h('td', { class: 'num' }, l.design_utilisation === undefined ? '—' : fmt(l.design_utilisation * 100, 4)),
+        ] : []),
+        ...(rate ? [
+          h('td', { class: 'num' }, f ? `${fmt(f.per_year, 4)} [${fmt(f.ci95_per_year[0], 3)}–${fmt(f.ci95_per_year[1], 3)}]` : '—'),
+          h('td', { class: 'num' }, f ? years(f.return_period_years) : '—'),
+        ] : [])))),
     );
   }
 

@@ -92,7 +92,43 @@ function barChart(el, data) {
   });
 }
 
+/**
+ * The spalling count as the Scene's release rate: observed_events (the total count, whole) over
+ * the period typed beside the button; the Scene's release-rate group is ticked and shown.
+ */
+function sendCount(data) {
+  const note = document.getElementById('spalling-send-note');
+  const events = data.total.spalling;
+  const period = parseNumber(document.getElementById('spalling-period').value, 0, 'years');
+  if (!Number.isInteger(events)) {
+    note.textContent = `The total count ${fmt(events, 6)} is not whole: the release rate needs whole events.`;
+    return;
+  }
+  if (period.error || period.empty || !(period.value > 0 && period.value <= 1000)) {
+    note.textContent = 'The period must be a number of years in (0, 1000].';
+    return;
+  }
+  const scene = document.getElementById('scene-form');
+  const box = scene.querySelector('input[name="scene_release_rate"]');
+  box.checked = true;
+  box.dispatchEvent(new Event('change', { bubbles: true }));
+  const set = (pointer, v) => {
+    const el = scene.querySelector(`[data-pointer="${pointer}"]`);
+    el.value = v;
+    el.dispatchEvent(new Event('change', { bubbles: true }));
+  };
+  set('/release_rate/rocks_per_year', '');
+  set('/release_rate/observed_events', String(events));
+  set('/release_rate/observed_period_years', String(period.value));
+  note.textContent = `Sent: ${events} events over ${fmt(period.value, 6)} years to the Scene.`;
+  document.getElementById('tab-scene').click();
+  box.closest('fieldset').scrollIntoView({ block: 'center' });
+}
+
+let last = null;
+
 export function initSpalling() {
+  document.getElementById('spalling-to-scene')?.addEventListener('click', () => last && sendCount(last));
   const form = document.getElementById('spalling-form');
   const input = document.getElementById('spalling-input');
   const status = document.getElementById('spalling-status');
@@ -116,9 +152,13 @@ export function initSpalling() {
       resultTable(output, data);
       document.getElementById('spalling-empty').hidden = true;
       barChart(plot, data);
+      last = data;
+      document.getElementById('spalling-send').hidden = false;
     },
     clear: () => {
       showWarnings(warnings, []);
+      last = null;
+      document.getElementById('spalling-send').hidden = true;
       output.replaceChildren();
       document.getElementById('spalling-empty').hidden = false;
       destroy(plot);

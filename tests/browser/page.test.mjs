@@ -1255,6 +1255,52 @@ async function floorViewSection(page, context) {
     assert(sent === 0, `${sent} requests sent with a release off the grid`);
   });
 
+  await check('protection: the Spalling count goes to the Scene as its release rate; the Scene shows each column\'s allowed speed, the design speed against it and the overloads per year', async () => {
+    await open(page, '#spalling');
+    await submit(page, '#spalling-form', '/v1/spalling');
+    await page.locator('#spalling-send').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await page.locator('#spalling-to-scene').click();
+    assert(await page.locator('#panel-scene').isVisible(), 'the Scene tab is not shown after sending the count');
+    const box = page.locator('#scene-form input[name="scene_release_rate"]');
+    assert(await box.isChecked(), 'the release-rate group is not ticked');
+    const events = await page.locator('#scene-form [data-pointer="/release_rate/observed_events"]').inputValue();
+    const years = await page.locator('#scene-form [data-pointer="/release_rate/observed_period_years"]').inputValue();
+    assert(events === '643' && years === '0.75', `sent ${events} events over ${years} years`);
+    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
+    const answer = await submit(page, '#scene-form', '/v1/scene');
+    const body = JSON.parse((await request).postData());
+    assert(body.release_rate?.observed_events === 643 && body.release_rate.observed_period_years === 0.75 && body.release_rate.rocks_per_year === undefined,
+      `release_rate sent: ${JSON.stringify(body.release_rate)}`);
+    // a streamed answer: progress lines, then {"result": …}
+    const lines = (await answer.text()).trim().split('\n').map((l) => JSON.parse(l));
+    const data = lines.find((l) => l.result)?.result ?? lines[lines.length - 1];
+    await page.locator('#scene-protection-card').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const head = await page.locator('#scene-protection thead').textContent();
+    for (const words of ['Allowed impact speed (m/s)', 'Allowed energy (J)', 'Design speed p95 (m/s)', 'Design ÷ allowed (%)', 'Overloads per year [95 % CI]', 'One every']) {
+      assert(head.includes(words), `protection table heading lacks "${words}": ${head}`);
+    }
+    const rows = page.locator('#scene-protection tbody tr');
+    const n = data.allowed_impacts.reduce((k, a) => k + a.limits.length, 0);
+    assert(await rows.count() === n && n > 0, `${await rows.count()} rows for ${n} support limits`);
+    // the first row is the most overloaded support; against the answer: its allowed speed and
+    // its overloads per year
+    const perYear = (a) => data.statistics.supports.find((x) => x.support === a.support && x.column_index === a.column_index).overloads_per_year.per_year;
+    const most = Math.max(...data.allowed_impacts.map(perYear));
+    assert(most > 0, 'no support is overloaded: the check compares nothing');
+    const label = await rows.first().locator('th').textContent();
+    const first = data.allowed_impacts.find((a) => label.startsWith(`#${a.support} `));
+    assert(first && perYear(first) === most, `first row ${label}: not the most overloaded support (${most} per year)`);
+    const cells = await rows.first().locator('td').allTextContents();
+    const shown = Number(cells[1]);
+    assert(Math.abs(shown - first.limits[0].impact_velocity_m_s) <= 1e-3 * first.limits[0].impact_velocity_m_s, `allowed speed shown ${cells[1]} vs ${first.limits[0].impact_velocity_m_s}`);
+    const st = data.statistics.supports.find((x) => x.support === first.support && x.column_index === first.column_index);
+    assert(cells[6].startsWith(String(Number(st.overloads_per_year.per_year.toPrecision(4)))), `overloads shown ${cells[6]} vs ${st.overloads_per_year.per_year}`);
+    const note = await page.locator('#scene-protection-note').textContent();
+    assert(/Overloads of some support: [\d.]+ per year/.test(note), note);
+    await elementShot(page.locator('#scene-protection-card'), 'scene-protection.png');
+  });
+
   await check('exports: every CSV button of every tab downloads a non-empty file headed by version, date and case', async () => {
     await open(page, '#migration');
     await page.locator(`${form} input[name="monte_carlo"]`).check();
