@@ -20,7 +20,7 @@ use crate::calc::{self, Report};
 use crate::config::Config;
 use crate::http::error::{ApiError, FieldError, num};
 use crate::http::runner::to_json_bytes;
-use crate::physics::migration::{Method, RunSummary};
+use crate::physics::migration::Method;
 use crate::physics::scene::{
     self, Check, DesignLimits, Limit, MethodSummary, Outcomes, Probability, ReleaseZone, SceneCase,
     SceneDraws, SceneError, SceneReport, SceneRun, SceneStatistics, Strike, SupportEntry,
@@ -1347,21 +1347,25 @@ impl SceneHead {
     }
 }
 
-/// The runs of an ensemble as CSV: `/v1/migration`'s columns, then
+/// The runs of an ensemble as CSV: `/v1/migration`'s documented columns, then
 /// `support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded`
-/// (empty when no support was struck); numbers in shortest round-trip form.
+/// (empty when no support was struck), then the run columns every runs CSV appends
+/// ([`RUNS_CSV_RUN_COLUMNS`](super::migration::RUNS_CSV_RUN_COLUMNS): release, rock, stop
+/// position, energies) and `passing_height_m` (the height of the rock's lowest point above the
+/// floor when it reached the support, m; empty when no support was reached); numbers in
+/// shortest round-trip form.
 #[must_use]
 pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
-    let summaries: Vec<RunSummary> = runs.iter().map(|r| r.summary).collect();
-    let base = super::migration::runs_csv(&summaries);
-    let mut out = String::with_capacity(base.len() * 2);
-    for (i, line) in base.lines().enumerate() {
-        out.push_str(line);
-        if i == 0 {
-            out.push_str(",support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded\n");
-            continue;
-        }
-        let r = &runs[i - 1];
+    use super::migration::{
+        RUNS_CSV_HEADER, RUNS_CSV_RUN_COLUMNS, runs_csv_documented_fields, runs_csv_run_fields,
+    };
+    let mut out = String::with_capacity(400 * (runs.len() + 1));
+    out.push_str(RUNS_CSV_HEADER);
+    out.push_str(",support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded,");
+    out.push_str(RUNS_CSV_RUN_COLUMNS);
+    out.push_str(",passing_height_m\n");
+    for (i, r) in runs.iter().enumerate() {
+        out.push_str(&runs_csv_documented_fields(i, &r.summary));
         match r.summary.support {
             Some(k) => {
                 let e = &case.supports[k];
@@ -1371,13 +1375,19 @@ pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
                 ));
                 match r.values {
                     Some(v) => out.push_str(&format!(
-                        ",{},{},{},false\n",
+                        ",{},{},{},false",
                         v.max_force, v.absorbed_energy, v.stress_utilisation
                     )),
-                    None => out.push_str(",,,,true\n"),
+                    None => out.push_str(",,,,true"),
                 }
             }
-            None => out.push_str(",,,,,,,\n"),
+            None => out.push_str(",,,,,,,"),
+        }
+        out.push(',');
+        out.push_str(&runs_csv_run_fields(&r.summary));
+        match r.summary.support {
+            Some(_) => out.push_str(&format!(",{}\n", r.summary.passing_height)),
+            None => out.push_str(",\n"),
         }
     }
     out

@@ -424,6 +424,15 @@ pub(super) fn compare_single(
             along_dip_velocity: a.along_dip_velocity,
             support: a.support,
             impact_speed: a.impact_speed.unwrap_or(0.0),
+            release_along_dip: m.release.along_dip,
+            release_across: m.release.across,
+            side_length: m.rock.side_length,
+            density: m.rock.density,
+            stop_along_dip: a.along_dip,
+            stop_across: a.position[1],
+            translational_energy: a.kinetic_energy - a.rotational_energy,
+            rotational_energy: a.rotational_energy,
+            passing_height: a.normal_offset.max(0.0),
         };
         let (_, mass) = rock_extent(&m.rock)?;
         let rock = impact_rock(&m.rock, mass);
