@@ -359,7 +359,47 @@ async fn scene_ensemble_shards_merge_to_the_http_answer() {
     let ex = st["any_exceeded"]["probability"].as_f64().unwrap();
     assert!(ex > 0.0 && ex < reached, "exceedance {ex}");
     assert!(v["migration"]["runs_csv"].as_str().unwrap().lines().count() == 62);
+    // the per-run draws, stop positions and design values are part of what must merge to the
+    // same bytes: present in the answer compared
+    let head = v["migration"]["runs_csv"]
+        .as_str()
+        .unwrap()
+        .lines()
+        .next()
+        .unwrap();
+    assert!(
+        head.ends_with(",release_along_dip_m,release_across_m,side_length_m,density_kg_m3,stop_along_dip_m,stop_across_m,translational_energy_j,rotational_energy_j,passing_height_m"),
+        "{head}"
+    );
+    for (s, &f) in st["supports"].as_array().unwrap().iter().zip(&hit) {
+        assert_eq!(s["design_values"].is_null(), f == 0.0, "{s}");
+    }
     same_bytes_for_any_split("scene", "scene", &body).await;
+}
+
+#[test]
+fn a_part_of_an_older_format_version_is_refused() {
+    let dir = scratch("old-version");
+    let req = write_request(&dir, &scene_request(4));
+    let part = compute(&dir, &req, "scene", 0, 1);
+    // the same part as version 3 wrote it would say so in its header line (the records of
+    // version 3 were shorter: the release, rock, stop position and design values were not there)
+    let bytes = std::fs::read(&part).unwrap();
+    let text = String::from_utf8_lossy(&bytes);
+    assert!(text.contains("\"version\":4"), "a version-4 header");
+    let old = dir.join("part-old");
+    let mut b = bytes.clone();
+    let at = text.find("\"version\":4").unwrap() + "\"version\":".len();
+    b[at] = b'3';
+    std::fs::write(&old, &b).unwrap();
+    let o = merge(&[old]);
+    assert!(!o.status.success());
+    let e = text(&o);
+    assert!(
+        e.contains("part format version 3 cannot be read by this build (it reads version 4)"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[tokio::test]

@@ -16,7 +16,8 @@
 //! body of sections: a migration's run records (153 bytes each) followed by its seven statistics
 //! columns, each sorted by `f64::total_cmp`; a scene's run records (186 bytes each: the
 //! migration record, the strike's four values, a flag byte) followed by five columns per support
-//! entry (the runs that struck it within capacity, sorted), repeated for the other method with
+//! entry (the runs that struck it within capacity, sorted) and five design-value columns per
+//! entry (the runs that reached it, sorted), repeated for the other method with
 //! `compare_methods`, then the stored nominal part (JSON, empty but in part 0); a study's point
 //! outputs (each a length, u64, then f64 values) and then its base point (part 0 only); a
 //! batch's answer lines, each preceded by its length (u64). A part is written to a temporary name
@@ -54,7 +55,8 @@ use crate::physics::migration::{
     MigrationCase, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason, run_columns,
 };
 use crate::physics::scene::{
-    ENTRY_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun, StrikeValues, entry_columns,
+    ENTRY_COLUMNS, REACH_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun, StrikeValues,
+    entry_columns, reach_columns,
 };
 
 mod compute;

@@ -216,6 +216,9 @@ pub struct SceneRequest {
     pub release_zones: Option<ReleaseZonesDto>,
     /// Design limits.
     pub design_limits: DesignLimitsDto,
+    /// Percentile of the design values at each support, in [0.5, 0.999] (ensemble).
+    #[schema(schema_with = super::design_values::design_percentile_schema)]
+    pub design_percentile: f64,
     /// Run both migration methods and compare them.
     #[schema(default = false, example = false)]
     pub compare_methods: bool,
@@ -247,6 +250,7 @@ impl Default for SceneRequest {
             impact_velocity_m_s: None,
             release_zones: None,
             design_limits: DesignLimitsDto::default(),
+            design_percentile: super::design_values::DESIGN_PERCENTILE_FIELD.value(),
             compare_methods: false,
             migration_output: MigrationOutputDto::default(),
             column_output: None,
@@ -496,7 +500,9 @@ impl SceneRequest {
         check_contact_lengths(&supports, side_max, &mut ck);
         let release_zones = self.resolve_release_zones(length, &mut ck);
         let draws = self.resolve_draws(&mut ck);
-        let limits = self.resolve_design_limits(&mut ck);
+        let mut limits = self.resolve_design_limits(&mut ck);
+        super::design_values::check_design_percentile(&mut ck, self.design_percentile);
+        limits.design_percentile = self.design_percentile;
         ck.finish()?;
         let case = SceneCase {
             migration,
@@ -714,6 +720,7 @@ impl SceneRequest {
             "",
         );
         DesignLimits {
+            design_percentile: scene::DESIGN_PERCENTILE,
             stress_utilisation: dl.stress_utilisation,
             max_force: dl.max_force_n,
             absorbed_energy: dl.absorbed_energy_j,
@@ -889,6 +896,10 @@ pub struct SupportStatisticsDto {
     pub exceedance: ExceedanceDto,
     /// `exceeded` when a probability is above acceptable_probability, else `ok`.
     pub verdict: String,
+    /// Design values: the rock's state on reaching this entry over every run that reached it
+    /// (past the capacity too), each with its value at `design_percentile` and a
+    /// distribution-free 95 % interval (null: no run reached it).
+    pub design_values: Option<super::design_values::DesignValuesDto>,
 }
 
 /// Ensemble statistics of a scene.
@@ -1040,6 +1051,7 @@ fn statistics_dto(st: &SceneStatistics, case: &SceneCase) -> SceneStatisticsDto 
                     stress_utilisation: s.stress_utilisation.as_ref().map(Into::into),
                     exceedance: ex,
                     verdict: if s.exceeded { "exceeded" } else { "ok" }.into(),
+                    design_values: s.design_values.as_ref().map(Into::into),
                 }
             })
             .collect(),

@@ -226,7 +226,20 @@ pub struct MigrationResponse {
     /// Monte Carlo statistics.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub statistics: Option<StatisticsDto>,
-    /// Per-run summaries as CSV (when `output.runs_csv`).
+    /// Per-run summaries as CSV (when `output.runs_csv`), one line per run from run 0:
+    /// `run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s`;
+    /// in a scene then `support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded`
+    /// (empty when no support was reached); then, in both,
+    /// `release_along_dip_m,release_across_m` (the release point as drawn: the floor point under
+    /// the rock; a scene draws it in its release zones and across distribution),
+    /// `side_length_m,density_kg_m3` (the rock as drawn; the request's when nothing is drawn),
+    /// `stop_along_dip_m,stop_across_m` (where the run ended: the rock's centre projected on the
+    /// face; the lumped mass's point), `translational_energy_j,rotational_energy_j` (kinetic
+    /// energy there, J; at a support, on reaching it); in a scene last `passing_height_m` (the
+    /// height of the rock's lowest point above the floor on reaching the support, m; empty when
+    /// none was reached). The lumped mass's runout is `stop_along_dip_m − release_along_dip_m`
+    /// on a plane floor; the rigid block's is measured from its centre at release (on a plane
+    /// drop_height·sin θ up the dip of the floor point). Numbers in shortest round-trip form.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub runs_csv: Option<String>,
     /// Time step, steps and mass properties (rigid block).
