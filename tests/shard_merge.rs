@@ -385,11 +385,11 @@ fn a_part_of_an_older_format_version_is_refused() {
     // the same part as version 3 wrote it would say so in its header line (the records of
     // version 3 were shorter: the release, rock, stop position and design values were not there)
     let bytes = std::fs::read(&part).unwrap();
-    let text = String::from_utf8_lossy(&bytes);
-    assert!(text.contains("\"version\":4"), "a version-4 header");
+    let header = String::from_utf8_lossy(&bytes);
+    assert!(header.contains("\"version\":4"), "a version-4 header");
     let old = dir.join("part-old");
     let mut b = bytes.clone();
-    let at = text.find("\"version\":4").unwrap() + "\"version\":".len();
+    let at = header.find("\"version\":4").unwrap() + "\"version\":".len();
     b[at] = b'3';
     std::fs::write(&old, &b).unwrap();
     let o = merge(&[old]);
