@@ -122,15 +122,17 @@ mod tests {
     //! statistics at ranks found by summing binomial terms directly.
     use super::*;
 
-    /// P(B ≤ k), B ~ Binomial(n, p), by summing the terms (independent of statrs).
+    /// P(B ≤ k), B ~ Binomial(n, p), by summing the terms in log space (independent of
+    /// statrs; (1 − p)ⁿ alone underflows for n = 400, p = 0.9).
     fn cdf(n: u64, p: f64, k: u64) -> f64 {
-        let mut term = (1.0 - p).powi(n as i32);
-        let mut sum = term;
-        for j in 1..=k {
-            term *= (n - j + 1) as f64 / j as f64 * p / (1.0 - p);
-            sum += term;
-        }
-        sum
+        let ln_choose = |j: u64| -> f64 {
+            (1..=j)
+                .map(|i| ((n - j + i) as f64).ln() - (i as f64).ln())
+                .sum()
+        };
+        (0..=k)
+            .map(|j| (ln_choose(j) + j as f64 * p.ln() + (n - j) as f64 * (1.0 - p).ln()).exp())
+            .sum()
     }
 
     #[test]
