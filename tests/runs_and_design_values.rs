@@ -433,3 +433,34 @@ async fn a_rigid_block_measures_its_runout_from_its_centre_and_passes_above_the_
     let dv = &b["statistics"]["supports"][0]["design_values"];
     assert_eq!(dv["passing_height_m"]["count"], 4);
 }
+
+#[tokio::test]
+async fn a_design_percentile_outside_its_range_is_refused_naming_it() {
+    let app = common::app();
+    for bad in [0.4, 1.0, 0.9991] {
+        let r = post(&app, "/v1/scene", &json!({"design_percentile": bad})).await;
+        let p = common::assert_problem(&r, 422, "invalid_input");
+        let e = &p["errors"][0];
+        assert_eq!(e["field"], "/design_percentile", "{p}");
+        assert_eq!(e["value"], bad);
+        assert!(
+            e["message"].as_str().unwrap().contains("[0.5, 0.999]"),
+            "{p}"
+        );
+    }
+    common::assert_rejections(
+        &app,
+        "/v1/scene",
+        vec![(
+            json!({"design_percentile": null}),
+            "/design_percentile",
+            "invalid_type",
+        )],
+    )
+    .await;
+    // the bounds themselves are accepted, and echoed
+    for good in [0.5, 0.999] {
+        let r = post(&app, "/v1/scene", &json!({"design_percentile": good})).await;
+        assert_eq!(ok(&r)["inputs"]["design_percentile"], good);
+    }
+}

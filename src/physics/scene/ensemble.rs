@@ -530,6 +530,8 @@ pub(super) fn compare_single(
             stop_across: a.position[1],
             translational_energy: a.kinetic_energy - a.rotational_energy,
             rotational_energy: a.rotational_energy,
+            // only the outcome and the impact speed of this summary are read: the centre's
+            // offset stands in for the lowest point's height
             passing_height: a.normal_offset.max(0.0),
         };
         let (_, mass) = rock_extent(&m.rock)?;
