@@ -72,34 +72,49 @@ pub struct DesignValues {
     pub passing_height: DesignValue,
 }
 
-/// The 0-based ranks of the sorted column of `n` values that [`design_value`] reads: those of
-/// the summary ([`stats::order_ranks`]), the two around the design percentile and the interval's
-/// two, ascending, without repeats. Empty for n = 0.
-#[must_use]
-pub fn design_ranks(n: u64, p: f64) -> Vec<u64> {
-    if n == 0 {
-        return Vec::new();
-    }
-    let mut r = stats::order_ranks(n);
-    let lo = ((n - 1) as f64 * p).floor() as u64;
-    r.extend([lo.min(n - 1), (lo + 1).min(n - 1)]);
-    r.extend(
-        quantile_interval_ranks(n, p, DESIGN_CONFIDENCE)
-            .iter()
-            .flatten()
-            .map(|k| k - 1),
-    );
-    r.sort_unstable();
-    r.dedup();
-    r
+/// The order statistics a design value of `n` values at percentile `p` reads, found once per
+/// support entry (the binomial ranks cost a bisection on the CDF each).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DesignRanks {
+    /// The 0-based ranks of the sorted column: those of the summary ([`stats::order_ranks`]),
+    /// the two around the design percentile and the interval's two, ascending, without repeats.
+    /// Empty for n = 0.
+    pub all: Vec<u64>,
+    /// The interval's 1-based ranks [l, u] ([`quantile_interval_ranks`] at 95 %).
+    pub interval: [Option<u64>; 2],
 }
 
-/// The design value of a column from its second pass (`pass`, over `n` values) and the values
-/// at [`design_ranks`]`(n, p)` of the column sorted by `f64::total_cmp` (same order).
+/// The ranks [`design_value`] reads for `n` values at percentile `p`.
 #[must_use]
-pub fn design_value(pass: &stats::SecondPass, n: u64, p: f64, values: &[f64]) -> DesignValue {
-    let ranks = design_ranks(n, p);
-    let at = |k: u64| values[ranks.partition_point(|&r| r < k)];
+pub fn design_ranks(n: u64, p: f64) -> DesignRanks {
+    if n == 0 {
+        return DesignRanks {
+            all: Vec::new(),
+            interval: [None, None],
+        };
+    }
+    let interval = quantile_interval_ranks(n, p, DESIGN_CONFIDENCE);
+    let mut all = stats::order_ranks(n);
+    let lo = ((n - 1) as f64 * p).floor() as u64;
+    all.extend([lo.min(n - 1), (lo + 1).min(n - 1)]);
+    all.extend(interval.iter().flatten().map(|k| k - 1));
+    all.sort_unstable();
+    all.dedup();
+    DesignRanks { all, interval }
+}
+
+/// The design value of a column from its second pass (`pass`, over `n` ≥ 1 values), the ranks
+/// `ranks` = [`design_ranks`]`(n, p)` and the values at `ranks.all` of the column sorted by
+/// `f64::total_cmp` (same order).
+#[must_use]
+pub fn design_value(
+    pass: &stats::SecondPass,
+    n: u64,
+    p: f64,
+    ranks: &DesignRanks,
+    values: &[f64],
+) -> DesignValue {
+    let at = |k: u64| values[ranks.all.partition_point(|&r| r < k)];
     let summary_values: Vec<f64> = stats::order_ranks(n).into_iter().map(at).collect();
     let h = (n - 1) as f64 * p;
     let lo = h.floor() as u64;
@@ -108,7 +123,7 @@ pub fn design_value(pass: &stats::SecondPass, n: u64, p: f64, values: &[f64]) ->
     } else {
         at(lo) + (h - lo as f64) * (at(lo + 1) - at(lo))
     };
-    let [l, u] = quantile_interval_ranks(n, p, DESIGN_CONFIDENCE);
+    let [l, u] = ranks.interval;
     DesignValue {
         summary: pass.finish(&summary_values),
         value,
@@ -155,8 +170,8 @@ mod tests {
                 let mut sorted = xs.clone();
                 sorted.sort_by(f64::total_cmp);
                 let ranks = design_ranks(n, p);
-                let values: Vec<f64> = ranks.iter().map(|&k| sorted[k as usize]).collect();
-                let d = design_value(&second, n, p, &values);
+                let values: Vec<f64> = ranks.all.iter().map(|&k| sorted[k as usize]).collect();
+                let d = design_value(&second, n, p, &ranks, &values);
                 assert_eq!(d.value, stats::percentile_sorted(&sorted, p), "n {n} p {p}");
                 assert_eq!(d.summary, stats::summarize(&xs).unwrap());
                 // the lower bound: the largest rank l with P(B ≤ l − 1) ≤ 2.5 %

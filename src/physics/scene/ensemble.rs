@@ -450,13 +450,18 @@ fn design_values_of<R: SceneRecords + ?Sized>(
     second: &[Option<stats::SecondPass>; REACH_COLUMNS],
 ) -> Result<Option<DesignValues>, R::Error> {
     let n = first[0].count();
+    if n == 0 {
+        return Ok(None);
+    }
+    // every column of the entry has the same n: the ranks once
+    let ranks = design_ranks(n, p);
     let mut values = Vec::with_capacity(REACH_COLUMNS);
     for (col, pass) in second.iter().enumerate() {
         let Some(pass) = pass else {
             return Ok(None);
         };
-        let order = records.reach_order_values(k, col, &design_ranks(n, p))?;
-        values.push(design_value(pass, n, p, &order));
+        let order = records.reach_order_values(k, col, &ranks.all)?;
+        values.push(design_value(pass, n, p, &ranks, &order));
     }
     let mut v = values.into_iter();
     let (

@@ -39,8 +39,8 @@ use ensemble::compare_single;
 mod tests;
 
 pub use collectors::{
-    DESIGN_CONFIDENCE, DESIGN_PERCENTILE, DesignValue, DesignValues, REACH_COLUMNS, design_ranks,
-    design_value, reach_columns,
+    DESIGN_CONFIDENCE, DESIGN_PERCENTILE, DesignRanks, DesignValue, DesignValues, REACH_COLUMNS,
+    design_ranks, design_value, reach_columns,
 };
 pub use ensemble::{
     ENTRY_COLUMNS, EnsembleReport, SceneRecords, ensemble_part, ensemble_report, entry_columns,
