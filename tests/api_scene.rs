@@ -248,17 +248,20 @@ async fn an_ensemble_to_a_spanning_support_at_the_lower_end_has_the_migration_al
     let csv = b["migration"]["runs_csv"].as_str().unwrap();
     let mcsv = m["runs_csv"].as_str().unwrap();
     let head = csv.lines().next().unwrap();
+    // api.md's nine columns, the scene's seven, then the run columns both append and the
+    // scene's passing height
+    let mhead: Vec<&str> = mcsv.lines().next().unwrap().split(',').collect();
     assert_eq!(
         head,
         format!(
-            "{},support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded",
-            mcsv.lines().next().unwrap()
+            "{},support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded,{},passing_height_m",
+            mhead[..9].join(","),
+            mhead[9..].join(",")
         )
     );
     assert!(
-        mcsv.lines()
-            .next()
-            .unwrap()
+        mhead[..9]
+            .join(",")
             .ends_with(",stop_reason,along_dip_velocity_m_s")
     );
     for (a, b) in csv.lines().skip(1).zip(mcsv.lines().skip(1)) {

@@ -367,11 +367,51 @@ async fn scene_ensemble_shards_merge_to_the_http_answer() {
             .any(|a| a["design_impact_velocity_m_s"].is_number()),
         "{allowed:?}"
     );
+    // the per-run draws, stop positions and design values are part of what must merge to the
+    // same bytes: present in the answer compared
+    let head = v["migration"]["runs_csv"]
+        .as_str()
+        .unwrap()
+        .lines()
+        .next()
+        .unwrap();
+    assert!(
+        head.ends_with(",release_along_dip_m,release_across_m,side_length_m,density_kg_m3,stop_along_dip_m,stop_across_m,translational_energy_j,rotational_energy_j,passing_height_m"),
+        "{head}"
+    );
+    for (s, &f) in st["supports"].as_array().unwrap().iter().zip(&hit) {
+        assert_eq!(s["design_values"].is_null(), f == 0.0, "{s}");
+    }
     same_bytes_for_any_split("scene", "scene", &body).await;
     // and the frequencies of a release rate observed as a count
     let mut counted = body.clone();
     counted["release_rate"] = json!({"observed_events": 643, "observed_period_years": 0.75});
     same_bytes_for_any_split("scene-rate", "scene", &counted).await;
+}
+
+#[test]
+fn a_part_of_an_older_format_version_is_refused() {
+    let dir = scratch("old-version");
+    let req = write_request(&dir, &scene_request(4));
+    let part = compute(&dir, &req, "scene", 0, 1);
+    // the same part as version 3 wrote it would say so in its header line (the records of
+    // version 3 were shorter: the release, rock, stop position and design values were not there)
+    let bytes = std::fs::read(&part).unwrap();
+    let header = String::from_utf8_lossy(&bytes);
+    assert!(header.contains("\"version\":4"), "a version-4 header");
+    let old = dir.join("part-old");
+    let mut b = bytes.clone();
+    let at = header.find("\"version\":4").unwrap() + "\"version\":".len();
+    b[at] = b'3';
+    std::fs::write(&old, &b).unwrap();
+    let o = merge(&[old]);
+    assert!(!o.status.success());
+    let e = text(&o);
+    assert!(
+        e.contains("part format version 3 cannot be read by this build (it reads version 4)"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[tokio::test]

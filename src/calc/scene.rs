@@ -100,16 +100,17 @@ pub fn attach(r: &mut SceneReport, tail: EnsembleReport) {
     }
 }
 
-/// Sets each entry's design impact speed from the ensemble's statistics: the p95 of the impact
-/// speeds of the runs that reached it within the contact capacity (None: none did).
+/// Sets each entry's design impact speed from the ensemble's statistics: its design value of
+/// the impact speed (the design percentile over every run that reached it, past the contact
+/// capacity too; None: none did).
 pub fn design_speeds(allowed: &mut [EntryAllowed], statistics: &SceneStatistics) {
     for (a, e) in allowed.iter_mut().zip(&statistics.entries) {
-        a.design_speed = e.impact_velocity.as_ref().map(|s| s.p95);
+        a.design_speed = e.design_values.as_ref().map(|d| d.impact_speed.value);
     }
 }
 
 /// The allowed impacts of every support entry and the plan's stage for them (None: not asked
-/// for), without design speeds.
+/// for), without design speeds ([`design_speeds`] adds them from the ensemble).
 ///
 /// # Errors
 /// The chain's ([`design::allowed_for_entries`]).

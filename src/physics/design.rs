@@ -214,8 +214,8 @@ pub fn allowed_impacts(
 pub struct EntryAllowed {
     /// Per active design limit, in api.md order.
     pub limits: Vec<AllowedImpact>,
-    /// The design impact speed of the runs that reached the entry, m/s (None: no ensemble, or
-    /// no run reached it).
+    /// The design impact speed of the runs that reached the entry (its design value at the
+    /// design percentile), m/s (None: no ensemble, or no run reached it).
     pub design_speed: Option<f64>,
 }
 

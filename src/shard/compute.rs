@@ -56,7 +56,13 @@ pub fn compute<W: Wire>(args: &ComputeArgs, wire: &W) -> Result<PathBuf, Failure
                             c.push(x);
                         }
                     }
-                    for mut v in columns.into_iter().flatten() {
+                    let mut reach = vec![vec![Vec::new(); REACH_COLUMNS]; case.supports.len()];
+                    for (k, x) in stream.iter().filter_map(reach_columns) {
+                        for (c, x) in reach[k].iter_mut().zip(x) {
+                            c.push(x);
+                        }
+                    }
+                    for mut v in columns.into_iter().chain(reach).flatten() {
                         v.sort_unstable_by(f64::total_cmp);
                         let before = body.len();
                         v.iter()

@@ -46,7 +46,7 @@ pub fn merge<W: Wire>(args: &MergeArgs, wire: &W, out: &mut dyn Write) -> Result
         }
         Prepared::Scene { case, req, .. } => {
             let ensemble = calc::scene::ensemble(&case);
-            let per = 1 + case.supports.len() * ENTRY_COLUMNS;
+            let per = 1 + case.supports.len() * (ENTRY_COLUMNS + REACH_COLUMNS);
             let streams = match ensemble {
                 Some(_) => 1 + usize::from(case.compare_methods),
                 None => 0,
@@ -69,11 +69,13 @@ pub fn merge<W: Wire>(args: &MergeArgs, wire: &W, out: &mut dyn Write) -> Result
                 parts: &parts,
                 first: 0,
                 limits,
+                entries: case.supports.len(),
             };
             let other = case.compare_methods.then_some(SceneRuns {
                 parts: &parts,
                 first: per,
                 limits,
+                entries: case.supports.len(),
             });
             let tail = calc::scene::merge(
                 &case,

@@ -11,12 +11,13 @@
 //! study's base point. The merge runs no solver for them. A migration's nominal run (one run) is
 //! still computed by the merge from the request the parts carry.
 //!
-//! Part file (format version 3): one JSON header line ([`Header`]: kind, build id, SHA-256 of the
+//! Part file (format version 4): one JSON header line ([`Header`]: kind, build id, SHA-256 of the
 //! resolved inputs, the request, the item range, section sizes), then a little-endian binary
-//! body of sections: a migration's run records (81 bytes each) followed by its seven statistics
-//! columns, each sorted by `f64::total_cmp`; a scene's run records (114 bytes each: the
+//! body of sections: a migration's run records (153 bytes each) followed by its seven statistics
+//! columns, each sorted by `f64::total_cmp`; a scene's run records (186 bytes each: the
 //! migration record, the strike's four values, a flag byte) followed by five columns per support
-//! entry (the runs that struck it within capacity, sorted), repeated for the other method with
+//! entry (the runs that struck it within capacity, sorted) and five design-value columns per
+//! entry (the runs that reached it, sorted), repeated for the other method with
 //! `compare_methods`, then the stored nominal part (JSON, empty but in part 0); a study's point
 //! outputs (each a length, u64, then f64 values) and then its base point (part 0 only); a
 //! batch's answer lines, each preceded by its length (u64). A part is written to a temporary name
@@ -54,7 +55,8 @@ use crate::physics::migration::{
     MigrationCase, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason, run_columns,
 };
 use crate::physics::scene::{
-    ENTRY_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun, StrikeValues, entry_columns,
+    ENTRY_COLUMNS, REACH_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun, StrikeValues,
+    entry_columns, reach_columns,
 };
 
 mod compute;
@@ -73,9 +75,9 @@ pub use wire::Wire;
 /// Name of the part file format.
 pub const FORMAT: &str = "gangue-part";
 /// Version of the part file format.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 /// Bytes of one migration run record.
-const RUN_RECORD_BYTES: u64 = 81;
+const RUN_RECORD_BYTES: u64 = 153;
 /// Bytes of one scene run record: the migration record, four strike values, a flag byte.
 const SCENE_RECORD_BYTES: u64 = RUN_RECORD_BYTES + 33;
 

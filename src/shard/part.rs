@@ -299,11 +299,14 @@ impl RunRecords for PartRuns<'_> {
 }
 
 /// The run records of one method of a scene's parts (sorted by start, tiling 0..N): its records
-/// in section `first`, then five sorted columns per support entry.
+/// in section `first`, then five sorted columns per support entry (the runs that struck it
+/// within capacity), then five design-value columns per entry (the runs that reached it).
 pub(super) struct SceneRuns<'a> {
     pub(super) parts: &'a [Part],
     pub(super) first: usize,
     pub(super) limits: usize,
+    /// Number of support entries.
+    pub(super) entries: usize,
 }
 
 impl SceneRecords for SceneRuns<'_> {
@@ -331,6 +334,20 @@ impl SceneRecords for SceneRuns<'_> {
         merged_order_values(
             self.parts,
             self.first + 1 + entry * ENTRY_COLUMNS + col,
+            ranks,
+        )
+    }
+
+    fn reach_order_values(
+        &self,
+        entry: usize,
+        col: usize,
+        ranks: &[u64],
+    ) -> Result<Vec<f64>, String> {
+        let entries = self.entries;
+        merged_order_values(
+            self.parts,
+            self.first + 1 + entries * ENTRY_COLUMNS + entry * REACH_COLUMNS + col,
             ranks,
         )
     }

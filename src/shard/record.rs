@@ -1,4 +1,4 @@
-//! The binary run records of a part's body: a migration run (81 bytes), a scene run (114).
+//! The binary run records of a part's body: a migration run (153 bytes), a scene run (186).
 
 use super::*;
 
@@ -16,6 +16,15 @@ pub(super) fn encode_run(r: &RunSummary, out: &mut Vec<u8>) {
         along_dip_velocity,
         support,
         impact_speed,
+        release_along_dip,
+        release_across,
+        side_length,
+        density,
+        stop_along_dip,
+        stop_across,
+        translational_energy,
+        rotational_energy,
+        passing_height,
     } = *r;
     for x in [
         time,
@@ -38,11 +47,27 @@ pub(super) fn encode_run(r: &RunSummary, out: &mut Vec<u8>) {
         StopReason::LeftFloor => 3,
         StopReason::Support => 4,
     });
+    // format version 4: the draws, the stop position and the energies and height at the end
+    for x in [
+        release_along_dip,
+        release_across,
+        side_length,
+        density,
+        stop_along_dip,
+        stop_across,
+        translational_energy,
+        rotational_energy,
+        passing_height,
+    ] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
 }
 
 pub(super) fn decode_run(b: &[u8; RUN_RECORD_BYTES as usize]) -> Result<RunSummary, String> {
     let f = |k: usize| f64::from_le_bytes(std::array::from_fn(|i| b[8 * k + i]));
     let u = |k: usize| u64::from_le_bytes(std::array::from_fn(|i| b[8 * k + i]));
+    // the fields of format version 4, after the stop-reason byte
+    let g = |k: usize| f64::from_le_bytes(std::array::from_fn(|i| b[81 + 8 * k + i]));
     Ok(RunSummary {
         time: f(0),
         speed: f(1),
@@ -65,6 +90,15 @@ pub(super) fn decode_run(b: &[u8; RUN_RECORD_BYTES as usize]) -> Result<RunSumma
             4 => StopReason::Support,
             x => return Err(format!("unknown stop reason code {x}")),
         },
+        release_along_dip: g(0),
+        release_across: g(1),
+        side_length: g(2),
+        density: g(3),
+        stop_along_dip: g(4),
+        stop_across: g(5),
+        translational_energy: g(6),
+        rotational_energy: g(7),
+        passing_height: g(8),
     })
 }
 

@@ -32,12 +32,24 @@ fn run_records_round_trip() {
         along_dip_velocity: -2.5,
         support: Some(3),
         impact_speed: 1.25,
+        release_along_dip: 17.5,
+        release_across: -1.0e-310,
+        side_length: 0.3,
+        density: 2650.0,
+        stop_along_dip: 120.0,
+        stop_across: -0.0,
+        translational_energy: 9.5,
+        rotational_energy: 0.0,
+        passing_height: 2.5e-3,
     };
     let mut b = Vec::new();
     encode_run(&r, &mut b);
     assert_eq!(b.len() as u64, RUN_RECORD_BYTES);
     let back = decode_run(b.as_slice().try_into().unwrap()).unwrap();
     assert_eq!(back.speed.to_bits(), r.speed.to_bits());
+    // the fields of format version 4, bit for bit (−0 and a subnormal included)
+    assert_eq!(back.stop_across.to_bits(), r.stop_across.to_bits());
+    assert_eq!(back.release_across.to_bits(), r.release_across.to_bits());
     assert_eq!(back, r);
 }
 
@@ -55,6 +67,15 @@ fn scene_run_records_round_trip() {
         along_dip_velocity: 4.0,
         support: Some(2),
         impact_speed: 3.75,
+        release_along_dip: 40.0,
+        release_across: 0.75,
+        side_length: 0.25,
+        density: 2100.0,
+        stop_along_dip: 47.25,
+        stop_across: 0.5,
+        translational_energy: 11.0,
+        rotational_energy: 1.0,
+        passing_height: 0.0,
     };
     let runs = [
         SceneRun {

@@ -534,7 +534,7 @@ export function initScene() {
     const years = (t) => (t === null || t === undefined ? 'never' : t >= 1 ? `${fmt(t, 3)} years` : t * 365.25 >= 1 ? `${fmt(t * 365.25, 3)} days` : `${fmt(t * 8766, 3)} hours`);
     note.textContent = `Allowed: the fastest impact of the case's rock (side ${fmt(rock.side_length_m, 3)} m, ${fmt(rock.density_kg_m3, 4)} kg/m³) each column takes `
       + 'within the limit (the inverse of the chain, to 1e-9).'
-      + (data.statistics ? ' Design speed: the p95 of the impact speeds of the runs that reached the support; design ÷ allowed above 100 % means the design impact exceeds the limit.' : '')
+      + (data.statistics ? ` Design speed: the ${fmt((data.inputs?.design_percentile ?? 0.95) * 100, 3)} % design value of the impact speeds of the runs that reached the support; design ÷ allowed above 100 % means the design impact exceeds the limit.` : '')
       + (face ? ` Overloads of some support: ${fmt(face.per_year, 4)} per year [${fmt(face.ci95_per_year[0], 3)}–${fmt(face.ci95_per_year[1], 3)}], one every ${years(face.return_period_years)}.` : '');
     const ENDS = { limit: 'the limit', capacity: 'the contact capacity', speed_range: 'none up to 1000 m/s', nothing: 'exceeded at any speed' };
     const rows = allowed.flatMap((a) => {
@@ -552,7 +552,7 @@ export function initScene() {
       csvNumber(f?.ci95_per_year?.[0]), csvNumber(f?.ci95_per_year?.[1]), csvNumber(f?.return_period_years)])];
     el.append(
       h('thead', {}, h('tr', {}, ['Support', 'Design limit', 'Allowed impact speed (m/s)', 'Allowed energy (J)', 'Ended by',
-        ...(data.statistics ? ['Design speed p95 (m/s)', 'Design ÷ allowed (%)'] : []),
+        ...(data.statistics ? ['Design speed (m/s)', 'Design ÷ allowed (%)'] : []),
         ...(rate ? ['Overloads per year [95 % CI]', 'One every'] : [])].map((c) => h('th', { scope: 'col' }, c)))),
       h('tbody', {}, rows.map(({ a, l, f }) => h('tr', { class: l.design_utilisation > 1 ? 'verdict-exceeded' : '' },
         h('th', { scope: 'row' }, label(a)),

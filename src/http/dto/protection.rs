@@ -58,9 +58,10 @@ pub struct AllowedImpactsDto {
     pub along_dip_m: f64,
     /// Across position of the column, m (null: the support spans the face).
     pub across_m: Option<f64>,
-    /// The design impact speed: the p95 of the impact speeds of the ensemble's runs that reached
-    /// the support within the contact capacity, m/s (omitted without an ensemble, or when no run
-    /// reached it).
+    /// The design impact speed: the support's design value of the impact speed
+    /// (`statistics.supports[].design_values.impact_speed_m_s.design_value`, at
+    /// `design_percentile` over every run that reached it), m/s (omitted without an ensemble, or
+    /// when no run reached it).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub design_impact_velocity_m_s: Option<f64>,
     /// Per checked design limit, in the order of `design_limits`.

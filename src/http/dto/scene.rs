@@ -24,7 +24,7 @@ use crate::calc::{self, Report};
 use crate::config::Config;
 use crate::http::error::{ApiError, FieldError, num};
 use crate::http::runner::to_json_bytes;
-use crate::physics::migration::{Method, RunSummary};
+use crate::physics::migration::Method;
 use crate::physics::scene::{
     self, Check, DesignLimits, Limit, MethodSummary, Outcomes, Probability, ReleaseZone, SceneCase,
     SceneDraws, SceneError, SceneReport, SceneRun, SceneStatistics, Strike, SupportEntry,
@@ -221,6 +221,9 @@ pub struct SceneRequest {
     pub release_zones: Option<ReleaseZonesDto>,
     /// Design limits.
     pub design_limits: DesignLimitsDto,
+    /// Percentile of the design values at each support, in [0.5, 0.999] (ensemble).
+    #[schema(schema_with = super::design_values::design_percentile_schema)]
+    pub design_percentile: f64,
     /// Run both migration methods and compare them.
     #[schema(default = false, example = false)]
     pub compare_methods: bool,
@@ -261,6 +264,7 @@ impl Default for SceneRequest {
             impact_velocity_m_s: None,
             release_zones: None,
             design_limits: DesignLimitsDto::default(),
+            design_percentile: super::design_values::DESIGN_PERCENTILE_FIELD.value(),
             compare_methods: false,
             release_rate: None,
             allowed_impacts: true,
@@ -512,7 +516,9 @@ impl SceneRequest {
         check_contact_lengths(&supports, side_max, &mut ck);
         let release_zones = self.resolve_release_zones(length, &mut ck);
         let draws = self.resolve_draws(&mut ck);
-        let limits = self.resolve_design_limits(&mut ck);
+        let mut limits = self.resolve_design_limits(&mut ck);
+        super::design_values::check_design_percentile(&mut ck, self.design_percentile);
+        limits.design_percentile = self.design_percentile;
         let release_rate = self.resolve_release_rate(&mut ck);
         ck.finish()?;
         let case = SceneCase {
@@ -749,6 +755,7 @@ impl SceneRequest {
             "",
         );
         DesignLimits {
+            design_percentile: scene::DESIGN_PERCENTILE,
             stress_utilisation: dl.stress_utilisation,
             max_force: dl.max_force_n,
             absorbed_energy: dl.absorbed_energy_j,
@@ -920,6 +927,10 @@ pub struct SupportStatisticsDto {
     /// and the return period (with `release_rate`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub overloads_per_year: Option<FrequencyDto>,
+    /// Design values: the rock's state on reaching this entry over every run that reached it
+    /// (past the capacity too), each with its value at `design_percentile` and a
+    /// distribution-free 95 % interval (null: no run reached it).
+    pub design_values: Option<super::design_values::DesignValuesDto>,
 }
 
 /// Ensemble statistics of a scene.
@@ -1081,6 +1092,7 @@ fn statistics_dto(st: &SceneStatistics, case: &SceneCase) -> SceneStatisticsDto 
                     exceedance: ex,
                     verdict: if s.exceeded { "exceeded" } else { "ok" }.into(),
                     overloads_per_year: s.overloads_per_year.as_ref().map(FrequencyDto::from),
+                    design_values: s.design_values.as_ref().map(Into::into),
                 }
             })
             .collect(),
@@ -1404,21 +1416,25 @@ impl SceneHead {
     }
 }
 
-/// The runs of an ensemble as CSV: `/v1/migration`'s columns, then
+/// The runs of an ensemble as CSV: `/v1/migration`'s documented columns, then
 /// `support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded`
-/// (empty when no support was struck); numbers in shortest round-trip form.
+/// (empty when no support was struck), then the run columns every runs CSV appends
+/// ([`RUNS_CSV_RUN_COLUMNS`](super::migration::RUNS_CSV_RUN_COLUMNS): release, rock, stop
+/// position, energies) and `passing_height_m` (the height of the rock's lowest point above the
+/// floor when it reached the support, m; empty when no support was reached); numbers in
+/// shortest round-trip form.
 #[must_use]
 pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
-    let summaries: Vec<RunSummary> = runs.iter().map(|r| r.summary).collect();
-    let base = super::migration::runs_csv(&summaries);
-    let mut out = String::with_capacity(base.len() * 2);
-    for (i, line) in base.lines().enumerate() {
-        out.push_str(line);
-        if i == 0 {
-            out.push_str(",support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded\n");
-            continue;
-        }
-        let r = &runs[i - 1];
+    use super::migration::{
+        RUNS_CSV_HEADER, RUNS_CSV_RUN_COLUMNS, runs_csv_documented_fields, runs_csv_run_fields,
+    };
+    let mut out = String::with_capacity(400 * (runs.len() + 1));
+    out.push_str(RUNS_CSV_HEADER);
+    out.push_str(",support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded,");
+    out.push_str(RUNS_CSV_RUN_COLUMNS);
+    out.push_str(",passing_height_m\n");
+    for (i, r) in runs.iter().enumerate() {
+        out.push_str(&runs_csv_documented_fields(i, &r.summary));
         match r.summary.support {
             Some(k) => {
                 let e = &case.supports[k];
@@ -1428,13 +1444,19 @@ pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
                 ));
                 match r.values {
                     Some(v) => out.push_str(&format!(
-                        ",{},{},{},false\n",
+                        ",{},{},{},false",
                         v.max_force, v.absorbed_energy, v.stress_utilisation
                     )),
-                    None => out.push_str(",,,,true\n"),
+                    None => out.push_str(",,,,true"),
                 }
             }
-            None => out.push_str(",,,,,,,\n"),
+            None => out.push_str(",,,,,,,"),
+        }
+        out.push(',');
+        out.push_str(&runs_csv_run_fields(&r.summary));
+        match r.summary.support {
+            Some(_) => out.push_str(&format!(",{}\n", r.summary.passing_height)),
+            None => out.push_str(",\n"),
         }
     }
     out

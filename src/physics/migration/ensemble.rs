@@ -11,10 +11,10 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::lumped_mass::{Setup, simulate};
+use super::lumped_mass::{Phase, Setup, simulate};
 use super::release::{Prepared, lumped_mass_setup, prepare_on};
 use super::terrain::Floor;
-use super::trajectory::{robust_norm, support_impact_speed};
+use super::trajectory::{height_above_floor, robust_norm, support_impact_speed};
 use super::{
     Method, MigrationCase, MigrationResult, MonteCarlo, RunSummary, Statistics, StopReason,
     Warning, monte_carlo, rigid_block,
@@ -117,6 +117,7 @@ pub(super) fn lumped_one(
         (en, et)
     };
     let o = simulate(setup, mu, &mut draw, None, Some(control))?;
+    let on_floor = matches!(o.phase, Phase::Slide | Phase::Roll | Phase::Stopped);
     Ok(RunSummary {
         time: o.t,
         speed: robust_norm(&o.v),
@@ -131,6 +132,19 @@ pub(super) fn lumped_one(
         impact_speed: o.support.map_or(0.0, |k| {
             support_impact_speed(&mean, &case.supports[k], &o.p, &o.v)
         }),
+        release_along_dip: case.release.along_dip,
+        release_across: case.release.across,
+        side_length: case.rock.side_length,
+        density: case.rock.density,
+        stop_along_dip: mean.along(&o.p),
+        stop_across: o.p.y,
+        translational_energy: 0.5 * m * o.v.norm_squared(),
+        rotational_energy: m * o.e_rot,
+        passing_height: if on_floor {
+            0.0
+        } else {
+            height_above_floor(&pr.floor, &o.p, &o.v).max(0.0)
+        },
     })
 }
 

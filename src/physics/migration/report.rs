@@ -133,6 +133,29 @@ pub struct RunSummary {
     pub support: Option<usize>,
     /// Speed towards the support reached, m/s (0 when none was).
     pub impact_speed: f64,
+    /// Along-dip position of the release point as drawn (the floor point under the rock), m.
+    pub release_along_dip: f64,
+    /// Across-face position y of the release point as drawn, m.
+    pub release_across: f64,
+    /// The rock's side length as drawn (the case's when not drawn), m.
+    pub side_length: f64,
+    /// The rock's density as drawn (the case's when not drawn), kg/m³.
+    pub density: f64,
+    /// Along-dip position of the rock's centre projected on the face where the run ended, m
+    /// (lumped mass: its point).
+    pub stop_along_dip: f64,
+    /// Across-face position y of the rock's centre where the run ended, m.
+    pub stop_across: f64,
+    /// Translational kinetic energy ½ m v² at the end (at a support: when reaching it), J.
+    pub translational_energy: f64,
+    /// Rotational kinetic energy at the end, J: the rigid block's ½ ωᵀIω; the lumped mass's
+    /// rolling sphere ½ (2/5 m r²) ω² = m v²/5 while it rolls (and the spin it keeps in flight),
+    /// 0 while it slides.
+    pub rotational_energy: f64,
+    /// Height of the rock's lowest point above the floor (along the floor's normal) at the end,
+    /// m, never negative (a contact overlap counts as 0): at a support, the height at which the
+    /// rock passes its line. The lumped mass's point is its lowest point (0 on the ground).
+    pub passing_height: f64,
 }
 
 /// Ensemble statistics (api.md `statistics`).

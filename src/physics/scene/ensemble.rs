@@ -137,6 +137,25 @@ pub trait SceneRecords {
         col: usize,
         ranks: &[u64],
     ) -> Result<Vec<f64>, Self::Error>;
+    /// The values at the 0-based `ranks` (ascending) of column `col` of [`reach_columns`] over
+    /// the runs that reached entry `entry`, sorted by `f64::total_cmp`.
+    fn reach_order_values(
+        &self,
+        entry: usize,
+        col: usize,
+        ranks: &[u64],
+    ) -> Result<Vec<f64>, Self::Error>;
+}
+
+/// The values at the 0-based ascending `ranks` of `work` sorted by `f64::total_cmp`, found by
+/// selection (O(n)); `work` is reordered.
+fn select_ranks(mut work: Vec<f64>, ranks: &[u64]) -> Vec<f64> {
+    let mut start = 0;
+    for &k in ranks {
+        work[start..].select_nth_unstable_by(k as usize - start, f64::total_cmp);
+        start = k as usize + 1;
+    }
+    ranks.iter().map(|&k| work[k as usize]).collect()
 }
 
 impl SceneRecords for [SceneRun] {
@@ -170,6 +189,21 @@ impl SceneRecords for [SceneRun] {
             start = k as usize + 1;
         }
         Ok(ranks.iter().map(|&k| work[k as usize]).collect())
+    }
+
+    fn reach_order_values(
+        &self,
+        entry: usize,
+        col: usize,
+        ranks: &[u64],
+    ) -> Result<Vec<f64>, Self::Error> {
+        let work: Vec<f64> = self
+            .iter()
+            .filter_map(reach_columns)
+            .filter(|(k, _)| *k == entry)
+            .map(|(_, x)| x[col])
+            .collect();
+        Ok(select_ranks(work, ranks))
     }
 }
 
@@ -299,6 +333,7 @@ fn statistics_of<R: SceneRecords + ?Sized>(
         at_start: 0,
     };
     let mut first = vec![[stats::FirstPass::default(); ENTRY_COLUMNS]; e];
+    let mut reach_first = vec![[stats::FirstPass::default(); REACH_COLUMNS]; e];
     records.for_each_run(&mut |r| {
         stops[stop_index(r.summary.stop_reason)] += 1;
         if let Some(k) = r.summary.support {
@@ -316,14 +351,30 @@ fn statistics_of<R: SceneRecords + ?Sized>(
                 p.push(x);
             }
         }
+        if let Some((k, x)) = reach_columns(r) {
+            for (p, x) in reach_first[k].iter_mut().zip(x) {
+                p.push(x);
+            }
+        }
     })?;
     // second pass: squared deviations from the mean and histogram counts, in run order
     let mut second: Vec<[Option<stats::SecondPass>; ENTRY_COLUMNS]> =
         first.iter().map(|f| f.map(|p| p.second_pass())).collect();
-    if first.iter().any(|f| f[0].count() > 0) {
+    let mut reach_second: Vec<[Option<stats::SecondPass>; REACH_COLUMNS]> = reach_first
+        .iter()
+        .map(|f| f.map(|p| p.second_pass()))
+        .collect();
+    if reach_first.iter().any(|f| f[0].count() > 0) {
         records.for_each_run(&mut |r| {
             if let Some((k, x)) = entry_columns(r) {
                 for (p, x) in second[k].iter_mut().zip(x) {
+                    if let Some(p) = p {
+                        p.push(x);
+                    }
+                }
+            }
+            if let Some((k, x)) = reach_columns(r) {
+                for (p, x) in reach_second[k].iter_mut().zip(x) {
                     if let Some(p) = p {
                         p.push(x);
                     }
@@ -351,6 +402,13 @@ fn statistics_of<R: SceneRecords + ?Sized>(
             .zip(&exceeded[k])
             .map(|((l, _), &c)| (*l, probability(c, n)))
             .collect();
+        let design_values = design_values_of(
+            records,
+            k,
+            case.limits.design_percentile,
+            &reach_first[k],
+            &reach_second[k],
+        )?;
         let mut s = summaries.into_iter();
         let mut next = || s.next().flatten();
         entries.push(EntryStatistics {
@@ -361,6 +419,7 @@ fn statistics_of<R: SceneRecords + ?Sized>(
             max_force: next(),
             absorbed_energy: next(),
             stress_utilisation: next(),
+            design_values,
             exceeded: exceedance
                 .iter()
                 .any(|(_, p)| p.probability > case.limits.acceptable_probability),
@@ -383,6 +442,50 @@ fn statistics_of<R: SceneRecords + ?Sized>(
         any_overloads_per_year: case.release_rate.map(|r| frequency(any, n, r)),
     };
     Ok((statistics, counts))
+}
+
+/// The design values of entry `k` at percentile `p` from the two passes over its
+/// [`reach_columns`] and their order statistics; None when no run reached the entry.
+fn design_values_of<R: SceneRecords + ?Sized>(
+    records: &R,
+    k: usize,
+    p: f64,
+    first: &[stats::FirstPass; REACH_COLUMNS],
+    second: &[Option<stats::SecondPass>; REACH_COLUMNS],
+) -> Result<Option<DesignValues>, R::Error> {
+    let n = first[0].count();
+    if n == 0 {
+        return Ok(None);
+    }
+    // every column of the entry has the same n: the ranks once
+    let ranks = design_ranks(n, p);
+    let mut values = Vec::with_capacity(REACH_COLUMNS);
+    for (col, pass) in second.iter().enumerate() {
+        let Some(pass) = pass else {
+            return Ok(None);
+        };
+        let order = records.reach_order_values(k, col, &ranks.all)?;
+        values.push(design_value(pass, n, p, &ranks, &order));
+    }
+    let mut v = values.into_iter();
+    let (
+        Some(impact_speed),
+        Some(kinetic_energy),
+        Some(translational_energy),
+        Some(rotational_energy),
+        Some(passing_height),
+    ) = (v.next(), v.next(), v.next(), v.next(), v.next())
+    else {
+        return Ok(None);
+    };
+    Ok(Some(DesignValues {
+        percentile: p,
+        impact_speed,
+        kinetic_energy,
+        translational_energy,
+        rotational_energy,
+        passing_height,
+    }))
 }
 
 fn stop_index(r: StopReason) -> usize {
@@ -428,6 +531,17 @@ pub(super) fn compare_single(
             along_dip_velocity: a.along_dip_velocity,
             support: a.support,
             impact_speed: a.impact_speed.unwrap_or(0.0),
+            release_along_dip: m.release.along_dip,
+            release_across: m.release.across,
+            side_length: m.rock.side_length,
+            density: m.rock.density,
+            stop_along_dip: a.along_dip,
+            stop_across: a.position[1],
+            translational_energy: a.kinetic_energy - a.rotational_energy,
+            rotational_energy: a.rotational_energy,
+            // only the outcome and the impact speed of this summary are read: the centre's
+            // offset stands in for the lowest point's height
+            passing_height: a.normal_offset.max(0.0),
         };
         let (_, mass) = rock_extent(&m.rock)?;
         let rock = impact_rock(&m.rock, mass);

@@ -34,11 +34,16 @@ use super::stats::rate::{Frequency, ReleaseRate, frequency};
 use super::stats::{self, Summary};
 use super::validity::Warning;
 
+mod collectors;
 mod ensemble;
 use ensemble::compare_single;
 #[cfg(test)]
 mod tests;
 
+pub use collectors::{
+    DESIGN_CONFIDENCE, DESIGN_PERCENTILE, DesignRanks, DesignValue, DesignValues, REACH_COLUMNS,
+    design_ranks, design_value, reach_columns,
+};
 pub use ensemble::{
     ENTRY_COLUMNS, EnsembleReport, SceneRecords, ensemble_part, ensemble_report, entry_columns,
     outcomes_of,
@@ -80,6 +85,8 @@ pub struct ReleaseZone {
 /// The design limits checked for every impact; `None` is not checked.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DesignLimits {
+    /// Percentile of the design values at each support, in (0, 1) (default 0.95).
+    pub design_percentile: f64,
     /// Largest bending-stress utilisation σ/σ_y (default 1).
     pub stress_utilisation: Option<f64>,
     /// Largest contact force, N.
@@ -93,6 +100,7 @@ pub struct DesignLimits {
 impl Default for DesignLimits {
     fn default() -> Self {
         Self {
+            design_percentile: DESIGN_PERCENTILE,
             stress_utilisation: Some(1.0),
             max_force: None,
             absorbed_energy: None,
@@ -376,6 +384,8 @@ pub struct EntryStatistics {
     pub absorbed_energy: Option<Summary>,
     /// Stress utilisation.
     pub stress_utilisation: Option<Summary>,
+    /// The design values over the runs that reached the entry (None: no run did).
+    pub design_values: Option<DesignValues>,
     /// Per active limit: the probability over all runs of striking this entry past the limit.
     pub exceedance: Vec<(Limit, Probability)>,
     /// Some exceedance probability above the acceptable one.

@@ -226,7 +226,20 @@ pub struct MigrationResponse {
     /// Monte Carlo statistics.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub statistics: Option<StatisticsDto>,
-    /// Per-run summaries as CSV (when `output.runs_csv`).
+    /// Per-run summaries as CSV (when `output.runs_csv`), one line per run from run 0:
+    /// `run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s`;
+    /// in a scene then `support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded`
+    /// (empty when no support was reached); then, in both,
+    /// `release_along_dip_m,release_across_m` (the release point as drawn: the floor point under
+    /// the rock; a scene draws it in its release zones and across distribution),
+    /// `side_length_m,density_kg_m3` (the rock as drawn; the request's when nothing is drawn),
+    /// `stop_along_dip_m,stop_across_m` (where the run ended: the rock's centre projected on the
+    /// face; the lumped mass's point), `translational_energy_j,rotational_energy_j` (kinetic
+    /// energy there, J; at a support, on reaching it); in a scene last `passing_height_m` (the
+    /// height of the rock's lowest point above the floor on reaching the support, m; empty when
+    /// none was reached). The lumped mass's runout is `stop_along_dip_m − release_along_dip_m`
+    /// on a plane floor; the rigid block's is measured from its centre at release (on a plane
+    /// drop_height·sin θ up the dip of the floor point). Numbers in shortest round-trip form.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub runs_csv: Option<String>,
     /// Time step, steps and mass properties (rigid block).
@@ -275,25 +288,58 @@ pub fn stop_name(s: StopReason) -> &'static str {
     }
 }
 
-/// CSV of per-run summaries with api.md's header; numbers in shortest round-trip form, runs
-/// numbered from 0 (the run index of the random stream).
+/// Header of api.md's per-run CSV columns (the first columns of every runs CSV).
+pub const RUNS_CSV_HEADER: &str = "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s";
+
+/// Header of the columns every runs CSV (migration and scene) appends after its documented ones:
+/// the release point as drawn (along the dip and across, m), the rock's side length (m) and
+/// density (kg/m³) as drawn (the case's when nothing is drawn), where the run ended (the rock's
+/// centre projected on the face, m) and the translational and rotational kinetic energy there
+/// (J; at a support, when reaching it).
+pub const RUNS_CSV_RUN_COLUMNS: &str = "release_along_dip_m,release_across_m,side_length_m,density_kg_m3,stop_along_dip_m,stop_across_m,translational_energy_j,rotational_energy_j";
+
+/// Run `i`'s values of [`RUNS_CSV_HEADER`]'s columns (no line end).
+#[must_use]
+pub fn runs_csv_documented_fields(i: usize, r: &RunSummary) -> String {
+    format!(
+        "{i},{},{},{},{},{},{},{},{}",
+        r.time,
+        r.speed,
+        r.kinetic_energy,
+        r.impact_count,
+        r.runout,
+        r.max_bounce_height,
+        stop_name(r.stop_reason),
+        r.along_dip_velocity
+    )
+}
+
+/// A run's values of [`RUNS_CSV_RUN_COLUMNS`] (no leading comma, no line end).
+#[must_use]
+pub fn runs_csv_run_fields(r: &RunSummary) -> String {
+    format!(
+        "{},{},{},{},{},{},{},{}",
+        r.release_along_dip,
+        r.release_across,
+        r.side_length,
+        r.density,
+        r.stop_along_dip,
+        r.stop_across,
+        r.translational_energy,
+        r.rotational_energy
+    )
+}
+
+/// CSV of per-run summaries: api.md's header, then [`RUNS_CSV_RUN_COLUMNS`]; numbers in
+/// shortest round-trip form, runs numbered from 0 (the run index of the random stream).
 #[must_use]
 pub fn runs_csv(runs: &[RunSummary]) -> String {
-    let mut s = String::from(
-        "run,time_s,speed_m_s,kinetic_energy_j,impact_count,runout_m,max_bounce_height_m,stop_reason,along_dip_velocity_m_s\n",
-    );
+    let mut s = format!("{RUNS_CSV_HEADER},{RUNS_CSV_RUN_COLUMNS}\n");
     for (i, r) in runs.iter().enumerate() {
-        s.push_str(&format!(
-            "{i},{},{},{},{},{},{},{},{}\n",
-            r.time,
-            r.speed,
-            r.kinetic_energy,
-            r.impact_count,
-            r.runout,
-            r.max_bounce_height,
-            stop_name(r.stop_reason),
-            r.along_dip_velocity
-        ));
+        s.push_str(&runs_csv_documented_fields(i, r));
+        s.push(',');
+        s.push_str(&runs_csv_run_fields(r));
+        s.push('\n');
     }
     s
 }

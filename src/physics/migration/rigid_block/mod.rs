@@ -911,20 +911,40 @@ impl<'a> Model<'a> {
     }
 
     fn height_of_centre(&self, c: &Vector3<f64>) -> f64 {
-        let h = match self.floor.locate(c.x, c.y, 0.0, 0.0) {
+        self.height_of_point(c) - self.rest_offset
+    }
+
+    /// Height above the floor, along its normal, of the point `p`: over the facet under it, or
+    /// the mean plane off the floor, m (negative below).
+    fn height_of_point(&self, p: &Vector3<f64>) -> f64 {
+        match self.floor.locate(p.x, p.y, 0.0, 0.0) {
             Some(f) => {
                 let pl = self.floor.facet_plane(f);
-                pl.height(c) * pl.normal().z
+                pl.height(p) * pl.normal().z
             }
             None => {
-                self.mean.normal().dot(c)
+                self.mean.normal().dot(p)
                     - self
                         .mean
                         .normal()
                         .dot(&Vector3::new(self.mean.x0, 0.0, self.mean.z_ref))
             }
+        }
+    }
+
+    /// Height of the block's lowest point above the floor, m, never negative (a contact overlap
+    /// counts as 0): the lowest vertex, or a sphere's centre less its radius.
+    fn lowest_point_height(&self, st: &State) -> f64 {
+        let h = match self.shape.sphere_radius {
+            Some(r) => self.height_of_point(&st.c) - r,
+            None => self
+                .shape
+                .vertices
+                .iter()
+                .map(|b| self.height_of_point(&(st.c + st.q * b)))
+                .fold(f64::INFINITY, f64::min),
         };
-        h - self.rest_offset
+        h.max(0.0)
     }
 
     fn energy(&self, st: &State) -> (f64, f64, f64) {
@@ -1152,6 +1172,15 @@ fn rigid_one(
         impact_speed: r.support.map_or(0.0, |k| {
             super::support_impact_speed(&model.mean, &case.supports[k], &r.st.c, &r.st.v)
         }),
+        release_along_dip: case.release.along_dip,
+        release_across: case.release.across,
+        side_length: case.rock.side_length,
+        density: case.rock.density,
+        stop_along_dip: model.mean.along(&r.st.c),
+        stop_across: r.st.c.y,
+        translational_energy: kt,
+        rotational_energy: kr,
+        passing_height: model.lowest_point_height(&r.st),
     })
 }
 
