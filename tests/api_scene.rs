@@ -786,3 +786,39 @@ async fn release_zones_are_clipped_to_where_the_block_fits_on_the_floor() {
         "{m}"
     );
 }
+
+/// A density drawn from a truncated normal about 2 500 kg/m³ is taken (its mean lies in the
+/// density's own range, beyond the ±1 000 other fields' means are held to), and every drawn
+/// density lies in [min, max]; a mean outside the density's range is refused naming it.
+#[tokio::test]
+async fn a_truncated_normal_density_about_its_own_scale_is_taken() {
+    let app = common::app();
+    let body = json!({
+        "monte_carlo": {"runs": 60, "density_kg_m3":
+            {"distribution": "truncated_normal", "mean": 2500.0, "std": 300.0, "min": 2000.0, "max": 3000.0}},
+        "migration_output": {"runs_csv": true},
+    });
+    let b = ok(&post(&app, "/v1/scene", &body).await);
+    let csv = b["migration"]["runs_csv"].as_str().unwrap();
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let k = head.iter().position(|h| *h == "density_kg_m3").unwrap();
+    let d: Vec<f64> = lines
+        .map(|l| l.split(',').nth(k).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(d.len(), 60);
+    assert!(d.iter().all(|x| (2000.0..=3000.0).contains(x)), "{d:?}");
+    assert!(d.iter().any(|&x| x != d[0]), "no density drawn");
+    let mut bad = body.clone();
+    bad["monte_carlo"]["density_kg_m3"]["mean"] = json!(30000.0);
+    let r = post(&app, "/v1/scene", &bad).await;
+    let p = common::assert_problem(&r, 422, "invalid_input");
+    assert!(
+        p["errors"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|e| e["field"] == "/monte_carlo/density_kg_m3/mean"),
+        "{p}"
+    );
+}

@@ -580,11 +580,13 @@ pub struct DistributionDto {
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.4)]
     pub max: Option<f64>,
-    /// Mean (normal, truncated_normal), in [−1000, 1000].
+    /// Mean (normal, truncated_normal), in [−1000, 1000], or in the field's own range where that
+    /// is wider (`density_kg_m3`: up to 20 000).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.3)]
     pub mean: Option<f64>,
-    /// Standard deviation, in [0, 1000] (normal, truncated_normal).
+    /// Standard deviation, in [0, 1000], or up to the width of the field's own range where that
+    /// is wider (normal, truncated_normal).
     #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
     #[schema(example = 0.05)]
     pub std: Option<f64>,
@@ -631,8 +633,9 @@ impl DistributionDto {
         let normal = |ck: &mut Checker| {
             let m = need(self.mean, "mean", ck);
             let s = need(self.std, "std", ck);
-            ck.closed(&p("mean"), m, -1e3, 1e3, "");
-            ck.closed(&p("std"), s, 0.0, 1e3, "");
+            // a field whose own range is wider (a density) takes a mean and spread of its size
+            ck.closed(&p("mean"), m, lo.min(-1e3), hi.max(1e3), "");
+            ck.closed(&p("std"), s, 0.0, (hi - lo).max(1e3), "");
             (m, s)
         };
         match self.distribution {
