@@ -61,6 +61,7 @@ fn case(method: Method, model: ColumnModel, runs: u64) -> SceneCase {
         compare_methods: false,
         allowed_impacts: false,
         release_rate: None,
+        guards: Vec::new(),
     }
 }
 
@@ -125,6 +126,7 @@ fn paper_face(runs: u64, columns: bool) -> SceneCase {
         compare_methods: false,
         allowed_impacts: false,
         release_rate: None,
+        guards: Vec::new(),
     }
 }
 

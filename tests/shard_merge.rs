@@ -386,6 +386,9 @@ async fn scene_ensemble_shards_merge_to_the_http_answer() {
     // and the frequencies of a release rate observed as a count
     let mut counted = body.clone();
     counted["release_rate"] = json!({"observed_events": 643, "observed_period_years": 0.75});
+    // and guards, whose held / broken-through flags ride in the run records
+    counted["guards"] =
+        json!([{"support": 1, "energy_rating_j": 40.0}, {"support": 4, "energy_rating_j": 0.0}]);
     same_bytes_for_any_split("scene-rate", "scene", &counted).await;
 }
 

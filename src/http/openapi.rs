@@ -144,6 +144,8 @@ const NULL_DEFAULTS: &[&str] = &[
     "time_step_s",
     "floor_material",
     "release_rate",
+    "guards",
+    "column_index",
     "rocks_per_year",
     "observed_events",
     "observed_period_years",

@@ -302,6 +302,7 @@ mod tests {
             compare_methods: false,
             allowed_impacts: false,
             release_rate: None,
+            guards: Vec::new(),
         }
     }
 

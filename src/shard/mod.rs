@@ -55,8 +55,8 @@ use crate::physics::migration::{
     MigrationCase, RunRecords, RunSummary, STATISTICS_COLUMNS, StopReason, run_columns,
 };
 use crate::physics::scene::{
-    ENTRY_COLUMNS, REACH_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun, StrikeValues,
-    entry_columns, reach_columns,
+    ENTRY_COLUMNS, Guard, REACH_COLUMNS, SceneCase, SceneError, SceneRecords, SceneRun,
+    StrikeValues, entry_columns, reach_columns,
 };
 
 mod compute;

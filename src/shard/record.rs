@@ -109,6 +109,7 @@ pub(super) fn encode_scene_run(r: &SceneRun, out: &mut Vec<u8>) {
         values,
         capacity_exceeded,
         exceeded,
+        guard,
     } = r;
     encode_run(summary, out);
     let StrikeValues {
@@ -125,12 +126,18 @@ pub(super) fn encode_scene_run(r: &SceneRun, out: &mut Vec<u8>) {
     ] {
         out.extend_from_slice(&x.to_le_bytes());
     }
-    // bit 0: values present, bit 1: past the capacity, bits 2…: exceeded per active limit (≤ 3)
-    debug_assert!(exceeded.len() <= 6);
+    // bit 0: values present, bit 1: past the capacity, bits 2–4: exceeded per active limit (≤ 3),
+    // bit 6: held by the guard, bit 7: broke through the guard
+    debug_assert!(exceeded.len() <= 3);
     let mut flags = u8::from(values.is_some()) | (u8::from(*capacity_exceeded) << 1);
     for (j, &e) in exceeded.iter().enumerate() {
         flags |= u8::from(e) << (2 + j);
     }
+    flags |= match guard {
+        Guard::None => 0,
+        Guard::Held => 1 << 6,
+        Guard::BrokenThrough => 1 << 7,
+    };
     out.push(flags);
 }
 
@@ -146,6 +153,17 @@ pub(super) fn decode_scene_run(
     let at = RUN_RECORD_BYTES as usize;
     let f = |k: usize| f64::from_le_bytes(std::array::from_fn(|i| b[at + 8 * k + i]));
     let flags = b[at + 32];
+    let guard = match flags >> 6 {
+        0 => Guard::None,
+        1 => Guard::Held,
+        2 => Guard::BrokenThrough,
+        _ => {
+            return Err(format!(
+                "scene record flags {flags:#04x}: held and broken through"
+            ));
+        }
+    };
+    let flags = flags & 0x3f;
     if flags >> (2 + limits) != 0 {
         return Err(format!(
             "scene record flags {flags:#04x} do not fit {limits} limits"
@@ -161,5 +179,6 @@ pub(super) fn decode_scene_run(
         }),
         capacity_exceeded: flags & 2 != 0,
         exceeded: (0..limits).map(|j| flags & (4 << j) != 0).collect(),
+        guard,
     })
 }

@@ -88,12 +88,14 @@ fn scene_run_records_round_trip() {
             }),
             capacity_exceeded: false,
             exceeded: vec![true, false, true],
+            guard: Guard::BrokenThrough,
         },
         SceneRun {
             summary,
             values: None,
             capacity_exceeded: true,
             exceeded: vec![true, true, true],
+            guard: Guard::None,
         },
         SceneRun {
             summary: RunSummary {
@@ -104,6 +106,7 @@ fn scene_run_records_round_trip() {
             values: None,
             capacity_exceeded: false,
             exceeded: vec![false, false, false],
+            guard: Guard::Held,
         },
     ];
     for r in &runs {

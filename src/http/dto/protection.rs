@@ -3,12 +3,12 @@
 //! to frequency: the release rate and the overloads per year.
 
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
+use serde_json::{Value, json};
 use utoipa::ToSchema;
 
 use super::common::{Bound, Checker, FieldDefault, NumberField, number_schemas};
 use crate::physics::design::{AllowedBy, AllowedImpact, EntryAllowed};
-use crate::physics::scene::{Limit, SceneCase};
+use crate::physics::scene::{GuardStatistics, Limit, SceneCase};
 use crate::physics::stats::rate::{Frequency, ReleaseRate};
 
 /// The name of a design limit on the wire.
@@ -288,6 +288,114 @@ impl From<&Frequency> for FrequencyDto {
             ci95_per_year: f.ci95,
             return_period_years: f.return_period,
             return_period_ci95_years: f.return_period_ci95,
+        }
+    }
+}
+
+/// Largest guard energy rating, J.
+pub const MAX_GUARD_RATING: f64 = 1e12;
+
+/// A guard on a support's column: it takes up to its energy rating of a striking rock's impact
+/// energy ½mv² (v the speed towards the column); the column takes the impact at the speed left,
+/// and a rock within the rating never loads it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GuardDto {
+    /// Support number (from 1).
+    #[schema(minimum = 1, example = 62)]
+    pub support: u32,
+    /// Column of that support (from 0; null: every column of the support).
+    #[schema(default = json!(null), example = json!(null))]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub column_index: Option<u32>,
+    /// Energy rating, J, in [0, 1e12] (0: the guard takes nothing).
+    #[schema(minimum = 0.0, maximum = 1e12, example = 500.0)]
+    pub energy_rating_j: f64,
+}
+
+/// The guards of a scene as one rating per support entry (None: no guard), checked: each names
+/// an existing support (and column), its rating in [0, 1e12] J, and no entry guarded twice.
+pub fn resolve_guards(
+    guards: &[GuardDto],
+    entries: &[crate::physics::scene::SupportEntry],
+    ck: &mut Checker,
+) -> Vec<Option<f64>> {
+    let mut out: Vec<Option<f64>> = vec![None; entries.len()];
+    let mut by: Vec<Option<usize>> = vec![None; entries.len()];
+    let last = entries.iter().map(|e| e.support).max().unwrap_or(0);
+    for (i, g) in guards.iter().enumerate() {
+        let at = format!("/guards/{i}");
+        let rating_ok = ck.closed(
+            &format!("{at}/energy_rating_j"),
+            g.energy_rating_j,
+            0.0,
+            MAX_GUARD_RATING,
+            "J",
+        );
+        let hit: Vec<usize> = entries
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| {
+                e.support == g.support && g.column_index.is_none_or(|c| c == e.column_index)
+            })
+            .map(|(k, _)| k)
+            .collect();
+        if hit.is_empty() {
+            let (field, value, message) = if entries.iter().any(|e| e.support == g.support) {
+                (
+                    format!("{at}/column_index"),
+                    json!(g.column_index),
+                    format!("support {} has no column with this index", g.support),
+                )
+            } else {
+                (
+                    format!("{at}/support"),
+                    json!(g.support),
+                    format!("no such support: the supports are numbered 1 to {last}"),
+                )
+            };
+            ck.push(field, value, message);
+            continue;
+        }
+        for k in hit {
+            if let Some(j) = by[k] {
+                ck.push(
+                    at.clone(),
+                    serde_json::to_value(g).unwrap_or(Value::Null),
+                    format!(
+                        "support {} column {} is already guarded by /guards/{j}",
+                        entries[k].support, entries[k].column_index
+                    ),
+                );
+                break;
+            }
+            by[k] = Some(i);
+            if rating_ok {
+                out[k] = Some(g.energy_rating_j);
+            }
+        }
+    }
+    out
+}
+
+/// What a support's guard did over all runs of the ensemble.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct GuardStatisticsDto {
+    /// The guard's energy rating, J.
+    pub energy_rating_j: f64,
+    /// Share of all runs whose rock the guard held (impact energy within the rating), with its
+    /// Wilson 95 % interval.
+    pub held: super::scene::ProbabilityDto,
+    /// Share of all runs whose rock broke through the guard (the column struck at the speed left).
+    pub broken_through: super::scene::ProbabilityDto,
+}
+
+impl From<&GuardStatistics> for GuardStatisticsDto {
+    fn from(g: &GuardStatistics) -> Self {
+        Self {
+            energy_rating_j: g.rating,
+            held: (&g.held).into(),
+            broken_through: (&g.broken_through).into(),
         }
     }
 }

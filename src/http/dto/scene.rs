@@ -17,8 +17,8 @@ use super::migration::{
 };
 use super::param::{Layout, scene_pointer};
 use super::protection::{
-    AllowedImpactsDto, FrequencyDto, ReleaseRateDto, StoredLimit, allowed_dto, limit_name, restore,
-    store,
+    AllowedImpactsDto, FrequencyDto, GuardDto, GuardStatisticsDto, ReleaseRateDto, StoredLimit,
+    allowed_dto, limit_name, resolve_guards, restore, store,
 };
 use crate::calc::{self, Report};
 use crate::config::Config;
@@ -229,9 +229,13 @@ pub struct SceneRequest {
     pub compare_methods: bool,
     /// Rocks released per year, or events counted over a period: each support's expected
     /// overloads per year and return period (needs `monte_carlo`; null: none).
-    #[schema(default = json!(null))]
+    #[schema(default = json!(null), example = json!({"observed_events": 643, "observed_period_years": 0.75}))]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub release_rate: Option<ReleaseRateDto>,
+    /// Guards on support columns, each with an energy rating (null: none).
+    #[schema(default = json!(null), example = json!([{"support": 62, "energy_rating_j": 500.0}]))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub guards: Option<Vec<GuardDto>>,
     /// Report each support's allowed impact per design limit (`allowed_impacts` of the answer):
     /// the impact speed and energy of the case's rock at which the check reaches its limit.
     #[schema(default = true, example = true)]
@@ -267,6 +271,7 @@ impl Default for SceneRequest {
             design_percentile: super::design_values::DESIGN_PERCENTILE_FIELD.value(),
             compare_methods: false,
             release_rate: None,
+            guards: None,
             allowed_impacts: true,
             migration_output: MigrationOutputDto::default(),
             column_output: None,
@@ -520,6 +525,11 @@ impl SceneRequest {
         super::design_values::check_design_percentile(&mut ck, self.design_percentile);
         limits.design_percentile = self.design_percentile;
         let release_rate = self.resolve_release_rate(&mut ck);
+        let guards = resolve_guards(
+            self.guards.as_deref().unwrap_or(&[]),
+            &supports.entries,
+            &mut ck,
+        );
         ck.finish()?;
         let case = SceneCase {
             migration,
@@ -532,6 +542,7 @@ impl SceneRequest {
             compare_methods: self.compare_methods,
             allowed_impacts: self.allowed_impacts,
             release_rate,
+            guards,
         };
         let ctx = SceneContext {
             migration: mreq,
@@ -815,8 +826,16 @@ pub struct SceneImpactDto {
     pub across_m: Option<f64>,
     /// The impact speed, m/s.
     pub impact_velocity_m_s: f64,
-    /// `struck`, `no_impact` (below 1e-6 m/s: all values 0) or `capacity_exceeded`.
+    /// `struck`, `no_impact` (below 1e-6 m/s, or held by the support's guard: all values 0) or
+    /// `capacity_exceeded`.
     pub outcome: String,
+    /// What the support's guard did: `held` (the impact energy within its rating) or
+    /// `broken_through` (omitted without a guard).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub guard: Option<String>,
+    /// The speed the column was struck at behind the guard, m/s (omitted without a guard).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub column_impact_velocity_m_s: Option<f64>,
     /// Largest speed the contact law takes, m/s (past the capacity only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_velocity_m_s: Option<f64>,
@@ -927,6 +946,9 @@ pub struct SupportStatisticsDto {
     /// and the return period (with `release_rate`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub overloads_per_year: Option<FrequencyDto>,
+    /// What this support's guard did (with `guards`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub guard: Option<GuardStatisticsDto>,
     /// Design values: the rock's state on reaching this entry over every run that reached it
     /// (past the capacity too), each with its value at `design_percentile` and a
     /// distribution-free 95 % interval (null: no run reached it).
@@ -1092,6 +1114,7 @@ fn statistics_dto(st: &SceneStatistics, case: &SceneCase) -> SceneStatisticsDto 
                     exceedance: ex,
                     verdict: if s.exceeded { "exceeded" } else { "ok" }.into(),
                     overloads_per_year: s.overloads_per_year.as_ref().map(FrequencyDto::from),
+                    guard: s.guard.as_ref().map(GuardStatisticsDto::from),
                     design_values: s.design_values.as_ref().map(Into::into),
                 }
             })
@@ -1122,14 +1145,14 @@ fn impact_dto(
             let mut rock = ctx.impact_rock.clone();
             rock.side_length_m = impact_case.rock.side_length;
             let ireq = ImpactRequest {
-                velocity_m_s: o.velocity,
+                velocity_m_s: o.column_speed,
                 rock: rock.clone(),
                 column: ctx.entry_column[o.entry].clone(),
                 contact: req.contact,
                 output: Default::default(),
             };
             let creq = ColumnRequest {
-                velocity_m_s: o.velocity,
+                velocity_m_s: o.column_speed,
                 rock,
                 column: ctx.entry_column[o.entry].clone(),
                 contact: req.contact,
@@ -1160,6 +1183,12 @@ fn impact_dto(
         across_m: e.across,
         impact_velocity_m_s: o.velocity,
         outcome: outcome.into(),
+        guard: match o.guard {
+            scene::Guard::None => None,
+            scene::Guard::Held => Some("held".into()),
+            scene::Guard::BrokenThrough => Some("broken_through".into()),
+        },
+        column_impact_velocity_m_s: (o.guard != scene::Guard::None).then_some(o.column_speed),
         max_velocity_m_s: max_velocity,
         impact,
         column,
@@ -1432,7 +1461,13 @@ pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
     out.push_str(RUNS_CSV_HEADER);
     out.push_str(",support,column_index,impact_velocity_m_s,max_force_n,absorbed_energy_j,stress_utilisation,capacity_exceeded,");
     out.push_str(RUNS_CSV_RUN_COLUMNS);
-    out.push_str(",passing_height_m\n");
+    // with guards (only then, so that a scene without them keeps its bytes): what the guard did
+    let guards = case.guards.iter().any(Option::is_some);
+    out.push_str(if guards {
+        ",passing_height_m,guard\n"
+    } else {
+        ",passing_height_m\n"
+    });
     for (i, r) in runs.iter().enumerate() {
         out.push_str(&runs_csv_documented_fields(i, &r.summary));
         match r.summary.support {
@@ -1455,9 +1490,17 @@ pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
         out.push(',');
         out.push_str(&runs_csv_run_fields(&r.summary));
         match r.summary.support {
-            Some(_) => out.push_str(&format!(",{}\n", r.summary.passing_height)),
-            None => out.push_str(",\n"),
+            Some(_) => out.push_str(&format!(",{}", r.summary.passing_height)),
+            None => out.push(','),
         }
+        if guards {
+            out.push_str(match r.guard {
+                scene::Guard::None => ",",
+                scene::Guard::Held => ",held",
+                scene::Guard::BrokenThrough => ",broken_through",
+            });
+        }
+        out.push('\n');
     }
     out
 }

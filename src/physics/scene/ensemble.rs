@@ -65,16 +65,18 @@ fn ensemble(
                 values: None,
                 capacity_exceeded: false,
                 exceeded: vec![false; limits.len()],
+                guard: Guard::None,
             });
         };
         let rock = impact_rock(&rock, mass);
-        let s = strike(case, k, &rock, summary.impact_speed, control)?;
+        let (guard, _, s) = guarded_strike(case, k, &rock, mass, summary.impact_speed, control)?;
         let ch = checks(&case.limits, &s);
         Ok(SceneRun {
             summary,
             values: s.values(),
             capacity_exceeded: matches!(s, Strike::CapacityExceeded { .. }),
             exceeded: ch.iter().map(|c| c.exceeded).collect(),
+            guard,
         })
     };
     migration::run_in_chunks(range, CHUNK, control, one)
@@ -327,6 +329,8 @@ fn statistics_of<R: SceneRecords + ?Sized>(
     let mut at = vec![0u64; e];
     let mut exceeded = vec![vec![0u64; limits.len()]; e];
     let mut overloaded = vec![0u64; e];
+    let mut held = vec![0u64; e];
+    let mut through = vec![0u64; e];
     let mut any = 0u64;
     let mut counts = Counts {
         struck: 0,
@@ -344,6 +348,8 @@ fn statistics_of<R: SceneRecords + ?Sized>(
                 *c += u64::from(x);
             }
             overloaded[k] += u64::from(r.exceeded.iter().any(|&x| x));
+            held[k] += u64::from(r.guard == Guard::Held);
+            through[k] += u64::from(r.guard == Guard::BrokenThrough);
         }
         any += u64::from(r.exceeded.iter().any(|&x| x));
         if let Some((k, x)) = entry_columns(r) {
@@ -425,6 +431,16 @@ fn statistics_of<R: SceneRecords + ?Sized>(
                 .any(|(_, p)| p.probability > case.limits.acceptable_probability),
             exceedance,
             overloads_per_year: case.release_rate.map(|r| frequency(overloaded[k], n, r)),
+            guard: case
+                .guards
+                .get(k)
+                .copied()
+                .flatten()
+                .map(|rating| GuardStatistics {
+                    rating,
+                    held: probability(held[k], n),
+                    broken_through: probability(through[k], n),
+                }),
         });
     }
     let statistics = SceneStatistics {

@@ -177,6 +177,8 @@ pub struct SceneCase {
     pub compare_methods: bool,
     /// Rocks released per year, or counted over a period (None: no frequencies).
     pub release_rate: Option<ReleaseRate>,
+    /// Per entry, the energy rating of a guard on its column, J (None: no guard).
+    pub guards: Vec<Option<f64>>,
     /// Compute each support's allowed impact per design limit ([`allowed_for_entries`](super::design::allowed_for_entries)).
     pub allowed_impacts: bool,
 }
@@ -306,6 +308,58 @@ pub fn checks(limits: &DesignLimits, strike: &Strike) -> Vec<Check> {
         .collect()
 }
 
+/// What a support's guard did to a rock that reached it.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Guard {
+    /// No guard on the entry.
+    #[default]
+    None,
+    /// The rock's impact energy was within the rating: the column was not loaded.
+    Held,
+    /// The rock's impact energy passed the rating: the column took the rest.
+    BrokenThrough,
+}
+
+/// The guard of entry `k` against a rock of mass `mass` (kg) reaching it at `v` (m/s): what it
+/// did and the speed the column then takes, m/s. The guard takes up to its rating R of the
+/// rock's impact energy ½mv²; past it the column is struck at √(v² − 2R/m).
+#[must_use]
+pub fn behind_guard(case: &SceneCase, k: usize, mass: f64, v: f64) -> (Guard, f64) {
+    match case.guards.get(k).copied().flatten() {
+        None => (Guard::None, v),
+        Some(rating) => {
+            // v² − 2R/m: with R = 0 the speed is v itself (√(v²) rounds back to v exactly)
+            let left = v * v - 2.0 * rating / mass;
+            if left <= 0.0 {
+                (Guard::Held, 0.0)
+            } else {
+                (Guard::BrokenThrough, left.sqrt())
+            }
+        }
+    }
+}
+
+/// [`strike`] behind entry `k`'s guard ([`behind_guard`]): a held rock is no impact; one that
+/// broke through strikes at the speed left. Returns what the guard did, the speed the column
+/// took (m/s) and the strike.
+///
+/// Errors: as [`strike`].
+pub fn guarded_strike(
+    case: &SceneCase,
+    k: usize,
+    rock: &Rock,
+    mass: f64,
+    v: f64,
+    control: &Control,
+) -> SceneResult<(Guard, f64, Strike)> {
+    let (guard, speed) = behind_guard(case, k, mass, v);
+    let s = match guard {
+        Guard::Held => Strike::NoImpact,
+        _ => strike(case, k, rock, speed, control)?,
+    };
+    Ok((guard, speed, s))
+}
+
 /// An impact of a single run (or of `impact_velocity`) with its checks.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImpactOutcome {
@@ -321,6 +375,10 @@ pub struct ImpactOutcome {
     pub exceeded: bool,
     /// The nominal run of an ensemble.
     pub nominal: bool,
+    /// What the entry's guard did.
+    pub guard: Guard,
+    /// The speed the column took behind the guard, m/s (the impact speed without one).
+    pub column_speed: f64,
 }
 
 /// One run of an ensemble with its strike.
@@ -334,6 +392,8 @@ pub struct SceneRun {
     pub capacity_exceeded: bool,
     /// Per active limit (in [`DesignLimits::active`] order), exceeded at the support reached.
     pub exceeded: Vec<bool>,
+    /// What the guard of the support reached did.
+    pub guard: Guard,
 }
 
 /// Fractions of all runs by how they ended (summing to 1).
@@ -367,6 +427,17 @@ fn probability(k: u64, n: u64) -> Probability {
     }
 }
 
+/// What a guard did over all runs of an ensemble.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GuardStatistics {
+    /// The guard's energy rating, J.
+    pub rating: f64,
+    /// Runs whose rock the guard held (within the rating), over all runs.
+    pub held: Probability,
+    /// Runs whose rock broke through it, over all runs.
+    pub broken_through: Probability,
+}
+
 /// Statistics of one entry over an ensemble.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EntryStatistics {
@@ -392,6 +463,8 @@ pub struct EntryStatistics {
     pub exceeded: bool,
     /// Expected strikes of this entry past some limit per year (with a release rate).
     pub overloads_per_year: Option<Frequency>,
+    /// What the entry's guard did over all runs (None: no guard).
+    pub guard: Option<GuardStatistics>,
 }
 
 /// Ensemble statistics of a scene.
@@ -543,7 +616,7 @@ fn outcome(
     case: &SceneCase,
     entry: usize,
     velocity: f64,
-    strike: Strike,
+    (guard, column_speed, strike): (Guard, f64, Strike),
     nominal: bool,
 ) -> ImpactOutcome {
     let checks = checks(&case.limits, &strike);
@@ -554,6 +627,8 @@ fn outcome(
         checks,
         strike,
         nominal,
+        guard,
+        column_speed,
     }
 }
 
@@ -762,7 +837,7 @@ pub fn solve_nominal(
         control.set_total(case.supports.len() as u64);
         for k in 0..case.supports.len() {
             control.check()?;
-            let s = strike(case, k, &rock0, v, control)?;
+            let s = guarded_strike(case, k, &rock0, mass, v, control)?;
             impacts.push(outcome(case, k, v, s, false));
             control.add_done(1);
         }
@@ -832,7 +907,7 @@ pub fn solve_nominal(
     ));
     let mut impacts = Vec::new();
     if let (Some(k), Some(v)) = (nominal.arrival.support, nominal.arrival.impact_speed) {
-        let s = strike(case, k, &rock0, v, control)?;
+        let s = guarded_strike(case, k, &rock0, mass, v, control)?;
         impacts.push(outcome(case, k, v, s, mc.is_some()));
     }
     let mut report = SceneReport {
