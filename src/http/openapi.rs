@@ -143,6 +143,7 @@ const NULL_DEFAULTS: &[&str] = &[
     "absorbed_energy_j",
     "time_step_s",
     "floor_material",
+    "maps",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot

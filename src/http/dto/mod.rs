@@ -6,6 +6,7 @@ pub mod column;
 pub mod common;
 pub mod floor;
 pub mod impact;
+pub mod maps;
 pub mod migration;
 pub mod param;
 pub mod scene;

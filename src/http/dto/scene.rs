@@ -461,6 +461,7 @@ impl SceneRequest {
         // the migration part, checked by /v1/migration's own rules and pointers
         let mut mreq = self.migration_request();
         let migration = mreq.resolve_in(config, Layout::Scene)?;
+        self.migration_output.maps = mreq.output.maps;
         self.face = mreq.face.clone();
         self.rock = mreq.rock.clone();
         let mut ck = Checker::new();
@@ -950,6 +951,9 @@ pub struct SceneResponse {
     /// Both methods side by side (compare_methods).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub comparison: Option<Vec<MethodComparisonDto>>,
+    /// Per-cell maps of the ensemble's runs, each to its stop (when `migration_output.maps`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub maps: Option<super::maps::MapsOutDto>,
     /// Named warnings, among them `release_zones_clipped` (the share of the release zones'
     /// weight where the rock does not fit on the floor, clipped off) and those of the migration.
     pub warnings: Vec<super::Warning>,
@@ -1189,6 +1193,7 @@ impl SceneResponse {
             impacts: Piece::Built(impacts),
             statistics,
             comparison,
+            maps: r.maps.as_ref().map(Into::into),
             warnings,
             inputs,
             model_version: meta.model_version,
@@ -1327,6 +1332,7 @@ impl SceneHead {
                 .comparison
                 .as_ref()
                 .map(|c| c.iter().map(|m| comparison_dto(case, m)).collect()),
+            maps: None,
             warnings,
             inputs,
             model_version: meta.model_version,

@@ -38,8 +38,8 @@ use ensemble::compare_single;
 mod tests;
 
 pub use ensemble::{
-    ENTRY_COLUMNS, EnsembleReport, SceneRecords, ensemble_part, ensemble_report, entry_columns,
-    outcomes_of,
+    ENTRY_COLUMNS, EnsembleReport, SceneRecords, ensemble_part, ensemble_part_mapped,
+    ensemble_report, entry_columns, outcomes_of,
 };
 
 /// Impact speed below which a support counts as reached without an impact, m/s.
@@ -424,6 +424,8 @@ pub struct SceneReport {
     pub comparison: Option<Vec<MethodSummary>>,
     /// Warnings of the scene (the migration's are in its result).
     pub warnings: Vec<Warning>,
+    /// Per-cell maps of the ensemble (with `migration_output.maps`).
+    pub maps: Option<migration::maps::Maps>,
 }
 
 /// Bounding radius of a rock (largest distance of a point from its centre of mass), m, and its
@@ -693,7 +695,14 @@ fn scale_rock(rock: &mut Rock, l: f64) {
 pub fn solve(case: &SceneCase, control: &Control) -> SceneResult<SceneReport> {
     let (mut report, mc) = solve_nominal(case, control)?;
     if let Some(mc) = mc {
-        let (runs, other) = ensemble_part(case, &mc, 0..mc.runs, control)?;
+        let (runs, other) = match &case.migration.output.maps {
+            None => ensemble_part(case, &mc, 0..mc.runs, control)?,
+            Some(g) => {
+                let (runs, other, maps) = ensemble_part_mapped(case, &mc, g, control)?;
+                report.maps = Some(maps);
+                (runs, other)
+            }
+        };
         let capacity = nominal_capacity(&report);
         let Ok(tail) = ensemble_report(
             case,
@@ -782,6 +791,7 @@ pub fn solve_nominal(
             runs: None,
             comparison: None,
             warnings,
+            maps: None,
         };
         return Ok((report, None));
     }
@@ -846,6 +856,7 @@ pub fn solve_nominal(
         runs: None,
         comparison: None,
         warnings,
+        maps: None,
     };
     if mc.is_none() {
         // a single run: the rest of the report is the nominal run's
