@@ -12,8 +12,6 @@
 //! missed, however short the crossing. A cell's value for a run is the largest over the samples
 //! in it and the chord's entry and exit points.
 
-use std::collections::HashMap;
-
 use nalgebra::Vector3;
 
 use super::terrain::MeanPlane;
@@ -78,6 +76,10 @@ impl MapGrid {
     }
 }
 
+/// Largest distance of a closed-form piece from the chords between its samples, as a share of
+/// the smaller cell side.
+pub const CHORD_SAG: f64 = 1e-3;
+
 /// A run's largest speed and kinetic energy in one cell.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CellMax {
@@ -108,7 +110,10 @@ pub(crate) struct CellTrack<'g> {
     grid: &'g MapGrid,
     mean: MeanPlane,
     last: Option<Sample>,
-    cells: HashMap<u32, (f64, f64)>,
+    /// The cells entered so far, in the order entered; `cur` indexes the last one kept (a path
+    /// stays in a cell for several samples and seldom comes back to an older one).
+    cells: Vec<CellMax>,
+    cur: usize,
 }
 
 impl<'g> CellTrack<'g> {
@@ -118,7 +123,8 @@ impl<'g> CellTrack<'g> {
             grid,
             mean,
             last: None,
-            cells: HashMap::new(),
+            cells: Vec::new(),
+            cur: 0,
         }
     }
 
@@ -151,10 +157,12 @@ impl<'g> CellTrack<'g> {
     ) {
         let h = self.grid.sample_spacing();
         // n equal time steps: each moves at most (|v₀| + |a| dt) dt / n, the largest speed on
-        // the piece times the step
+        // the piece times the step, and strays at most |a| (dt/n)² / 8 from its chord, kept
+        // below CHORD_SAG of a cell side (so a cell the curve enters deeper is entered)
         let len = (v0.norm() + a.norm() * dt) * dt;
-        let n = if len.is_finite() && h > 0.0 {
-            ((len / h).ceil()).clamp(1.0, 1e7) as u64
+        let sag = (a.norm() / (8.0 * CHORD_SAG * 2.0 * h)).sqrt() * dt;
+        let n = if len.is_finite() && sag.is_finite() && h > 0.0 {
+            (len / h).max(sag).ceil().clamp(1.0, 1e7) as u64
         } else {
             1
         };
@@ -166,11 +174,24 @@ impl<'g> CellTrack<'g> {
         }
     }
 
-    /// Keeps the larger values of `x` for cell `c`.
+    /// Keeps the larger of the values kept and `speed`, `ke` for cell `c`.
     fn keep(&mut self, c: u32, speed: f64, ke: f64) {
-        let e = self.cells.entry(c).or_insert((speed, ke));
-        e.0 = e.0.max(speed);
-        e.1 = e.1.max(ke);
+        if self.cells.get(self.cur).is_none_or(|x| x.cell != c) {
+            self.cur = match self.cells.iter().rposition(|x| x.cell == c) {
+                Some(k) => k,
+                None => {
+                    self.cells.push(CellMax {
+                        cell: c,
+                        speed,
+                        kinetic_energy: ke,
+                    });
+                    self.cells.len() - 1
+                }
+            };
+        }
+        let e = &mut self.cells[self.cur];
+        e.speed = e.speed.max(speed);
+        e.kinetic_energy = e.kinetic_energy.max(ke);
     }
 
     /// Walks the chord a → b over the grid: the part inside the grid (clipped), each cell it
@@ -254,16 +275,9 @@ impl<'g> CellTrack<'g> {
 
     /// The cells entered, by ascending index.
     pub(crate) fn finish(self) -> RunCells {
-        let mut out: RunCells = self
-            .cells
-            .into_iter()
-            .map(|(cell, (speed, kinetic_energy))| CellMax {
-                cell,
-                speed,
-                kinetic_energy,
-            })
-            .collect();
+        let mut out = self.cells;
         out.sort_unstable_by_key(|c| c.cell);
+        out.shrink_to_fit();
         out
     }
 }
@@ -420,6 +434,46 @@ mod tests {
                 prop_assert!(got.contains(c), "cell {} missed: {:?} vs {:?}", c, got, want);
             }
             prop_assert!(got.len() <= want.len() + 2, "{:?} vs {:?}", got, want);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+        #[test]
+        fn a_curved_piece_enters_every_cell_it_passes(
+            i in 1u32..9, j in 1u32..7, ds in -0.1f64..0.1, dy in -0.1f64..0.1,
+            vs in -2.0f64..2.0, vy in -2.0f64..2.0, as_ in -20.0f64..20.0, ay in -20.0f64..20.0,
+            dt in 0.01f64..1.0,
+        ) {
+            // near a corner of the cells, short and strongly curved: where chords cut corners
+            let g = grid();
+            let (s0, y0) = (f64::from(i) + ds, -2.0 + 0.5 * f64::from(j) + dy);
+            let (p0, v0, a) = (
+                Vector3::new(s0, y0, 0.0),
+                Vector3::new(vs, vy, 0.0),
+                Vector3::new(as_, ay, 0.0),
+            );
+            let mut t = CellTrack::new(&g, plane());
+            t.piece(&p0, &v0, &a, dt, &|v| v.norm_squared());
+            let got: Vec<u32> = t.finish().iter().map(|c| c.cell).collect();
+            // brute force: 20 000 points of the curve; a cell counts where a point lies deeper
+            // in it than twice the allowed sag
+            let (hs, hy) = (g.cell_along_dip(), g.cell_across());
+            let depth = 2.0 * CHORD_SAG * hs.min(hy);
+            for k in 0..=20_000 {
+                let tau = dt * f64::from(k) / 20_000.0;
+                let p = p0 + v0 * tau + a * (0.5 * tau * tau);
+                let (u, w) = ((p.x - g.along_dip_min) / hs, (p.y - g.across_min) / hy);
+                if u < 0.0 || w < 0.0 || u >= 10.0 || w >= 8.0 {
+                    continue;
+                }
+                let (du, dw) = ((u - u.floor()).min(u.ceil() - u) * hs, (w - w.floor()).min(w.ceil() - w) * hy);
+                if du.min(dw) < depth {
+                    continue;
+                }
+                let c = g.index(u.floor() as u32, w.floor() as u32);
+                prop_assert!(got.contains(&c), "cell {} at τ = {} missed", c, tau);
+            }
         }
     }
 
