@@ -55,7 +55,10 @@ const RELATED: &[(&str, &str)] = &[
     ("/support_rows/lowest_along_dip_m", "/support_rows/count"),
     ("/support_rows/spacing_m", "/support_rows/count"),
     ("/output/maps/across_min_m", "/output/maps/across_max_m"),
-    ("/output/maps/along_dip_min_m", "/output/maps/along_dip_max_m"),
+    (
+        "/output/maps/along_dip_min_m",
+        "/output/maps/along_dip_max_m",
+    ),
     (
         "/migration_output/maps/across_min_m",
         "/migration_output/maps/across_max_m",
