@@ -2,7 +2,8 @@
 //! `/v1/scene`): against the closed form of a slide on a plane, against an independent
 //! recomputation from the per-run data, with the rigid block, in a scene (runs end at their
 //! support), the limits (422 naming the pointer), thread-count invariance, the answer without
-//! maps unchanged, and the refusal of maps in a sharded computation.
+//! maps unchanged, a migration's maps through shards (the bytes of one request) and the
+//! refusal of a scene's maps in a sharded computation.
 
 mod common;
 
@@ -386,50 +387,100 @@ async fn omitting_maps_leaves_the_answer_unchanged() {
     }
 }
 
-#[test]
-fn a_sharded_computation_refuses_maps_naming_the_field() {
-    let dir = std::env::temp_dir().join(format!("gangue-maps-shard-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    for (kind, body, field) in [
+fn gangue(args: &[&str]) -> std::process::Output {
+    // the shard index comes from the flags here, not from a scheduler's environment
+    std::process::Command::new(env!("CARGO_BIN_EXE_gangue"))
+        .args(args)
+        .env_remove("JOB_COMPLETION_INDEX")
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("SLURM_ARRAY_TASK_COUNT")
+        .env_remove("AWS_BATCH_JOB_ARRAY_INDEX")
+        .env("GANGUE_SOLVER_THREADS", "2")
+        .output()
+        .unwrap()
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("gangue-maps-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[tokio::test]
+async fn migration_maps_of_merged_shards_are_the_bytes_of_one_request() {
+    let dir = scratch("merge");
+    for (name, body) in [
         (
-            "migration",
-            json!({"monte_carlo": {"runs": 5}, "output": {"maps": {}}}),
-            "/output/maps",
+            "lumped",
+            json!({"face": {"length_m": 40}, "monte_carlo": {"runs": 23, "seed": 7, "friction_coefficient": {"distribution": "uniform", "min": 0.1, "max": 0.5}},
+                   "release": {"across_m": 0.4}, "output": {"runs_csv": true, "maps": {"cells_along_dip": 20, "cells_across": 8}}}),
         ),
         (
-            "scene",
-            json!({"monte_carlo": {"runs": 5}, "migration_output": {"maps": {}}}),
-            "/migration_output/maps",
+            "rigid",
+            json!({"method": "rigid_block", "face": {"length_m": 4}, "release": {"drop_height_m": 0.2},
+                   "monte_carlo": {"runs": 3, "seed": 1}, "output": {"maps": {"cells_along_dip": 8, "cells_across": 4, "across_min_m": -1, "across_max_m": 1}}}),
         ),
     ] {
-        let req = dir.join(format!("{kind}.json"));
+        let want = post(&common::app(), "/v1/migration", &body).await;
+        assert_eq!(want.status, 200, "{}", String::from_utf8_lossy(&want.body));
+        assert!(want.json()["maps"]["passages"].is_array());
+        let req = dir.join(format!("{name}.json"));
         std::fs::write(&req, serde_json::to_vec(&body).unwrap()).unwrap();
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_gangue"))
-            .args([
-                "compute",
-                "--request",
-                req.to_str().unwrap(),
-                "--kind",
-                kind,
-                "--shard",
-                "0/2",
-                "--out",
-                dir.join(format!("{kind}-part")).to_str().unwrap(),
-            ])
-            .env_remove("JOB_COMPLETION_INDEX")
-            .env_remove("SLURM_ARRAY_TASK_ID")
-            .env_remove("SLURM_ARRAY_TASK_COUNT")
-            .env_remove("AWS_BATCH_JOB_ARRAY_INDEX")
-            .output()
-            .unwrap();
-        assert!(
-            !out.status.success(),
-            "{kind}: maps in a shard must be refused"
-        );
-        let text = String::from_utf8_lossy(&out.stderr).into_owned()
-            + &String::from_utf8_lossy(&out.stdout);
-        assert!(text.contains(field), "{kind}: {text}");
-        assert!(text.contains("sharded"), "{kind}: {text}");
+        for k in [1u64, 3] {
+            let mut parts = Vec::new();
+            for i in 0..k {
+                let out = dir.join(format!("{name}-{k}-{i}"));
+                let o = gangue(&[
+                    "compute",
+                    "--request",
+                    req.to_str().unwrap(),
+                    "--kind",
+                    "migration",
+                    "--shard",
+                    &format!("{i}/{k}"),
+                    "--out",
+                    out.to_str().unwrap(),
+                ]);
+                assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+                parts.push(out.to_str().unwrap().to_string());
+            }
+            let mut args = vec!["merge"];
+            args.extend(parts.iter().map(String::as_str));
+            let o = gangue(&args);
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            assert!(
+                o.stdout == want.body,
+                "{name}, {k} shards: the merged answer differs from the request's"
+            );
+        }
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_sharded_scene_refuses_maps_naming_the_field() {
+    let dir = scratch("scene");
+    let body = json!({"monte_carlo": {"runs": 5}, "migration_output": {"maps": {}}});
+    let req = dir.join("scene.json");
+    std::fs::write(&req, serde_json::to_vec(&body).unwrap()).unwrap();
+    let out = gangue(&[
+        "compute",
+        "--request",
+        req.to_str().unwrap(),
+        "--kind",
+        "scene",
+        "--shard",
+        "0/2",
+        "--out",
+        dir.join("part").to_str().unwrap(),
+    ]);
+    assert!(
+        !out.status.success(),
+        "maps in a scene shard must be refused"
+    );
+    let text =
+        String::from_utf8_lossy(&out.stderr).into_owned() + &String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("/migration_output/maps"), "{text}");
+    assert!(text.contains("sharded"), "{text}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -20,16 +20,16 @@ use crate::physics::scene::{EnsembleReport, SceneCase, SceneError, SceneReport};
 use crate::physics::{Control, PhysicsError};
 use crate::shard::{Failure, Wire};
 
-/// Per-cell maps are not carried through part files: a shard request asking for them (at
-/// `pointer`) is refused with 422 before any work.
+/// A scene's per-cell maps are not carried through part files: a shard request asking for them
+/// (at `pointer`) is refused with 422 before any work (a migration's are).
 fn refuse_maps(maps: Option<&MapsDto>, pointer: &str) -> Result<(), ApiError> {
     let Some(m) = maps else { return Ok(()) };
     let mut ck = Checker::new();
     ck.push(
         pointer,
         serde_json::to_value(m).unwrap_or_default(),
-        "per-cell maps are not carried through the part files of a sharded computation \
-         (gangue compute/merge): leave maps out, or send the request to the service",
+        "a scene's per-cell maps are not carried through the part files of a sharded \
+         computation (gangue compute/merge): leave maps out, or send the request to the service",
     );
     ck.finish()
 }
@@ -59,7 +59,6 @@ impl Wire for HttpWire {
         let v = parse_json(request)?;
         let mut req: MigrationRequest = from_value(&v)?;
         let case = req.resolve(config)?;
-        refuse_maps(req.output.maps.as_ref(), "/output/maps")?;
         let inputs = serde_json::to_vec(&req).map_err(ApiError::internal)?;
         Ok((case, req, inputs))
     }

@@ -91,7 +91,7 @@ pub const MAP_FIELDS: &[(&str, NumberField)] = &[
 /// face (the foot of the perpendicular on the mean plane, and y), sampled at most half the
 /// smaller cell side apart on every closed-form piece and at every rigid-block step, the chords
 /// between samples walked cell by cell. Refused (422 naming `…/maps`) when cells × runs passes
-/// the server's `max_map_cell_runs` or the cells pass `max_map_cells`.
+/// the server's `max_map_cell_runs` or the cells pass `max_map_cells`, and in a sharded scene.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MapsDto {
