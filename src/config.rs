@@ -95,6 +95,15 @@ pub struct Config {
     #[arg(long, env = "GANGUE_MAX_FLOOR_BYTES", default_value_t = 512 * 1024 * 1024)]
     pub max_floor_bytes: u64,
 
+    /// Most cells of an ensemble's per-cell maps (default 250 000).
+    #[arg(long, env = "GANGUE_MAX_MAP_CELLS", default_value_t = 250_000)]
+    pub max_map_cells: u64,
+
+    /// Largest cells × runs of an ensemble's per-cell maps (default 5e7): the work and memory
+    /// bound of the maps, 40 bytes per run entering a cell (README "Limits").
+    #[arg(long, env = "GANGUE_MAX_MAP_CELL_RUNS", default_value_t = 50_000_000)]
+    pub max_map_cell_runs: u64,
+
     /// Most time steps of one rigid-block run (default 2e7).
     #[arg(long, env = "GANGUE_MAX_RIGID_STEPS", default_value_t = 2e7)]
     pub max_rigid_steps: f64,

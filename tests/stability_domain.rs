@@ -33,7 +33,8 @@ const KNOWN_ELSEWHERE: &[(&str, &str, &str)] = &[];
 
 /// Documented cross-field rules: an in-range value of the first field may be refused naming the
 /// second, whose default it contradicts (api.md: D₂ < D₁; the column at least the contact length
-/// L of a cube; a zone's A∩B at most min(A, B) and A∩C at most min(A, C)).
+/// L of a cube; a zone's A∩B at most min(A, B) and A∩C at most min(A, C); a map's far edges
+/// beyond its near ones).
 const RELATED: &[(&str, &str)] = &[
     ("/column/outer_diameter_m", "/column/inner_diameter_m"),
     (
@@ -53,6 +54,19 @@ const RELATED: &[(&str, &str)] = &[
     ("/rock/side_length_m", "/supports/0/column/length_m"),
     ("/support_rows/lowest_along_dip_m", "/support_rows/count"),
     ("/support_rows/spacing_m", "/support_rows/count"),
+    ("/output/maps/across_min_m", "/output/maps/across_max_m"),
+    (
+        "/output/maps/along_dip_min_m",
+        "/output/maps/along_dip_max_m",
+    ),
+    (
+        "/migration_output/maps/across_min_m",
+        "/migration_output/maps/across_max_m",
+    ),
+    (
+        "/migration_output/maps/along_dip_min_m",
+        "/migration_output/maps/along_dip_max_m",
+    ),
     (
         "/support_rows/column/outer_diameter_m",
         "/support_rows/column/inner_diameter_m",
@@ -149,11 +163,24 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             "/face/floor_material/",
             json!({"face": {"floor_material": floor_material()}}),
         ),
+        // per-cell maps are made over an ensemble
+        (
+            "/v1/migration",
+            "/output/maps/",
+            json!({"face": {"length_m": 20}, "monte_carlo": {"runs": 5}}),
+        ),
+        (
+            "/v1/scene",
+            "/migration_output/maps/",
+            json!({"face": {"length_m": 20}, "monte_carlo": {"runs": 5}}),
+        ),
     ];
     // `map` exists only on grid and contour floors: its fields are varied on a grid in map
     // coordinates, never on the default plane
     let mut out = if pointer.starts_with("/face/floor/map/")
         || pointer.starts_with("/face/floor_material/")
+        || pointer.starts_with("/output/maps/")
+        || pointer.starts_with("/migration_output/maps/")
     {
         vec![]
     } else {

@@ -3,7 +3,7 @@
 
 use super::{Calculation, Ensemble, Report, Stage};
 use crate::physics::migration::{
-    self, Method, MigrationCase, MigrationResult, RunRecords, RunSummary,
+    self, Method, MigrationCase, MigrationResult, RunRecords, RunSummary, maps,
 };
 use crate::physics::{Control, PhysicsError};
 
@@ -38,6 +38,21 @@ impl Ensemble for Migration {
     ) -> Result<Vec<RunSummary>, PhysicsError> {
         Ok(migration::run_part(case, range, false, control)?.1)
     }
+}
+
+/// The runs of `range` of `case` with the cells each run's path entered on the map grid of
+/// `case.output.maps` (empty without one), in run order: a shard's part of a migration with maps.
+///
+/// # Errors
+/// As [`Migration::solve`].
+pub fn part_with_maps(
+    case: &MigrationCase,
+    range: std::ops::Range<u64>,
+    control: &Control,
+) -> Result<(Vec<RunSummary>, Vec<maps::RunCells>), PhysicsError> {
+    let (_, runs, cells) =
+        migration::run_part_mapped(case, range, false, case.output.maps.as_ref(), control)?;
+    Ok((runs, cells))
 }
 
 /// The report of `case` from the records of its runs (computed here or read back from the

@@ -22,7 +22,14 @@ impl Calculation for Scene {
     fn solve(case: &SceneCase, control: &Control) -> Result<Report<SceneReport>, SceneError> {
         let (mut r, mc) = nominal_report(case, control)?;
         if let Some(mc) = mc {
-            let (runs, other) = scene::ensemble_part(case, &mc, 0..mc.runs, control)?;
+            let (runs, other) = match &case.migration.output.maps {
+                None => scene::ensemble_part(case, &mc, 0..mc.runs, control)?,
+                Some(g) => {
+                    let (runs, other, maps) = scene::ensemble_part_mapped(case, &mc, g, control)?;
+                    r.maps = Some(maps);
+                    (runs, other)
+                }
+            };
             let capacity = scene::nominal_capacity(&r);
             let Ok(tail) = scene::ensemble_report(
                 case,

@@ -149,6 +149,7 @@ const NULL_DEFAULTS: &[&str] = &[
     "rocks_per_year",
     "observed_events",
     "observed_period_years",
+    "maps",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot

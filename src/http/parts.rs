@@ -7,6 +7,8 @@ use serde_json::Value;
 use crate::calc::Report;
 use crate::config::Config;
 use crate::http::dto::batch::{json_items, ndjson_items};
+use crate::http::dto::common::Checker;
+use crate::http::dto::maps::MapsDto;
 use crate::http::dto::migration::{MigrationRequest, MigrationResponse};
 use crate::http::dto::scene::{SceneContext, SceneHead, SceneRequest, scene_error};
 use crate::http::error::ApiError;
@@ -17,6 +19,20 @@ use crate::physics::migration::{MigrationCase, MigrationResult};
 use crate::physics::scene::{EnsembleReport, SceneCase, SceneError, SceneReport};
 use crate::physics::{Control, PhysicsError};
 use crate::shard::{Failure, Wire};
+
+/// A scene's per-cell maps are not carried through part files: a shard request asking for them
+/// (at `pointer`) is refused with 422 before any work (a migration's are).
+fn refuse_maps(maps: Option<&MapsDto>, pointer: &str) -> Result<(), ApiError> {
+    let Some(m) = maps else { return Ok(()) };
+    let mut ck = Checker::new();
+    ck.push(
+        pointer,
+        serde_json::to_value(m).unwrap_or_default(),
+        "a scene's per-cell maps are not carried through the part files of a sharded \
+         computation (gangue compute/merge): leave maps out, or send the request to the service",
+    );
+    ck.finish()
+}
 
 /// The service's wire: requests and answers as the endpoints read and write them.
 #[derive(Debug, Clone, Copy, Default)]
@@ -67,6 +83,7 @@ impl Wire for HttpWire {
         let v = parse_json(request)?;
         let mut req: SceneRequest = from_value(&v)?;
         let (case, ctx) = req.resolve(config)?;
+        refuse_maps(req.migration_output.maps.as_ref(), "/migration_output/maps")?;
         let inputs = serde_json::to_vec(&req).map_err(ApiError::internal)?;
         Ok((case, (ctx, req), inputs))
     }

@@ -1,6 +1,7 @@
 //! `gangue compute`: the items of one shard into a part file.
 
 use super::*;
+use crate::physics::migration::maps::{CellMax, RunCells};
 
 /// `gangue compute`: computes the items of one shard and writes its part file. Returns the path
 /// written. `wire` reads the request and writes the answer pieces part 0 stores.
@@ -18,8 +19,15 @@ pub fn compute<W: Wire>(args: &ComputeArgs, wire: &W) -> Result<PathBuf, Failure
     match &r.prepared {
         Prepared::Migration { case, .. } => {
             let ctl = control(args.time_limit_s);
-            let runs =
-                Migration::part(case, range.clone(), &ctl).map_err(|e| wire.physics_failure(e))?;
+            let (runs, cells) = if case.output.maps.is_some() {
+                let (runs, cells) = calc::migration::part_with_maps(case, range.clone(), &ctl)
+                    .map_err(|e| wire.physics_failure(e))?;
+                (runs, Some(cells))
+            } else {
+                let runs = Migration::part(case, range.clone(), &ctl)
+                    .map_err(|e| wire.physics_failure(e))?;
+                (runs, None)
+            };
             for run in &runs {
                 encode_run(run, &mut body);
             }
@@ -30,6 +38,12 @@ pub fn compute<W: Wire>(args: &ComputeArgs, wire: &W) -> Result<PathBuf, Failure
                 let before = body.len();
                 v.iter()
                     .for_each(|x| body.extend_from_slice(&x.to_le_bytes()));
+                sections.push((body.len() - before) as u64);
+            }
+            // with maps, a section of its own after the columns: each run's cells
+            if let Some(cells) = &cells {
+                let before = body.len();
+                cells.iter().for_each(|c| encode_cells(c, &mut body));
                 sections.push((body.len() - before) as u64);
             }
         }
@@ -157,4 +171,53 @@ pub(super) fn write_part(out: &Path, header: &Header, body: &[u8]) -> Result<(),
         let _ = std::fs::remove_file(&tmp);
         io_err(out, e)
     })
+}
+
+/// Bytes of one cell of a run in a part's maps section: index (u32), speed and kinetic energy
+/// (f64), little-endian.
+pub(super) const CELL_BYTES: usize = 20;
+
+/// Appends one run's cells to a part's maps section: their count (u64), then each cell.
+fn encode_cells(cells: &RunCells, body: &mut Vec<u8>) {
+    body.extend_from_slice(&(cells.len() as u64).to_le_bytes());
+    for c in cells {
+        body.extend_from_slice(&c.cell.to_le_bytes());
+        body.extend_from_slice(&c.speed.to_le_bytes());
+        body.extend_from_slice(&c.kinetic_energy.to_le_bytes());
+    }
+}
+
+/// The runs' cells of a part's maps section (see [`encode_cells`]), `runs` of them.
+pub(super) fn decode_cells(b: &[u8], runs: u64) -> Result<Vec<RunCells>, String> {
+    let mut out = Vec::with_capacity(usize::try_from(runs).unwrap_or(0));
+    let mut at = 0usize;
+    let take = |at: &mut usize, n: usize| -> Result<&[u8], String> {
+        let s = b
+            .get(*at..*at + n)
+            .ok_or_else(|| "the maps section is short".to_string())?;
+        *at += n;
+        Ok(s)
+    };
+    for _ in 0..runs {
+        let n = u64::from_le_bytes(take(&mut at, 8)?.try_into().map_err(|_| "count")?);
+        let n = usize::try_from(n).map_err(|_| "a run's cell count does not fit")?;
+        if n > (b.len() - at) / CELL_BYTES {
+            return Err("the maps section is short".into());
+        }
+        let mut run = Vec::with_capacity(n);
+        for _ in 0..n {
+            let c = take(&mut at, CELL_BYTES)?;
+            let f = |k: usize| f64::from_le_bytes(c[k..k + 8].try_into().unwrap_or([0; 8]));
+            run.push(CellMax {
+                cell: u32::from_le_bytes(c[0..4].try_into().unwrap_or([0; 4])),
+                speed: f(4),
+                kinetic_energy: f(12),
+            });
+        }
+        out.push(run);
+    }
+    if at != b.len() {
+        return Err("the maps section is longer than its runs".into());
+    }
+    Ok(out)
 }

@@ -5,6 +5,7 @@ use super::part::{
     reader,
 };
 use super::*;
+use crate::physics::migration::maps::{MapGrid, Maps, build_maps};
 
 /// `gangue merge`: checks the parts and writes the response body to `out`; `wire` reads the
 /// request and writes the answer.
@@ -37,11 +38,14 @@ pub fn merge<W: Wire>(args: &MergeArgs, wire: &W, out: &mut dyn Write) -> Result
     let ctl = control(args.time_limit_s);
     let bytes = match r.prepared {
         Prepared::Migration { case, req } => {
-            let report =
+            let mut report =
                 calc::migration::merge(&case, &PartRuns(&parts), &ctl).map_err(|e| match e {
                     MergeError::Physics(e) => wire.physics_failure(e),
                     MergeError::Records(e) => Failure::from(e),
                 })?;
+            if let Some(grid) = &case.output.maps {
+                report.result.maps = Some(merged_maps(&parts, grid)?);
+            }
             wire.migration_answer(report, *req)?
         }
         Prepared::Scene { case, req, .. } => {
@@ -139,4 +143,19 @@ pub fn merge<W: Wire>(args: &MergeArgs, wire: &W, out: &mut dyn Write) -> Result
     out.write_all(&bytes)
         .and_then(|()| out.flush())
         .map_err(|e| Failure::from(format!("writing the answer: {e}")))
+}
+
+/// The maps of a migration from its parts' maps sections (after the records and the seven
+/// columns), the runs in index order: the maps of the same request computed at once.
+fn merged_maps(parts: &[super::part::Part], grid: &MapGrid) -> Result<Maps, String> {
+    check_sections(parts, 1 + STATISTICS_COLUMNS + 1, Some(RUN_RECORD_BYTES))?;
+    let mut cells = Vec::new();
+    for p in parts {
+        let b = read_section(p, 1 + STATISTICS_COLUMNS)?;
+        cells.extend(
+            super::compute::decode_cells(&b, p.header.end - p.header.start)
+                .map_err(|e| format!("{}: {e}", p.path.display()))?,
+        );
+    }
+    Ok(build_maps(grid, &cells))
 }

@@ -5,7 +5,7 @@
 // floor under the path; a 3-D view (vendored three.js, loaded on first use)
 // that falls back to the 2-D views where WebGL is missing.
 
-import { fmt, h } from './format.js';
+import { csvButton, fmt, h } from './format.js';
 import { destroy, joinSeries, linePlot } from './plot.js';
 
 const ELEV = (t) => `hsl(${120 - 90 * t}, 38%, 46%)`;
@@ -16,6 +16,92 @@ const SUPPORT_OVER = '#c8423b';
 const SUPPORT_IDLE = '#6b7684';
 const ZONE = '#d88a1c';
 const STOP = '#1c2430';
+/** Map colour: pale yellow (low) through red to purple (high). */
+const MAPC = (t) => {
+  const u = Math.max(0, Math.min(1, t));
+  return `hsl(${(52 - 112 * u + 360) % 360}, 88%, ${62 - 28 * u}%)`;
+};
+
+/**
+ * The layers of an ensemble's per-cell maps (`maps` of a Migration or Scene answer): the field,
+ * its label and unit on the page, and the factor from SI (energies shown in kJ).
+ */
+export const MAP_LAYERS = [
+  { key: 'passages', label: 'passages', short: 'runs', field: 'passages', unit: 'runs', si: 'runs', k: 1 },
+  { key: 'speed_mean', label: 'mean speed', short: 'v mean (m/s)', field: 'speed_mean_m_s', unit: 'm/s', si: 'm_s', k: 1 },
+  { key: 'speed_p95', label: 'p95 speed', short: 'v p95 (m/s)', field: 'speed_p95_m_s', unit: 'm/s', si: 'm_s', k: 1 },
+  { key: 'energy_mean', label: 'mean kinetic energy', short: 'E mean (kJ)', field: 'kinetic_energy_mean_j', unit: 'kJ', si: 'j', k: 1e-3 },
+  { key: 'energy_p95', label: 'p95 kinetic energy', short: 'E p95 (kJ)', field: 'kinetic_energy_p95_j', unit: 'kJ', si: 'j', k: 1e-3 },
+];
+
+/** Cells along the dip and across of the page's maps (about 60 × 40), fewer when the runs are many. */
+const MAP_CELLS = [60, 40];
+
+/**
+ * The map grid the page asks for with an ensemble (`output.maps`): 60 × 40 cells over the face
+ * (0 to its length along the dip; across, the uploaded floor's extent, else the release, its
+ * spread and the supports with 3 m beside them), fewer cells when cells × runs would pass
+ * `maxCellRuns` (the server's `max_map_cell_runs`).
+ */
+export function defaultMapGrid(request, upload, runs, maxCellRuns = 5e7) {
+  const map = request?.face?.floor?.map ?? null;
+  const draw = request?.face?.floor?.kind && request.face.floor.kind !== 'plane' ? upload?.draw ?? null : null;
+  let lo;
+  let hi;
+  if (draw && !map && draw.kind === 'grid') {
+    [lo, hi] = [draw.y0, draw.y0 + (draw.nrows - 1) * draw.d];
+  } else if (draw && !map && draw.kind === 'contours') {
+    [lo, hi] = extent(draw.lines.flatMap((l) => l.points.map((p) => p[1])));
+  } else {
+    const length = request?.face?.length_m ?? 120;
+    const ys = [request?.release?.across_m ?? 0, request?.monte_carlo?.release_across_m?.min, request?.monte_carlo?.release_across_m?.max,
+      ...requestSupports(request, length).map((p) => p.across)].filter((v) => Number.isFinite(v));
+    const [a, b] = extent(ys);
+    [lo, hi] = [Math.max(-1000, a - 3), Math.min(1000, b + 3)];
+  }
+  let [na, nc] = MAP_CELLS;
+  const n = Math.max(1, runs ?? 1);
+  while (na * nc * n > maxCellRuns && (na > 4 || nc > 2)) {
+    na = Math.max(4, Math.floor(na * 0.8));
+    nc = Math.max(2, Math.floor(nc * 0.8));
+  }
+  return { cells_along_dip: na, cells_across: nc, across_min_m: lo, across_max_m: hi };
+}
+
+/** The values of `layer` ({field, k}) in page units, null where no run passed. */
+function mapValues(maps, layer) {
+  return maps[layer.field].map((v, i) => (maps.passages[i] > 0 && v !== null && v !== undefined ? v * layer.k : null));
+}
+
+/** The across limits of the map's cells some run entered (m), to keep them in the plane's view. */
+function passedAcross(maps) {
+  if (!maps) return [];
+  const out = [];
+  maps.passages.forEach((n, k) => {
+    if (n > 0) {
+      const j = k % maps.cells_across;
+      out.push(maps.across_min_m + j * maps.cell_across_m, maps.across_min_m + (j + 1) * maps.cell_across_m);
+    }
+  });
+  return extent(out).filter(Number.isFinite);
+}
+
+/** Rows of the CSV of a map layer: each cell's bounds, its passages and the layer's value in SI. */
+export function mapCsvRows(maps, layer) {
+  const head = ['along_dip_from_m', 'along_dip_to_m', 'across_from_m', 'across_to_m', 'passages'];
+  const extra = layer && layer.key !== 'passages' ? layer.field : null;
+  const rows = [extra ? [...head, extra] : head];
+  for (let i = 0; i < maps.cells_along_dip; i++) {
+    for (let j = 0; j < maps.cells_across; j++) {
+      const k = i * maps.cells_across + j;
+      const row = [maps.along_dip_min_m + i * maps.cell_along_dip_m, maps.along_dip_min_m + (i + 1) * maps.cell_along_dip_m,
+        maps.across_min_m + j * maps.cell_across_m, maps.across_min_m + (j + 1) * maps.cell_across_m, maps.passages[k]];
+      if (extra) row.push(maps[extra][k] ?? '');
+      rows.push(row);
+    }
+  }
+  return rows;
+}
 
 /** Smallest and largest finite values. */
 function extent(values) {
@@ -154,7 +240,7 @@ export function stopPositions(runsCsv, release, supports) {
  * Draws the plan of `model` into `canvas` (CSS width of its box): the floor, the supports,
  * the release, the path coloured by speed and the stops. Returns what it drew, for the legend.
  */
-export function drawPlan(canvas, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map() } = {}) {
+export function drawPlan(canvas, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map(), maps = null, layer = null } = {}) {
   const cssW = Math.max(280, Math.floor(canvas.parentElement?.clientWidth || 600));
   const pathXY = tr ? tr.position_m.map(model.path) : [];
   // The floor's extent in the view frame.
@@ -169,14 +255,17 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     yr = extent(pts.map((p) => p[1]));
   } else {
     // The inclined plane: along the dip 0…L; across, what the supports, the release and the path use, ±2 m.
-    const ys = [0, ...supports.map((p) => p.across), release.point?.across, ...pathXY.map((p) => p[1])].filter((v) => v !== null && v !== undefined);
+    const ys = [0, ...supports.map((p) => p.across), release.point?.across, ...pathXY.map((p) => p[1]), ...passedAcross(maps)]
+      .filter((v) => v !== null && v !== undefined);
     const [a, b] = extent(ys);
     xr = [0, model.length * Math.cos(model.dip)];
     yr = [Math.min(a, -1) - 2, Math.max(b, 1) + 2];
   }
   // Narrow screens: the colour bars closer together.
   const narrow = cssW < 560;
-  const M = { l: model.map ? 80 : 58, r: narrow ? 118 : 160, t: 14, b: 58 };
+  const mapLayer = maps ? MAP_LAYERS.find((l) => l.key === layer) ?? null : null;
+  // with maps, room for their colour bar whatever the layer: choosing one moves nothing else
+  const M = { l: model.map ? 80 : 58, r: (narrow ? 118 : 160) + (maps ? (narrow ? 62 : 84) : 0), t: 14, b: 58 };
   const plotW = cssW - M.l - M.r;
   const sx = plotW / (xr[1] - xr[0] || 1);
   // Equal scales unless the floor is a thin strip: then across is stretched, and said so.
@@ -243,6 +332,37 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     grad.addColorStop(1, ELEV(0));
     ctx.fillStyle = grad;
     ctx.fillRect(px(xr[0]), M.t, (xr[1] - xr[0]) * sx, plotH);
+  }
+  // The ensemble's map: each cell a run entered, coloured by the layer; the others left clear.
+  let mapRange = null;
+  let mapCells = 0;
+  if (mapLayer) {
+    const values = mapValues(maps, mapLayer);
+    mapRange = extent(values);
+    if (mapLayer.key === 'passages') mapRange = [0, mapRange[1]];
+    const span = mapRange[1] - mapRange[0];
+    ctx.globalAlpha = 0.85;
+    for (let i = 0; i < maps.cells_along_dip; i++) {
+      const s0 = maps.along_dip_min_m + i * maps.cell_along_dip_m;
+      for (let j = 0; j < maps.cells_across; j++) {
+        const v = values[i * maps.cells_across + j];
+        if (v === null) continue;
+        const y0 = maps.across_min_m + j * maps.cell_across_m;
+        const corners = [[s0, y0], [s0 + maps.cell_along_dip_m, y0], [s0 + maps.cell_along_dip_m, y0 + maps.cell_across_m], [s0, y0 + maps.cell_across_m]]
+          .map(([a, b]) => model.face2view(a, b));
+        ctx.fillStyle = MAPC(span > 0 ? (v - mapRange[0]) / span : 1);
+        ctx.beginPath();
+        corners.forEach(([x, y], q) => (q ? ctx.lineTo(px(x), py(y)) : ctx.moveTo(px(x), py(y))));
+        ctx.closePath();
+        ctx.fill();
+        // a hair of the same colour over the seams between cells
+        ctx.strokeStyle = ctx.fillStyle;
+        ctx.lineWidth = 0.6;
+        ctx.stroke();
+        mapCells += 1;
+      }
+    }
+    ctx.globalAlpha = 1;
   }
   // Release zones: bands across the floor between their along-dip limits; a point as a ring.
   ctx.lineWidth = 2;
@@ -370,9 +490,17 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
   // Colour bars: elevation, and speed along the path.
   colourBar(ctx, cssW - M.r + (narrow ? 12 : 16), M.t, plotH, zr, ELEV, narrow ? 'z (m)' : 'elevation (m)');
   if (tr) colourBar(ctx, cssW - M.r + (narrow ? 66 : 92), M.t, plotH, [v0, v1], SPEED, narrow ? 'v (m/s)' : 'speed (m/s)');
+  if (mapLayer && mapRange) {
+    colourBar(ctx, cssW - M.r + (narrow ? 120 : 168), M.t, plotH, mapRange, MAPC, narrow ? mapLayer.short : `${mapLayer.label} (${mapLayer.unit})`.replace('kinetic energy', 'energy'));
+  }
+  canvas.dataset.mapLayer = mapLayer ? mapLayer.key : 'none';
+  canvas.dataset.mapCells = String(mapCells);
+  // where a face point (s along the dip, y across) is drawn, in CSS pixels of the canvas
+  canvas.facePixel = (a, b) => { const [x, y] = model.face2view(a, b); return [px(x), py(y)]; };
+  canvas.plotRect = { l: M.l, t: M.t, w: plotW, h: plotH };
   canvas.dataset.exaggeration = String(ex);
   canvas.dataset.stops = String(drawnStops.length);
-  return { xr, yr, zr, speed: [v0, v1], stops: drawnStops.length, ex };
+  return { xr, yr, zr, speed: [v0, v1], stops: drawnStops.length, ex, map: mapLayer ? { layer: mapLayer, range: mapRange, cells: mapCells } : null };
 }
 
 function colourBar(ctx, x, y, hgt, [lo, hi], colour, label) {
@@ -718,7 +846,7 @@ function nearestAcross(tr, s) {
 }
 
 /** A legend in HTML under the plan: what each mark is (no "--" anywhere). */
-export function planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts }) {
+export function planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps = null }) {
   const items = [];
   const sw = (colour, shape = 'line') => h('span', { class: `swatch ${shape}`, style: `--c:${colour}` });
   items.push(h('li', {}, sw('#9fb58a', 'box'), model.uploaded
@@ -734,6 +862,12 @@ export function planLegend(drawn, { model, supports, release, tr, stops, unplace
   if (stops.length || unplaced) {
     items.push(h('li', {}, sw(STOP, 'cross'), `${stops.length} run${stops.length === 1 ? '' : 's'} stopped where marked (along the dip from the runs' table; across from the support struck, else from the nominal path)`
       + (unplaced ? `; ${unplaced} run${unplaced === 1 ? '' : 's'} not placed (the response does not say where they came to rest)` : '')));
+  }
+  if (drawn.map) {
+    const { layer, range, cells } = drawn.map;
+    const m = maps;
+    items.push(h('li', { dataset: { out: 'map' } }, sw(MAPC(0.7), 'box'), `map of the ${m.runs} runs: ${layer.label}${layer.key === 'passages' ? ' (runs whose centre, projected on the face, entered the cell)' : ' of each passing run\'s largest value in the cell'}`
+      + `, ${Number.isFinite(range[0]) ? `${fmt(range[0], 3)} to ${fmt(range[1], 3)} ${layer.unit}` : 'no cell reached'}; ${cells} of ${m.cells_along_dip} × ${m.cells_across} cells of ${fmt(m.cell_along_dip_m, 3)} m along the dip × ${fmt(m.cell_across_m, 3)} m across were entered, the others are left clear`));
   }
   if (drawn.ex > 1.05) items.push(h('li', {}, `across the face stretched ×${fmt(drawn.ex, 2)} to be seen; the scale bar is along x`));
   return h('ul', { class: 'floor-legend' }, items);
@@ -759,7 +893,7 @@ export function offFloor(model, s, across) {
  * Fills a floor-views block (`<prefix>-floor`): the plan with its legend, the profile and
  * the 3-D view, for a Migration or Scene answer.
  */
-export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv, arrival = null, verdicts = new Map(), extra = [] }) {
+export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv, arrival = null, verdicts = new Map(), extra = [], maps = null }) {
   const box = document.getElementById(`${prefix}-floor`);
   const model = floorModel(inputs, upload);
   const length = model.length;
@@ -771,13 +905,25 @@ export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv,
   const stops = placed.stops.length || unplaced || !arrival ? placed.stops : [{ s: arrival.along_dip_m, across: null, reason: arrival.stop_reason }];
   box.hidden = false;
   const canvas = document.getElementById(`${prefix}-floor-plan`);
-  const options = { supports, release, tr, stops, verdicts };
-  const drawn = drawPlan(canvas, model, options);
+  const controls = mapControls(prefix, canvas, maps);
+  const options = { supports, release, tr, stops, verdicts, maps, layer: controls?.value ?? null };
+  let drawn = drawPlan(canvas, model, options);
   const floorWords = model.uploaded ? `uploaded floor ${model.name}` : 'plane floor';
   canvas.setAttribute('aria-label', `Plan of the ${floorWords}: ${supports.length} supports, ${release.zones ? `${release.zones.length} release zones` : 'one release point'}, `
     + `${tr ? `the nominal path (speed ${fmt(drawn.speed[0], 3)} to ${fmt(drawn.speed[1], 3)} m/s), ` : ''}${stops.length} stops marked.`);
   canvas.dataset.floor = model.uploaded ? 'uploaded' : 'plane';
-  canvas.redraw = () => drawPlan(canvas, model, options);
+  const legend = document.getElementById(`${prefix}-floor-legend`);
+  canvas.redraw = () => {
+    drawn = drawPlan(canvas, model, options);
+    legend.replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps }));
+    return drawn;
+  };
+  if (controls) {
+    controls.onchange = () => {
+      options.layer = controls.value;
+      canvas.redraw();
+    };
+  }
   // A new width (a turned phone, a resized window) draws the plan again at that width.
   if (!canvas.resizeWatch) {
     let width = canvas.parentElement.clientWidth;
@@ -788,7 +934,7 @@ export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv,
     canvas.resizeWatch.observe(canvas.parentElement);
   }
   canvas.csv = () => [['run_stop_along_dip_m', 'across_m', 'stop_reason'], ...stops.map((s) => [s.s ?? length, s.across ?? '', s.reason ?? ''])];
-  document.getElementById(`${prefix}-floor-legend`).replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts }));
+  legend.replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps }));
   const profile = document.getElementById(`${prefix}-profile-plot`);
   if (tr) {
     drawProfile(profile, model, tr, {
@@ -801,6 +947,31 @@ export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv,
   }
   const box3d = document.getElementById(`${prefix}-3d`);
   return draw3d(box3d, model, options);
+}
+
+/**
+ * The map controls above a plan (`<prefix>-map-controls`): the layer chooser and the CSV of the
+ * chosen layer; hidden without maps. Returns the chooser, or null.
+ */
+function mapControls(prefix, canvas, maps) {
+  const id = `${prefix}-map-controls`;
+  let box = document.getElementById(id);
+  if (!box) {
+    const select = h('select', { id: `${prefix}-map-layer`, 'aria-label': 'Map layer of the ensemble drawn on the floor' },
+      h('option', { value: 'none' }, 'none'), ...MAP_LAYERS.map((l) => h('option', { value: l.key }, `${l.label} (${l.unit})`)));
+    select.value = 'passages';
+    box = h('div', { id, class: 'map-controls' },
+      h('label', { for: `${prefix}-map-layer` }, 'Map of the ensemble: '), select,
+      csvButton(`${prefix}_map.csv`, () => {
+        const m = box.maps;
+        if (!m) return [['no map: run an ensemble']];
+        return mapCsvRows(m, MAP_LAYERS.find((l) => l.key === select.value) ?? null);
+      }, 'CSV: map'));
+    canvas.parentElement.before(box);
+  }
+  box.maps = maps;
+  box.hidden = !maps;
+  return maps ? box.querySelector('select') : null;
 }
 
 /** Hides a floor-views block and lets its 3-D view go. */

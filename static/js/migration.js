@@ -8,7 +8,7 @@ import { csvButton, fillTable, fmt, h, showWarnings } from './format.js';
 import { postJson } from './api.js';
 import { initPanel } from './panel.js';
 import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
-import { clearFloorViews, offFloor, floorModel, renderFloorViews } from './floorview.js';
+import { clearFloorViews, defaultMapGrid, offFloor, floorModel, renderFloorViews } from './floorview.js';
 
 /** Why the friction spread starts from the page's own values. */
 const FRICTION_SPREAD = 'an example spread: the server has none unless one is sent';
@@ -233,12 +233,14 @@ export function initMigration() {
           if (mc[key]) mc[key] = { distribution: 'uniform', ...mc[key] };
         }
         if (mc.friction_coefficient) mc.friction_coefficient = { distribution: 'truncated_normal', ...mc.friction_coefficient };
-        request.output = { ...request.output, runs_csv: true };
+        // the ensemble's per-cell maps, drawn on the floor view
+        request.output = { ...request.output, runs_csv: true, maps: defaultMapGrid(request, floor.current(), mc.runs) };
       }
       if (compareNext) {
         compareNext = false;
         delete request.monte_carlo;
         request.output = { ...request.output, trajectory: true, runs_csv: false };
+        delete request.output.maps;
         Object.defineProperty(request, 'compare', { value: true, enumerable: false });
       }
       return request;
@@ -297,7 +299,7 @@ export function initMigration() {
     const extra = Object.entries(data.comparison ?? {})
       .filter(([, d]) => d.trajectory && d.trajectory !== data.trajectory && d.method !== data.method)
       .map(([method, d]) => ({ label: `the rock, ${names[method] ?? method}`, tr: d.trajectory }));
-    renderFloorViews('migration', { inputs: data.inputs, request, upload: floor.current(), tr: data.trajectory ?? null, runsCsv, arrival: data.arrival, extra });
+    renderFloorViews('migration', { inputs: data.inputs, request, upload: floor.current(), tr: data.trajectory ?? null, runsCsv, arrival: data.arrival, extra, maps: data.maps ?? null });
   }
 
   function renderComparison(both) {

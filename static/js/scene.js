@@ -9,7 +9,7 @@ import { buildForm, merge } from './form.js';
 import { csvButton, csvNumber, fmt, h, showWarnings } from './format.js';
 import { initPanel } from './panel.js';
 import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
-import { clearFloorViews, floorModel, offFloor, renderFloorViews } from './floorview.js';
+import { clearFloorViews, defaultMapGrid, floorModel, offFloor, renderFloorViews } from './floorview.js';
 
 /** Why the release across the face starts from the page's own range. */
 const RELEASE_ACROSS = 'an assumed range across the face (the server draws none unless asked)';
@@ -245,7 +245,11 @@ export function initScene() {
           request.monte_carlo.density_kg_m3 = { distribution: 'uniform', ...rockRanges['rock.density_kg_m3'] };
         }
         // the nominal run's path is drawn on the floor
-        request.migration_output = { runs_csv: true, trajectory: true, sample_interval_s: m.output?.sample_interval_s };
+        request.migration_output = {
+          runs_csv: true, trajectory: true, sample_interval_s: m.output?.sample_interval_s,
+          // the ensemble's per-cell maps, drawn on the floor view
+          maps: defaultMapGrid(request, migrationForm.floor?.current?.() ?? null, request.monte_carlo.runs),
+        };
       } else {
         request.migration_output = { trajectory: true, sample_interval_s: m.output?.sample_interval_s };
       }
@@ -294,7 +298,7 @@ export function initScene() {
     const verdicts = new Map(entries.map((e) => [`${e.support}.${e.column_index ?? 0}`, e.verdict]));
     renderFloorViews('scene', {
       inputs: data.inputs ?? data.migration?.inputs, request: request ?? data.inputs, upload: migrationForm.floor?.current?.() ?? null,
-      tr: data.migration?.trajectory ?? null, runsCsv, arrival: data.migration?.arrival ?? null, verdicts,
+      tr: data.migration?.trajectory ?? null, runsCsv, arrival: data.migration?.arrival ?? null, verdicts, maps: data.maps ?? null,
     });
     distSelect.replaceChildren(...entries.map((e, i) => h('option', { value: String(i) }, label(e))));
     const worst = entries.reduce((b, e, i) => ((e.risk ?? -1) > (entries[b]?.risk ?? -1) ? i : b), 0);

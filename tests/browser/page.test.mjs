@@ -1080,6 +1080,83 @@ async function floorViewSection(page, context) {
     await page.locator(`${form} input[name="monte_carlo"]`).uncheck();
   });
 
+  await check('floor view: an ensemble\'s maps are drawn on the plan where runs passed and nowhere else, the layer chooser changes them, the chosen map downloads as CSV', async () => {
+    await open(page, '#migration');
+    await page.locator(`${form} input[name="monte_carlo"]`).check();
+    await field(page, form, '/monte_carlo/runs').fill('60');
+    const done = await rendered(page, 'migration');
+    const response = await submit(page, form, '/v1/migration');
+    await done.done;
+    const sent = JSON.parse(response.request().postData());
+    const grid = sent.output?.maps;
+    assert(grid?.cells_along_dip === 60 && grid.cells_across === 40, `maps asked for: ${JSON.stringify(grid)}`);
+    // a streamed answer: progress lines, then {"result": …}
+    const last = (await response.text()).trim().split('\n').pop();
+    const maps = JSON.parse(last).result?.maps;
+    assert(maps && maps.runs === 60 && maps.passages.length === 2400, 'no maps in the answer');
+    assert(await page.locator('#migration-floor-plan').getAttribute('data-map-layer') === 'passages', 'the passages map is not drawn first');
+    // the plan drawn with no layer and with each layer: what changed in the plot lies in the cells entered
+    const diff = (layer) => page.evaluate(([l, m]) => {
+      const c = document.getElementById('migration-floor-plan');
+      const sel = document.getElementById('migration-map-layer');
+      const grab = () => c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      sel.value = 'none';
+      sel.dispatchEvent(new Event('change'));
+      const a = grab();
+      sel.value = l;
+      sel.dispatchEvent(new Event('change'));
+      const b = grab();
+      const dpr = c.width / parseFloat(c.style.width);
+      const boxes = [];
+      m.passages.forEach((n, k) => {
+        if (!n) return;
+        const i = Math.floor(k / m.cells_across);
+        const j = k % m.cells_across;
+        const s0 = m.along_dip_min_m + i * m.cell_along_dip_m;
+        const y0 = m.across_min_m + j * m.cell_across_m;
+        const pts = [[s0, y0], [s0 + m.cell_along_dip_m, y0 + m.cell_across_m]].map(([s, y]) => c.facePixel(s, y));
+        boxes.push([Math.min(pts[0][0], pts[1][0]) - 2, Math.max(pts[0][0], pts[1][0]) + 2, Math.min(pts[0][1], pts[1][1]) - 2, Math.max(pts[0][1], pts[1][1]) + 2]);
+      });
+      const r = c.plotRect;
+      let inside = 0;
+      let outside = 0;
+      for (let y = Math.ceil(r.t * dpr) + 1; y < Math.floor((r.t + r.h) * dpr) - 1; y++) {
+        for (let x = Math.ceil(r.l * dpr) + 1; x < Math.floor((r.l + r.w) * dpr) - 1; x++) {
+          const q = 4 * (y * c.width + x);
+          if (a[q] === b[q] && a[q + 1] === b[q + 1] && a[q + 2] === b[q + 2]) continue;
+          const [cx, cy] = [x / dpr, y / dpr];
+          if (boxes.some(([x0, x1, y0, y1]) => cx >= x0 && cx <= x1 && cy >= y0 && cy <= y1)) inside += 1;
+          else outside += 1;
+        }
+      }
+      return { inside, outside, layer: c.dataset.mapLayer, cells: Number(c.dataset.mapCells) };
+    }, [layer, maps]);
+    const entered = maps.passages.filter((n) => n > 0).length;
+    for (const layer of ['passages', 'speed_p95', 'energy_mean']) {
+      const d = await diff(layer);
+      assert(d.layer === layer && d.cells === entered, `${layer}: drawn ${d.cells} cells of the ${entered} entered`);
+      assert(d.inside > 100 && d.outside === 0, `${layer}: ${d.inside} pixels changed in the cells entered, ${d.outside} elsewhere`);
+    }
+    const legend = await page.locator('#migration-floor-legend').textContent();
+    assert(/map of the 60 runs: mean kinetic energy/.test(legend) && /kJ/.test(legend), `legend: ${legend}`);
+    // the chooser itself: p95 speed, then its CSV (SI, every cell, passages beside)
+    await page.locator('#migration-map-layer').selectOption('speed_p95');
+    assert(await page.locator('#migration-floor-plan').getAttribute('data-map-layer') === 'speed_p95', 'the chooser did not redraw');
+    const csv = await downloaded(page, page.locator('[data-csv="migration_map.csv"]'));
+    assertCsvHeader(csv, 'map CSV');
+    const lines = csv.text.trim().split('\n');
+    assert(lines[0] === 'along_dip_from_m,along_dip_to_m,across_from_m,across_to_m,passages,speed_p95_m_s', `map CSV columns: ${lines[0]}`);
+    const rows = lines.slice(1).map((l) => l.split(','));
+    assert(rows.length === 2400, `${rows.length} map rows`);
+    const k = maps.passages.findIndex((n) => n > 0);
+    assert(Number(rows[k][4]) === maps.passages[k] && Math.abs(Number(rows[k][5]) - maps.speed_p95_m_s[k]) <= 1e-12 * maps.speed_p95_m_s[k], `map row ${k}: ${rows[k]}`);
+    assert(rows.every((r, i) => (maps.passages[i] > 0) === (r[5] !== '')), 'a cell without passages has a value, or one with passages none');
+    await elementShot(page.locator('#migration-floor'), 'floor-view-maps.png');
+    await page.locator('#migration-map-layer').selectOption('none');
+    assert(await page.locator('#migration-floor-plan').getAttribute('data-map-cells') === '0', 'layer none still draws cells');
+    await page.locator(`${form} input[name="monte_carlo"]`).uncheck();
+  });
+
   await check('floor view: an uploaded floor says so in the case bar, the legends and the plots, with the sha256 the service echoes', async () => {
     await open(page, '#migration');
     await page.locator('#floor-kind').selectOption('upload');
@@ -1174,6 +1251,10 @@ async function floorViewSection(page, context) {
     const legend = await page.locator('#scene-floor-legend').textContent();
     assert(/62 support columns where they stand/.test(legend) && /release zones \(Table 1 thirds\): 0–40 m, 40–80 m, 80–120 m/.test(legend), legend);
     assert(/nominal path coloured by speed/.test(legend) && /100 runs stopped where marked/.test(legend), legend);
+    // the ensemble's maps: asked for over the face and drawn (each run to the support it struck)
+    assert(body.migration_output.maps?.cells_along_dip === 60 && body.migration_output.maps.cells_across === 40, `maps asked for: ${JSON.stringify(body.migration_output.maps)}`);
+    assert(/map of the 100 runs: passages/.test(legend), legend);
+    assert(Number(await page.locator('#scene-floor-plan').getAttribute('data-map-cells')) > 20, 'the scene map draws no cell');
     assert(await drawnPixels(page, '#scene-floor-plan') > 20000, 'the plan is blank');
     await page.locator('#scene-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
     await elementShot(page.locator('#scene-floor'), 'floor-view-scene.png');
@@ -1410,6 +1491,13 @@ async function floorViewSection(page, context) {
     const w = await phone.evaluate(() => document.getElementById('migration-floor-plan').getBoundingClientRect().right);
     assert(w <= 390, `the plan reaches ${w} px`);
     await elementShot(phone.locator('#migration-floor'), 'phone-floor-view.png');
+    // an ensemble's map at phone width: its colour bar beside the others, nothing overflows
+    await phone.locator(`${form} input[name="monte_carlo"]`).check();
+    await phone.locator(`${form} [data-pointer="/monte_carlo/runs"]`).fill('30');
+    await submit(phone, form, '/v1/migration');
+    await phone.waitForFunction(() => Number(document.getElementById('migration-floor-plan').dataset.mapCells) > 0, null, { timeout: WAIT_MS });
+    await noHorizontalScroll(phone, 'migration with a map on the floor view');
+    await elementShot(phone.locator('#migration-floor'), 'phone-floor-view-maps.png');
     // a wider window draws the plan again at its new width
     await phone.setViewportSize({ width: 1200, height: 900 });
     await phone.waitForFunction(() => document.getElementById('migration-floor-plan').getBoundingClientRect().width > 700, null, { timeout: WAIT_MS });

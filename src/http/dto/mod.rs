@@ -7,6 +7,7 @@ pub mod common;
 pub mod design_values;
 pub mod floor;
 pub mod impact;
+pub mod maps;
 pub mod migration;
 pub mod param;
 pub mod protection;

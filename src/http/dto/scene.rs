@@ -486,6 +486,7 @@ impl SceneRequest {
         // the migration part, checked by /v1/migration's own rules and pointers
         let mut mreq = self.migration_request();
         let migration = mreq.resolve_in(config, Layout::Scene)?;
+        self.migration_output.maps = mreq.output.maps;
         self.face = mreq.face.clone();
         self.rock = mreq.rock.clone();
         let mut ck = Checker::new();
@@ -1023,6 +1024,9 @@ pub struct SceneResponse {
     /// speed against it (omitted with `allowed_impacts: false`; empty when no limit is checked).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub allowed_impacts: Option<Vec<AllowedImpactsDto>>,
+    /// Per-cell maps of the ensemble's runs, each to its stop (when `migration_output.maps`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub maps: Option<super::maps::MapsOutDto>,
     /// Named warnings, among them `release_zones_clipped` (the share of the release zones'
     /// weight where the rock does not fit on the floor, clipped off) and those of the migration.
     pub warnings: Vec<super::Warning>,
@@ -1273,6 +1277,7 @@ impl SceneResponse {
             statistics,
             comparison,
             allowed_impacts: r.allowed.as_ref().map(|a| allowed_dto(case, a)),
+            maps: r.maps.as_ref().map(Into::into),
             warnings,
             inputs,
             model_version: meta.model_version,
@@ -1425,6 +1430,7 @@ impl SceneHead {
                 .as_ref()
                 .map(|c| c.iter().map(|m| comparison_dto(case, m)).collect()),
             allowed_impacts: allowed.as_ref().map(|a| allowed_dto(case, a)),
+            maps: None,
             warnings,
             inputs,
             model_version: meta.model_version,

@@ -138,7 +138,9 @@ fn presets_value(state: &AppState) -> Value {
             "max_study_points": c.max_study_points,
             "max_batch_items": c.max_batch_items,
             "max_rigid_block_steps": c.max_rigid_steps,
-            "max_floor_bytes": c.max_floor_bytes
+            "max_floor_bytes": c.max_floor_bytes,
+            "max_map_cells": c.max_map_cells,
+            "max_map_cell_runs": c.max_map_cell_runs
         }
     })
 }

@@ -182,6 +182,8 @@ pub struct OutputOptions {
     pub runs_csv: bool,
     /// Largest number of trajectory samples (the service's limit, default 1 000 000).
     pub max_samples: usize,
+    /// Per-cell maps of the ensemble on this grid (Monte Carlo; default none: no work spent).
+    pub maps: Option<super::maps::MapGrid>,
 }
 
 impl Default for OutputOptions {
@@ -192,6 +194,7 @@ impl Default for OutputOptions {
             events: true,
             runs_csv: false,
             max_samples: 1_000_000,
+            maps: None,
         }
     }
 }

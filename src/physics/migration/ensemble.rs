@@ -11,7 +11,10 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::lumped_mass::{Phase, Setup, simulate};
+use nalgebra::Vector3;
+
+use super::lumped_mass::{Phase, Recording, Setup, simulate};
+use super::maps::{CellTrack, MapGrid, RunCells};
 use super::release::{Prepared, lumped_mass_setup, prepare_on};
 use super::terrain::Floor;
 use super::trajectory::{height_above_floor, robust_norm, support_impact_speed};
@@ -95,6 +98,52 @@ pub(super) fn ensemble(
     run_in_chunks(range, CHUNK as usize, control, one)
 }
 
+/// [`ensemble`] with the cells each run entered on `grid` (see [`super::maps`]).
+pub(super) fn ensemble_mapped(
+    case: &MigrationCase,
+    pr: &Prepared,
+    mc: &MonteCarlo,
+    range: std::ops::Range<u64>,
+    grid: &MapGrid,
+    control: &Control,
+) -> PhysicsResult<(Vec<RunSummary>, Vec<RunCells>)> {
+    const CHUNK: u64 = 256;
+    let setup = lumped_mass_setup(case, pr);
+    control.set_total(range.end - range.start);
+    let one = |i: u64| lumped_one_mapped(case, pr, &setup, mc, i, grid, control);
+    Ok(run_in_chunks(range, CHUNK as usize, control, one)?
+        .into_iter()
+        .unzip())
+}
+
+/// [`lumped_one`] recorded, with the cells its path entered on `grid`: every closed-form piece
+/// sampled at most half a cell apart.
+fn lumped_one_mapped(
+    case: &MigrationCase,
+    pr: &Prepared,
+    setup: &Setup<'_>,
+    mc: &MonteCarlo,
+    i: u64,
+    grid: &MapGrid,
+    control: &Control,
+) -> PhysicsResult<(RunSummary, RunCells)> {
+    let mut rec = Recording::default();
+    let summary = lumped_run(case, pr, setup, mc, i, Some(&mut rec), control)?;
+    let m = pr.mass;
+    let mut track = CellTrack::new(grid, pr.floor.mean);
+    for s in &rec.segments {
+        let ke = |v: &Vector3<f64>| {
+            let rot = match s.rolling {
+                Some(_) => 0.2 * v.norm_squared(),
+                None => s.spin.0,
+            };
+            m * (0.5 * v.norm_squared() + rot)
+        };
+        track.piece(&s.p0, &s.v0, &s.a, s.dt, &ke);
+    }
+    Ok((summary, track.finish()))
+}
+
 /// Run `i` of a lumped-mass ensemble: μ then (e_n, e_t) at every impact from the run's stream.
 pub(super) fn lumped_one(
     case: &MigrationCase,
@@ -102,6 +151,19 @@ pub(super) fn lumped_one(
     setup: &Setup<'_>,
     mc: &MonteCarlo,
     i: u64,
+    control: &Control,
+) -> PhysicsResult<RunSummary> {
+    lumped_run(case, pr, setup, mc, i, None, control)
+}
+
+/// [`lumped_one`], recorded into `rec` when given.
+fn lumped_run(
+    case: &MigrationCase,
+    pr: &Prepared,
+    setup: &Setup<'_>,
+    mc: &MonteCarlo,
+    i: u64,
+    rec: Option<&mut Recording>,
     control: &Control,
 ) -> PhysicsResult<RunSummary> {
     let mean = pr.floor.mean;
@@ -116,7 +178,7 @@ pub(super) fn lumped_one(
         let et = monte_carlo::sample(&mc.restitution_tangential, &mut rng).clamp(0.0, 1.0);
         (en, et)
     };
-    let o = simulate(setup, mu, &mut draw, None, Some(control))?;
+    let o = simulate(setup, mu, &mut draw, rec, Some(control))?;
     let on_floor = matches!(o.phase, Phase::Slide | Phase::Roll | Phase::Stopped);
     Ok(RunSummary {
         time: o.t,
@@ -162,11 +224,37 @@ pub(crate) fn ensemble_run(
     control: &Control,
 ) -> PhysicsResult<RunSummary> {
     if case.method == Method::RigidBlock {
-        return rigid_block::ensemble_run(case, floor, mc, index, control);
+        return Ok(rigid_block::ensemble_run(case, floor, mc, index, None, control)?.0);
     }
     let pr = prepare_on(case, Arc::clone(floor))?;
     let setup = lumped_mass_setup(case, &pr);
     lumped_one(case, &pr, &setup, mc, index, control)
+}
+
+/// [`ensemble_run`] with the cells the run's path entered on `grid` when given (see
+/// [`super::maps`]).
+///
+/// Errors: as [`run`].
+pub(crate) fn ensemble_run_mapped(
+    case: &MigrationCase,
+    floor: &Arc<Floor>,
+    mc: &MonteCarlo,
+    index: u64,
+    grid: Option<&MapGrid>,
+    control: &Control,
+) -> PhysicsResult<(RunSummary, Option<RunCells>)> {
+    if case.method == Method::RigidBlock {
+        return rigid_block::ensemble_run(case, floor, mc, index, grid, control);
+    }
+    let pr = prepare_on(case, Arc::clone(floor))?;
+    let setup = lumped_mass_setup(case, &pr);
+    match grid {
+        None => Ok((lumped_one(case, &pr, &setup, mc, index, control)?, None)),
+        Some(g) => {
+            let (r, c) = lumped_one_mapped(case, &pr, &setup, mc, index, g, control)?;
+            Ok((r, Some(c)))
+        }
+    }
 }
 
 /// Warnings of an ensemble, whatever the method: friction draws clipped to [0, 2] (μ is the first

@@ -12,6 +12,7 @@
 mod case;
 mod ensemble;
 mod lumped_mass;
+pub mod maps;
 pub mod monte_carlo;
 mod release;
 mod report;
@@ -21,9 +22,9 @@ mod terrain;
 mod trajectory;
 
 pub use self::case::*;
-use self::ensemble::{MU_MAX, Polled, ensemble};
+use self::ensemble::{MU_MAX, Polled, ensemble, ensemble_mapped};
 pub use self::ensemble::{RunRecords, STATISTICS_COLUMNS, attach_ensemble, run_columns};
-pub(crate) use self::ensemble::{ensemble_run, run_in_chunks};
+pub(crate) use self::ensemble::{ensemble_run, ensemble_run_mapped, run_in_chunks};
 use self::release::{
     Prepared, lumped_mass_setup, prepare, prepare_on, roll_radius, start_and_end_warnings,
 };
@@ -73,7 +74,8 @@ use super::material::RockShape;
 /// ```
 pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationResult> {
     let n = case.monte_carlo.map_or(0, |mc| mc.runs);
-    let (r, runs) = run_part(case, 0..n, true, control)?;
+    let grid = case.output.maps.as_ref().filter(|_| n > 0);
+    let (r, runs, cells) = run_part_mapped(case, 0..n, true, grid, control)?;
     let mut r =
         r.ok_or_else(|| PhysicsError::Numerical("the nominal run was not returned".into()))?;
     if let Some(mc) = &case.monte_carlo {
@@ -82,9 +84,21 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
             control,
         };
         attach_ensemble(&mut r, mc, case.output.runs_csv, &records)?;
+        if let Some(g) = grid {
+            control.check()?;
+            r.maps = Some(maps::build_maps(g, &cells));
+        }
     }
     Ok(r)
 }
+
+/// What a part of a case gives: the nominal run (when asked), the runs' summaries and, with a
+/// map grid, the cells each run entered (both in run order).
+pub(crate) type Part = (
+    Option<MigrationResult>,
+    Vec<RunSummary>,
+    Vec<maps::RunCells>,
+);
 
 /// Runs part of a migration case: the nominal run when `nominal` (its result without ensemble
 /// statistics) and the Monte Carlo runs with global indices in `range`, in run order. Run i is
@@ -99,8 +113,22 @@ pub fn run_part(
     nominal: bool,
     control: &Control,
 ) -> PhysicsResult<(Option<MigrationResult>, Vec<RunSummary>)> {
+    let (r, runs, _) = run_part_mapped(case, range, nominal, None, control)?;
+    Ok((r, runs))
+}
+
+/// [`run_part`], with the cells each run entered on `grid` when given (see [`maps`]).
+///
+/// Errors: as [`run`].
+pub(crate) fn run_part_mapped(
+    case: &MigrationCase,
+    range: std::ops::Range<u64>,
+    nominal: bool,
+    grid: Option<&maps::MapGrid>,
+    control: &Control,
+) -> PhysicsResult<Part> {
     if case.method == Method::RigidBlock {
-        return rigid_block::run_part(case, range, nominal, control);
+        return rigid_block::run_part(case, range, nominal, grid, control);
     }
     let face = &case.face;
     let dip = face.dip_deg.to_radians();
@@ -133,11 +161,16 @@ pub fn run_part(
     } else {
         None
     };
-    let runs = match &case.monte_carlo {
-        Some(mc) if !range.is_empty() => ensemble(case, &pr, mc, range, control)?,
-        _ => Vec::new(),
+    let (runs, cells) = match (&case.monte_carlo, grid) {
+        (Some(mc), None) if !range.is_empty() => {
+            (ensemble(case, &pr, mc, range, control)?, Vec::new())
+        }
+        (Some(mc), Some(g)) if !range.is_empty() => {
+            ensemble_mapped(case, &pr, mc, range, g, control)?
+        }
+        _ => (Vec::new(), Vec::new()),
     };
-    Ok((r, runs))
+    Ok((r, runs, cells))
 }
 
 /// The nominal run of a lumped-mass case, without ensemble statistics.
@@ -244,5 +277,6 @@ fn nominal_run(
         statistics: None,
         warnings,
         rigid_block: None,
+        maps: None,
     })
 }

@@ -218,4 +218,6 @@ pub struct MigrationResult {
     pub warnings: Vec<Warning>,
     /// Time step, steps and mass properties (rigid block only).
     pub rigid_block: Option<RigidBlockReport>,
+    /// Per-cell maps of the ensemble (Monte Carlo with a map grid).
+    pub maps: Option<super::maps::Maps>,
 }

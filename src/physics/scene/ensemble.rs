@@ -2,6 +2,7 @@
 //! of a sharded computation) and the statistics, outcomes and comparison built from them.
 
 use super::*;
+use crate::physics::migration::maps::{MapGrid, Maps, RunCells};
 
 /// The method a comparison runs besides the case's own.
 fn other_method(m: Method) -> Method {
@@ -34,6 +35,34 @@ pub fn ensemble_part(
     Ok((runs, other))
 }
 
+/// [`ensemble_part`] over all runs, with the maps of the case's own method on `grid` (the
+/// cells each run's migration entered, to its stop; see [`migration::maps`]).
+///
+/// Errors: as `calc::scene::Scene::solve`.
+pub fn ensemble_part_mapped(
+    case: &SceneCase,
+    mc: &MonteCarlo,
+    grid: &MapGrid,
+    control: &Control,
+) -> SceneResult<(Vec<SceneRun>, Option<Vec<SceneRun>>, Maps)> {
+    let pairs = ensemble_with(case, mc, 0..mc.runs, Some(grid), control, |r, c| {
+        (r, c.unwrap_or_default())
+    })?;
+    let (runs, cells): (Vec<SceneRun>, Vec<RunCells>) = pairs.into_iter().unzip();
+    control.check()?;
+    let maps = migration::maps::build_maps(grid, &cells);
+    drop(cells);
+    let other = if case.compare_methods {
+        let mut sc = case.clone();
+        sc.migration.method = other_method(case.migration.method);
+        sc.compare_methods = false;
+        Some(ensemble(&sc, mc, 0..mc.runs, control)?)
+    } else {
+        None
+    };
+    Ok((runs, other, maps))
+}
+
 /// Runs the runs of `range`: the migration of each run (the `/v1/migration` streams), then its
 /// strike.
 fn ensemble(
@@ -42,6 +71,18 @@ fn ensemble(
     range: std::ops::Range<u64>,
     control: &Control,
 ) -> SceneResult<Vec<SceneRun>> {
+    ensemble_with(case, mc, range, None, control, |r, _| r)
+}
+
+/// [`ensemble`], each run's record made by `wrap` from its run and, on `grid`, its cells.
+fn ensemble_with<T: Send>(
+    case: &SceneCase,
+    mc: &MonteCarlo,
+    range: std::ops::Range<u64>,
+    grid: Option<&MapGrid>,
+    control: &Control,
+    wrap: impl Fn(SceneRun, Option<RunCells>) -> T + Sync,
+) -> SceneResult<Vec<T>> {
     const CHUNK: usize = 64;
     let n = (range.end - range.start) as usize;
     let limits = case.limits.active();
@@ -55,29 +96,38 @@ fn ensemble(
         Some(z) => Some(clip_zones(z, migration::release_span(&case.migration, &floor)?)?.0),
         None => None,
     };
-    let one = |i: u64| -> SceneResult<SceneRun> {
+    let one = |i: u64| -> SceneResult<T> {
         let (mut m, rock, _, mass) = run_case(case, zones.as_deref(), mc.seed, i)?;
         m.monte_carlo = None;
-        let summary = migration::ensemble_run(&m, &floor, mc, i, control)?;
+        let (summary, cells) = match grid {
+            None => (migration::ensemble_run(&m, &floor, mc, i, control)?, None),
+            Some(g) => migration::ensemble_run_mapped(&m, &floor, mc, i, Some(g), control)?,
+        };
         let Some(k) = summary.support else {
-            return Ok(SceneRun {
-                summary,
-                values: None,
-                capacity_exceeded: false,
-                exceeded: vec![false; limits.len()],
-                guard: Guard::None,
-            });
+            return Ok(wrap(
+                SceneRun {
+                    summary,
+                    values: None,
+                    capacity_exceeded: false,
+                    exceeded: vec![false; limits.len()],
+                    guard: Guard::None,
+                },
+                cells,
+            ));
         };
         let rock = impact_rock(&rock, mass);
         let (guard, _, s) = guarded_strike(case, k, &rock, mass, summary.impact_speed, control)?;
         let ch = checks(&case.limits, &s);
-        Ok(SceneRun {
-            summary,
-            values: s.values(),
-            capacity_exceeded: matches!(s, Strike::CapacityExceeded { .. }),
-            exceeded: ch.iter().map(|c| c.exceeded).collect(),
-            guard,
-        })
+        Ok(wrap(
+            SceneRun {
+                summary,
+                values: s.values(),
+                capacity_exceeded: matches!(s, Strike::CapacityExceeded { .. }),
+                exceeded: ch.iter().map(|c| c.exceeded).collect(),
+                guard,
+            },
+            cells,
+        ))
     };
     migration::run_in_chunks(range, CHUNK, control, one)
 }

@@ -45,8 +45,8 @@ pub use collectors::{
     design_ranks, design_value, reach_columns,
 };
 pub use ensemble::{
-    ENTRY_COLUMNS, EnsembleReport, SceneRecords, ensemble_part, ensemble_report, entry_columns,
-    outcomes_of,
+    ENTRY_COLUMNS, EnsembleReport, SceneRecords, ensemble_part, ensemble_part_mapped,
+    ensemble_report, entry_columns, outcomes_of,
 };
 
 /// Impact speed below which a support counts as reached without an impact, m/s.
@@ -519,6 +519,8 @@ pub struct SceneReport {
     pub allowed: Option<Vec<EntryAllowed>>,
     /// Warnings of the scene (the migration's are in its result).
     pub warnings: Vec<Warning>,
+    /// Per-cell maps of the ensemble (with `migration_output.maps`).
+    pub maps: Option<migration::maps::Maps>,
 }
 
 /// Bounding radius of a rock (largest distance of a point from its centre of mass), m, and its
@@ -854,6 +856,7 @@ pub fn solve_nominal(
             comparison: None,
             allowed: None,
             warnings,
+            maps: None,
         };
         return Ok((report, None));
     }
@@ -919,6 +922,7 @@ pub fn solve_nominal(
         comparison: None,
         allowed: None,
         warnings,
+        maps: None,
     };
     if mc.is_none() {
         // a single run: the rest of the report is the nominal run's

@@ -778,6 +778,10 @@ pub struct MigrationOutputDto {
     /// Per-run summaries as CSV (Monte Carlo).
     #[schema(default = false, example = false)]
     pub runs_csv: bool,
+    /// Per-cell maps of the ensemble (Monte Carlo; null: none, and no work spent on them).
+    #[schema(default = json!(null))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub maps: Option<super::maps::MapsDto>,
 }
 
 impl Default for MigrationOutputDto {
@@ -787,6 +791,7 @@ impl Default for MigrationOutputDto {
             sample_interval_s: SAMPLE_INTERVAL.value(),
             events: true,
             runs_csv: false,
+            maps: None,
         }
     }
 }
@@ -868,6 +873,7 @@ impl MigrationRequest {
                 "per-run summaries need monte_carlo",
             );
         }
+        let maps = self.resolve_maps(config, layout, monte_carlo.as_ref(), &mut ck);
         ck.finish()?;
         let f = &self.face;
         let rigid_block = RigidBlockOptions {
@@ -927,6 +933,7 @@ impl MigrationRequest {
                 events: o.events,
                 runs_csv: o.runs_csv,
                 max_samples: config.max_samples as usize,
+                maps,
             },
             ..MigrationCase::default()
         })
@@ -1090,5 +1097,22 @@ impl MigrationRequest {
             }
         }
         (Some(monte_carlo), damping_distribution)
+    }
+}
+
+impl MigrationRequest {
+    /// The map grid of `output.maps` (None when not asked for), checked against the limits.
+    fn resolve_maps(
+        &mut self,
+        config: &Config,
+        layout: Layout,
+        monte_carlo: Option<&MonteCarlo>,
+        ck: &mut Checker,
+    ) -> Option<migration::maps::MapGrid> {
+        let length = self.face.length_m;
+        self.output
+            .maps
+            .as_mut()
+            .and_then(|m| m.resolve(config, layout, length, monte_carlo.map(|mc| mc.runs), ck))
     }
 }

@@ -245,6 +245,9 @@ pub struct MigrationResponse {
     /// Time step, steps and mass properties (rigid block).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rigid_block: Option<RigidBlockOutDto>,
+    /// Per-cell maps of the ensemble (when `output.maps`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub maps: Option<super::super::maps::MapsOutDto>,
     /// Named warnings, among them `release_moved` (the rigid block overhung the floor's edge at
     /// the release point and was placed where every corner is over the floor: by how much) and
     /// `left_floor` (the run left the floor: where, and past which boundary).
@@ -447,6 +450,7 @@ impl MigrationResponse {
                 mass_kg: b.mass,
                 principal_inertia_kg_m2: b.principal_inertia,
             }),
+            maps: r.maps.as_ref().map(Into::into),
             warnings: meta.warnings,
             plan: meta.plan,
             inputs,

@@ -91,6 +91,7 @@
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 use super::lumped_mass::{EventKind, Phase, StopReason};
+use super::maps::{CellTrack, MapGrid, RunCells};
 use super::monte_carlo::{self, Distribution};
 use super::shape::BlockShape;
 use super::terrain::{Floor, FloorKind, FloorTriangle, MeanPlane};
@@ -1005,8 +1006,9 @@ pub(crate) fn run_part(
     case: &MigrationCase,
     range: std::ops::Range<u64>,
     nominal: bool,
+    grid: Option<&MapGrid>,
     control: &Control,
-) -> PhysicsResult<(Option<MigrationResult>, Vec<RunSummary>)> {
+) -> PhysicsResult<super::Part> {
     let pr = super::prepare(case)?;
     let model = Model::new(case, &pr)?;
     let o = &case.rigid_block;
@@ -1025,11 +1027,22 @@ pub(crate) fn run_part(
     } else {
         None
     };
-    let runs = match &case.monte_carlo {
-        Some(mc) if !range.is_empty() => ensemble(case, &model, mc, range, control)?,
-        _ => Vec::new(),
+    let (runs, cells) = match (&case.monte_carlo, grid) {
+        (Some(mc), None) if !range.is_empty() => {
+            (ensemble(case, &model, mc, range, control)?, Vec::new())
+        }
+        (Some(mc), Some(g)) if !range.is_empty() => {
+            control.set_total(range.end - range.start);
+            let release_along = model.mean.along(&model.c0);
+            let one = |i: u64| rigid_one(case, &model, mc, i, control, release_along, Some(g));
+            super::run_in_chunks(range, 16, control, one)?
+                .into_iter()
+                .map(|(r, c)| (r, c.unwrap_or_default()))
+                .unzip()
+        }
+        _ => (Vec::new(), Vec::new()),
     };
-    Ok((r, runs))
+    Ok((r, runs, cells))
 }
 
 /// The nominal run of a rigid-block case, without ensemble statistics.
@@ -1120,6 +1133,7 @@ fn nominal_run(
         statistics: None,
         warnings,
         rigid_block: Some(model.report(out.steps, out.max_overlap)),
+        maps: None,
     })
 }
 
@@ -1133,7 +1147,7 @@ fn ensemble(
     const CHUNK: usize = 16;
     control.set_total(range.end - range.start);
     let release_along = model.mean.along(&model.c0);
-    let one = |i: u64| rigid_one(case, model, mc, i, control, release_along);
+    let one = |i: u64| rigid_one(case, model, mc, i, control, release_along, None).map(|r| r.0);
     super::run_in_chunks(range, CHUNK, control, one)
 }
 
@@ -1145,7 +1159,8 @@ fn rigid_one(
     i: u64,
     control: &Control,
     release_along: f64,
-) -> PhysicsResult<RunSummary> {
+    grid: Option<&MapGrid>,
+) -> PhysicsResult<(RunSummary, Option<RunCells>)> {
     let o = &case.rigid_block;
     let mut rng = monte_carlo::run_stream(mc.seed, i);
     let mu = match &mc.friction_coefficient {
@@ -1156,9 +1171,14 @@ fn rigid_one(
         Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, 0.999),
         None => o.critical_damping_ratio,
     };
-    let r = model.simulate(mu, beta, None, false, Some(control))?;
+    let mut track = grid.map(|g| CellTrack::new(g, model.mean));
+    let r = model.simulate_tracked(mu, beta, None, false, track.as_mut(), Some(control))?;
     let (kt, kr, _) = model.energy(&r.st);
-    Ok(RunSummary {
+    if let Some(t) = track.as_mut() {
+        // the end state as reported (velocities synchronised with the position)
+        t.point(&r.st.c, r.st.v.norm(), kt + kr);
+    }
+    let summary = RunSummary {
         time: r.st.t,
         speed: r.st.v.norm(),
         kinetic_energy: kt + kr,
@@ -1181,7 +1201,8 @@ fn rigid_one(
         translational_energy: kt,
         rotational_energy: kr,
         passing_height: model.lowest_point_height(&r.st),
-    })
+    };
+    Ok((summary, track.map(CellTrack::finish)))
 }
 
 /// Run `i` of the ensemble `mc` of `case` alone (see [`super::ensemble_run`]), with the step
@@ -1191,8 +1212,9 @@ pub(crate) fn ensemble_run(
     floor: &std::sync::Arc<super::terrain::Floor>,
     mc: &MonteCarlo,
     i: u64,
+    grid: Option<&MapGrid>,
     control: &Control,
-) -> PhysicsResult<RunSummary> {
+) -> PhysicsResult<(RunSummary, Option<RunCells>)> {
     let pr = super::prepare_on(case, std::sync::Arc::clone(floor))?;
     let model = Model::new(case, &pr)?;
     let est = model.estimated_steps(case, case.face.friction_coefficient);
@@ -1203,7 +1225,7 @@ pub(crate) fn ensemble_run(
         });
     }
     let release_along = model.mean.along(&model.c0);
-    rigid_one(case, &model, mc, i, control, release_along)
+    rigid_one(case, &model, mc, i, control, release_along, grid)
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! form, episodes (impacts, ground phases), stops, samples and the energy books.
 
 use super::*;
+use crate::physics::migration::maps::CellTrack;
 
 impl Model<'_> {
     /// Runs the block from its release to its stop with the friction coefficient `mu` and
@@ -13,6 +14,21 @@ impl Model<'_> {
         beta: f64,
         record: Option<(f64, usize)>,
         events: bool,
+        control: Option<&Control>,
+    ) -> PhysicsResult<RunOut> {
+        self.simulate_tracked(mu, beta, record, events, None, control)
+    }
+
+    /// [`Self::simulate`], following the centre's path on a map's cells when `track` is given:
+    /// its state at every step, and closed-form flights and settled slides sampled at most half
+    /// a cell apart (see `maps`).
+    pub(super) fn simulate_tracked(
+        &self,
+        mu: f64,
+        beta: f64,
+        record: Option<(f64, usize)>,
+        events: bool,
+        mut track: Option<&mut CellTrack<'_>>,
         control: Option<&Control>,
     ) -> PhysicsResult<RunOut> {
         let cfg = RunSettings {
@@ -27,7 +43,11 @@ impl Model<'_> {
             log_events: events,
         };
         let (mut run, e_start) = self.release(record);
+        let mut prev: Option<State> = None;
         let reason = loop {
+            if let Some(t) = track.as_deref_mut() {
+                self.track_state(t, &mut prev, &run.st);
+            }
             if let Some(reason) = self.stop_before_step(&mut run, &cfg)? {
                 break reason;
             }
@@ -54,7 +74,27 @@ impl Model<'_> {
             }
             self.skip_settled_slide(&mut run, &step.forces, &cfg);
         };
+        if let Some(t) = track {
+            self.track_state(t, &mut prev, &run.st);
+        }
         self.finish(run, reason, e_start, &cfg)
+    }
+
+    /// The path from the previous tracked state `prev` to `st`: one step is a chord; a longer
+    /// advance (a closed-form flight or settled slide) is the constant-acceleration piece
+    /// between the two states, sampled by the track.
+    fn track_state(&self, track: &mut CellTrack<'_>, prev: &mut Option<State>, st: &State) {
+        let (kt, kr, _) = self.energy(st);
+        if let Some(p) = prev.as_ref()
+            && st.t - p.t > 1.5 * self.dt
+        {
+            let dt = st.t - p.t;
+            let a = (st.c - p.c - p.v * dt) * (2.0 / (dt * dt));
+            let m = self.m;
+            track.piece(&p.c, &p.v, &a, dt, &|v| 0.5 * m * v.norm_squared() + kr);
+        }
+        track.point(&st.c, st.v.norm(), kt + kr);
+        *prev = Some(*st);
     }
 
     /// The run at release, with the energy at the start (J): a block released on the floor
