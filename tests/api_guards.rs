@@ -109,6 +109,16 @@ async fn a_guard_above_every_energy_leaves_no_risk_and_one_rated_zero_changes_no
         for s in v["statistics"]["supports"].as_array_mut().unwrap() {
             s.as_object_mut().unwrap().remove("guard");
         }
+        for a in v["allowed_impacts"].as_array_mut().unwrap() {
+            for l in a["limits"].as_array_mut().unwrap() {
+                // rated 0: the speed behind the guard is the allowed speed itself
+                let l = l.as_object_mut().unwrap();
+                assert_eq!(
+                    l.remove("behind_guard_impact_velocity_m_s"),
+                    l.get("impact_velocity_m_s").cloned()
+                );
+            }
+        }
         for i in v["impacts"].as_array_mut().unwrap() {
             let i = i.as_object_mut().unwrap();
             i.remove("guard");
@@ -122,12 +132,13 @@ async fn a_guard_above_every_energy_leaves_no_risk_and_one_rated_zero_changes_no
         v["migration"]["runs_csv"] = json!(cut.join("\n") + "\n");
         v
     };
-    assert_eq!(strip(zero), {
+    let (zero, plain) = (strip(zero), {
         // the plain answer has no guard column to cut
         let mut n = none.clone();
         n.as_object_mut().unwrap().remove("inputs");
         n
     });
+    assert!(zero == plain, "rated 0 changed the answer");
 }
 
 #[tokio::test]
@@ -216,5 +227,41 @@ async fn bad_guards_are_refused_naming_the_field() {
             .find(|e| e["field"] == field);
         let e = e.unwrap_or_else(|| panic!("{guards}: {field} not named in {p}"));
         assert!(e["message"].as_str().unwrap().contains(words), "{e}");
+    }
+}
+
+/// Behind a guard the column takes a faster rock: √(v_a² + 2R/m); the forward chain with the
+/// guard is within the limit just below that speed and past it just above.
+#[tokio::test]
+async fn the_allowed_speed_behind_a_guard_adds_its_rating() {
+    let app = common::app();
+    let (side, density, rating) = (0.25_f64, 2700.0_f64, 300.0_f64);
+    let mass = density * side.powi(3);
+    let mut req = json!({
+        "rock": {"side_length_m": side, "density_kg_m3": density},
+        "supports": [{"along_dip_m": 60}, {"along_dip_m": 90}],
+        "guards": [{"support": 1, "energy_rating_j": rating}],
+    });
+    let b = ok(&post(&app, "/v1/scene", &req).await);
+    let a = &b["allowed_impacts"];
+    let va = a[0]["limits"][0]["impact_velocity_m_s"].as_f64().unwrap();
+    let vb = a[0]["limits"][0]["behind_guard_impact_velocity_m_s"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(vb, (va * va + 2.0 * rating / mass).sqrt());
+    assert!(
+        a[1]["limits"][0]
+            .get("behind_guard_impact_velocity_m_s")
+            .is_none()
+    );
+    for (v, exceeded) in [(vb * (1.0 - 1e-7), false), (vb * (1.0 + 1e-6), true)] {
+        req["impact_velocity_m_s"] = json!(v);
+        let s = ok(&post(&app, "/v1/scene", &req).await);
+        assert_eq!(s["impacts"][0]["guard"], "broken_through");
+        assert_eq!(
+            s["impacts"][0]["checks"][0]["exceeded"], exceeded,
+            "at {v}: {}",
+            s["impacts"][0]["checks"]
+        );
     }
 }

@@ -12,6 +12,7 @@
 //! does not exceed the limit, and at the upper end (at most a relative 1e-9 faster) it does.
 
 use super::control::Control;
+use super::error::PhysicsError;
 use super::material::Rock;
 use super::scene::{
     self, DesignLimits, Limit, MAX_IMPACT_SPEED, NO_IMPACT_SPEED, SceneCase, SceneResult, Strike,
@@ -217,22 +218,64 @@ pub struct EntryAllowed {
     /// The design impact speed of the runs that reached the entry (its design value at the
     /// design percentile), m/s (None: no ensemble, or no run reached it).
     pub design_speed: Option<f64>,
+    /// The entry's guard (None: no guard).
+    pub guard: Option<GuardAllowance>,
+}
+
+/// A guard in front of an entry's column, for the allowed speed behind it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GuardAllowance {
+    /// Energy rating, J.
+    pub rating: f64,
+    /// Mass of the case's rock, kg.
+    pub mass: f64,
 }
 
 impl EntryAllowed {
-    /// Design impact speed ÷ allowed speed per limit (≤ 1: within; None without a design
-    /// speed, or where nothing is allowed).
+    /// Per limit, the fastest approach of the case's rock the column takes behind the entry's
+    /// guard, m/s: the guard takes R of ½mv², so √(v_a² + 2R/m) (None: no guard).
+    #[must_use]
+    pub fn behind_guard(&self) -> Vec<Option<f64>> {
+        self.limits
+            .iter()
+            .map(|a| {
+                self.guard
+                    .map(|g| (a.speed * a.speed + 2.0 * g.rating / g.mass).sqrt())
+            })
+            .collect()
+    }
+
+    /// Design impact speed ÷ allowed speed per limit — behind the guard where there is one
+    /// (≤ 1: within; None without a design speed, or where nothing is allowed).
     #[must_use]
     pub fn utilisation(&self) -> Vec<Option<f64>> {
         self.limits
             .iter()
-            .map(|a| {
+            .zip(self.behind_guard())
+            .map(|(a, g)| {
+                let allowed = g.unwrap_or(a.speed);
                 self.design_speed
-                    .filter(|_| a.speed > 0.0)
-                    .map(|v| v / a.speed)
+                    .filter(|_| allowed > 0.0)
+                    .map(|v| v / allowed)
             })
             .collect()
     }
+}
+
+/// Per entry of `case`, its guard for [`EntryAllowed::guard`] (None: no guard).
+///
+/// Errors: the rock's (its extent).
+pub fn guard_allowances(case: &SceneCase) -> Result<Vec<Option<GuardAllowance>>, PhysicsError> {
+    let (_, mass) = scene::rock_extent(&case.migration.rock)?;
+    Ok((0..case.supports.len())
+        .map(|k| {
+            case.guards
+                .get(k)
+                .copied()
+                .flatten()
+                .map(|rating| GuardAllowance { rating, mass })
+        })
+        .collect())
 }
 
 /// The allowed impacts of every support entry of `case` for its active design limits, for the
@@ -254,7 +297,11 @@ pub fn allowed_for_entries(case: &SceneCase, control: &Control) -> SceneResult<V
         out.push(EntryAllowed {
             limits,
             design_speed: None,
+            guard: None,
         });
+    }
+    for (a, g) in out.iter_mut().zip(guard_allowances(case)?) {
+        a.guard = g;
     }
     Ok(out)
 }

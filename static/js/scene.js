@@ -73,6 +73,18 @@ const SCENE_GROUPS = [
     ],
   },
   {
+    legend: 'Guards on the columns',
+    pointer: '/guards',
+    toggle: { name: 'scene_guards', checked: false },
+    note: 'A guard on every support\'s column takes up to its rating of a striking rock\'s impact energy; the column takes the rest.',
+    fields: [
+      {
+        local: 'guard_rating', label: 'Energy rating of each guard', unit: 'J', choice: { value: 500, why: 'a starting rating to edit' },
+        hint: 'a rock within the rating never loads the column; past it the column is struck at √(v² − 2R/m)',
+      },
+    ],
+  },
+  {
     legend: 'Release rate (overloads per year)',
     pointer: '/release_rate',
     toggle: { name: 'scene_release_rate', checked: false },
@@ -234,6 +246,10 @@ export function initScene() {
         request.supports = [{ along_dip_m: m.face.length_m, across_m: null, column }];
       }
       Object.assign(request, own2);
+      if (typeof own.local.guard_rating === 'number') {
+        const count = request.support_rows ? request.support_rows.count : 1;
+        request.guards = Array.from({ length: count }, (_, k) => ({ support: k + 1, energy_rating_j: own.local.guard_rating }));
+      }
       if (request.column_model === 'decoupled') delete request.galerkin.modes;
       else if (request.galerkin.mode_shapes && request.galerkin.mode_shapes !== 'exact') delete request.galerkin.mode_shapes;
       releaseEditor.apply(request, own.local, migrationForm.floor?.current?.() ?? null);
@@ -539,26 +555,33 @@ export function initScene() {
     note.textContent = `Allowed: the fastest impact of the case's rock (side ${fmt(rock.side_length_m, 3)} m, ${fmt(rock.density_kg_m3, 4)} kg/m³) each column takes `
       + 'within the limit (the inverse of the chain, to 1e-9).'
       + (data.statistics ? ` Design speed: the ${fmt((data.inputs?.design_percentile ?? 0.95) * 100, 3)} % design value of the impact speeds of the runs that reached the support; design ÷ allowed above 100 % means the design impact exceeds the limit.` : '')
+      + (data.inputs?.guards ? ' Behind a guard of rating R the column takes a rock arriving at √(v² + 2R/m); design ÷ allowed is then against that speed.' : '')
       + (face ? ` Overloads of some support: ${fmt(face.per_year, 4)} per year [${fmt(face.ci95_per_year[0], 3)}–${fmt(face.ci95_per_year[1], 3)}], one every ${years(face.return_period_years)}.` : '');
     const ENDS = { limit: 'the limit', capacity: 'the contact capacity', speed_range: 'none up to 1000 m/s', nothing: 'exceeded at any speed' };
     const rows = allowed.flatMap((a) => {
-      const f = stats.get(`${a.support}.${a.column_index ?? 0}`)?.overloads_per_year ?? null;
-      return a.limits.map((l) => ({ a, l, f }));
+      const s = stats.get(`${a.support}.${a.column_index ?? 0}`);
+      const f = s?.overloads_per_year ?? null;
+      const g = s?.guard ?? null;
+      return a.limits.map((l) => ({ a, l, f, g }));
     });
+    const guarded = rows.some((r) => r.g);
     // the most loaded first: overloads per year, then design ÷ allowed, then the support number
     const key = (r) => [-(r.f?.per_year ?? -1), -(r.l.design_utilisation ?? -1), r.a.support, r.a.column_index ?? 0];
     rows.sort((x, y) => { const [a, b] = [key(x), key(y)]; const i = a.findIndex((v, k) => v !== b[k]); return i < 0 ? 0 : a[i] - b[i]; });
     const rate = rows.some((r) => r.f);
     el.csv = () => [['support', 'column_index', 'along_dip_m', 'limit', 'allowed', 'allowed_impact_speed_m_s', 'allowed_kinetic_energy_j', 'ended_by',
-      'design_impact_speed_m_s', 'design_over_allowed', 'overloads_per_year', 'overloads_per_year_ci95_low', 'overloads_per_year_ci95_high', 'return_period_years'],
-    ...rows.map(({ a, l, f }) => [a.support, a.column_index ?? 0, csvNumber(a.along_dip_m), l.limit, csvNumber(l.allowed), csvNumber(l.impact_velocity_m_s),
+      'design_impact_speed_m_s', 'design_over_allowed', 'overloads_per_year', 'overloads_per_year_ci95_low', 'overloads_per_year_ci95_high', 'return_period_years',
+      'guard_energy_rating_j', 'behind_guard_impact_speed_m_s', 'guard_held_fraction', 'guard_broken_through_fraction'],
+    ...rows.map(({ a, l, f, g }) => [a.support, a.column_index ?? 0, csvNumber(a.along_dip_m), l.limit, csvNumber(l.allowed), csvNumber(l.impact_velocity_m_s),
       csvNumber(l.kinetic_energy_j), l.ended_by, csvNumber(a.design_impact_velocity_m_s), csvNumber(l.design_utilisation), csvNumber(f?.per_year),
-      csvNumber(f?.ci95_per_year?.[0]), csvNumber(f?.ci95_per_year?.[1]), csvNumber(f?.return_period_years)])];
+      csvNumber(f?.ci95_per_year?.[0]), csvNumber(f?.ci95_per_year?.[1]), csvNumber(f?.return_period_years),
+      csvNumber(g?.energy_rating_j), csvNumber(l.behind_guard_impact_velocity_m_s), csvNumber(g?.held?.probability), csvNumber(g?.broken_through?.probability)])];
     el.append(
       h('thead', {}, h('tr', {}, ['Support', 'Design limit', 'Allowed impact speed (m/s)', 'Allowed energy (J)', 'Ended by',
         ...(data.statistics ? ['Design speed (m/s)', 'Design ÷ allowed (%)'] : []),
-        ...(rate ? ['Overloads per year [95 % CI]', 'One every'] : [])].map((c) => h('th', { scope: 'col' }, c)))),
-      h('tbody', {}, rows.map(({ a, l, f }) => h('tr', { class: l.design_utilisation > 1 ? 'verdict-exceeded' : '' },
+        ...(rate ? ['Overloads per year [95 % CI]', 'One every'] : []),
+        ...(guarded ? ['Guard rating (J)', 'Allowed behind the guard (m/s)', 'Held by the guard (%) [95 % CI]', 'Broke through (%)'] : [])].map((c) => h('th', { scope: 'col' }, c)))),
+      h('tbody', {}, rows.map(({ a, l, f, g }) => h('tr', { class: l.design_utilisation > 1 ? 'verdict-exceeded' : '' },
         h('th', { scope: 'row' }, label(a)),
         h('td', {}, LIMIT_WORDS[l.limit] ?? l.limit),
         h('td', { class: 'num' }, fmt(l.impact_velocity_m_s, 4)),
@@ -571,6 +594,12 @@ export function initScene() {
         ...(rate ? [
           h('td', { class: 'num' }, f ? `${fmt(f.per_year, 4)} [${fmt(f.ci95_per_year[0], 3)}–${fmt(f.ci95_per_year[1], 3)}]` : '—'),
           h('td', { class: 'num' }, f ? years(f.return_period_years) : '—'),
+        ] : []),
+        ...(guarded ? [
+          h('td', { class: 'num' }, g ? fmt(g.energy_rating_j, 4) : 'none'),
+          h('td', { class: 'num' }, l.behind_guard_impact_velocity_m_s === undefined ? '—' : fmt(l.behind_guard_impact_velocity_m_s, 4)),
+          h('td', { class: 'num' }, g ? `${fmt(g.held.probability * 100, 3)} [${fmt(g.held.ci95[0] * 100, 2)}–${fmt(g.held.ci95[1] * 100, 2)}]` : '—'),
+          h('td', { class: 'num' }, g ? fmt(g.broken_through.probability * 100, 3) : '—'),
         ] : [])))),
     );
   }

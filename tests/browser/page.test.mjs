@@ -1382,6 +1382,30 @@ async function floorViewSection(page, context) {
     await elementShot(page.locator('#scene-protection-card'), 'scene-protection.png');
   });
 
+  await check('protection: guards on every column are sent with their rating; a rating above every rock\'s energy leaves no support at risk and the table says what the guards held', async () => {
+    await open(page, '#scene');
+    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    const box = page.locator('#scene-form input[name="scene_guards"]');
+    await box.check();
+    await page.locator('#scene-form [data-local="guard_rating"]').fill('1e9');
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
+    await submit(page, '#scene-form', '/v1/scene');
+    const body = JSON.parse((await request).postData());
+    assert(body.guards?.length === body.support_rows.count && body.guards.every((g, k) => g.support === k + 1 && g.energy_rating_j === 1e9),
+      `guards sent: ${JSON.stringify(body.guards?.slice(0, 3))} … (${body.guards?.length})`);
+    await page.locator('#scene-protection-card').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const head = await page.locator('#scene-protection thead').textContent();
+    assert(head.includes('Guard rating (J)') && head.includes('Allowed behind the guard (m/s)') && head.includes('Held by the guard (%) [95 % CI]'), head);
+    // a rating of 1e9 J lets every column take any rock: no row is marked over its limit
+    assert(await page.locator('#scene-protection tbody tr.verdict-exceeded').count() === 0, 'a guarded support marked over its limit');
+    const answer = await page.locator('#scene-summary').innerText();
+    assert(/0 of 62 support entries exceed/.test(answer), `the answer with guards above every energy: ${answer.slice(0, 300)}`);
+    const first = await page.locator('#scene-protection tbody tr').first().locator('td').allTextContents();
+    assert(first.some((c) => c.trim() === '1 × 10⁹'), `guard rating cell: ${first.join(' | ')}`);
+    await elementShot(page.locator('#scene-protection-card'), 'scene-guards.png');
+    await box.uncheck();
+  });
+
   await check('exports: every CSV button of every tab downloads a non-empty file headed by version, date and case', async () => {
     await open(page, '#migration');
     await page.locator(`${form} input[name="monte_carlo"]`).check();

@@ -41,8 +41,14 @@ pub struct AllowedLimitDto {
     /// contact law's capacity is passed first), `speed_range` (within the limit up to 1000 m/s,
     /// the fastest impact computed) or `nothing` (even 1e-6 m/s exceeds it).
     pub ended_by: String,
-    /// The design impact speed ÷ this allowed speed (≤ 1: the design impact is within the
-    /// limit; omitted without a design speed or when nothing is allowed).
+    /// The fastest approach of the case's rock the column takes behind the support's guard, m/s:
+    /// the guard takes its rating R of ½mv², so √(v² + 2R/m) with v the allowed speed above
+    /// (omitted without a guard).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub behind_guard_impact_velocity_m_s: Option<f64>,
+    /// The design impact speed ÷ the allowed speed (behind the guard where there is one; ≤ 1: the
+    /// design impact is within the limit; omitted without a design speed or when nothing is
+    /// allowed).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub design_utilisation: Option<f64>,
 }
@@ -84,13 +90,15 @@ pub fn allowed_dto(case: &SceneCase, allowed: &[EntryAllowed]) -> Vec<AllowedImp
                 .limits
                 .iter()
                 .zip(a.utilisation())
-                .map(|(l, u)| AllowedLimitDto {
+                .zip(a.behind_guard())
+                .map(|((l, u), g)| AllowedLimitDto {
                     limit: limit_name(l.limit).into(),
                     allowed: l.allowed,
                     impact_velocity_m_s: l.speed,
                     kinetic_energy_j: l.energy,
                     value: l.value,
                     ended_by: by_name(l.by).into(),
+                    behind_guard_impact_velocity_m_s: g,
                     design_utilisation: u,
                 })
                 .collect(),
@@ -162,6 +170,7 @@ pub fn restore(stored: &[Vec<StoredLimit>]) -> Result<Vec<EntryAllowed>, String>
             Ok(EntryAllowed {
                 limits,
                 design_speed: None,
+                guard: None,
             })
         })
         .collect()

@@ -1418,6 +1418,11 @@ impl SceneHead {
             .transpose()
             .map_err(|e| ApiError::internal(format!("the stored allowed impacts: {e}")))?;
         if let Some(a) = allowed.as_mut() {
+            let guards = crate::physics::design::guard_allowances(case)
+                .map_err(|e| ApiError::internal(format!("the stored allowed impacts: {e}")))?;
+            for (a, g) in a.iter_mut().zip(guards) {
+                a.guard = g;
+            }
             calc::scene::design_speeds(a, &tail.statistics);
         }
         let resp = SceneResponse {
