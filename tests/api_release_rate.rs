@@ -184,17 +184,17 @@ async fn bad_release_rates_are_refused_naming_the_field() {
         (
             with(json!({"rocks_per_year": 0.0})),
             "/release_rate/rocks_per_year",
-            "(0, 1e9]",
+            "[1e-6, 1e9]",
         ),
         (
             with(json!({"rocks_per_year": 2e9})),
             "/release_rate/rocks_per_year",
-            "(0, 1e9]",
+            "[1e-6, 1e9]",
         ),
         (
             with(json!({"observed_events": 10, "observed_period_years": 0.0})),
             "/release_rate/observed_period_years",
-            "(0, 1000]",
+            "[0.001, 1000]",
         ),
         (
             with(json!({"observed_events": 10})),

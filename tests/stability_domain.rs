@@ -174,6 +174,22 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             "/migration_output/maps/",
             json!({"face": {"length_m": 20}, "monte_carlo": {"runs": 5}}),
         ),
+        // a release rate needs an ensemble, and a count its period (and the period its count)
+        (
+            "/v1/scene",
+            "/release_rate/rocks_per_year",
+            json!({"monte_carlo": {"runs": 5}}),
+        ),
+        (
+            "/v1/scene",
+            "/release_rate/observed_events",
+            json!({"monte_carlo": {"runs": 5}, "release_rate": {"observed_period_years": 0.75}}),
+        ),
+        (
+            "/v1/scene",
+            "/release_rate/observed_period_years",
+            json!({"monte_carlo": {"runs": 5}, "release_rate": {"observed_events": 643}}),
+        ),
     ];
     // `map` exists only on grid and contour floors: its fields are varied on a grid in map
     // coordinates, never on the default plane
@@ -181,6 +197,7 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
         || pointer.starts_with("/face/floor_material/")
         || pointer.starts_with("/output/maps/")
         || pointer.starts_with("/migration_output/maps/")
+        || pointer.starts_with("/release_rate/")
     {
         vec![]
     } else {

@@ -188,10 +188,10 @@ fn by_name(by: AllowedBy) -> &'static str {
 
 /// `release_rate.rocks_per_year`.
 pub const ROCKS_PER_YEAR: NumberField = NumberField {
-    description: "Rocks released per year on the face, 1/year, in (0, 1e9] (null: give \
+    description: "Rocks released per year on the face, 1/year, in [1e-6, 1e9] (null: give \
                   observed_events and observed_period_years instead).",
     default: FieldDefault::Null,
-    lo: Bound::Open(0.0),
+    lo: Bound::Closed(1e-6),
     hi: Bound::Closed(1e9),
     unit: "1/year",
     example: 850.0,
@@ -200,10 +200,11 @@ pub const ROCKS_PER_YEAR: NumberField = NumberField {
 
 /// `release_rate.observed_period_years`.
 pub const OBSERVED_PERIOD: NumberField = NumberField {
-    description: "Period over which observed_events were counted, years, in (0, 1000] (the \
-                  paper's Table 1: 643 spalling events in 9 months, 0.75).",
+    description: "Period over which observed_events were counted, years, in [0.001, 1000] (the \
+                  paper's Table 1: 643 spalling events in 9 months, 0.75; a shorter count than \
+                  about nine hours says nothing of a yearly rate).",
     default: FieldDefault::Null,
-    lo: Bound::Open(0.0),
+    lo: Bound::Closed(1e-3),
     hi: Bound::Closed(1000.0),
     unit: "years",
     example: 0.75,
@@ -311,7 +312,7 @@ pub const MAX_GUARD_RATING: f64 = 1e12;
 #[serde(deny_unknown_fields)]
 pub struct GuardDto {
     /// Support number (from 1).
-    #[schema(minimum = 1, example = 62)]
+    #[schema(minimum = 1, example = 1)]
     pub support: u32,
     /// Column of that support (from 0; null: every column of the support).
     #[schema(default = json!(null), example = json!(null))]

@@ -233,7 +233,7 @@ pub struct SceneRequest {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub release_rate: Option<ReleaseRateDto>,
     /// Guards on support columns, each with an energy rating (null: none).
-    #[schema(default = json!(null), example = json!([{"support": 62, "energy_rating_j": 500.0}]))]
+    #[schema(default = json!(null), example = json!([{"support": 1, "energy_rating_j": 500.0}]))]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub guards: Option<Vec<GuardDto>>,
     /// Report each support's allowed impact per design limit (`allowed_impacts` of the answer):

@@ -89,7 +89,8 @@ pub fn frequency(k: u64, n: u64, rate: ReleaseRate) -> Frequency {
     let [p_lo, p_hi] = wilson_interval(k as f64, n as f64, z).unwrap_or([0.0, 1.0]);
     let per_year = rate.per_year() * p;
     let ci95 = [r_lo * p_lo, r_hi * p_hi];
-    let inv = |x: f64| (x > 0.0 && x.is_finite()).then(|| 1.0 / x);
+    // a return period too long for a double is unbounded, as one with nothing expected
+    let inv = |x: f64| Some(1.0 / x).filter(|t| x > 0.0 && t.is_finite());
     Frequency {
         per_year,
         ci95,
