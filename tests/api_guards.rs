@@ -16,22 +16,9 @@ fn ok(r: &common::Reply) -> Value {
 
 const RUNS: u64 = 300;
 
-/// Three supports struck with probabilities between 0 and 1 (utilisation limit 5).
+/// [`common::risky_scene`] with `guards`.
 fn scene(guards: Option<Value>) -> Value {
-    let mut s = json!({
-        "design_limits": {"stress_utilisation": 5.0},
-        "supports": [
-            {"along_dip_m": 40, "across_m": -0.5},
-            {"along_dip_m": 80, "across_m": 0.5},
-            {"along_dip_m": 110},
-        ],
-        "monte_carlo": {
-            "runs": RUNS, "seed": 5,
-            "side_length_m": {"distribution": "uniform", "min": 0.05, "max": 0.3},
-            "release_across_m": {"distribution": "uniform", "min": -1.5, "max": 1.5},
-        },
-        "migration_output": {"runs_csv": true},
-    });
+    let mut s = common::risky_scene(RUNS, 5);
     if let Some(g) = guards {
         s["guards"] = g;
     }
@@ -264,4 +251,41 @@ async fn the_allowed_speed_behind_a_guard_adds_its_rating() {
             s["impacts"][0]["checks"]
         );
     }
+}
+
+/// The comparison of methods honours the guards too: a guard above every energy leaves neither
+/// method's single run over a limit, while without it the nominal strike exceeds.
+#[tokio::test]
+async fn the_comparison_of_methods_strikes_behind_the_guards() {
+    let app = common::app();
+    let mut req = json!({"compare_methods": true, "supports": [{"along_dip_m": 60}]});
+    let plain = ok(&post(&app, "/v1/scene", &req).await);
+    let exceeded = |b: &Value| -> Vec<f64> {
+        b["comparison"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|m| m["supports"].as_array().unwrap().clone())
+            .flat_map(|s| {
+                s["exceedance"]
+                    .as_object()
+                    .unwrap()
+                    .values()
+                    .map(|v| v.as_f64().unwrap())
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    };
+    assert!(
+        exceeded(&plain).iter().any(|&p| p > 0.0),
+        "nothing exceeds without a guard: {}",
+        plain["comparison"]
+    );
+    req["guards"] = json!([{"support": 1, "energy_rating_j": 1e9}]);
+    let guarded = ok(&post(&app, "/v1/scene", &req).await);
+    assert!(
+        exceeded(&guarded).iter().all(|&p| p == 0.0),
+        "{}",
+        guarded["comparison"]
+    );
 }

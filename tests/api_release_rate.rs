@@ -16,23 +16,11 @@ fn ok(r: &common::Reply) -> Value {
 
 const RUNS: u64 = 400;
 
-/// Three supports struck with probabilities between 0 and 1 (utilisation limit 5).
+/// [`common::risky_scene`] with the release rate `rate`.
 fn scene(rate: &Value) -> Value {
-    json!({
-        "design_limits": {"stress_utilisation": 5.0},
-        "supports": [
-            {"along_dip_m": 40, "across_m": -0.5},
-            {"along_dip_m": 80, "across_m": 0.5},
-            {"along_dip_m": 110},
-        ],
-        "monte_carlo": {
-            "runs": RUNS, "seed": 3,
-            "side_length_m": {"distribution": "uniform", "min": 0.05, "max": 0.3},
-            "release_across_m": {"distribution": "uniform", "min": -1.5, "max": 1.5},
-        },
-        "migration_output": {"runs_csv": true},
-        "release_rate": rate,
-    })
+    let mut s = common::risky_scene(RUNS, 3);
+    s["release_rate"] = rate.clone();
+    s
 }
 
 /// Wilson score interval, written from its formula (Wilson 1927).

@@ -714,6 +714,7 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
     geo.setIndex(index);
     geo.computeVertexNormals();
     scene.add(new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide })));
+    box.dataset.surface = `grid: ${cols} × ${rows} nodes`;
     pts.push([g.x0, g.y0], [g.x0 + (g.ncols - 1) * g.d, g.y0 + (g.nrows - 1) * g.d]);
   } else if (model.draw?.kind === 'contours') {
     const all = model.draw.lines.flatMap((l) => l.points);
@@ -721,6 +722,39 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
     const [ya, yb] = extent(all.map((p) => p[1]));
     const [zlo, zhi] = extent(model.draw.lines.map((l) => l.z));
     centre = [(xa + xb) / 2, (ya + yb) / 2, (zlo + zhi) / 2];
+    // The floor surface between the lines: a 60 × 40 mesh at the heights the marks use (the two
+    // nearest lines weighted by distance), coloured by elevation; the lines drawn on it.
+    const [nx, ny] = [60, 40];
+    const pos = new Float32Array(nx * ny * 3);
+    const col = new Float32Array(nx * ny * 3);
+    const c3 = new THREE.Color();
+    for (let r = 0; r < ny; r++) {
+      for (let c = 0; c < nx; c++) {
+        const x = xa + (xb - xa) * c / (nx - 1);
+        const y = ya + (yb - ya) * r / (ny - 1);
+        const z = contourHeight(model.draw.lines, x, y) ?? zlo;
+        const i = r * nx + c;
+        pos.set([x - centre[0], y - centre[1], z - centre[2]], i * 3);
+        c3.setStyle(ELEV(zhi > zlo ? (z - zlo) / (zhi - zlo) : 0.5));
+        col.set([c3.r, c3.g, c3.b], i * 3);
+      }
+    }
+    const index = [];
+    for (let r = 0; r + 1 < ny; r++) {
+      for (let c = 0; c + 1 < nx; c++) {
+        const a = r * nx + c;
+        index.push(a, a + nx, a + 1, a + 1, a + nx, a + nx + 1);
+      }
+    }
+    const surface = new THREE.BufferGeometry();
+    surface.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+    surface.setAttribute('color', new THREE.BufferAttribute(col, 3));
+    surface.setIndex(index);
+    surface.computeVertexNormals();
+    const mesh = new THREE.Mesh(surface, new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide }));
+    mesh.name = 'contour-surface';
+    scene.add(mesh);
+    box.dataset.surface = `contours: ${nx} × ${ny} mesh between ${model.draw.lines.length} lines`;
     for (const l of model.draw.lines) {
       const geo = new THREE.BufferGeometry().setFromPoints(l.points.map(([x, y]) => V(x, y, l.z)));
       scene.add(new THREE.Line(geo, new THREE.LineBasicMaterial({ color: new THREE.Color().setStyle(ELEV(zhi > zlo ? (l.z - zlo) / (zhi - zlo) : 0.5)) })));

@@ -1202,7 +1202,7 @@ async function floorViewSection(page, context) {
     assert(await page.locator('#case-summary [data-part="floor"].used').count() === 1, 'the Scene tab does not show the floor as used');
   });
 
-  await check('floor view: uploaded contours in map coordinates are drawn in easting and northing with every digit; the 3-D view draws the lines', async () => {
+  await check('floor view: uploaded contours in map coordinates are drawn in easting and northing with every digit; the 3-D view draws the floor surface between the lines', async () => {
     await open(page, '#migration');
     await page.locator('#floor-kind').selectOption('upload');
     await page.locator('#floor-file').setInputFiles(path.join(REPO, 'tests/browser/fixtures/plane45.geojson'));
@@ -1218,6 +1218,12 @@ async function floorViewSection(page, context) {
     const xticks = await page.locator('#migration-floor-plan').getAttribute('data-xticks');
     assert(/\b500000\b/.test(xticks) && /\b500100\b/.test(xticks) && !/e\+/.test(xticks), `easting ticks: ${xticks}`);
     await page.locator('#migration-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const surface = await page.locator('#migration-3d').getAttribute('data-surface');
+    assert(/^contours: 60 × 40 mesh between \d+ lines$/.test(surface ?? ''), `3-D surface: ${surface}`);
+    await elementShot(page.locator('#migration-3d'), 'floor-3d-contours.png');
+    const drawn = await drawnPixels(page, '#migration-3d canvas');
+    // measured: the lines, supports and path alone cover about 2 300 pixels, with the surface about 17 000
+    assert(drawn > 5000, `no floor surface in the 3-D view of the contours (${drawn} drawn pixels)`);
     await elementShot(page.locator('#migration-floor'), 'floor-view-contours.png');
   });
 

@@ -154,3 +154,23 @@ pub async fn assert_rejections(app: &Router, path: &str, cases: Vec<(Value, &str
         );
     }
 }
+
+/// A scene ensemble of `runs` runs (seed `seed`) on three supports — two columns beside the
+/// path and a spanning one — that rocks of 0.05–0.3 m strike past a stress utilisation of 5 with
+/// probabilities between 0 and 1; with the runs CSV.
+pub fn risky_scene(runs: u64, seed: u64) -> Value {
+    serde_json::json!({
+        "design_limits": {"stress_utilisation": 5.0},
+        "supports": [
+            {"along_dip_m": 40, "across_m": -0.5},
+            {"along_dip_m": 80, "across_m": 0.5},
+            {"along_dip_m": 110},
+        ],
+        "monte_carlo": {
+            "runs": runs, "seed": seed,
+            "side_length_m": {"distribution": "uniform", "min": 0.05, "max": 0.3},
+            "release_across_m": {"distribution": "uniform", "min": -1.5, "max": 1.5},
+        },
+        "migration_output": {"runs_csv": true},
+    })
+}

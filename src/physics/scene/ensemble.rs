@@ -613,7 +613,7 @@ pub(super) fn compare_single(
         let rock = impact_rock(&m.rock, mass);
         let exceeded: Vec<(usize, Vec<(Limit, bool)>)> = match a.support {
             Some(k) => {
-                let s = strike(&sc, k, &rock, summary.impact_speed, control)?;
+                let (_, _, s) = guarded_strike(&sc, k, &rock, mass, summary.impact_speed, control)?;
                 vec![(
                     k,
                     checks(&sc.limits, &s)
