@@ -504,6 +504,13 @@ async fn ndjson_progress_never_sends_an_empty_count() {
                 l["progress"]["total"].as_u64().unwrap(),
             );
             assert!(total > 0 && done <= total, "{path}: {l}");
+            // the time so far, and the time left at that rate while some is done and some left
+            assert!(
+                l["progress"]["elapsed_s"].as_f64().unwrap() >= 0.0,
+                "{path}: {l}"
+            );
+            let left = l["progress"].get("remaining_s");
+            assert_eq!(left.is_some(), done > 0 && done < total, "{path}: {l}");
             assert_ne!(prev, Some((done, total)), "{path}: repeated {l}");
             prev = Some((done, total));
         }

@@ -254,7 +254,13 @@ fn add_post_responses(doc: &mut serde_json::Value) {
                     "done": {"type": "integer", "minimum": 0,
                              "description": "Work units done (runs or steps)."},
                     "total": {"type": "integer", "minimum": 1,
-                              "description": "Work units in all."}
+                              "description": "Work units in all."},
+                    "elapsed_s": {"type": "number", "format": "double", "minimum": 0,
+                                  "description": "Seconds since the computation started."},
+                    "remaining_s": {"type": "number", "format": "double", "minimum": 0,
+                                    "description": "Estimated seconds left at the rate so far: \
+                                        elapsed_s · (total − done) / done (omitted before any \
+                                        work is done and when all is)."}
                 }
             }),
         );

@@ -395,12 +395,14 @@ where
         // A progress line is sent only when the solver announced a total and the count moved:
         // `{"done":0,"total":0}` or a repeated line says nothing.
         let mut last: Option<(u64, u64)> = None;
+        let started = std::time::Instant::now();
         let result = loop {
             tokio::select! {
                 r = &mut fut => break r,
                 _ = tick.tick() => {
                     let (done, total) = control.progress();
-                    if let Some(line) = progress_line(done, total, &mut last) {
+                    let elapsed = started.elapsed().as_secs_f64();
+                    if let Some(line) = progress_line(done, total, elapsed, &mut last) {
                         yield Ok::<_, std::convert::Infallible>(bytes::Bytes::from(line));
                     }
                 }
@@ -432,16 +434,33 @@ where
         .into_response()
 }
 
-/// The NDJSON progress line for (done, total), or `None` when it would say nothing new: no total
-/// announced (total 0) or the same counts as the last line sent (`last`, updated when sent).
-fn progress_line(done: u64, total: u64, last: &mut Option<(u64, u64)>) -> Option<String> {
+/// The NDJSON progress line for (done, total) after `elapsed` seconds, or `None` when it would say
+/// nothing new: no total announced (total 0) or the same counts as the last line sent (`last`,
+/// updated when sent). Once some work is done and some is left, the line carries the time left
+/// at the rate so far, `elapsed · (total − done) / done` (s, to the millisecond).
+fn progress_line(
+    done: u64,
+    total: u64,
+    elapsed: f64,
+    last: &mut Option<(u64, u64)>,
+) -> Option<String> {
     if total == 0 || *last == Some((done, total)) {
         return None;
     }
     *last = Some((done, total));
+    let done = done.min(total);
+    let ms = |s: f64| (s * 1e3).round() / 1e3;
+    let left = if done > 0 && done < total {
+        format!(
+            ",\"remaining_s\":{}",
+            ms(elapsed * (total - done) as f64 / done as f64)
+        )
+    } else {
+        String::new()
+    };
     Some(format!(
-        "{{\"progress\":{{\"done\":{},\"total\":{total}}}}}\n",
-        done.min(total)
+        "{{\"progress\":{{\"done\":{done},\"total\":{total},\"elapsed_s\":{}{left}}}}}\n",
+        ms(elapsed)
     ))
 }
 
@@ -649,16 +668,29 @@ mod tests {
     #[test]
     fn progress_lines_only_when_they_say_something() {
         let mut last = None;
-        assert_eq!(progress_line(0, 0, &mut last), None, "no total announced");
-        assert_eq!(progress_line(5, 0, &mut last), None);
         assert_eq!(
-            progress_line(0, 10, &mut last).as_deref(),
-            Some("{\"progress\":{\"done\":0,\"total\":10}}\n")
+            progress_line(0, 0, 0.1, &mut last),
+            None,
+            "no total announced"
         );
-        assert_eq!(progress_line(0, 10, &mut last), None, "repeated");
+        assert_eq!(progress_line(5, 0, 0.2, &mut last), None);
         assert_eq!(
-            progress_line(3, 10, &mut last).as_deref(),
-            Some("{\"progress\":{\"done\":3,\"total\":10}}\n")
+            progress_line(0, 10, 0.25, &mut last).as_deref(),
+            Some("{\"progress\":{\"done\":0,\"total\":10,\"elapsed_s\":0.25}}\n"),
+            "nothing done: no estimate of the time left"
+        );
+        assert_eq!(progress_line(0, 10, 0.5, &mut last), None, "repeated");
+        // 3 of 10 in 1.5 s: 7 left at 0.5 s each
+        assert_eq!(
+            progress_line(3, 10, 1.5, &mut last).as_deref(),
+            Some(
+                "{\"progress\":{\"done\":3,\"total\":10,\"elapsed_s\":1.5,\"remaining_s\":3.5}}\n"
+            )
+        );
+        assert_eq!(
+            progress_line(10, 10, 4.0, &mut last).as_deref(),
+            Some("{\"progress\":{\"done\":10,\"total\":10,\"elapsed_s\":4}}\n"),
+            "all done: nothing left to estimate"
         );
     }
 

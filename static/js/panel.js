@@ -70,11 +70,13 @@ export function initPanel(opts) {
       progress.hidden = false;
       bringIntoView(progress);
     }
-    const onProgress = stream ? ({ done, total }) => {
+    const onProgress = stream ? ({ done, total, remaining_s: left }) => {
       if (running !== controller) return;
       bar.max = total || 1;
       bar.value = done;
-      text.textContent = `${done} / ${total}${opts.unit ? ` ${opts.unit}` : ''}`;
+      // the server's estimate of the time left at the rate so far
+      const eta = typeof left === 'number' ? `, about ${left < 90 ? `${Math.max(1, Math.round(left))} s` : `${Math.round(left / 60)} min`} left` : '';
+      text.textContent = `${done} / ${total}${opts.unit ? ` ${opts.unit}` : ''}${eta}`;
     } : undefined;
 
     let answer;

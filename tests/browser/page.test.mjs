@@ -1342,6 +1342,20 @@ async function floorViewSection(page, context) {
     assert(sent === 0, `${sent} requests sent with a release off the grid`);
   });
 
+  await check('progress: a long ensemble shows the server\'s estimate of the time left beside the count', async () => {
+    await open(page, '#migration');
+    await field(page, '#migration-form', '/method').selectOption('rigid_block');
+    await page.locator('#tab-scene').click();
+    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('300');
+    const answer = page.waitForResponse((r) => r.url().endsWith('/v1/scene') && r.request().method() === 'POST', { timeout: WAIT_MS });
+    await page.locator('#scene-form button[type="submit"]').click();
+    await page.waitForFunction(() => /^\d+ \/ 301 runs, about \d+ (s|min) left$/.test(document.querySelector('#scene-progress .progress-text')?.textContent ?? ''), null, { timeout: WAIT_MS });
+    await answer;
+    await page.locator('#scene-table tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
+    await open(page, '#migration');
+    await field(page, '#migration-form', '/method').selectOption('lumped_mass');
+  });
+
   await check('protection: the Spalling count goes to the Scene as its release rate; the Scene shows each column\'s allowed speed, the design speed against it and the overloads per year', async () => {
     await open(page, '#spalling');
     await submit(page, '#spalling-form', '/v1/spalling');
