@@ -289,3 +289,24 @@ async fn the_comparison_of_methods_strikes_behind_the_guards() {
         guarded["comparison"]
     );
 }
+
+/// More guards than support columns cannot all be distinct: refused at once, naming the list
+/// (and a long list is matched to the supports by number, not by scanning them per guard).
+#[tokio::test]
+async fn more_guards_than_columns_are_refused() {
+    let app = common::app();
+    let guards: Vec<Value> = (0..5)
+        .map(|_| json!({"support": 1, "energy_rating_j": 1.0}))
+        .collect();
+    let req = json!({"supports": [{"along_dip_m": 60}, {"along_dip_m": 90}], "guards": guards});
+    let p = assert_problem(&post(&app, "/v1/scene", &req).await, 422, "invalid_input");
+    let e = &p["errors"][0];
+    assert_eq!(e["field"], "/guards");
+    assert!(
+        e["message"]
+            .as_str()
+            .unwrap()
+            .contains("5 guards for 2 columns"),
+        "{e}"
+    );
+}

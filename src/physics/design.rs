@@ -287,12 +287,20 @@ pub fn allowed_for_entries(case: &SceneCase, control: &Control) -> SceneResult<V
     let (_, mass) = scene::rock_extent(&case.migration.rock)?;
     let rock = scene::impact_rock(&case.migration.rock, mass);
     let mut out: Vec<EntryAllowed> = Vec::with_capacity(case.supports.len());
+    // the distinct columns met so far, with the first entry of each: O(entries × distinct)
+    let mut seen: Vec<usize> = Vec::new();
     for (k, e) in case.supports.iter().enumerate() {
         control.check()?;
-        let same = case.supports[..k].iter().position(|p| p.column == e.column);
+        let same = seen
+            .iter()
+            .copied()
+            .find(|&j| case.supports[j].column == e.column);
         let limits = match same {
             Some(j) => out[j].limits.clone(),
-            None => allowed_impacts(case, k, &rock, mass, &case.limits, control)?,
+            None => {
+                seen.push(k);
+                allowed_impacts(case, k, &rock, mass, &case.limits, control)?
+            }
         };
         out.push(EntryAllowed {
             limits,
@@ -310,11 +318,13 @@ pub fn allowed_for_entries(case: &SceneCase, control: &Control) -> SceneResult<V
 /// [`allowed_for_entries`] computes).
 #[must_use]
 pub fn distinct_columns(case: &SceneCase) -> usize {
-    case.supports
-        .iter()
-        .enumerate()
-        .filter(|(k, e)| !case.supports[..*k].iter().any(|p| p.column == e.column))
-        .count()
+    let mut seen: Vec<&super::material::Column> = Vec::new();
+    for e in &case.supports {
+        if !seen.contains(&&e.column) {
+            seen.push(&e.column);
+        }
+    }
+    seen.len()
 }
 
 #[cfg(test)]

@@ -333,6 +333,23 @@ pub fn resolve_guards(
     let mut out: Vec<Option<f64>> = vec![None; entries.len()];
     let mut by: Vec<Option<usize>> = vec![None; entries.len()];
     let last = entries.iter().map(|e| e.support).max().unwrap_or(0);
+    if guards.len() > entries.len() {
+        ck.push(
+            "/guards",
+            json!(guards.len()),
+            format!(
+                "at most one guard per support column: {} guards for {} columns",
+                guards.len(),
+                entries.len()
+            ),
+        );
+        return out;
+    }
+    // the entries of each support number, found once
+    let mut of: std::collections::HashMap<u32, Vec<usize>> = std::collections::HashMap::new();
+    for (k, e) in entries.iter().enumerate() {
+        of.entry(e.support).or_default().push(k);
+    }
     for (i, g) in guards.iter().enumerate() {
         let at = format!("/guards/{i}");
         let rating_ok = ck.closed(
@@ -342,16 +359,17 @@ pub fn resolve_guards(
             MAX_GUARD_RATING,
             "J",
         );
-        let hit: Vec<usize> = entries
-            .iter()
-            .enumerate()
-            .filter(|(_, e)| {
-                e.support == g.support && g.column_index.is_none_or(|c| c == e.column_index)
+        let hit: Vec<usize> = of
+            .get(&g.support)
+            .map(|ks| {
+                ks.iter()
+                    .copied()
+                    .filter(|&k| g.column_index.is_none_or(|c| c == entries[k].column_index))
+                    .collect()
             })
-            .map(|(k, _)| k)
-            .collect();
+            .unwrap_or_default();
         if hit.is_empty() {
-            let (field, value, message) = if entries.iter().any(|e| e.support == g.support) {
+            let (field, value, message) = if of.contains_key(&g.support) {
                 (
                     format!("{at}/column_index"),
                     json!(g.column_index),
