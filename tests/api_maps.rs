@@ -7,6 +7,7 @@
 
 mod common;
 
+use common::gangue_cli as gangue;
 use common::{assert_problem, post};
 use serde_json::{Value, json};
 
@@ -385,19 +386,6 @@ async fn omitting_maps_leaves_the_answer_unchanged() {
         assert!(without.json().get("maps").is_none());
         assert_eq!(strip(w, output), without.json(), "{path}");
     }
-}
-
-fn gangue(args: &[&str]) -> std::process::Output {
-    // the shard index comes from the flags here, not from a scheduler's environment
-    std::process::Command::new(env!("CARGO_BIN_EXE_gangue"))
-        .args(args)
-        .env_remove("JOB_COMPLETION_INDEX")
-        .env_remove("SLURM_ARRAY_TASK_ID")
-        .env_remove("SLURM_ARRAY_TASK_COUNT")
-        .env_remove("AWS_BATCH_JOB_ARRAY_INDEX")
-        .env("GANGUE_SOLVER_THREADS", "2")
-        .output()
-        .unwrap()
 }
 
 fn scratch(name: &str) -> std::path::PathBuf {

@@ -7,6 +7,8 @@
 
 mod common;
 
+use common::gangue_cli as run;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -26,19 +28,6 @@ fn scratch(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-fn run(args: &[&str]) -> Output {
-    // the shard index must come from the flags here, not from a scheduler's environment
-    Command::new(BIN)
-        .args(args)
-        .env_remove("JOB_COMPLETION_INDEX")
-        .env_remove("SLURM_ARRAY_TASK_ID")
-        .env_remove("SLURM_ARRAY_TASK_COUNT")
-        .env_remove("AWS_BATCH_JOB_ARRAY_INDEX")
-        .env("GANGUE_SOLVER_THREADS", "2")
-        .output()
-        .expect("the gangue binary runs")
 }
 
 fn text(o: &Output) -> String {

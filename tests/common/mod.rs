@@ -174,3 +174,17 @@ pub fn risky_scene(runs: u64, seed: u64) -> Value {
         "migration_output": {"runs_csv": true},
     })
 }
+
+/// Runs the `gangue` binary with `args` (a shard's `compute` or a `merge`): the shard index from
+/// the flags only, not from a scheduler's environment; two solver threads.
+pub fn gangue_cli(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_gangue"))
+        .args(args)
+        .env_remove("JOB_COMPLETION_INDEX")
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("SLURM_ARRAY_TASK_COUNT")
+        .env_remove("AWS_BATCH_JOB_ARRAY_INDEX")
+        .env("GANGUE_SOLVER_THREADS", "2")
+        .output()
+        .expect("the gangue binary runs")
+}
