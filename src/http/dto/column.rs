@@ -5,9 +5,8 @@ use serde_json::{Value, json};
 use utoipa::ToSchema;
 
 use super::common::{
-    Bound, Checker, ColumnDto, ContactDto, FieldDefault, MODEL_VERSION, Meta, NumberField,
-    PlanStep, RockDto, VELOCITY, Warning, non_null, number_schemas, plan_of, velocity_schema,
-    warnings_of,
+    Bound, Checker, ColumnDto, ContactDto, FieldDefault, Meta, NumberField, PlanStep, RockDto,
+    VELOCITY, Warning, non_null, number_schemas, velocity_schema,
 };
 use super::impact::resolve_impact_case;
 use super::param::Layout;
@@ -535,11 +534,7 @@ impl ColumnResponse {
             plan,
             warnings,
         } = report;
-        let meta = Meta {
-            model_version: MODEL_VERSION.into(),
-            plan: plan_of(&plan),
-            warnings: warnings_of(&warnings),
-        };
+        let meta = Meta::of(&plan, &warnings);
         let mut out = Self {
             model: inputs.model,
             natural_frequencies_hz: r.natural_frequencies_hz,

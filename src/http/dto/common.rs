@@ -1063,6 +1063,16 @@ impl Meta {
             warnings: Vec::new(),
         }
     }
+
+    /// Metadata with the crate version and a calculation report's plan and warnings.
+    #[must_use]
+    pub fn of(plan: &[crate::calc::Stage], warnings: &[crate::calc::Warning]) -> Self {
+        Self {
+            model_version: MODEL_VERSION.into(),
+            plan: plan_of(plan),
+            warnings: warnings_of(warnings),
+        }
+    }
 }
 
 #[cfg(test)]

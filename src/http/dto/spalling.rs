@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 use utoipa::ToSchema;
 
-use super::common::{Checker, MODEL_VERSION, Meta, PlanStep, Warning, plan_of, some, warnings_of};
+use super::common::{Checker, Meta, PlanStep, Warning, some};
 use crate::calc::Report;
 use crate::calc::spalling::Case as SpallingCase;
 use crate::http::error::{ApiError, num};
@@ -379,11 +379,7 @@ impl SpallingResponse {
             plan,
             warnings,
         } = report;
-        let meta = Meta {
-            model_version: MODEL_VERSION.into(),
-            plan: plan_of(&plan),
-            warnings: warnings_of(&warnings),
-        };
+        let meta = Meta::of(&plan, &warnings);
         Self {
             zones: r
                 .zones
