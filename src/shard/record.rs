@@ -46,6 +46,7 @@ pub(super) fn encode_run(r: &RunSummary, out: &mut Vec<u8>) {
         StopReason::EndTime => 2,
         StopReason::LeftFloor => 3,
         StopReason::Support => 4,
+        StopReason::Barrier => 5,
     });
     // format version 4: the draws, the stop position and the energies and height at the end
     for x in [
@@ -88,6 +89,7 @@ pub(super) fn decode_run(b: &[u8; RUN_RECORD_BYTES as usize]) -> Result<RunSumma
             2 => StopReason::EndTime,
             3 => StopReason::LeftFloor,
             4 => StopReason::Support,
+            5 => StopReason::Barrier,
             x => return Err(format!("unknown stop reason code {x}")),
         },
         release_along_dip: g(0),
@@ -110,6 +112,8 @@ pub(super) fn encode_scene_run(r: &SceneRun, out: &mut Vec<u8>) {
         capacity_exceeded,
         exceeded,
         guard,
+        // a sharded scene has no lines (refused when asked): nothing to store
+        crossings: _,
     } = r;
     encode_run(summary, out);
     let StrikeValues {
@@ -180,5 +184,6 @@ pub(super) fn decode_scene_run(
         capacity_exceeded: flags & 2 != 0,
         exceeded: (0..limits).map(|j| flags & (4 << j) != 0).collect(),
         guard,
+        crossings: Vec::new(),
     })
 }

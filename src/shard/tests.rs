@@ -89,6 +89,7 @@ fn scene_run_records_round_trip() {
             capacity_exceeded: false,
             exceeded: vec![true, false, true],
             guard: Guard::BrokenThrough,
+            crossings: Vec::new(),
         },
         SceneRun {
             summary,
@@ -96,6 +97,7 @@ fn scene_run_records_round_trip() {
             capacity_exceeded: true,
             exceeded: vec![true, true, true],
             guard: Guard::None,
+            crossings: Vec::new(),
         },
         SceneRun {
             summary: RunSummary {
@@ -107,6 +109,7 @@ fn scene_run_records_round_trip() {
             capacity_exceeded: false,
             exceeded: vec![false, false, false],
             guard: Guard::Held,
+            crossings: Vec::new(),
         },
     ];
     for r in &runs {

@@ -2,6 +2,7 @@
 //! ensemble, the output options and the supports that stop a run (api.md `POST /v1/migration`,
 //! `POST /v1/scene`), SI units, with their defaults.
 
+use super::lines::Line;
 use super::lumped_mass::Motion;
 use super::monte_carlo::Distribution;
 use super::rigid_block::RigidBlockOptions;
@@ -226,6 +227,9 @@ pub struct MigrationCase {
     pub max_steps_per_run: u64,
     /// Supports that end a run when reached (api.md `POST /v1/scene`; default none).
     pub supports: Vec<SupportStop>,
+    /// Lines across the face, sorted by along-dip position: collectors and barriers
+    /// (api.md `POST /v1/scene`; default none; see [`super::lines`]).
+    pub lines: Vec<Line>,
 }
 
 /// A support that ends a run when the rock reaches it (api.md `POST /v1/scene`).
@@ -288,6 +292,7 @@ impl Default for MigrationCase {
             output: OutputOptions::default(),
             max_steps_per_run: 10_000_000,
             supports: Vec::new(),
+            lines: Vec::new(),
         }
     }
 }

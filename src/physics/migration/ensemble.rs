@@ -110,7 +110,8 @@ pub(super) fn ensemble_mapped(
     const CHUNK: u64 = 256;
     let setup = lumped_mass_setup(case, pr);
     control.set_total(range.end - range.start);
-    let one = |i: u64| lumped_one_mapped(case, pr, &setup, mc, i, grid, control);
+    let one =
+        |i: u64| lumped_one_mapped(case, pr, &setup, mc, i, grid, control).map(|r| (r.0, r.1));
     Ok(run_in_chunks(range, CHUNK as usize, control, one)?
         .into_iter()
         .unzip())
@@ -126,9 +127,9 @@ fn lumped_one_mapped(
     i: u64,
     grid: &MapGrid,
     control: &Control,
-) -> PhysicsResult<(RunSummary, RunCells)> {
+) -> PhysicsResult<(RunSummary, RunCells, Crossings)> {
     let mut rec = Recording::default();
-    let summary = lumped_run(case, pr, setup, mc, i, Some(&mut rec), control)?;
+    let (summary, crossings) = lumped_run(case, pr, setup, mc, i, Some(&mut rec), control)?;
     let m = pr.mass;
     let mut track = CellTrack::new(grid, pr.floor.mean);
     for s in &rec.segments {
@@ -141,7 +142,7 @@ fn lumped_one_mapped(
         };
         track.piece(&s.p0, &s.v0, &s.a, s.dt, &ke);
     }
-    Ok((summary, track.finish()))
+    Ok((summary, track.finish(), crossings))
 }
 
 /// Run `i` of a lumped-mass ensemble: μ then (e_n, e_t) at every impact from the run's stream.
@@ -153,7 +154,7 @@ pub(super) fn lumped_one(
     i: u64,
     control: &Control,
 ) -> PhysicsResult<RunSummary> {
-    lumped_run(case, pr, setup, mc, i, None, control)
+    Ok(lumped_run(case, pr, setup, mc, i, None, control)?.0)
 }
 
 /// [`lumped_one`], recorded into `rec` when given.
@@ -165,7 +166,7 @@ fn lumped_run(
     i: u64,
     rec: Option<&mut Recording>,
     control: &Control,
-) -> PhysicsResult<RunSummary> {
+) -> PhysicsResult<(RunSummary, Crossings)> {
     let mean = pr.floor.mean;
     let m = pr.mass;
     let mut rng = monte_carlo::run_stream(mc.seed, i);
@@ -178,9 +179,10 @@ fn lumped_run(
         let et = monte_carlo::sample(&mc.restitution_tangential, &mut rng).clamp(0.0, 1.0);
         (en, et)
     };
-    let o = simulate(setup, mu, &mut draw, rec, Some(control))?;
+    let mut o = simulate(setup, mu, &mut draw, rec, Some(control))?;
     let on_floor = matches!(o.phase, Phase::Slide | Phase::Roll | Phase::Stopped);
-    Ok(RunSummary {
+    let crossings = std::mem::take(&mut o.crossings);
+    let summary = RunSummary {
         time: o.t,
         speed: robust_norm(&o.v),
         kinetic_energy: m * (0.5 * o.v.norm_squared() + o.e_rot),
@@ -207,13 +209,19 @@ fn lumped_run(
         } else {
             height_above_floor(&pr.floor, &o.p, &o.v).max(0.0)
         },
-    })
+    };
+    Ok((summary, crossings))
 }
 
+/// Per line of a case ([`MigrationCase::lines`]), the rock's state where a run reached it
+/// (None: not reached).
+pub type Crossings = Vec<Option<super::Crossing>>;
+
 /// Run `index` of the ensemble `mc` of `case`, alone: the summary `/v1/migration`'s ensemble of
-/// the same case gives for that run (same streams). A caller may change the release, the rock or
-/// the supports between runs (api.md `POST /v1/scene`), never the face: `floor` is
-/// [`build_floor`] of the case's face, built once for all runs.
+/// the same case gives for that run (same streams), the cells the run's path entered on `grid`
+/// when given (see [`super::maps`]) and the run's line crossings. A caller may change the
+/// release, the rock, the supports or the lines between runs (api.md `POST /v1/scene`), never
+/// the face: `floor` is [`build_floor`] of the case's face, built once for all runs.
 ///
 /// Errors: as [`run`].
 pub(crate) fn ensemble_run(
@@ -221,38 +229,22 @@ pub(crate) fn ensemble_run(
     floor: &Arc<Floor>,
     mc: &MonteCarlo,
     index: u64,
-    control: &Control,
-) -> PhysicsResult<RunSummary> {
-    if case.method == Method::RigidBlock {
-        return Ok(rigid_block::ensemble_run(case, floor, mc, index, None, control)?.0);
-    }
-    let pr = prepare_on(case, Arc::clone(floor))?;
-    let setup = lumped_mass_setup(case, &pr);
-    lumped_one(case, &pr, &setup, mc, index, control)
-}
-
-/// [`ensemble_run`] with the cells the run's path entered on `grid` when given (see
-/// [`super::maps`]).
-///
-/// Errors: as [`run`].
-pub(crate) fn ensemble_run_mapped(
-    case: &MigrationCase,
-    floor: &Arc<Floor>,
-    mc: &MonteCarlo,
-    index: u64,
     grid: Option<&MapGrid>,
     control: &Control,
-) -> PhysicsResult<(RunSummary, Option<RunCells>)> {
+) -> PhysicsResult<(RunSummary, Option<RunCells>, Crossings)> {
     if case.method == Method::RigidBlock {
         return rigid_block::ensemble_run(case, floor, mc, index, grid, control);
     }
     let pr = prepare_on(case, Arc::clone(floor))?;
     let setup = lumped_mass_setup(case, &pr);
     match grid {
-        None => Ok((lumped_one(case, &pr, &setup, mc, index, control)?, None)),
+        None => {
+            let (r, x) = lumped_run(case, &pr, &setup, mc, index, None, control)?;
+            Ok((r, None, x))
+        }
         Some(g) => {
-            let (r, c) = lumped_one_mapped(case, &pr, &setup, mc, index, g, control)?;
-            Ok((r, Some(c)))
+            let (r, c, x) = lumped_one_mapped(case, &pr, &setup, mc, index, g, control)?;
+            Ok((r, Some(c), x))
         }
     }
 }

@@ -11,6 +11,7 @@
 
 mod case;
 mod ensemble;
+pub mod lines;
 mod lumped_mass;
 pub mod maps;
 pub mod monte_carlo;
@@ -22,9 +23,11 @@ mod terrain;
 mod trajectory;
 
 pub use self::case::*;
+pub use self::ensemble::Crossings;
 use self::ensemble::{MU_MAX, Polled, ensemble, ensemble_mapped};
 pub use self::ensemble::{RunRecords, STATISTICS_COLUMNS, attach_ensemble, run_columns};
-pub(crate) use self::ensemble::{ensemble_run, ensemble_run_mapped, run_in_chunks};
+pub(crate) use self::ensemble::{ensemble_run, run_in_chunks};
+pub use self::lines::{Barrier, Crossing, Line, LineAction};
 use self::release::{
     Prepared, lumped_mass_setup, prepare, prepare_on, roll_radius, start_and_end_warnings,
 };
@@ -201,9 +204,10 @@ fn nominal_run(
     };
     let arrival = arrival_of(case, pr, &out);
     let (imp, fric, trans) = (out.e_imp * m, out.e_fric * m, out.e_trans * m);
+    let taken = out.e_barrier * m;
     let pe = m * pr.g * (out.p.z - pr.z_end);
     let total_start = m * pr.e0;
-    let residual = arrival.kinetic_energy + pe + imp + fric + trans - total_start;
+    let residual = arrival.kinetic_energy + pe + imp + fric + trans + taken - total_start;
     if case.lumped_mass.motion == Motion::Roll
         && !matches!(case.rock.shape, RockShape::Sphere { .. })
     {
@@ -269,6 +273,7 @@ fn nominal_run(
             transition: trans,
             damping: 0.0,
             stored: 0.0,
+            barriers: taken,
             residual,
         },
         events,

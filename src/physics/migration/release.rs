@@ -516,6 +516,8 @@ pub(super) fn lumped_mass_setup<'a>(case: &'a MigrationCase, pr: &'a Prepared) -
         length: case.stop_length().0,
         span_support: case.stop_length().1,
         supports: &case.supports,
+        lines: &case.lines,
+        mass: pr.mass,
         end_time: case.end_time,
         max_steps: case.max_steps_per_run,
         p0: pr.p0,

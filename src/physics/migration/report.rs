@@ -54,6 +54,8 @@ pub struct EnergyBudget {
     pub damping: f64,
     /// Elastic energy still in the contact springs (rigid block only; 0 here), J.
     pub stored: f64,
+    /// Taken by barriers (api.md `POST /v1/scene`), J.
+    pub barriers: f64,
     /// KE + PE + losses − total_start at the end, J (rounding only).
     pub residual: f64,
 }

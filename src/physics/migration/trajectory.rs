@@ -81,7 +81,7 @@ pub(super) fn xyz(v: &Vector3<f64>) -> [f64; 3] {
     [v.x, v.y, v.z]
 }
 
-pub(super) fn height_above_floor(floor: &Floor, p: &Vector3<f64>, v: &Vector3<f64>) -> f64 {
+pub(crate) fn height_above_floor(floor: &Floor, p: &Vector3<f64>, v: &Vector3<f64>) -> f64 {
     floor.locate(p.x, p.y, v.x, v.y).map_or(0.0, |f| {
         let pl = floor.facet_plane(f);
         pl.height(p) * pl.normal().z
@@ -176,7 +176,7 @@ pub(super) fn sample_trajectory(
             None => (
                 out.p,
                 out.v,
-                out.e_imp + out.e_fric + out.e_trans,
+                out.e_imp + out.e_fric + out.e_trans + out.e_barrier,
                 out.e_rot,
                 out.omega,
                 true,
@@ -186,7 +186,7 @@ pub(super) fn sample_trajectory(
             (
                 out.p,
                 out.v,
-                out.e_imp + out.e_fric + out.e_trans,
+                out.e_imp + out.e_fric + out.e_trans + out.e_barrier,
                 out.e_rot,
                 out.omega,
             )

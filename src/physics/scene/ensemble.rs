@@ -99,10 +99,8 @@ fn ensemble_with<T: Send>(
     let one = |i: u64| -> SceneResult<T> {
         let (mut m, rock, _, mass) = run_case(case, zones.as_deref(), mc.seed, i)?;
         m.monte_carlo = None;
-        let (summary, cells) = match grid {
-            None => (migration::ensemble_run(&m, &floor, mc, i, control)?, None),
-            Some(g) => migration::ensemble_run_mapped(&m, &floor, mc, i, Some(g), control)?,
-        };
+        let (summary, cells, crossings) =
+            migration::ensemble_run(&m, &floor, mc, i, grid, control)?;
         let Some(k) = summary.support else {
             return Ok(wrap(
                 SceneRun {
@@ -111,6 +109,7 @@ fn ensemble_with<T: Send>(
                     capacity_exceeded: false,
                     exceeded: vec![false; limits.len()],
                     guard: Guard::None,
+                    crossings,
                 },
                 cells,
             ));
@@ -125,6 +124,7 @@ fn ensemble_with<T: Send>(
                 capacity_exceeded: matches!(s, Strike::CapacityExceeded { .. }),
                 exceeded: ch.iter().map(|c| c.exceeded).collect(),
                 guard,
+                crossings,
             },
             cells,
         ))
@@ -140,6 +140,7 @@ pub fn outcomes_of(runs: &[RunSummary]) -> Outcomes {
     Outcomes {
         support: f(StopReason::Support),
         lower_end: f(StopReason::LowerEnd),
+        barrier: f(StopReason::Barrier),
         at_rest: f(StopReason::AtRest),
         left_floor: f(StopReason::LeftFloor),
         end_time: f(StopReason::EndTime),
@@ -375,7 +376,7 @@ fn statistics_of<R: SceneRecords + ?Sized>(
     let e = case.supports.len();
     let limits = case.limits.active();
     // first pass: counts, and count, sum, min and max of each entry's columns, in run order
-    let mut stops = [0u64; 5];
+    let mut stops = [0u64; 6];
     let mut at = vec![0u64; e];
     let mut exceeded = vec![vec![0u64; limits.len()]; e];
     let mut overloaded = vec![0u64; e];
@@ -502,6 +503,7 @@ fn statistics_of<R: SceneRecords + ?Sized>(
             at_rest: frac(stops[stop_index(StopReason::AtRest)]),
             left_floor: frac(stops[stop_index(StopReason::LeftFloor)]),
             end_time: frac(stops[stop_index(StopReason::EndTime)]),
+            barrier: frac(stops[stop_index(StopReason::Barrier)]),
         },
         entries,
         any_exceeded: probability(any, n),
@@ -561,6 +563,7 @@ fn stop_index(r: StopReason) -> usize {
         StopReason::AtRest => 2,
         StopReason::LeftFloor => 3,
         StopReason::EndTime => 4,
+        StopReason::Barrier => 5,
     }
 }
 

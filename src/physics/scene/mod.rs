@@ -394,6 +394,8 @@ pub struct SceneRun {
     pub exceeded: Vec<bool>,
     /// What the guard of the support reached did.
     pub guard: Guard,
+    /// Per line of the scene's migration (barriers, then collectors), where the run reached it.
+    pub crossings: migration::Crossings,
 }
 
 /// Fractions of all runs by how they ended (summing to 1).
@@ -409,6 +411,8 @@ pub struct Outcomes {
     pub left_floor: f64,
     /// Reached the end time.
     pub end_time: f64,
+    /// Stopped by a barrier.
+    pub barrier: f64,
 }
 
 /// A probability with its Wilson 95 % interval.

@@ -276,6 +276,7 @@ fn event_name(k: EventKind) -> &'static str {
         EventKind::RollStart => "roll_start",
         EventKind::TakeOff => "take_off",
         EventKind::Stop => "stop",
+        EventKind::Barrier => "barrier",
     }
 }
 
@@ -288,6 +289,7 @@ pub fn stop_name(s: StopReason) -> &'static str {
         StopReason::EndTime => "end_time",
         StopReason::LeftFloor => "left_floor",
         StopReason::Support => "support",
+        StopReason::Barrier => "barrier",
     }
 }
 

@@ -86,6 +86,9 @@ pub struct OutcomesDto {
     pub left_floor: f64,
     /// Reached the end time.
     pub end_time: f64,
+    /// Stopped by a barrier (only with `barriers`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub barrier: Option<f64>,
 }
 
 impl From<&Outcomes> for OutcomesDto {
@@ -96,6 +99,7 @@ impl From<&Outcomes> for OutcomesDto {
             at_rest: o.at_rest,
             left_floor: o.left_floor,
             end_time: o.end_time,
+            barrier: None,
         }
     }
 }

@@ -75,7 +75,7 @@ impl Run<'_, '_> {
             fric: c.e * (dir * mu * c.n_tot),
             // what this branch booked before the piece (a removed velocity part,
             // a rest) is part of its start
-            diss0: s.e_imp + s.e_fric + s.e_trans,
+            diss0: s.e_imp + s.e_fric + s.e_trans + s.e_barrier,
             // rolling along the crease: the spin axis is horizontal-most normal to it
             rolling: roll.then(|| crease_up(&c.e)),
             spin: (0.0, Vector3::zeros()),

@@ -19,6 +19,7 @@
 
 use nalgebra::Vector3;
 
+use super::lines::{Crossing, Line, LineAction, act, first_reachable};
 use super::terrain::{Facet, FacetPlane, FlightEnd, Floor, MeanPlane, inside_tri};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
@@ -73,6 +74,8 @@ pub enum StopReason {
     LeftFloor,
     /// The rock reached a support (api.md `POST /v1/scene`).
     Support,
+    /// A barrier stopped the rock (api.md `POST /v1/scene`, `barriers`).
+    Barrier,
 }
 
 /// Kind of a recorded event.
@@ -88,6 +91,8 @@ pub enum EventKind {
     TakeOff,
     /// The rock came to rest.
     Stop,
+    /// A barrier stopped the rock or took its rating of the rock's kinetic energy.
+    Barrier,
 }
 
 /// One event of a run (energies per kg until scaled by the caller).
@@ -142,6 +147,10 @@ pub(crate) struct Setup<'a> {
     pub(crate) span_support: Option<usize>,
     /// Supports of a scene; columns among them are checked along every piece.
     pub(crate) supports: &'a [super::SupportStop],
+    /// Lines across the face (collectors and barriers), sorted along the dip.
+    pub(crate) lines: &'a [Line],
+    /// The rock's mass, kg (a barrier's rating is in J).
+    pub(crate) mass: f64,
     pub(crate) end_time: Option<f64>,
     pub(crate) max_steps: u64,
     /// Release point (lifted), velocity and, for a release on the floor, its facet.
@@ -178,6 +187,10 @@ pub(crate) struct RunOut {
     pub(crate) rebound_cutoff: bool,
     /// The support reached, when the run ended there.
     pub(crate) support: Option<usize>,
+    /// Kinetic energy per kg taken by barriers.
+    pub(crate) e_barrier: f64,
+    /// Per line of the setup, the rock's state where it reached it (None: not reached).
+    pub(crate) crossings: Vec<Option<Crossing>>,
 }
 
 struct St {
@@ -194,6 +207,8 @@ struct St {
     e_imp: f64,
     e_fric: f64,
     e_trans: f64,
+    /// Kinetic energy per kg taken by barriers.
+    e_barrier: f64,
     spin: (f64, Vector3<f64>),
     undecelerated: bool,
     rebound_cutoff: bool,
@@ -225,6 +240,7 @@ impl St {
             e_imp: 0.0,
             e_fric: 0.0,
             e_trans: 0.0,
+            e_barrier: 0.0,
             spin: (0.0, Vector3::zeros()),
             undecelerated: false,
             rebound_cutoff: false,
@@ -497,6 +513,10 @@ struct Run<'a, 'r> {
     catch: Catch,
     /// The support reached.
     hit: Option<usize>,
+    /// The next line the rock can reach (index into the setup's lines).
+    next_line: usize,
+    /// Per line, the rock's state where it reached it.
+    crossings: Vec<Option<Crossing>>,
 }
 
 /// How one step of a run ends: the run goes on (`None`) or ends in this phase for this reason.
@@ -536,6 +556,11 @@ impl<'a, 'r> Run<'a, 'r> {
                 p_last: p,
             },
             hit: None,
+            next_line: first_reachable(
+                su.lines,
+                su.base.1 + (su.p0 - su.base.0).dot(&mean.dip_dir()),
+            ),
+            crossings: vec![None; su.lines.len()],
         };
         if let Some(f) = su.on_floor {
             run.s.flight_from = FlightFrom::TakeOff;
@@ -725,24 +750,98 @@ impl<'a, 'r> Run<'a, 'r> {
             set_height(s, top, self.g, 1.0);
         }
         let t_left = self.su.end_time.map_or(f64::INFINITY, |te| te - s.t);
-        let s_left = self.su.length - (s.s_r + (s.p - s.r).dot(&dip));
+        let along = s.s_r + (s.p - s.r).dot(&dip);
+        let mut s_left = self.su.length - along;
         let moving = match s.ground {
             None => Phase::Flight,
             Some(_) if self.roll => Phase::Roll,
             Some(_) => Phase::Slide,
         };
+        // the next line cuts the pieces as the lower end does; one at or above the end is
+        // reached before the run ends there (a barrier stands in front of its support)
+        let mut to_line = false;
+        if let Some(line) = self.su.lines.get(self.next_line)
+            && line.along_dip <= self.su.length
+        {
+            let d = line.along_dip - along;
+            if d <= 0.0 {
+                return Ok(self.cross_line());
+            }
+            to_line = d <= s_left;
+            s_left = s_left.min(d);
+        }
+        let s = &mut self.s;
         if s_left <= 0.0 {
             return Ok(Some((moving, StopReason::LowerEnd)));
         }
         if t_left <= 0.0 {
             return Ok(Some((moving, StopReason::EndTime)));
         }
-        let diss0 = s.e_imp + s.e_fric + s.e_trans;
-        Ok(match (s.ground, s.crease) {
+        let diss0 = s.e_imp + s.e_fric + s.e_trans + s.e_barrier;
+        let end = match (s.ground, s.crease) {
             (None, _) => self.flight_step(draw, t_left, s_left, diss0),
             (Some(_), Some(c)) => self.crease_step(c, t_left, s_left, moving),
             (Some(f), None) => self.ground_step(f, t_left, s_left, diss0, moving),
+        };
+        // a piece that reached the distance left reached the line when the line cut it
+        Ok(match end {
+            Some((_, StopReason::LowerEnd)) if to_line => self.cross_line(),
+            e => e,
         })
+    }
+
+    /// The rock reached the next line: its state recorded, the
+    /// barrier's action applied (see [`super::lines`]). Ends the run when a barrier stopped it.
+    fn cross_line(&mut self) -> StepEnd {
+        let k = self.next_line;
+        self.next_line += 1;
+        let line = self.su.lines[k];
+        let s = &mut self.s;
+        if !line.spans(s.p.y) {
+            return None;
+        }
+        let m = self.su.mass;
+        let v2 = s.v.norm_squared();
+        let (trans, rot, height) = match s.ground {
+            // on the floor: a rolling rock's spin is 0.2 v² per kg
+            Some(_) => (0.5 * v2, (self.ke_factor - 1.0) * 0.5 * v2, 0.0),
+            None => (
+                0.5 * v2,
+                s.spin.0,
+                super::trajectory::height_above_floor(self.floor, &s.p, &s.v).max(0.0),
+            ),
+        };
+        let energy = m * (trans + rot);
+        let (action, f) = act(&line, height, energy);
+        self.crossings[k] = Some(Crossing {
+            time: s.t,
+            across: s.p.y,
+            speed: v2.sqrt(),
+            translational_energy: m * trans,
+            rotational_energy: m * rot,
+            passing_height: height,
+            action,
+        });
+        if !matches!(action, LineAction::Stopped | LineAction::BrokenThrough) {
+            return None;
+        }
+        let before = v2.sqrt();
+        // every velocity scales by f: the kinetic energy (per kg) by f²
+        let lost = (trans + rot) * (1.0 - f * f);
+        s.v *= f;
+        s.spin = (s.spin.0 * f * f, s.spin.1 * f);
+        s.e_barrier += lost;
+        let ev = EventRec {
+            t: s.t,
+            kind: EventKind::Barrier,
+            p: s.p,
+            speed_before: before,
+            speed_after: s.v.norm(),
+            lost,
+        };
+        self.push_event(ev);
+        // a stopped rock is at rest against the barrier
+        (action == LineAction::Stopped).then_some((Phase::Stopped, StopReason::Barrier))
     }
 
     /// Invariants checked at every event and piece end: never below the floor, never on the
@@ -816,6 +915,8 @@ impl<'a, 'r> Run<'a, 'r> {
             rebound_cutoff: s.rebound_cutoff,
             steps: self.steps,
             support: self.hit,
+            e_barrier: s.e_barrier,
+            crossings: self.crossings,
         })
     }
 }
@@ -849,6 +950,8 @@ mod tests {
             length: 1e3,
             span_support: None,
             supports: &[],
+            lines: &[],
+            mass: 1.0,
             end_time: None,
             max_steps: 1000,
             p0,

@@ -407,6 +407,10 @@ struct RunOut {
     events: Vec<Event>,
     trajectory: Option<Trajectory>,
     support: Option<usize>,
+    /// Kinetic energy taken by barriers, J.
+    barrier: f64,
+    /// Per line of the case, the block's state where it reached it (None: not reached).
+    crossings: Vec<Option<super::Crossing>>,
 }
 
 struct Recorder {
@@ -1037,7 +1041,7 @@ pub(crate) fn run_part(
             let one = |i: u64| rigid_one(case, &model, mc, i, control, release_along, Some(g));
             super::run_in_chunks(range, 16, control, one)?
                 .into_iter()
-                .map(|(r, c)| (r, c.unwrap_or_default()))
+                .map(|(r, c, _)| (r, c.unwrap_or_default()))
                 .unzip()
         }
         _ => (Vec::new(), Vec::new()),
@@ -1125,6 +1129,7 @@ fn nominal_run(
             transition: 0.0,
             damping: out.damping,
             stored: out.stored,
+            barriers: out.barrier,
             residual,
         },
         events: case.output.events.then_some(out.events),
@@ -1160,7 +1165,7 @@ fn rigid_one(
     control: &Control,
     release_along: f64,
     grid: Option<&MapGrid>,
-) -> PhysicsResult<(RunSummary, Option<RunCells>)> {
+) -> PhysicsResult<(RunSummary, Option<RunCells>, super::ensemble::Crossings)> {
     let o = &case.rigid_block;
     let mut rng = monte_carlo::run_stream(mc.seed, i);
     let mu = match &mc.friction_coefficient {
@@ -1202,7 +1207,7 @@ fn rigid_one(
         rotational_energy: kr,
         passing_height: model.lowest_point_height(&r.st),
     };
-    Ok((summary, track.map(CellTrack::finish)))
+    Ok((summary, track.map(CellTrack::finish), r.crossings))
 }
 
 /// Run `i` of the ensemble `mc` of `case` alone (see [`super::ensemble_run`]), with the step
@@ -1214,7 +1219,7 @@ pub(crate) fn ensemble_run(
     i: u64,
     grid: Option<&MapGrid>,
     control: &Control,
-) -> PhysicsResult<(RunSummary, Option<RunCells>)> {
+) -> PhysicsResult<(RunSummary, Option<RunCells>, super::ensemble::Crossings)> {
     let pr = super::prepare_on(case, std::sync::Arc::clone(floor))?;
     let model = Model::new(case, &pr)?;
     let est = model.estimated_steps(case, case.face.friction_coefficient);

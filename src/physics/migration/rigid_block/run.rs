@@ -1013,6 +1013,8 @@ impl Model<'_> {
             events: run.events,
             trajectory: run.rec.map(|r| r.tr),
             support: run.support,
+            barrier: 0.0,
+            crossings: Vec::new(),
         })
     }
 
