@@ -193,7 +193,7 @@ mod tests {
         assert!((r.energy.barriers - 0.5 * e_at).abs() < 1e-9 * e_at);
         assert!(r.energy.residual.abs() < 1e-9 * r.energy.total_start);
         // a sliding rock passes at height 0: a barrier of height 0 is overtopped by everything
-        let mut low = stop.clone();
+        let mut low = stop;
         low.lines[0].barrier = Some(Barrier {
             height: 0.0,
             rating: 1e12,
