@@ -34,6 +34,27 @@ fn refuse_maps(maps: Option<&MapsDto>, pointer: &str) -> Result<(), ApiError> {
     ck.finish()
 }
 
+/// Refuses a sharded scene with barriers or collectors: the part files do not carry the runs'
+/// crossings of their lines.
+fn refuse_lines(req: &SceneRequest) -> Result<(), ApiError> {
+    let mut ck = Checker::new();
+    for (pointer, given) in [
+        ("/barriers", req.barriers.as_ref().map(Vec::len)),
+        ("/collectors", req.collectors.as_ref().map(Vec::len)),
+    ] {
+        if let Some(n) = given.filter(|&n| n > 0) {
+            ck.push(
+                pointer,
+                serde_json::json!(n),
+                "a scene's barriers and collectors are not carried through the part files of a \
+                 sharded computation (gangue compute/merge): leave them out, or send the request \
+                 to the service",
+            );
+        }
+    }
+    ck.finish()
+}
+
 /// The service's wire: requests and answers as the endpoints read and write them.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct HttpWire;
@@ -84,6 +105,7 @@ impl Wire for HttpWire {
         let mut req: SceneRequest = from_value(&v)?;
         let (case, ctx) = req.resolve(config)?;
         refuse_maps(req.migration_output.maps.as_ref(), "/migration_output/maps")?;
+        refuse_lines(&req)?;
         let inputs = serde_json::to_vec(&req).map_err(ApiError::internal)?;
         Ok((case, (ctx, req), inputs))
     }

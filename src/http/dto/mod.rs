@@ -5,6 +5,7 @@ pub mod batch;
 pub mod column;
 pub mod common;
 pub mod design_values;
+pub mod devices;
 pub mod floor;
 pub mod impact;
 pub mod maps;

@@ -299,7 +299,8 @@ pub fn ensemble_report<R: SceneRecords + ?Sized>(
     other: Option<&R>,
     keep_runs: bool,
 ) -> Result<EnsembleReport, R::Error> {
-    let (statistics, counts) = statistics_of(case, mc, records)?;
+    let (mut statistics, counts) = statistics_of(case, mc, records)?;
+    statistics.devices = devices::device_statistics(case, records)?;
     let mut warnings = draw_warnings(mc);
     for (k, e) in statistics.entries.iter().enumerate() {
         if e.impact_velocity.is_none() {
@@ -316,6 +317,26 @@ pub fn ensemble_report<R: SceneRecords + ?Sized>(
     }
     if counts.at_start > 0 {
         warnings.push(within_reach_warning(counts.at_start, records.runs()));
+    }
+    let through: Vec<String> = statistics
+        .devices
+        .iter()
+        .zip(&case.device_lines)
+        .filter_map(|(d, &k)| {
+            let b = d.barrier?;
+            let n = b.broken_through_runs;
+            (n > 0).then(|| format!("{n} at {} m", case.migration.lines[k].along_dip))
+        })
+        .collect();
+    if !through.is_empty() {
+        warnings.push(Warning {
+            code: "barrier_broken_through",
+            message: format!(
+                "rocks broke through barriers (past their energy rating, below their height): \
+                 {}; each passed with the rating taken from its kinetic energy",
+                through.join(", ")
+            ),
+        });
     }
     let mut plan = Vec::new();
     push_strike_plan(case, &mut plan, counts.struck, nominal_capacity);
@@ -508,6 +529,7 @@ fn statistics_of<R: SceneRecords + ?Sized>(
         entries,
         any_exceeded: probability(any, n),
         any_overloads_per_year: case.release_rate.map(|r| frequency(any, n, r)),
+        devices: Vec::new(),
     };
     Ok((statistics, counts))
 }

@@ -35,6 +35,7 @@ use super::stats::{self, Summary};
 use super::validity::Warning;
 
 mod collectors;
+mod devices;
 mod ensemble;
 use ensemble::compare_single;
 #[cfg(test)]
@@ -44,6 +45,7 @@ pub use collectors::{
     DESIGN_CONFIDENCE, DESIGN_PERCENTILE, DesignRanks, DesignValue, DesignValues, REACH_COLUMNS,
     design_ranks, design_value, reach_columns,
 };
+pub use devices::{BarrierStatistics, DeviceStatistics, crossing_columns, scene_lines};
 pub use ensemble::{
     ENTRY_COLUMNS, EnsembleReport, SceneRecords, ensemble_part, ensemble_part_mapped,
     ensemble_report, entry_columns, outcomes_of,
@@ -181,6 +183,9 @@ pub struct SceneCase {
     pub guards: Vec<Option<f64>>,
     /// Compute each support's allowed impact per design limit ([`allowed_for_entries`](super::design::allowed_for_entries)).
     pub allowed_impacts: bool,
+    /// Per device (barriers, then collectors, each in request order), the index of its line in
+    /// `migration.lines` ([`scene_lines`]).
+    pub device_lines: Vec<usize>,
 }
 
 /// The failure of a scene: the stage's error and the support entry it concerns (its fields are
@@ -486,6 +491,8 @@ pub struct SceneStatistics {
     pub any_exceeded: Probability,
     /// Expected overloads of some support per year (with a release rate).
     pub any_overloads_per_year: Option<Frequency>,
+    /// Per device (barriers, then collectors), what it saw.
+    pub devices: Vec<DeviceStatistics>,
 }
 
 /// One entry of a method in a comparison: reached fraction, median impact speed (None: never

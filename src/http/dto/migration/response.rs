@@ -49,6 +49,9 @@ pub struct EnergyDto {
     pub damping_j: f64,
     /// Elastic energy still in the contact springs at the end (rigid block; else 0), J.
     pub stored_j: f64,
+    /// Taken by a scene's barriers, J (omitted when none took any).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub barriers_j: Option<f64>,
     /// KE + PE + losses − total at start (rounding only), J.
     pub residual_j: f64,
 }
@@ -402,6 +405,7 @@ impl MigrationResponse {
                 transition_j: r.energy.transition,
                 damping_j: r.energy.damping,
                 stored_j: r.energy.stored,
+                barriers_j: (r.energy.barriers != 0.0).then_some(r.energy.barriers),
                 residual_j: r.energy.residual,
             },
             events: r.events.map(|ev| {

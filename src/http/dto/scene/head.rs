@@ -1,6 +1,7 @@
 //! The part of a scene's answer a sharded computation's part 0 stores, and the runs CSV.
 
 use super::*;
+use crate::physics::migration::LineAction;
 
 /// The part of a scene's answer its ensemble does not change (from
 /// [`scene::solve_nominal`]), as the part 0 of a sharded computation stores it: the plan's
@@ -178,8 +179,12 @@ impl SceneHead {
 /// (empty when no support was struck), then the run columns every runs CSV appends
 /// ([`RUNS_CSV_RUN_COLUMNS`](super::super::migration::RUNS_CSV_RUN_COLUMNS): release, rock, stop
 /// position, energies) and `passing_height_m` (the height of the rock's lowest point above the
-/// floor when it reached the support, m; empty when no support was reached); numbers in
-/// shortest round-trip form.
+/// floor when it reached the support, m; empty when no support was reached); with guards,
+/// `guard` (held, broken_through or empty); with barriers or collectors, per device
+/// (`barrier_1`…, then `collector_1`…) the rock's state where it reached the line — speed (m/s),
+/// kinetic, translational and rotational energy (J), passing height (m) and the action (passed,
+/// overtopped, stopped, broken_through), empty when it did not reach it; numbers in shortest
+/// round-trip form.
 #[must_use]
 pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
     use super::super::migration::{
@@ -192,10 +197,25 @@ pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
     // with guards (only then, so that a scene without them keeps its bytes): what the guard did
     let guards = case.guards.iter().any(Option::is_some);
     out.push_str(if guards {
-        ",passing_height_m,guard\n"
+        ",passing_height_m,guard"
     } else {
-        ",passing_height_m\n"
+        ",passing_height_m"
     });
+    // with barriers or collectors (only then): per device, the rock's state at its line
+    let devices = device_names(case);
+    for name in &devices {
+        for col in [
+            "speed_m_s",
+            "kinetic_energy_j",
+            "translational_energy_j",
+            "rotational_energy_j",
+            "passing_height_m",
+            "action",
+        ] {
+            out.push_str(&format!(",{name}_{col}"));
+        }
+    }
+    out.push('\n');
     for (i, r) in runs.iter().enumerate() {
         out.push_str(&runs_csv_documented_fields(i, &r.summary));
         match r.summary.support {
@@ -228,7 +248,41 @@ pub fn runs_csv(case: &SceneCase, runs: &[SceneRun]) -> String {
                 scene::Guard::BrokenThrough => ",broken_through",
             });
         }
+        for &k in &case.device_lines {
+            match r.crossings.get(k).copied().flatten() {
+                Some(c) => {
+                    for x in scene::crossing_columns(&c) {
+                        out.push_str(&format!(",{x}"));
+                    }
+                    out.push_str(match c.action {
+                        LineAction::Passed => ",passed",
+                        LineAction::Overtopped => ",overtopped",
+                        LineAction::Stopped => ",stopped",
+                        LineAction::BrokenThrough => ",broken_through",
+                    });
+                }
+                None => out.push_str(",,,,,,"),
+            }
+        }
         out.push('\n');
     }
     out
+}
+
+/// The CSV column prefix of each device of `case` (barriers, then collectors): `barrier_1`,
+/// `collector_1`, … numbered from 1 in request order.
+fn device_names(case: &SceneCase) -> Vec<String> {
+    let (mut b, mut c) = (0, 0);
+    case.device_lines
+        .iter()
+        .map(|&k| {
+            if case.migration.lines[k].barrier.is_some() {
+                b += 1;
+                format!("barrier_{b}")
+            } else {
+                c += 1;
+                format!("collector_{c}")
+            }
+        })
+        .collect()
 }

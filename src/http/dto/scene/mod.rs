@@ -16,6 +16,7 @@ use super::common::{
     Checker, ColumnDto, ContactDto, LawDto, Meta, PlanStep, RockDto, ShapeKind, plan_of,
     warnings_of,
 };
+use super::devices::{BarrierDto, CollectorDto, resolve_devices};
 use super::impact::{ImpactRequest, ImpactResponse};
 use super::migration::monte_carlo_dto;
 use super::migration::{
@@ -243,6 +244,14 @@ pub struct SceneRequest {
     #[schema(default = json!(null), example = json!([{"support": 1, "energy_rating_j": 500.0}]))]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub guards: Option<Vec<GuardDto>>,
+    /// Barriers across the face, each with a height and an energy rating (null: none).
+    #[schema(default = json!(null), example = json!([{"along_dip_m": 40.0, "height_m": 1.0, "energy_rating_j": 20000.0}]))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub barriers: Option<Vec<BarrierDto>>,
+    /// Data collectors: lines across the face where each run's state is recorded (null: none).
+    #[schema(default = json!(null), example = json!([{"along_dip_m": 30.0}]))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collectors: Option<Vec<CollectorDto>>,
     /// Report each support's allowed impact per design limit (`allowed_impacts` of the answer):
     /// the impact speed and energy of the case's rock at which the check reaches its limit.
     #[schema(default = true, example = true)]
@@ -279,6 +288,8 @@ impl Default for SceneRequest {
             compare_methods: false,
             release_rate: None,
             guards: None,
+            barriers: None,
+            collectors: None,
             allowed_impacts: true,
             migration_output: MigrationOutputDto::default(),
             column_output: None,
@@ -538,8 +549,18 @@ impl SceneRequest {
             &supports.entries,
             &mut ck,
         );
+        let (barriers, collectors) = resolve_devices(
+            self.barriers.as_deref().unwrap_or(&[]),
+            self.collectors.as_deref().unwrap_or(&[]),
+            length,
+            &mut ck,
+        );
         ck.finish()?;
+        let (lines, device_lines) = scene::scene_lines(&barriers, &collectors);
+        let mut migration = migration;
+        migration.lines = lines;
         let case = SceneCase {
+            device_lines,
             migration,
             supports: supports.entries,
             column: column_case,

@@ -2,6 +2,12 @@
 //! the report.
 
 use super::*;
+use crate::http::dto::devices::DeviceStatisticsDto;
+
+/// True when the scene has barriers (the outcomes then give the share they stopped).
+fn has_barriers(case: &SceneCase) -> bool {
+    case.migration.lines.iter().any(|l| l.barrier.is_some())
+}
 
 /// One design check of an impact.
 #[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
@@ -194,6 +200,14 @@ pub struct SceneStatisticsDto {
     /// Expected overloads of some support per year (with `release_rate`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub any_overloads_per_year: Option<FrequencyDto>,
+    /// Per barrier, in request order: the runs that reached it, what it did, the rock's state
+    /// at its line (with `barriers`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub barriers: Option<Vec<DeviceStatisticsDto>>,
+    /// Per collector, in request order: the runs that reached it and the rock's state at its
+    /// line (with `collectors`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collectors: Option<Vec<DeviceStatisticsDto>>,
 }
 
 /// One entry of one method in a comparison.
@@ -310,7 +324,10 @@ pub(super) fn statistics_dto(st: &SceneStatistics, case: &SceneCase) -> SceneSta
     SceneStatisticsDto {
         runs: st.runs,
         seed: st.seed,
-        outcomes: (&st.outcomes).into(),
+        outcomes: OutcomesDto {
+            barrier: has_barriers(case).then_some(st.outcomes.barrier),
+            ..(&st.outcomes).into()
+        },
         supports: st
             .entries
             .iter()
@@ -347,7 +364,26 @@ pub(super) fn statistics_dto(st: &SceneStatistics, case: &SceneCase) -> SceneSta
             .collect(),
         any_exceeded: (&st.any_exceeded).into(),
         any_overloads_per_year: st.any_overloads_per_year.as_ref().map(FrequencyDto::from),
+        barriers: devices(st, case, true),
+        collectors: devices(st, case, false),
     }
+}
+
+/// The statistics of the scene's barriers (or collectors), in request order (None: none given).
+fn devices(
+    st: &SceneStatistics,
+    case: &SceneCase,
+    barriers: bool,
+) -> Option<Vec<DeviceStatisticsDto>> {
+    let out: Vec<DeviceStatisticsDto> = st
+        .devices
+        .iter()
+        .zip(&case.device_lines)
+        .map(|(s, &k)| (s, &case.migration.lines[k]))
+        .filter(|(_, l)| l.barrier.is_some() == barriers)
+        .map(|(s, l)| DeviceStatisticsDto::new(l, s))
+        .collect();
+    (!out.is_empty()).then_some(out)
 }
 
 pub(super) fn impact_dto(
@@ -431,7 +467,10 @@ pub(super) fn comparison_dto(case: &SceneCase, m: &MethodSummary) -> MethodCompa
             Method::RigidBlock => "rigid_block",
         }
         .into(),
-        outcomes: (&m.outcomes).into(),
+        outcomes: OutcomesDto {
+            barrier: has_barriers(case).then_some(m.outcomes.barrier),
+            ..(&m.outcomes).into()
+        },
         supports: m
             .entries
             .iter()
