@@ -63,6 +63,7 @@ fn case(method: Method, model: ColumnModel, runs: u64) -> SceneCase {
         release_rate: None,
         guards: Vec::new(),
         device_lines: Vec::new(),
+        target: None,
     }
 }
 
@@ -129,6 +130,7 @@ fn paper_face(runs: u64, columns: bool) -> SceneCase {
         release_rate: None,
         guards: Vec::new(),
         device_lines: Vec::new(),
+        target: None,
     }
 }
 

@@ -190,6 +190,12 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             "/release_rate/observed_period_years",
             json!({"monte_carlo": {"runs": 5}, "release_rate": {"observed_events": 643}}),
         ),
+        // a target names its statistic
+        (
+            "/v1/scene",
+            "/monte_carlo/target/half_width",
+            json!({"monte_carlo": {"runs": 5, "target": {"statistic": "any_exceeded"}}}),
+        ),
     ];
     // `map` exists only on grid and contour floors: its fields are varied on a grid in map
     // coordinates, never on the default plane
@@ -198,6 +204,7 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
         || pointer.starts_with("/output/maps/")
         || pointer.starts_with("/migration_output/maps/")
         || pointer.starts_with("/release_rate/")
+        || pointer.starts_with("/monte_carlo/target/")
     {
         vec![]
     } else {

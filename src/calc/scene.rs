@@ -4,7 +4,8 @@
 use super::{Calculation, Ensemble, Report, Stage};
 use crate::physics::Control;
 use crate::physics::design::{self, EntryAllowed};
-use crate::physics::migration::MonteCarlo;
+use crate::physics::migration::{Method, MonteCarlo};
+use crate::physics::scene::target::{self, SceneTarget, TargetOutcome};
 use crate::physics::scene::{
     self, EnsembleReport, SceneCase, SceneError, SceneRecords, SceneReport, SceneRun,
     SceneStatistics,
@@ -21,17 +22,34 @@ impl Calculation for Scene {
 
     fn solve(case: &SceneCase, control: &Control) -> Result<Report<SceneReport>, SceneError> {
         let (mut r, mc) = nominal_report(case, control)?;
-        if let Some(mc) = mc {
-            let (runs, other) = match &case.migration.output.maps {
-                None => scene::ensemble_part(case, &mc, 0..mc.runs, control)?,
-                Some(g) => {
+        if let Some(mut mc) = mc {
+            // with a target, the runs it needs first (the runs of that many, bit for bit)
+            let (early, outcome) = match &case.target {
+                Some(t) => {
+                    let (runs, outcome) = until_precise(case, &mc, t, control)?;
+                    mc.runs = outcome.runs;
+                    (Some(runs), Some(outcome))
+                }
+                None => (None, None),
+            };
+            let (runs, other) = match (&case.migration.output.maps, early) {
+                (None, None) => scene::ensemble_part(case, &mc, 0..mc.runs, control)?,
+                (None, Some(runs)) => {
+                    let other = if case.compare_methods {
+                        Some(other_method(case, &mc, control)?)
+                    } else {
+                        None
+                    };
+                    (runs, other)
+                }
+                (Some(g), _) => {
                     let (runs, other, maps) = scene::ensemble_part_mapped(case, &mc, g, control)?;
                     r.maps = Some(maps);
                     (runs, other)
                 }
             };
             let capacity = scene::nominal_capacity(&r);
-            let Ok(tail) = scene::ensemble_report(
+            let Ok(mut tail) = scene::ensemble_report(
                 case,
                 &mc,
                 capacity,
@@ -39,6 +57,7 @@ impl Calculation for Scene {
                 other.as_deref(),
                 false,
             );
+            tail.statistics.target = outcome;
             attach(&mut r, tail);
             r.runs = Some(runs);
         }
@@ -64,6 +83,59 @@ impl Ensemble for Scene {
             None => Ok((Vec::new(), None)),
         }
     }
+}
+
+/// The runs of `case`'s own method in prefixes ([`target::checkpoints`]) until `t`'s statistic
+/// is precise enough or every run of `mc` ran, and what the target gave.
+///
+/// # Errors
+/// As [`Scene::solve`].
+pub fn until_precise(
+    case: &SceneCase,
+    mc: &MonteCarlo,
+    t: &SceneTarget,
+    control: &Control,
+) -> Result<(Vec<SceneRun>, TargetOutcome), SceneError> {
+    let own = SceneCase {
+        compare_methods: false,
+        ..case.clone()
+    };
+    let mut runs: Vec<SceneRun> = Vec::new();
+    let mut checked_at = Vec::new();
+    let mut half_width = 0.5;
+    for n in target::checkpoints(mc.runs) {
+        let (more, _) = scene::ensemble_part(&own, mc, runs.len() as u64..n, control)?;
+        runs.extend(more);
+        checked_at.push(n);
+        half_width = target::measured_half_width(case, t, &runs);
+        if half_width <= t.half_width {
+            break;
+        }
+    }
+    let outcome = TargetOutcome {
+        target: *t,
+        half_width,
+        met: half_width <= t.half_width,
+        runs: runs.len() as u64,
+        max_runs: mc.runs,
+        checked_at,
+    };
+    Ok((runs, outcome))
+}
+
+/// The runs of `mc` with the other migration method (`compare_methods`).
+fn other_method(
+    case: &SceneCase,
+    mc: &MonteCarlo,
+    control: &Control,
+) -> Result<Vec<SceneRun>, SceneError> {
+    let mut other = case.clone();
+    other.compare_methods = false;
+    other.migration.method = match case.migration.method {
+        Method::LumpedMass => Method::RigidBlock,
+        Method::RigidBlock => Method::LumpedMass,
+    };
+    Ok(scene::ensemble_part(&other, mc, 0..mc.runs, control)?.0)
 }
 
 /// The ensemble of a scene, if it has one (not with `impact_velocity`).

@@ -34,8 +34,8 @@ fn refuse_maps(maps: Option<&MapsDto>, pointer: &str) -> Result<(), ApiError> {
     ck.finish()
 }
 
-/// Refuses a sharded scene with barriers or collectors: the part files do not carry the runs'
-/// crossings of their lines.
+/// Refuses a sharded scene with barriers or collectors (the part files do not carry the runs'
+/// crossings of their lines) or with a target (the runs are split before any ran).
 fn refuse_lines(req: &SceneRequest) -> Result<(), ApiError> {
     let mut ck = Checker::new();
     for (pointer, given) in [
@@ -51,6 +51,15 @@ fn refuse_lines(req: &SceneRequest) -> Result<(), ApiError> {
                  to the service",
             );
         }
+    }
+    if let Some(t) = req.monte_carlo.as_ref().and_then(|m| m.target) {
+        ck.push(
+            "/monte_carlo/target",
+            serde_json::to_value(t).unwrap_or_default(),
+            "a sharded computation splits all the runs between its shards before any runs: it \
+             cannot stop early; leave the target out (monte_carlo.runs is then the runs), or send \
+             the request to the service",
+        );
     }
     ck.finish()
 }

@@ -361,6 +361,7 @@ mod tests {
             release_rate: None,
             guards: Vec::new(),
             device_lines: Vec::new(),
+            target: None,
         }
     }
 

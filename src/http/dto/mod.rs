@@ -15,5 +15,6 @@ pub mod protection;
 pub mod scene;
 pub mod spalling;
 pub mod study;
+pub mod target;
 
 pub use common::{Meta, PlanStep, Warning};

@@ -530,6 +530,7 @@ fn statistics_of<R: SceneRecords + ?Sized>(
         any_exceeded: probability(any, n),
         any_overloads_per_year: case.release_rate.map(|r| frequency(any, n, r)),
         devices: Vec::new(),
+        target: None,
     };
     Ok((statistics, counts))
 }

@@ -34,9 +34,11 @@ use super::stats::rate::{Frequency, ReleaseRate, frequency};
 use super::stats::{self, Summary};
 use super::validity::Warning;
 
+pub mod barrier_design;
 mod collectors;
 mod devices;
 mod ensemble;
+pub mod target;
 use ensemble::compare_single;
 #[cfg(test)]
 mod tests;
@@ -186,6 +188,8 @@ pub struct SceneCase {
     /// Per device (barriers, then collectors, each in request order), the index of its line in
     /// `migration.lines` ([`scene_lines`]).
     pub device_lines: Vec<usize>,
+    /// Stop the ensemble when a statistic is precise enough (None: run every run).
+    pub target: Option<target::SceneTarget>,
 }
 
 /// The failure of a scene: the stage's error and the support entry it concerns (its fields are
@@ -493,6 +497,8 @@ pub struct SceneStatistics {
     pub any_overloads_per_year: Option<Frequency>,
     /// Per device (barriers, then collectors), what it saw.
     pub devices: Vec<DeviceStatistics>,
+    /// What the ensemble's target gave (None: no target).
+    pub target: Option<target::TargetOutcome>,
 }
 
 /// One entry of a method in a comparison: reached fraction, median impact speed (None: never

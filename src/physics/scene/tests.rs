@@ -46,6 +46,7 @@ mod guard_properties {
             release_rate: None,
             guards: vec![rating],
             device_lines: Vec::new(),
+            target: None,
         }
     }
 

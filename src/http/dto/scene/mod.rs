@@ -171,6 +171,9 @@ monte_carlo_dto! {
         pub density_kg_m3: Option<DistributionDto>,
         /// The release across the face y, m, bounds in [−1000, 1000] (scene stream).
         pub release_across_m: Option<DistributionDto>,
+        /// Stop when a statistic is precise enough: checked at 1000, 2000, 4000, … runs and
+        /// at `runs`, which is then the most runs allowed (null: run every run).
+        pub target: Option<super::target::SceneTargetDto>,
     }
 }
 
@@ -555,11 +558,17 @@ impl SceneRequest {
             length,
             &mut ck,
         );
-        ck.finish()?;
         let (lines, device_lines) = scene::scene_lines(&barriers, &collectors);
         let mut migration = migration;
         migration.lines = lines;
+        let target = self
+            .monte_carlo
+            .as_ref()
+            .and_then(|m| m.target.as_ref())
+            .and_then(|t| t.resolve("/monte_carlo/target", &mut ck));
+        ck.finish()?;
         let case = SceneCase {
+            target,
             device_lines,
             migration,
             supports: supports.entries,

@@ -208,6 +208,9 @@ pub struct SceneStatisticsDto {
     /// line (with `collectors`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub collectors: Option<Vec<DeviceStatisticsDto>>,
+    /// What `monte_carlo.target` gave: the runs used, whether the target was met.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target: Option<crate::http::dto::target::TargetOutcomeDto>,
 }
 
 /// One entry of one method in a comparison.
@@ -366,6 +369,7 @@ pub(super) fn statistics_dto(st: &SceneStatistics, case: &SceneCase) -> SceneSta
         any_overloads_per_year: st.any_overloads_per_year.as_ref().map(FrequencyDto::from),
         barriers: devices(st, case, true),
         collectors: devices(st, case, false),
+        target: st.target.as_ref().map(Into::into),
     }
 }
 

@@ -1,0 +1,113 @@
+//! Ensembles that stop when the answer is precise enough (api.md `POST /v1/scene`,
+//! `monte_carlo.target`): the runs are taken in prefixes of fixed sizes — [`FIRST_CHECK`] · 2^k,
+//! up to `monte_carlo.runs` — and after each the named statistic's Wilson 95 % interval is
+//! measured; the ensemble stops at the first prefix where its half-width is at most the one
+//! asked for. The prefixes do not depend on the machine or the thread count (run i is seeded by
+//! (seed, i) whatever the split), so the answer is the ensemble of that many runs, bit for bit.
+
+use super::{SceneCase, SceneRun};
+use crate::physics::stats::interval::{Z_95, wilson_interval};
+
+/// Runs of the first prefix checked.
+pub const FIRST_CHECK: u64 = 1000;
+
+/// The statistic a target is set on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TargetStatistic {
+    /// The probability that a run overloads some support.
+    AnyExceeded,
+    /// Every support entry's exceedance probability (some design limit, or the capacity).
+    EverySupport,
+}
+
+/// When an ensemble may stop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SceneTarget {
+    /// The statistic.
+    pub statistic: TargetStatistic,
+    /// Largest half-width of its Wilson 95 % interval (the widest over the supports for
+    /// [`TargetStatistic::EverySupport`]).
+    pub half_width: f64,
+}
+
+/// What the target gave.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TargetOutcome {
+    /// The target asked for.
+    pub target: SceneTarget,
+    /// The half-width reached with the runs used.
+    pub half_width: f64,
+    /// The half-width is within the target.
+    pub met: bool,
+    /// Runs used.
+    pub runs: u64,
+    /// Runs allowed (`monte_carlo.runs`).
+    pub max_runs: u64,
+    /// The prefixes checked, in order.
+    pub checked_at: Vec<u64>,
+}
+
+/// The prefix sizes checked for an ensemble of at most `max` runs: 1000, 2000, 4000, … and
+/// `max` last.
+#[must_use]
+pub fn checkpoints(max: u64) -> Vec<u64> {
+    let mut out = Vec::new();
+    let mut n = FIRST_CHECK;
+    while n < max {
+        out.push(n);
+        n = n.saturating_mul(2);
+    }
+    out.push(max);
+    out
+}
+
+/// Half-width of the Wilson 95 % interval of k successes in n trials.
+fn half_width(k: u64, n: u64) -> f64 {
+    wilson_interval(k as f64, n as f64, Z_95).map_or(0.5, |[l, u]| 0.5 * (u - l))
+}
+
+/// The half-width of `target`'s statistic over `runs` of `case`.
+#[must_use]
+pub fn measured_half_width(case: &SceneCase, target: &SceneTarget, runs: &[SceneRun]) -> f64 {
+    let n = runs.len() as u64;
+    let over = |r: &SceneRun| r.exceeded.iter().any(|&x| x);
+    match target.statistic {
+        TargetStatistic::AnyExceeded => {
+            half_width(runs.iter().filter(|r| over(r)).count() as u64, n)
+        }
+        TargetStatistic::EverySupport => {
+            let mut k = vec![0u64; case.supports.len()];
+            for r in runs {
+                if let Some(e) = r.summary.support
+                    && over(r)
+                {
+                    k[e] += 1;
+                }
+            }
+            k.iter().map(|&k| half_width(k, n)).fold(0.0, f64::max)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prefixes_double_from_a_thousand_and_end_at_the_maximum() {
+        assert_eq!(checkpoints(200), [200]);
+        assert_eq!(checkpoints(1000), [1000]);
+        assert_eq!(checkpoints(5000), [1000, 2000, 4000, 5000]);
+        assert_eq!(checkpoints(8000), [1000, 2000, 4000, 8000]);
+    }
+
+    #[test]
+    fn the_half_width_is_the_wilson_intervals() {
+        // 0 of 1000: [0, z²/(n + z²)]
+        let z2 = Z_95 * Z_95;
+        assert!((half_width(0, 1000) - 0.5 * z2 / (1000.0 + z2)).abs() < 1e-15);
+        // symmetric at one half, about z/(2√n) wide
+        let h = half_width(5000, 10_000);
+        assert!((h - Z_95 * 0.5 / 100.0).abs() < 1e-4, "{h}");
+    }
+}
