@@ -190,7 +190,17 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             "/release_rate/observed_period_years",
             json!({"monte_carlo": {"runs": 5}, "release_rate": {"observed_events": 643}}),
         ),
-        // a target names its statistic
+        // a target names its statistic; a migration's, its percentile and width
+        (
+            "/v1/migration",
+            "/monte_carlo/target/percentile",
+            json!({"monte_carlo": {"runs": 5, "target": {"relative_half_width": 0.1}}}),
+        ),
+        (
+            "/v1/migration",
+            "/monte_carlo/target/relative_half_width",
+            json!({"monte_carlo": {"runs": 5, "target": {"percentile": 0.5}}}),
+        ),
         (
             "/v1/scene",
             "/monte_carlo/target/half_width",

@@ -10,6 +10,7 @@ use crate::physics::scene::{
     self, EnsembleReport, SceneCase, SceneError, SceneRecords, SceneReport, SceneRun,
     SceneStatistics,
 };
+use crate::physics::stats::precision;
 
 /// The scene calculation.
 #[derive(Debug, Clone, Copy)]
@@ -85,7 +86,7 @@ impl Ensemble for Scene {
     }
 }
 
-/// The runs of `case`'s own method in prefixes ([`target::checkpoints`]) until `t`'s statistic
+/// The runs of `case`'s own method in prefixes ([`precision::checkpoints`]) until `t`'s statistic
 /// is precise enough or every run of `mc` ran, and what the target gave.
 ///
 /// # Errors
@@ -103,7 +104,7 @@ pub fn until_precise(
     let mut runs: Vec<SceneRun> = Vec::new();
     let mut checked_at = Vec::new();
     let mut half_width = 0.5;
-    for n in target::checkpoints(mc.runs) {
+    for n in precision::checkpoints(mc.runs) {
         let (more, _) = scene::ensemble_part(&own, mc, runs.len() as u64..n, control)?;
         runs.extend(more);
         checked_at.push(n);

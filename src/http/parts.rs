@@ -52,16 +52,28 @@ fn refuse_lines(req: &SceneRequest) -> Result<(), ApiError> {
             );
         }
     }
-    if let Some(t) = req.monte_carlo.as_ref().and_then(|m| m.target) {
+    refuse_target(
+        &mut ck,
+        req.monte_carlo
+            .as_ref()
+            .and_then(|m| m.target)
+            .map(serde_json::to_value),
+    );
+    ck.finish()
+}
+
+/// Records the refusal of a sharded ensemble with a target (given as its JSON value): the runs
+/// are split between the shards before any ran, so none can stop early.
+fn refuse_target(ck: &mut Checker, target: Option<serde_json::Result<Value>>) {
+    if let Some(t) = target {
         ck.push(
             "/monte_carlo/target",
-            serde_json::to_value(t).unwrap_or_default(),
+            t.unwrap_or_default(),
             "a sharded computation splits all the runs between its shards before any runs: it \
              cannot stop early; leave the target out (monte_carlo.runs is then the runs), or send \
              the request to the service",
         );
     }
-    ck.finish()
 }
 
 /// The service's wire: requests and answers as the endpoints read and write them.
@@ -89,6 +101,15 @@ impl Wire for HttpWire {
         let v = parse_json(request)?;
         let mut req: MigrationRequest = from_value(&v)?;
         let case = req.resolve(config)?;
+        let mut ck = Checker::new();
+        refuse_target(
+            &mut ck,
+            req.monte_carlo
+                .as_ref()
+                .and_then(|m| m.target)
+                .map(serde_json::to_value),
+        );
+        ck.finish()?;
         let inputs = serde_json::to_vec(&req).map_err(ApiError::internal)?;
         Ok((case, req, inputs))
     }

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
 
 use super::common::Checker;
+use crate::physics::migration::{ArrivalTarget, ArrivalTargetOutcome};
 use crate::physics::scene::target::{SceneTarget, TargetOutcome, TargetStatistic};
 
 /// The statistic a target is set on.
@@ -74,6 +75,72 @@ impl From<&TargetOutcome> for TargetOutcomeDto {
                 half_width: o.target.half_width,
             },
             half_width: o.half_width,
+            met: o.met,
+            runs_used: o.runs,
+            max_runs: o.max_runs,
+            checked_at_runs: o.checked_at.clone(),
+        }
+    }
+}
+
+/// Stop a migration ensemble at the first of 1000, 2000, 4000, … runs (and `runs` last) where
+/// the distribution-free 95 % interval of the arrival speed's `percentile` (over the runs that
+/// reached the lower end) has a half-width of at most `relative_half_width` of its value.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ArrivalTargetDto {
+    /// The percentile p of the arrival speed, in [0.01, 0.99].
+    #[schema(minimum = 0.01, maximum = 0.99, example = 0.95)]
+    pub percentile: f64,
+    /// Largest half-width of its 95 % interval relative to its value, in (0, 1].
+    #[schema(exclusive_minimum = 0.0, maximum = 1.0, example = 0.02)]
+    pub relative_half_width: f64,
+}
+
+impl ArrivalTargetDto {
+    /// The target, its fields checked (`at`: the object's pointer).
+    pub fn resolve(&self, at: &str, ck: &mut Checker) -> Option<ArrivalTarget> {
+        let ok = ck.closed(&format!("{at}/percentile"), self.percentile, 0.01, 0.99, "")
+            & ck.open_closed(
+                &format!("{at}/relative_half_width"),
+                self.relative_half_width,
+                0.0,
+                1.0,
+                "",
+            );
+        ok.then_some(ArrivalTarget {
+            percentile: self.percentile,
+            relative_half_width: self.relative_half_width,
+        })
+    }
+}
+
+/// What a migration ensemble's target gave.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct ArrivalTargetOutcomeDto {
+    /// The target asked for.
+    pub target: ArrivalTargetDto,
+    /// The relative half-width reached with the runs used (null: too few runs reached the
+    /// lower end for the interval, or the percentile is 0).
+    pub relative_half_width: Option<f64>,
+    /// True when it is within the target (false: every allowed run ran first).
+    pub met: bool,
+    /// Runs used (the statistics are over these).
+    pub runs_used: u64,
+    /// Runs allowed (`monte_carlo.runs`).
+    pub max_runs: u64,
+    /// The run counts at which the target was checked, in order (1000 · 2^k, and `runs`).
+    pub checked_at_runs: Vec<u64>,
+}
+
+impl From<&ArrivalTargetOutcome> for ArrivalTargetOutcomeDto {
+    fn from(o: &ArrivalTargetOutcome) -> Self {
+        Self {
+            target: ArrivalTargetDto {
+                percentile: o.target.percentile,
+                relative_half_width: o.target.relative_half_width,
+            },
+            relative_half_width: o.relative_half_width,
             met: o.met,
             runs_used: o.runs,
             max_runs: o.max_runs,

@@ -230,6 +230,37 @@ pub struct MigrationCase {
     /// Lines across the face, sorted by along-dip position: collectors and barriers
     /// (api.md `POST /v1/scene`; default none; see [`super::lines`]).
     pub lines: Vec<Line>,
+    /// Stop the ensemble when a percentile of the arrival speed is precise enough (default
+    /// none: every run of `monte_carlo`).
+    pub target: Option<ArrivalTarget>,
+}
+
+/// When a migration ensemble may stop (api.md `monte_carlo.target`): checked at 1000 · 2^k
+/// runs and at `monte_carlo.runs` ([`checkpoints`](crate::physics::stats::precision::checkpoints)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArrivalTarget {
+    /// The percentile p of the arrival speed, in (0, 1).
+    pub percentile: f64,
+    /// Largest half-width of its distribution-free 95 % interval relative to its value.
+    pub relative_half_width: f64,
+}
+
+/// What a migration ensemble's target gave.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArrivalTargetOutcome {
+    /// The target asked for.
+    pub target: ArrivalTarget,
+    /// The relative half-width reached with the runs used (None: too few runs reached the
+    /// lower end for the interval, or the percentile is 0).
+    pub relative_half_width: Option<f64>,
+    /// The relative half-width is within the target.
+    pub met: bool,
+    /// Runs used.
+    pub runs: u64,
+    /// Runs allowed (`monte_carlo.runs`).
+    pub max_runs: u64,
+    /// The run counts checked, in order.
+    pub checked_at: Vec<u64>,
 }
 
 /// A support that ends a run when the rock reaches it (api.md `POST /v1/scene`).
@@ -293,6 +324,7 @@ impl Default for MigrationCase {
             max_steps_per_run: 10_000_000,
             supports: Vec::new(),
             lines: Vec::new(),
+            target: None,
         }
     }
 }

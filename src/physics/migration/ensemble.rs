@@ -426,6 +426,7 @@ pub(super) fn statistics_of<R: RunRecords + ?Sized>(
         impact_count,
         runout,
         max_bounce_height,
+        target: None,
     }))
 }
 

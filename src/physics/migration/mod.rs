@@ -51,6 +51,7 @@ use self::lumped_mass::{Recording, simulate};
 use super::control::Control;
 use super::error::{Param, PhysicsError, PhysicsResult};
 use super::material::RockShape;
+use super::stats::precision;
 
 /// Runs a migration case: the nominal trajectory and, when asked, the Monte Carlo ensemble.
 ///
@@ -76,6 +77,9 @@ use super::material::RockShape;
 /// assert!((r.arrival.speed - 36.35233409073599).abs() < 1e-8);
 /// ```
 pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationResult> {
+    if let (Some(mc), Some(t)) = (&case.monte_carlo, &case.target) {
+        return run_until_precise(case, mc, t, control);
+    }
     let n = case.monte_carlo.map_or(0, |mc| mc.runs);
     let grid = case.output.maps.as_ref().filter(|_| n > 0);
     let (r, runs, cells) = run_part_mapped(case, 0..n, true, grid, control)?;
@@ -91,6 +95,66 @@ pub fn run(case: &MigrationCase, control: &Control) -> PhysicsResult<MigrationRe
             control.check()?;
             r.maps = Some(maps::build_maps(g, &cells));
         }
+    }
+    Ok(r)
+}
+
+/// [`run`] with a target: the runs in prefixes ([`precision::checkpoints`]) until the arrival
+/// speed's percentile is precise enough or every run ran; the answer is that of the runs used
+/// (bit for bit the answer of that many runs), with what the target gave.
+fn run_until_precise(
+    case: &MigrationCase,
+    mc: &MonteCarlo,
+    t: &ArrivalTarget,
+    control: &Control,
+) -> PhysicsResult<MigrationResult> {
+    let (r, _, _) = run_part_mapped(case, 0..0, true, None, control)?;
+    let mut r =
+        r.ok_or_else(|| PhysicsError::Numerical("the nominal run was not returned".into()))?;
+    let mut runs: Vec<RunSummary> = Vec::new();
+    let mut checked_at = Vec::new();
+    let mut width = None;
+    for n in precision::checkpoints(mc.runs) {
+        let (_, more, _) = run_part_mapped(case, runs.len() as u64..n, false, None, control)?;
+        runs.extend(more);
+        checked_at.push(n);
+        let mut speeds: Vec<f64> = runs
+            .iter()
+            .filter(|s| s.stop_reason == StopReason::LowerEnd)
+            .map(|s| s.speed)
+            .collect();
+        speeds.sort_by(f64::total_cmp);
+        width = precision::percentile_relative_half_width(&speeds, t.percentile);
+        if width.is_some_and(|w| w <= t.relative_half_width) {
+            break;
+        }
+    }
+    let used = MonteCarlo {
+        runs: runs.len() as u64,
+        ..*mc
+    };
+    let records = Polled {
+        runs: &runs,
+        control,
+    };
+    attach_ensemble(&mut r, &used, case.output.runs_csv, &records)?;
+    if let Some(g) = &case.output.maps {
+        // the maps of the runs used, their paths run again
+        let mut c = case.clone();
+        c.monte_carlo = Some(used);
+        let (_, _, cells) = run_part_mapped(&c, 0..used.runs, false, Some(g), control)?;
+        control.check()?;
+        r.maps = Some(maps::build_maps(g, &cells));
+    }
+    if let Some(st) = r.statistics.as_mut() {
+        st.target = Some(ArrivalTargetOutcome {
+            target: *t,
+            relative_half_width: width,
+            met: width.is_some_and(|w| w <= t.relative_half_width),
+            runs: used.runs,
+            max_runs: mc.runs,
+            checked_at,
+        });
     }
     Ok(r)
 }

@@ -183,6 +183,8 @@ pub struct Statistics {
     pub runout: Summary,
     /// Largest bounce height over all runs, m.
     pub max_bounce_height: Summary,
+    /// What the ensemble's target gave (None: no target).
+    pub target: Option<super::ArrivalTargetOutcome>,
 }
 
 /// A named warning (api.md `warnings`): the one physics warning type.

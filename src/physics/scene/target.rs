@@ -1,15 +1,12 @@
 //! Ensembles that stop when the answer is precise enough (api.md `POST /v1/scene`,
-//! `monte_carlo.target`): the runs are taken in prefixes of fixed sizes — [`FIRST_CHECK`] · 2^k,
-//! up to `monte_carlo.runs` — and after each the named statistic's Wilson 95 % interval is
+//! `monte_carlo.target`): the runs are taken in prefixes of fixed sizes — 1000 · 2^k, up to
+//! `monte_carlo.runs` ([`checkpoints`](crate::physics::stats::precision::checkpoints)) — and after each the named statistic's Wilson 95 % interval is
 //! measured; the ensemble stops at the first prefix where its half-width is at most the one
 //! asked for. The prefixes do not depend on the machine or the thread count (run i is seeded by
 //! (seed, i) whatever the split), so the answer is the ensemble of that many runs, bit for bit.
 
 use super::{SceneCase, SceneRun};
-use crate::physics::stats::interval::{Z_95, wilson_interval};
-
-/// Runs of the first prefix checked.
-pub const FIRST_CHECK: u64 = 1000;
+use crate::physics::stats::precision::probability_half_width;
 
 /// The statistic a target is set on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,23 +44,9 @@ pub struct TargetOutcome {
     pub checked_at: Vec<u64>,
 }
 
-/// The prefix sizes checked for an ensemble of at most `max` runs: 1000, 2000, 4000, … and
-/// `max` last.
-#[must_use]
-pub fn checkpoints(max: u64) -> Vec<u64> {
-    let mut out = Vec::new();
-    let mut n = FIRST_CHECK;
-    while n < max {
-        out.push(n);
-        n = n.saturating_mul(2);
-    }
-    out.push(max);
-    out
-}
-
-/// Half-width of the Wilson 95 % interval of k successes in n trials.
+/// Half-width of the Wilson 95 % interval of k successes in n trials (0.5 without trials).
 fn half_width(k: u64, n: u64) -> f64 {
-    wilson_interval(k as f64, n as f64, Z_95).map_or(0.5, |[l, u]| 0.5 * (u - l))
+    probability_half_width(k, n).unwrap_or(0.5)
 }
 
 /// The half-width of `target`'s statistic over `runs` of `case`.
@@ -92,14 +75,7 @@ pub fn measured_half_width(case: &SceneCase, target: &SceneTarget, runs: &[Scene
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn prefixes_double_from_a_thousand_and_end_at_the_maximum() {
-        assert_eq!(checkpoints(200), [200]);
-        assert_eq!(checkpoints(1000), [1000]);
-        assert_eq!(checkpoints(5000), [1000, 2000, 4000, 5000]);
-        assert_eq!(checkpoints(8000), [1000, 2000, 4000, 8000]);
-    }
+    use crate::physics::stats::interval::Z_95;
 
     #[test]
     fn the_half_width_is_the_wilson_intervals() {
@@ -109,5 +85,6 @@ mod tests {
         // symmetric at one half, about z/(2√n) wide
         let h = half_width(5000, 10_000);
         assert!((h - Z_95 * 0.5 / 100.0).abs() < 1e-4, "{h}");
+        assert_eq!(half_width(0, 0), 0.5);
     }
 }

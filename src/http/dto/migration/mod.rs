@@ -742,6 +742,7 @@ macro_rules! monte_carlo_dto {
         }
 
         impl From<&$name> for MonteCarloDto {
+            #[allow(clippy::needless_update)]
             fn from(m: &$name) -> Self {
                 Self {
                     runs: m.runs,
@@ -750,6 +751,8 @@ macro_rules! monte_carlo_dto {
                     restitution_tangential: m.restitution_tangential,
                     friction_coefficient: m.friction_coefficient,
                     critical_damping_ratio: m.critical_damping_ratio,
+                    // a scene's own fields (its target among them) stay with the scene
+                    ..MonteCarloDto::default()
                 }
             }
         }
@@ -759,7 +762,12 @@ pub(crate) use monte_carlo_dto;
 
 monte_carlo_dto! {
     /// A seeded Monte Carlo ensemble.
-    pub struct MonteCarloDto {}
+    pub struct MonteCarloDto {
+        /// Stop when a percentile of the arrival speed is precise enough: checked at 1000,
+        /// 2000, 4000, … runs and at `runs`, which is then the most runs allowed (null: run
+        /// every run).
+        pub target: Option<super::target::ArrivalTargetDto>,
+    }
 }
 
 /// What to report besides the arrival.
@@ -874,6 +882,11 @@ impl MigrationRequest {
             );
         }
         let maps = self.resolve_maps(config, layout, monte_carlo.as_ref(), &mut ck);
+        let target = self
+            .monte_carlo
+            .as_ref()
+            .and_then(|m| m.target.as_ref())
+            .and_then(|t| t.resolve("/monte_carlo/target", &mut ck));
         ck.finish()?;
         let f = &self.face;
         let rigid_block = RigidBlockOptions {
@@ -935,6 +948,7 @@ impl MigrationRequest {
                 max_samples: config.max_samples as usize,
                 maps,
             },
+            target,
             ..MigrationCase::default()
         })
     }

@@ -183,6 +183,9 @@ pub struct StatisticsDto {
     pub runout_m: SummaryDto,
     /// Largest bounce height over all runs, m.
     pub max_bounce_height_m: SummaryDto,
+    /// What `monte_carlo.target` gave: the runs used, whether the target was met.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target: Option<crate::http::dto::target::ArrivalTargetOutcomeDto>,
 }
 
 /// What the rigid-block method reports besides the common outputs.
@@ -447,6 +450,7 @@ impl MigrationResponse {
                 impact_count: (&s.impact_count).into(),
                 runout_m: (&s.runout).into(),
                 max_bounce_height_m: (&s.max_bounce_height).into(),
+                target: s.target.as_ref().map(Into::into),
             }),
             runs_csv: r.runs.as_deref().map(runs_csv),
             rigid_block: r.rigid_block.map(|b| RigidBlockOutDto {
