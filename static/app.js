@@ -646,6 +646,13 @@ function buildReport() {
     const panel = document.querySelector(`[data-panel="${tab}"]`);
     const checks = [...panel.querySelectorAll('.checks-card table')].filter((t) => !t.closest('[hidden]'));
     if (checks.length) parts.push(h('h2', {}, 'Checks'), ...checks.map((t) => t.cloneNode(true)));
+    // result cards marked for the report (the Scene's barriers and collectors, with and without protection)
+    for (const card of panel.querySelectorAll('.results .card[data-report]')) {
+      if (card.closest('[hidden]')) continue;
+      const table = card.querySelector('table');
+      const note = card.querySelector('.note')?.textContent.trim();
+      parts.push(h('h2', {}, card.querySelector('h3')?.textContent.trim() ?? ''), ...(note ? [h('p', {}, note)] : []), ...(table ? [table.cloneNode(true)] : []));
+    }
     const figs = [];
     for (const el of panel.querySelectorAll('.results .plot, .results canvas.floor-plan, .results .view3d canvas')) {
       if (el.closest('[hidden]')) continue;
