@@ -75,6 +75,7 @@ function rowEditor(form, kind) {
   const renumber = () => [...list.children].forEach((row, i) => {
     row.querySelector('.device-title').textContent = `${NOUN[kind][0].toUpperCase()}${NOUN[kind].slice(1)} ${i + 1}`;
     row.querySelector('.device-remove').setAttribute('aria-label', `remove ${NOUN[kind]} ${i + 1}`);
+    row.querySelectorAll('.device-name').forEach((span) => { span.textContent = `${NOUN[kind][0].toUpperCase()}${NOUN[kind].slice(1)} ${i + 1}: `; });
     row.querySelectorAll('input').forEach((input, k) => { input.dataset.target = pointerOf(kind, i, cols[k].key); });
   });
   const addRow = (values = FIRST[kind]) => {
@@ -86,7 +87,9 @@ function rowEditor(form, kind) {
       });
       if (!c.exp) delete input.dataset.exp;
       input.addEventListener('input', save);
-      return h('div', { class: 'field field-number' }, h('label', { for: id }, c.label),
+      // the row's name is in the label too (hidden on screen, where the row's title shows it), so a
+      // problem's summary says which row it means
+      return h('div', { class: 'field field-number' }, h('label', { for: id }, h('span', { class: 'visually-hidden device-name' }), c.label),
         h('div', { class: 'control' }, input, h('span', { class: 'unit' }, c.unit)),
         h('p', { class: 'field-error', hidden: true, role: 'alert' }));
     });

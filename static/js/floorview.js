@@ -387,7 +387,13 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     ctx.fillStyle = '#7a4a08';
     ctx.font = '11px system-ui, sans-serif';
     ctx.textAlign = 'center';
-    ctx.fillText(`release ${fmt(z.from, 3)}–${fmt(z.to, 3)} m${release.zones.length > 1 ? `, weight ${fmt(z.weight, 3)}` : ''}`, px(mx), M.t + 12);
+    // the longest label that fits the zone's width (narrow screens: the legend names them all)
+    const [x0] = model.face2view(z.from, 0);
+    const [x1] = model.face2view(z.to, 0);
+    const room = Math.abs(px(x1) - px(x0)) - 4;
+    const label = [`release ${fmt(z.from, 3)}–${fmt(z.to, 3)} m${release.zones.length > 1 ? `, weight ${fmt(z.weight, 3)}` : ''}`,
+      `release ${fmt(z.from, 3)}–${fmt(z.to, 3)} m`, `${fmt(z.from, 3)}–${fmt(z.to, 3)} m`].find((t) => ctx.measureText(t).width <= room);
+    if (label) ctx.fillText(label, px(mx), M.t + 12);
   }
   if (release.point) {
     const [x, y] = model.face2view(release.point.s, release.point.across);
@@ -418,7 +424,7 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
   }
   // Barriers as solid lines across their range (or the whole face), labelled with height and
   // rating; collectors dashed.
-  for (const d of hideDevices ? [] : devices) {
+  for (const [k, d] of (hideDevices ? [] : devices).entries()) {
     const [a, b] = d.across ?? [yr[0] - 1e3, yr[1] + 1e3];
     const [ax, ay] = model.face2view(d.s, a);
     const [bx, by] = model.face2view(d.s, b);
@@ -430,14 +436,19 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     ctx.lineTo(px(bx), py(by));
     ctx.stroke();
     ctx.setLineDash([]);
-    // the label beside the line's lower end, inside the plot (the release zones are named at the top), on a pale box
-    const base = Math.min(M.t + plotH - 5, Math.max(py(ay), py(by)) - 5) - (d.kind === 'barrier' ? 0 : 16);
-    const text = deviceLabel(d);
+    // the labels one row each from the plot's bottom (the release zones are named at the top), beside
+    // their line (left of it when the right has no room), on a pale box
+    const base = M.t + plotH - 5 - 16 * k;
     ctx.font = '11px system-ui, sans-serif';
     ctx.textAlign = 'left';
-    const x = (px(ax) + px(bx)) / 2 + 5;
+    // a narrow plot names the line only (the legend gives its height and rating)
+    const full = deviceLabel(d);
+    const text = ctx.measureText(full).width <= plotW / 2 ? full : `${d.kind} ${d.index}`;
+    const w = ctx.measureText(text).width;
+    const lx = (px(ax) + px(bx)) / 2;
+    const x = Math.max(M.l + 2, lx + 5 + w <= M.l + plotW ? lx + 5 : lx - 5 - w);
     ctx.fillStyle = 'rgba(255, 255, 255, 0.8)';
-    ctx.fillRect(x - 2, base - 11, ctx.measureText(text).width + 4, 14);
+    ctx.fillRect(x - 2, base - 11, w + 4, 14);
     ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
     ctx.fillText(text, x, base);
   }

@@ -160,7 +160,7 @@ function drawDeviceLines(u, devices) {
   ctx.rect(u.bbox.left, u.bbox.top, u.bbox.width, u.bbox.height);
   ctx.clip();
   const [ylo, yhi] = [u.scales.y.min, u.scales.y.max];
-  for (const d of devices) {
+  for (const [k, d] of devices.entries()) {
     const x = u.valToPos(d.s, 'x', true);
     const [a, b] = d.across ?? [ylo, yhi];
     ctx.strokeStyle = ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
@@ -171,7 +171,16 @@ function drawDeviceLines(u, devices) {
     ctx.lineTo(x, u.valToPos(Math.min(b, yhi), 'y', true));
     ctx.stroke();
     ctx.font = `${11 * r}px system-ui, sans-serif`;
-    ctx.fillText(deviceLabel(d), x + 4 * r, u.bbox.top + 12 * r + (d.kind === 'barrier' ? 0 : 13 * r));
+    ctx.textAlign = 'left';
+    ctx.textBaseline = 'alphabetic';
+    const text = deviceLabel(d);
+    const w = ctx.measureText(text).width;
+    const tx = x + 4 * r + w <= u.bbox.left + u.bbox.width ? x + 4 * r : x - 4 * r - w;
+    const ty = u.bbox.top + (12 + 15 * k) * r;
+    ctx.fillStyle = 'rgba(255, 255, 255, 0.85)';
+    ctx.fillRect(tx - 2 * r, ty - 11 * r, w + 4 * r, 14 * r);
+    ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
+    ctx.fillText(text, tx, ty);
   }
   ctx.restore();
 }
@@ -437,19 +446,20 @@ export function initScene() {
       + 'common random numbers, so each run meets the same rock, release and restitutions and the difference is the protection\'s, not chance. '
       + `P(exceed) is each support's largest over the design limits, with its Wilson 95 % interval. Any support overloaded: ${fmt(bare.statistics.any_exceeded.probability * 100, 3)} % without, `
       + `${fmt(st.any_exceeded.probability * 100, 3)} % with.`;
+    const quietWords = (shown, all, quiet) => ` Shown: the ${shown} of ${all} support entries some run overloaded, with or without protection, the largest drop first`
+      + `${quiet ? `; the other ${quiet} had no overloading run either way (all are in the CSV)` : ''}.`;
     const pc = (p, ci) => `${fmt(p * 100, 3)} [${fmt(ci[0] * 100, 2)}–${fmt(ci[1] * 100, 2)}]`;
     const rows = withP.map((e) => ({ e, b: without.get(`${e.support}.${e.column_index ?? 0}`) }));
     // shown: the supports some run overloaded with or without protection, the largest change first; the CSV has them all
     const shown = rows.filter(({ e, b }) => e.risk > 0 || (b?.risk ?? 0) > 0)
       .sort((x, y) => ((y.b?.risk ?? 0) - y.e.risk) - ((x.b?.risk ?? 0) - x.e.risk) || (y.b?.risk ?? 0) - (x.b?.risk ?? 0) || x.e.support - y.e.support);
     const quiet = rows.length - shown.length;
+    document.getElementById('scene-unprotected-note').append(quietWords(shown.length, rows.length, quiet));
     el.csv = () => [['support', 'column_index', 'along_dip_m', 'p_exceed_without', 'p_exceed_without_ci95_low', 'p_exceed_without_ci95_high',
       'p_exceed_with', 'p_exceed_with_ci95_low', 'p_exceed_with_ci95_high'],
     ...rows.map(({ e, b }) => [e.support, e.column_index ?? 0, csvNumber(e.along_dip_m), csvNumber(b?.risk), csvNumber(b?.riskCi[0]), csvNumber(b?.riskCi[1]),
       csvNumber(e.risk), csvNumber(e.riskCi[0]), csvNumber(e.riskCi[1])])];
     el.replaceChildren(
-      h('caption', { class: 'table-count' }, `${shown.length} of ${rows.length} support entries: those some run overloaded, with or without protection, the largest drop first`
-        + `${quiet ? `; the other ${quiet} had no overloading run either way (all in the CSV)` : ''}.`),
       h('thead', {}, h('tr', {}, ['Support', 'Along the dip (m)', 'P(exceed) without protection (%) [95 % CI]', 'P(exceed) with protection (%) [95 % CI]', 'Change (points)']
         .map((c) => h('th', { scope: 'col' }, c)))),
       h('tbody', {}, shown.map(({ e, b }) => h('tr', { class: e.verdict === 'exceeded' ? 'verdict-exceeded' : '', dataset: { support: `${e.support}.${e.column_index ?? 0}` } },
@@ -957,12 +967,16 @@ export function initScene() {
     const devices = requestDevices(request ?? data.inputs);
     const deviceMarks = devices.map((d) => ({ x: d.s, color: d.kind === 'barrier' ? BARRIER : COLLECTOR, dash: d.kind === 'barrier' ? [] : [6, 4], width: 2.5, label: deviceLabel(d) }));
     linePlot(plots.side, {
-      x: { label: `along the dip (m); supports as vertical lines${devices.length ? ', barriers brown, collectors dashed violet' : ''}`, values: joined[0] },
+      x: { label: 'along the dip (m); supports as vertical lines', values: joined[0] },
       y: { label: 'elevation (m)' },
       series,
       vlines: [...marks, ...deviceMarks],
       height: 240,
     });
+    const sideNote = document.getElementById('scene-side-note');
+    sideNote.hidden = !devices.length;
+    sideNote.textContent = devices.length ? `Lines across the face: ${devices.map((d) => `${deviceLabel(d)} at ${fmt(d.s, 4)} m`).join('; ')} `
+      + '(barriers solid brown, collectors dashed violet; also on the plan view beside and on the floor below).' : '';
     if (tr) plots.side.csv = () => [['along_dip_m', 'height_m'], ...tr.along_dip_m.map((s, i) => [s, tr.height_m[i]])];
 
     // Plan: along the dip against across the face; columns as points, spanning supports as lines.

@@ -1043,8 +1043,8 @@ async function devicePixels(page) {
         let hit = false;
         for (const l of lines) {
           if (Math.abs(cx - l.x) <= 3 && cy >= l.lo - 3 && cy <= l.hi + 3) { l.on += 1; hit = true; }
-          // the label beside the line's lower end
-          else if (cx >= l.x && cx <= l.x + 200 && cy >= l.hi - 36 && cy <= l.hi) hit = true;
+          // the labels beside the lines, one row each from the plot's bottom
+          else if (Math.abs(cx - l.x) <= 200 && cy >= r.t + r.h - 16 * lines.length - 8) hit = true;
         }
         if (hit) near += 1; else elsewhere += 1;
       }
@@ -1183,6 +1183,8 @@ async function protectionLinesSection(page, context) {
     const labels = await legendLabels(page, '#scene-support-plot');
     assert(labels.some((l) => /P without protection \(same runs\)/.test(l)), `risk plot series: ${labels.join(' | ')}`);
     await elementShot(page.locator('#scene-unprotected-card'), 'scene-unprotected.png');
+    await elementShot(page.locator('.card:has(#scene-support-plot)'), 'scene-risk-protection.png');
+    await elementShot(page.locator('.result-grid:has(#scene-side-plot)'), 'scene-side-plan-barriers.png');
     await elementShot(page.locator('#scene-devices-card'), 'scene-devices.png');
   });
 
@@ -1255,7 +1257,10 @@ async function protectionLinesSection(page, context) {
     await done.done;
     await phone.locator('#scene-unprotected tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
     await noHorizontalScroll(phone, 'scene with barriers');
-    await screenshot(phone, 'phone-scene-barriers.png');
+    await elementShot(phone.locator('fieldset[data-group="/barriers"]'), 'phone-scene-barrier-rows.png');
+    await elementShot(phone.locator('#scene-devices-card'), 'phone-scene-devices.png');
+    await elementShot(phone.locator('#scene-unprotected-card'), 'phone-scene-unprotected.png');
+    await elementShot(phone.locator('#scene-floor-plan'), 'phone-scene-floor-barriers.png');
     await phone.close();
   });
 }
