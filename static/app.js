@@ -590,6 +590,7 @@ const INPUT_GROUPS = [
   ['/rigid_block', 'Rigid-block settings'], ['/monte_carlo', 'Ensemble: runs, seed and ranges'], ['/release_zones', 'Release zones'],
   ['/support_rows', 'Supports'], ['/supports', 'Supports'], ['/column', 'Column'], ['/contact', 'Contact'], ['/galerkin', 'Galerkin'],
   ['/design_limits', 'Design limits'], ['/column_model', 'Column model'], ['/impact_velocity_m_s', 'Impact velocity'],
+  ['/guards', 'Guards on the columns'], ['/barriers', 'Barriers across the face (m, J)'], ['/collectors', 'Collectors across the face (m)'],
 ];
 
 /**

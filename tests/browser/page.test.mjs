@@ -1193,7 +1193,7 @@ async function protectionLinesSection(page, context) {
     await page.locator('#case-print').click();
     await page.emulateMedia({ media: 'print' });
     const text = await page.locator('#report').textContent();
-    for (const want of ['/barriers/0/energy_rating_j', '/collectors/0/along_dip_m', 'Barriers and collectors', 'With and without protection, per support', 'Broken through (%) [95 % CI]']) {
+    for (const want of ['Barriers across the face (m, J)', '/barriers/0/energy_rating_j', '/collectors/0/along_dip_m', 'Barriers and collectors', 'With and without protection, per support', 'Broken through (%) [95 % CI]']) {
       assert(text.includes(want), `the report lacks "${want}"`);
     }
     await screenshot(page, 'report-barriers.png');
