@@ -506,23 +506,25 @@ export function initScene() {
     const across = (d) => (d.across_m ? `${fmt(d.across_m[0], 4)} to ${fmt(d.across_m[1], 4)}` : 'whole face');
     const barriers = list.some(({ kind }) => kind === 'barrier');
     el.append(
-      h('thead', {}, h('tr', {}, ['Line', 'Along the dip (m)', 'Across (m)', ...(barriers ? ['Height (m)', 'Rating (kJ)'] : []), 'Reached (%) [95 % CI]',
+      // the line and what it saw first: on a phone they show without scrolling sideways
+      h('thead', {}, h('tr', {}, ['Line', 'Reached (%) [95 % CI]',
         ...(barriers ? ['Stopped (%) [95 % CI]', 'Broken through (%) [95 % CI]', 'Overtopped (%) [95 % CI]'] : []),
-        `Speed at p${fmt(p * 100, 3)} (m/s) [95 % CI]`, `Kinetic energy at p${fmt(p * 100, 3)} (kJ) [95 % CI]`, `Passing height at p${fmt(p * 100, 3)} (m) [95 % CI]`]
+        `Speed at p${fmt(p * 100, 3)} (m/s) [95 % CI]`, `Kinetic energy at p${fmt(p * 100, 3)} (kJ) [95 % CI]`, `Passing height at p${fmt(p * 100, 3)} (m) [95 % CI]`,
+        'Along the dip (m)', 'Across (m)', ...(barriers ? ['Height (m)', 'Rating (kJ)'] : [])]
         .map((c) => h('th', { scope: 'col' }, c)))),
       h('tbody', {}, list.map(({ d, kind, i }) => h('tr', { dataset: { device: `${kind}_${i}` } },
-        h('th', { scope: 'row' }, `${kind === 'barrier' ? 'Barrier' : 'Collector'} ${i}`),
-        h('td', { class: 'num' }, fmt(d.along_dip_m, 5)),
-        h('td', { class: 'num' }, across(d)),
-        ...(barriers ? [h('td', { class: 'num' }, d.height_m === undefined ? '—' : fmt(d.height_m, 4)),
-          h('td', { class: 'num' }, d.energy_rating_j === undefined ? '—' : fmt(d.energy_rating_j / 1e3, 4))] : []),
+        h('th', { scope: 'row' }, `${kind === 'barrier' ? 'Barrier' : 'Collector'} ${i} at ${fmt(d.along_dip_m, 4)} m`),
         h('td', { class: 'num', dataset: { out: 'reached' } }, pct(d.reached)),
         ...(barriers ? [h('td', { class: 'num', dataset: { out: 'stopped' } }, pct(d.outcomes?.stopped)),
           h('td', { class: 'num', dataset: { out: 'broken_through' } }, pct(d.outcomes?.broken_through)),
           h('td', { class: 'num', dataset: { out: 'overtopped' } }, pct(d.outcomes?.overtopped))] : []),
         h('td', { class: 'num', dataset: { out: 'speed' } }, dv(d.values?.speed_m_s)),
         h('td', { class: 'num', dataset: { out: 'kinetic_energy' } }, dv(d.values?.kinetic_energy_j, 1e-3)),
-        h('td', { class: 'num', dataset: { out: 'passing_height' } }, dv(d.values?.passing_height_m))))),
+        h('td', { class: 'num', dataset: { out: 'passing_height' } }, dv(d.values?.passing_height_m)),
+        h('td', { class: 'num' }, fmt(d.along_dip_m, 5)),
+        h('td', { class: 'num' }, across(d)),
+        ...(barriers ? [h('td', { class: 'num' }, d.height_m === undefined ? '—' : fmt(d.height_m, 4)),
+          h('td', { class: 'num' }, d.energy_rating_j === undefined ? '—' : fmt(d.energy_rating_j / 1e3, 4))] : [])))),
     );
     // The CSV: SI numbers, each share and design value with its interval as two columns.
     const share = (x) => [csvNumber(x?.probability), csvNumber(x?.ci95?.[0]), csvNumber(x?.ci95?.[1])];
