@@ -590,6 +590,7 @@ const INPUT_GROUPS = [
   ['/rigid_block', 'Rigid-block settings'], ['/monte_carlo', 'Ensemble: runs, seed and ranges'], ['/release_zones', 'Release zones'],
   ['/support_rows', 'Supports'], ['/supports', 'Supports'], ['/column', 'Column'], ['/contact', 'Contact'], ['/galerkin', 'Galerkin'],
   ['/design_limits', 'Design limits'], ['/column_model', 'Column model'], ['/impact_velocity_m_s', 'Impact velocity'],
+  ['/guards', 'Guards on the columns'], ['/barriers', 'Barriers across the face (m, J)'], ['/collectors', 'Collectors across the face (m)'],
 ];
 
 /**
@@ -646,6 +647,13 @@ function buildReport() {
     const panel = document.querySelector(`[data-panel="${tab}"]`);
     const checks = [...panel.querySelectorAll('.checks-card table')].filter((t) => !t.closest('[hidden]'));
     if (checks.length) parts.push(h('h2', {}, 'Checks'), ...checks.map((t) => t.cloneNode(true)));
+    // result cards marked for the report (the Scene's barriers and collectors, with and without protection)
+    for (const card of panel.querySelectorAll('.results .card[data-report]')) {
+      if (card.closest('[hidden]')) continue;
+      const table = card.querySelector('table');
+      const note = card.querySelector('.note')?.textContent.trim();
+      parts.push(h('h2', {}, card.querySelector('h3')?.textContent.trim() ?? ''), ...(note ? [h('p', {}, note)] : []), ...(table ? [table.cloneNode(true)] : []));
+    }
     const figs = [];
     for (const el of panel.querySelectorAll('.results .plot, .results canvas.floor-plan, .results .view3d canvas')) {
       if (el.closest('[hidden]')) continue;

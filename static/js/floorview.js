@@ -7,6 +7,7 @@
 
 import { csvButton, fmt, h } from './format.js';
 import { destroy, joinSeries, linePlot } from './plot.js';
+import { deviceLabel } from './devices.js';
 
 const ELEV = (t) => `hsl(${120 - 90 * t}, 38%, 46%)`;
 /** Speed colour: blue (slow) to red (fast). */
@@ -16,6 +17,8 @@ const SUPPORT_OVER = '#c8423b';
 const SUPPORT_IDLE = '#6b7684';
 const ZONE = '#d88a1c';
 const STOP = '#1c2430';
+const BARRIER = '#7a3e12';
+const COLLECTOR = '#6b3fa0';
 /** Map colour: pale yellow (low) through red to purple (high). */
 const MAPC = (t) => {
   const u = Math.max(0, Math.min(1, t));
@@ -240,7 +243,7 @@ export function stopPositions(runsCsv, release, supports) {
  * Draws the plan of `model` into `canvas` (CSS width of its box): the floor, the supports,
  * the release, the path coloured by speed and the stops. Returns what it drew, for the legend.
  */
-export function drawPlan(canvas, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map(), maps = null, layer = null } = {}) {
+export function drawPlan(canvas, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map(), maps = null, layer = null, devices = [], hideDevices = false } = {}) {
   const cssW = Math.max(280, Math.floor(canvas.parentElement?.clientWidth || 600));
   const pathXY = tr ? tr.position_m.map(model.path) : [];
   // The floor's extent in the view frame.
@@ -255,7 +258,7 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     yr = extent(pts.map((p) => p[1]));
   } else {
     // The inclined plane: along the dip 0…L; across, what the supports, the release and the path use, ±2 m.
-    const ys = [0, ...supports.map((p) => p.across), release.point?.across, ...pathXY.map((p) => p[1]), ...passedAcross(maps)]
+    const ys = [0, ...supports.map((p) => p.across), release.point?.across, ...pathXY.map((p) => p[1]), ...passedAcross(maps), ...devices.flatMap((d) => d.across ?? [])]
       .filter((v) => v !== null && v !== undefined);
     const [a, b] = extent(ys);
     xr = [0, model.length * Math.cos(model.dip)];
@@ -384,7 +387,13 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     ctx.fillStyle = '#7a4a08';
     ctx.font = '11px system-ui, sans-serif';
     ctx.textAlign = 'center';
-    ctx.fillText(`release ${fmt(z.from, 3)}–${fmt(z.to, 3)} m${release.zones.length > 1 ? `, weight ${fmt(z.weight, 3)}` : ''}`, px(mx), M.t + 12);
+    // the longest label that fits the zone's width (narrow screens: the legend names them all)
+    const [x0] = model.face2view(z.from, 0);
+    const [x1] = model.face2view(z.to, 0);
+    const room = Math.abs(px(x1) - px(x0)) - 4;
+    const label = [`release ${fmt(z.from, 3)}–${fmt(z.to, 3)} m${release.zones.length > 1 ? `, weight ${fmt(z.weight, 3)}` : ''}`,
+      `release ${fmt(z.from, 3)}–${fmt(z.to, 3)} m`, `${fmt(z.from, 3)}–${fmt(z.to, 3)} m`].find((t) => ctx.measureText(t).width <= room);
+    if (label) ctx.fillText(label, px(mx), M.t + 12);
   }
   if (release.point) {
     const [x, y] = model.face2view(release.point.s, release.point.across);
@@ -412,6 +421,36 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
       ctx.arc(px(x), py(y), 3.2, 0, 2 * Math.PI);
       ctx.fill();
     }
+  }
+  // Barriers as solid lines across their range (or the whole face), labelled with height and
+  // rating; collectors dashed.
+  for (const [k, d] of (hideDevices ? [] : devices).entries()) {
+    const [a, b] = d.across ?? [yr[0] - 1e3, yr[1] + 1e3];
+    const [ax, ay] = model.face2view(d.s, a);
+    const [bx, by] = model.face2view(d.s, b);
+    ctx.strokeStyle = ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
+    ctx.lineWidth = d.kind === 'barrier' ? 3 : 2;
+    ctx.setLineDash(d.kind === 'barrier' ? [] : [6, 4]);
+    ctx.beginPath();
+    ctx.moveTo(px(ax), py(ay));
+    ctx.lineTo(px(bx), py(by));
+    ctx.stroke();
+    ctx.setLineDash([]);
+    // the labels one row each from the plot's bottom (the release zones are named at the top), beside
+    // their line (left of it when the right has no room), on a pale box
+    const base = M.t + plotH - 5 - 16 * k;
+    ctx.font = '11px system-ui, sans-serif';
+    ctx.textAlign = 'left';
+    // a narrow plot names the line only (the legend gives its height and rating)
+    const full = deviceLabel(d);
+    const text = ctx.measureText(full).width <= plotW / 2 ? full : `${d.kind} ${d.index}`;
+    const w = ctx.measureText(text).width;
+    const lx = (px(ax) + px(bx)) / 2;
+    const x = Math.max(M.l + 2, lx + 5 + w <= M.l + plotW ? lx + 5 : lx - 5 - w);
+    ctx.fillStyle = 'rgba(255, 255, 255, 0.8)';
+    ctx.fillRect(x - 2, base - 11, w + 4, 14);
+    ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
+    ctx.fillText(text, x, base);
   }
   // The nominal path, coloured by speed.
   const [v0, v1] = tr ? extent(tr.speed_m_s) : [0, 0];
@@ -633,7 +672,7 @@ const views3d = new WeakMap();
  * The 3-D view in `box`: the floor surface, the supports, the release and the path; orbit
  * (drag), zoom (wheel), reset (button). Resolves to true when drawn, false when WebGL is missing.
  */
-export async function draw3d(box, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map() } = {}) {
+export async function draw3d(box, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map(), devices = [] } = {}) {
   views3d.get(box)?.dispose();
   views3d.delete(box);
   box.replaceChildren();
@@ -793,6 +832,37 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
       scene.add(cyl);
     }
   }
+  // Barriers as fences of their height across their range (the whole face: the drawn strip),
+  // collectors as dashed lines on the floor.
+  for (const d of devices) {
+    const [a, b] = d.across ?? [-10, 10];
+    const n = 24;
+    const foot = Array.from({ length: n + 1 }, (_, k) => {
+      const [x, y] = model.face2view(d.s, a + ((b - a) * k) / n);
+      return [x, y, floorZ(x, y, centre[2])];
+    });
+    const colour = d.kind === 'barrier' ? BARRIER : COLLECTOR;
+    if (d.kind === 'barrier') {
+      const pos = new Float32Array(foot.length * 6);
+      foot.forEach(([x, y, z], k) => pos.set([x, y, z, x, y, z + d.height], k * 6));
+      const index = [];
+      for (let k = 0; k < n; k++) index.push(2 * k, 2 * k + 2, 2 * k + 1, 2 * k + 1, 2 * k + 2, 2 * k + 3);
+      const geo = new THREE.BufferGeometry();
+      geo.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+      geo.setIndex(index);
+      geo.computeVertexNormals();
+      const fence = new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ color: colour, side: THREE.DoubleSide, transparent: true, opacity: 0.75 }));
+      fence.name = `barrier ${d.index}`;
+      scene.add(fence);
+    } else {
+      const line = new THREE.Line(new THREE.BufferGeometry().setFromPoints(foot.map(([x, y, z]) => V(x, y, z + 0.05))),
+        new THREE.LineDashedMaterial({ color: colour, dashSize: 0.6, gapSize: 0.4 }));
+      line.computeLineDistances();
+      line.name = `collector ${d.index}`;
+      scene.add(line);
+    }
+  }
+  box.dataset.devices = devices.map((d) => `${d.kind} ${d.index}`).join(',');
   // Release zones: their limits as orange lines across; a point as an orange ball.
   for (const zn of release.zones ?? []) {
     for (const s of [zn.from, zn.to]) {
@@ -880,7 +950,7 @@ function nearestAcross(tr, s) {
 }
 
 /** A legend in HTML under the plan: what each mark is (no "--" anywhere). */
-export function planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps = null }) {
+export function planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps = null, devices = [] }) {
   const items = [];
   const sw = (colour, shape = 'line') => h('span', { class: `swatch ${shape}`, style: `--c:${colour}` });
   items.push(h('li', {}, sw('#9fb58a', 'box'), model.uploaded
@@ -889,6 +959,17 @@ export function planLegend(drawn, { model, supports, release, tr, stops, unplace
   if (supports.length) {
     const over = [...verdicts.values()].filter((v) => v === 'exceeded').length;
     items.push(h('li', {}, sw(SUPPORT_OVER, 'dot'), sw(SUPPORT_OK, 'dot'), `${supports.length} support column${supports.length === 1 ? '' : 's'} where they stand${verdicts.size ? ` (red: exceeded, ${over}; green: within)` : ''}`));
+  }
+  const barriers = devices.filter((d) => d.kind === 'barrier');
+  const collectors = devices.filter((d) => d.kind === 'collector');
+  const span = (d) => (d.across ? `${fmt(d.across[0], 4)} to ${fmt(d.across[1], 4)} m across` : 'the whole face');
+  if (barriers.length) {
+    items.push(h('li', { dataset: { out: 'barriers' } }, sw(BARRIER), `${barriers.length} barrier${barriers.length === 1 ? '' : 's'} as solid lines: `
+      + barriers.map((d) => `at ${fmt(d.s, 4)} m along the dip over ${span(d)}, ${fmt(d.height, 3)} m high, rated ${fmt(d.rating / 1e3, 4)} kJ`).join('; ')));
+  }
+  if (collectors.length) {
+    items.push(h('li', { dataset: { out: 'collectors' } }, sw(COLLECTOR, 'dash'), `${collectors.length} collector${collectors.length === 1 ? '' : 's'} as dashed lines: `
+      + collectors.map((d) => `at ${fmt(d.s, 4)} m along the dip over ${span(d)}`).join('; ')));
   }
   if (release.zones?.length) items.push(h('li', {}, sw(ZONE, 'box'), `release zones${release.table1 ? ' (Table 1 thirds)' : ''}: ${release.zones.map((z) => `${fmt(z.from, 4)}–${fmt(z.to, 4)} m`).join(', ')}`));
   if (release.point) items.push(h('li', {}, sw(ZONE, 'ring'), `release point at ${fmt(release.point.s, 4)} m along the dip, ${fmt(release.point.across, 4)} m across`));
@@ -927,7 +1008,7 @@ export function offFloor(model, s, across) {
  * Fills a floor-views block (`<prefix>-floor`): the plan with its legend, the profile and
  * the 3-D view, for a Migration or Scene answer.
  */
-export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv, arrival = null, verdicts = new Map(), extra = [], maps = null }) {
+export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv, arrival = null, verdicts = new Map(), extra = [], maps = null, devices = [] }) {
   const box = document.getElementById(`${prefix}-floor`);
   const model = floorModel(inputs, upload);
   const length = model.length;
@@ -940,16 +1021,18 @@ export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv,
   box.hidden = false;
   const canvas = document.getElementById(`${prefix}-floor-plan`);
   const controls = mapControls(prefix, canvas, maps);
-  const options = { supports, release, tr, stops, verdicts, maps, layer: controls?.value ?? null };
+  const options = { supports, release, tr, stops, verdicts, maps, layer: controls?.value ?? null, devices };
+  // what the plan is drawn with (a redraw after changing it draws the change)
+  canvas.options = options;
   let drawn = drawPlan(canvas, model, options);
   const floorWords = model.uploaded ? `uploaded floor ${model.name}` : 'plane floor';
-  canvas.setAttribute('aria-label', `Plan of the ${floorWords}: ${supports.length} supports, ${release.zones ? `${release.zones.length} release zones` : 'one release point'}, `
+  canvas.setAttribute('aria-label', `Plan of the ${floorWords}: ${supports.length} supports, ${devices.length ? `${devices.length} barriers and collectors, ` : ''}${release.zones ? `${release.zones.length} release zones` : 'one release point'}, `
     + `${tr ? `the nominal path (speed ${fmt(drawn.speed[0], 3)} to ${fmt(drawn.speed[1], 3)} m/s), ` : ''}${stops.length} stops marked.`);
   canvas.dataset.floor = model.uploaded ? 'uploaded' : 'plane';
   const legend = document.getElementById(`${prefix}-floor-legend`);
   canvas.redraw = () => {
     drawn = drawPlan(canvas, model, options);
-    legend.replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps }));
+    legend.replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps, devices }));
     return drawn;
   };
   if (controls) {
@@ -968,7 +1051,7 @@ export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv,
     canvas.resizeWatch.observe(canvas.parentElement);
   }
   canvas.csv = () => [['run_stop_along_dip_m', 'across_m', 'stop_reason'], ...stops.map((s) => [s.s ?? length, s.across ?? '', s.reason ?? ''])];
-  legend.replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps }));
+  legend.replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps, devices }));
   const profile = document.getElementById(`${prefix}-profile-plot`);
   if (tr) {
     drawProfile(profile, model, tr, {

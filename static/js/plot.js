@@ -20,7 +20,7 @@ const resizer = new ResizeObserver((entries) => {
  * - `series`: [{label, values, color?, axis?: 'y'|'y2', points?, width?, dash?, bars?, value?}];
  *   points 'only' draws marks without a line, 'none' nothing (a value shown on hover)
  * - `y`, `y2`: {label, range?}; y2 only when a series uses it.
- * - `vlines`: [{x, color}] vertical marks across the plot (supports on a face).
+ * - `vlines`: [{x, color, width?, dash?}] vertical marks across the plot (supports on a face).
  * - `y.log`: a logarithmic y axis (base 10; `y.range` then bounds it).
  * - `x.value(i)`: the x shown on hover for the i-th point; `x.ticks(v)`: a tick's label.
  * - `draw(u)`: drawn over the series (error bars, markers).
@@ -62,6 +62,8 @@ export function linePlot(el, { x, y, y2, series, height = HEIGHT, legend = true,
           const px = u.valToPos(mark.x, 'x', true);
           if (px < u.bbox.left || px > u.bbox.left + u.bbox.width) continue;
           ctx.strokeStyle = mark.color ?? '#555e6b';
+          ctx.lineWidth = (mark.width ?? 1) * Math.max(1, devicePixelRatio);
+          ctx.setLineDash((mark.dash ?? []).map((v) => v * devicePixelRatio));
           ctx.beginPath();
           ctx.moveTo(px, u.bbox.top);
           ctx.lineTo(px, u.bbox.top + u.bbox.height);

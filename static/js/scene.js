@@ -10,6 +10,8 @@ import { csvButton, csvNumber, fmt, h, showWarnings } from './format.js';
 import { initPanel } from './panel.js';
 import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
 import { clearFloorViews, defaultMapGrid, floorModel, offFloor, renderFloorViews } from './floorview.js';
+import { deviceLabel, initDeviceEditors, requestDevices } from './devices.js';
+import { postJson } from './api.js';
 
 /** Why the release across the face starts from the page's own range. */
 const RELEASE_ACROSS = 'an assumed range across the face (the server draws none unless asked)';
@@ -85,6 +87,22 @@ const SCENE_GROUPS = [
     ],
   },
   {
+    legend: 'Barriers across the face',
+    pointer: '/barriers',
+    toggle: { name: 'scene_barriers', checked: false },
+    note: 'A barrier stops a rock that reaches its line below its height with kinetic energy within its rating, lets a faster one through with the rating taken off, '
+      + 'and is overtopped by a rock at or above its height. Along the dip in [0, face length] m; across from ≤ to in [−1000, 1000] m, both empty for the whole face; '
+      + 'height in (0, 100] m; rating in [0, 10⁹] kJ (sent in J).',
+    fields: [],
+  },
+  {
+    legend: 'Collectors across the face',
+    pointer: '/collectors',
+    toggle: { name: 'scene_collectors', checked: false },
+    note: 'A collector records each rock\'s speed, energies and passing height where it crosses its line, changing nothing. Along the dip in [0, face length] m; across as for a barrier.',
+    fields: [],
+  },
+  {
     legend: 'Release rate (overloads per year)',
     pointer: '/release_rate',
     toggle: { name: 'scene_release_rate', checked: false },
@@ -123,12 +141,49 @@ const DISTRIBUTIONS = [
 ];
 const LIMIT_WORDS = { stress_utilisation: 'stress utilisation σ/σy', max_force_n: 'rated force (N)', absorbed_energy_j: 'design energy (J)' };
 const STAT_COLUMNS = ['mean', 'std', 'min', 'p05', 'p50', 'p95', 'p99', 'max'];
-const OUTCOMES = [['support', 'struck a support'], ['lower_end', 'reached the lower end'], ['at_rest', 'came to rest'],
+const OUTCOMES = [['support', 'struck a support'], ['barrier', 'stopped by a barrier'], ['lower_end', 'reached the lower end'], ['at_rest', 'came to rest'],
   ['left_floor', 'left the floor'], ['end_time', 'still moving at the end time']];
 
 const RED = '#c8423b';
 const GREEN = '#2a8f4f';
 const GREY = '#7d8794';
+const BLUE = '#1d5fa8';
+const BARRIER = '#7a3e12';
+const COLLECTOR = '#6b3fa0';
+
+/** Barriers (solid, labelled with height and rating) and collectors (dashed) on a uPlot of along the dip against across. */
+function drawDeviceLines(u, devices) {
+  const { ctx } = u;
+  const r = devicePixelRatio;
+  ctx.save();
+  ctx.beginPath();
+  ctx.rect(u.bbox.left, u.bbox.top, u.bbox.width, u.bbox.height);
+  ctx.clip();
+  const [ylo, yhi] = [u.scales.y.min, u.scales.y.max];
+  for (const [k, d] of devices.entries()) {
+    const x = u.valToPos(d.s, 'x', true);
+    const [a, b] = d.across ?? [ylo, yhi];
+    ctx.strokeStyle = ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
+    ctx.lineWidth = (d.kind === 'barrier' ? 3 : 2) * r;
+    ctx.setLineDash(d.kind === 'barrier' ? [] : [6 * r, 4 * r]);
+    ctx.beginPath();
+    ctx.moveTo(x, u.valToPos(Math.max(a, ylo), 'y', true));
+    ctx.lineTo(x, u.valToPos(Math.min(b, yhi), 'y', true));
+    ctx.stroke();
+    ctx.font = `${11 * r}px system-ui, sans-serif`;
+    ctx.textAlign = 'left';
+    ctx.textBaseline = 'alphabetic';
+    const text = deviceLabel(d);
+    const w = ctx.measureText(text).width;
+    const tx = x + 4 * r + w <= u.bbox.left + u.bbox.width ? x + 4 * r : x - 4 * r - w;
+    const ty = u.bbox.top + (12 + 15 * k) * r;
+    ctx.fillStyle = 'rgba(255, 255, 255, 0.85)';
+    ctx.fillRect(tx - 2 * r, ty - 11 * r, w + 4 * r, 14 * r);
+    ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
+    ctx.fillText(text, tx, ty);
+  }
+  ctx.restore();
+}
 
 /** The impact speed statistic a row sends to the Impact and Column tabs. */
 const SEND_STATS = { p50: 'median', p95: 'p95', max: 'largest' };
@@ -196,6 +251,7 @@ export function initScene() {
   const sourceNotes = [document.getElementById('impact-source'), document.getElementById('column-source')];
   buildForm(form, SCENE_GROUPS);
   const releaseEditor = initReleaseEditor(form, migrationForm);
+  const deviceEditors = initDeviceEditors(form);
   // A velocity typed by hand no longer comes from the Scene.
   impactForm.addEventListener('input', (ev) => {
     if (ev.target.dataset?.pointer === '/velocity_m_s') for (const note of sourceNotes) note.hidden = true;
@@ -216,6 +272,8 @@ export function initScene() {
 
   let last = null;
   let runsCsv = null;
+  /** Per support entry (support.column), the same runs without protection; null when not compared. */
+  let unprotected = null;
 
   const panel = initPanel({
     name: 'scene',
@@ -253,6 +311,7 @@ export function initScene() {
       if (request.column_model === 'decoupled') delete request.galerkin.modes;
       else if (request.galerkin.mode_shapes && request.galerkin.mode_shapes !== 'exact') delete request.galerkin.mode_shapes;
       releaseEditor.apply(request, own.local, migrationForm.floor?.current?.() ?? null);
+      deviceEditors.apply(request, own.local, m.face.length_m);
       if (request.monte_carlo) {
         if (own.local.release_zones === 'table1') request.release_zones = 'table1';
         if (request.monte_carlo.release_across_m) request.monte_carlo.release_across_m = { distribution: 'uniform', ...request.monte_carlo.release_across_m };
@@ -291,6 +350,8 @@ export function initScene() {
     supportSummary.textContent = '';
     distTable.replaceChildren();
     renderProtection(null);
+    renderDevices(null);
+    renderUnprotected(null);
     planList.replaceChildren();
     showWarnings(warnings, []);
     Object.values(plots).forEach(destroy);
@@ -309,17 +370,172 @@ export function initScene() {
     renderSummary(data, entries);
     renderTable(data, entries);
     renderProtection(data);
+    renderDevices(data, request);
+    renderUnprotected(null);
     renderSupportChart(entries, acceptableOf(data));
-    renderFace(data, entries);
+    renderFace(data, entries, request);
     const verdicts = new Map(entries.map((e) => [`${e.support}.${e.column_index ?? 0}`, e.verdict]));
     renderFloorViews('scene', {
       inputs: data.inputs ?? data.migration?.inputs, request: request ?? data.inputs, upload: migrationForm.floor?.current?.() ?? null,
       tr: data.migration?.trajectory ?? null, runsCsv, arrival: data.migration?.arrival ?? null, verdicts, maps: data.maps ?? null,
+      devices: requestDevices(request ?? data.inputs),
     });
     distSelect.replaceChildren(...entries.map((e, i) => h('option', { value: String(i) }, label(e))));
     const worst = entries.reduce((b, e, i) => ((e.risk ?? -1) > (entries[b]?.risk ?? -1) ? i : b), 0);
     distSelect.value = String(worst);
     renderDistributions(data);
+    if (data.statistics && (request?.guards?.length || request?.barriers?.length)) compareUnprotected(data, request);
+  }
+
+  /** The pending request without protection (aborted when a new answer or an error comes). */
+  let bareRun = null;
+
+  /**
+   * The same request without guards, barriers and collectors (the same seed, so the same
+   * draws run for run: common random numbers), sent beside the answer; per support the
+   * exceedance without and with protection.
+   */
+  async function compareUnprotected(data, request) {
+    const bare = structuredClone(request);
+    delete bare.guards;
+    delete bare.barriers;
+    delete bare.collectors;
+    // the per-support statistics are all that is compared
+    delete bare.migration_output;
+    const controller = new AbortController();
+    bareRun = controller;
+    const note = document.getElementById('scene-unprotected-note');
+    document.getElementById('scene-unprotected-card').hidden = false;
+    note.textContent = `Computing the same ${data.statistics.runs} runs without protection…`;
+    let answer;
+    try {
+      answer = await postJson('v1/scene', bare, { signal: controller.signal });
+    } catch (err) {
+      if (err.name === 'AbortError') return;
+      answer = { ok: false, problem: { detail: err.message } };
+    }
+    if (bareRun !== controller || last !== data) return;
+    bareRun = null;
+    if (!answer.ok) {
+      note.textContent = `The run without protection was refused: ${answer.problem?.detail ?? answer.problem?.title ?? 'no answer'}.`;
+      return;
+    }
+    renderUnprotected(data, answer.data, request);
+  }
+
+  /** The with/without table and the risk plot's second series; null clears both. */
+  function renderUnprotected(data, bare = null, request = null) {
+    const card = document.getElementById('scene-unprotected-card');
+    const el = document.getElementById('scene-unprotected');
+    if (!bare) {
+      bareRun?.abort();
+      bareRun = null;
+      unprotected = null;
+      card.hidden = true;
+      el.replaceChildren();
+      delete el.csv;
+      return;
+    }
+    const withP = supportEntries(data);
+    const without = new Map(supportEntries(bare).map((e) => [`${e.support}.${e.column_index ?? 0}`, e]));
+    unprotected = without;
+    const st = data.statistics;
+    const what = [request?.guards?.length ? `the guards on ${request.guards.length} column${request.guards.length === 1 ? '' : 's'}` : '',
+      request?.barriers?.length ? `${request.barriers.length} barrier${request.barriers.length === 1 ? '' : 's'}` : ''].filter(Boolean).join(' and ');
+    document.getElementById('scene-unprotected-note').textContent = `The same ${st.runs} seeded runs (seed ${st.seed}) computed twice, with ${what} and without any protection: `
+      + 'common random numbers, so each run meets the same rock, release and restitutions and the difference is the protection\'s, not chance. '
+      + `P(exceed) is each support's largest over the design limits, with its Wilson 95 % interval. Any support overloaded: ${fmt(bare.statistics.any_exceeded.probability * 100, 3)} % without, `
+      + `${fmt(st.any_exceeded.probability * 100, 3)} % with.`;
+    const quietWords = (shown, all, quiet) => ` Shown: the ${shown} of ${all} support entries some run overloaded, with or without protection, the largest drop first`
+      + `${quiet ? `; the other ${quiet} had no overloading run either way (all are in the CSV)` : ''}.`;
+    const pc = (p, ci) => `${fmt(p * 100, 3)} [${fmt(ci[0] * 100, 2)}–${fmt(ci[1] * 100, 2)}]`;
+    const rows = withP.map((e) => ({ e, b: without.get(`${e.support}.${e.column_index ?? 0}`) }));
+    // shown: the supports some run overloaded with or without protection, the largest change first; the CSV has them all
+    const shown = rows.filter(({ e, b }) => e.risk > 0 || (b?.risk ?? 0) > 0)
+      .sort((x, y) => ((y.b?.risk ?? 0) - y.e.risk) - ((x.b?.risk ?? 0) - x.e.risk) || (y.b?.risk ?? 0) - (x.b?.risk ?? 0) || x.e.support - y.e.support);
+    const quiet = rows.length - shown.length;
+    document.getElementById('scene-unprotected-note').append(quietWords(shown.length, rows.length, quiet));
+    el.csv = () => [['support', 'column_index', 'along_dip_m', 'p_exceed_without', 'p_exceed_without_ci95_low', 'p_exceed_without_ci95_high',
+      'p_exceed_with', 'p_exceed_with_ci95_low', 'p_exceed_with_ci95_high'],
+    ...rows.map(({ e, b }) => [e.support, e.column_index ?? 0, csvNumber(e.along_dip_m), csvNumber(b?.risk), csvNumber(b?.riskCi[0]), csvNumber(b?.riskCi[1]),
+      csvNumber(e.risk), csvNumber(e.riskCi[0]), csvNumber(e.riskCi[1])])];
+    el.replaceChildren(
+      h('thead', {}, h('tr', {}, ['Support', 'Along the dip (m)', 'P(exceed) without protection (%) [95 % CI]', 'P(exceed) with protection (%) [95 % CI]', 'Change (points)']
+        .map((c) => h('th', { scope: 'col' }, c)))),
+      h('tbody', {}, shown.map(({ e, b }) => h('tr', { class: e.verdict === 'exceeded' ? 'verdict-exceeded' : '', dataset: { support: `${e.support}.${e.column_index ?? 0}` } },
+        h('th', { scope: 'row' }, `#${e.support}${e.column_index ? `.${e.column_index}` : ''}`),
+        h('td', { class: 'num' }, fmt(e.along_dip_m, 5)),
+        h('td', { class: 'num', dataset: { without: String(b?.risk ?? '') } }, b ? pc(b.risk, b.riskCi) : '—'),
+        h('td', { class: 'num', dataset: { with: String(e.risk) } }, pc(e.risk, e.riskCi)),
+        h('td', { class: 'num' }, b ? fmt((e.risk - b.risk) * 100, 3) : '—')))),
+    );
+    card.hidden = false;
+    renderSupportChart(withP, acceptableOf(data));
+  }
+
+  /**
+   * What each barrier and collector saw: position, reached share, a barrier's stopped /
+   * broken through / overtopped shares (Wilson 95 %), and the design values at the line.
+   */
+  function renderDevices(data, request = null) {
+    const card = document.getElementById('scene-devices-card');
+    const el = document.getElementById('scene-devices');
+    const note = document.getElementById('scene-devices-note');
+    el.replaceChildren();
+    delete el.csv;
+    const st = data?.statistics;
+    const list = [...(st?.barriers ?? []).map((d, i) => ({ d, kind: 'barrier', i: i + 1 })), ...(st?.collectors ?? []).map((d, i) => ({ d, kind: 'collector', i: i + 1 }))];
+    const asked = (request?.barriers?.length ?? 0) + (request?.collectors?.length ?? 0);
+    card.hidden = !list.length && !asked;
+    if (card.hidden) return;
+    const m = data.migration;
+    const nominal = m?.arrival?.stop_reason === 'barrier'
+      ? ` The nominal run was stopped by a barrier at ${fmt(m.arrival.along_dip_m, 4)} m along the dip.` : '';
+    const lost = m?.energy?.barriers_j ? ` Barriers took ${fmt(m.energy.barriers_j / 1e3, 4)} kJ from the nominal run.` : '';
+    if (!list.length) {
+      note.textContent = `A single run: switch on the Monte Carlo ensemble for what each barrier and collector saw.${nominal}${lost}`;
+      return;
+    }
+    const pct = (x) => (x ? `${fmt(x.probability * 100, 3)} [${fmt(x.ci95[0] * 100, 2)}–${fmt(x.ci95[1] * 100, 2)}]` : '—');
+    const bound = (v, scale) => (v === null || v === undefined ? 'none' : fmt(v * scale, 3));
+    const dv = (x, scale = 1) => (x ? `${fmt(x.design_value * scale, 4)} [${bound(x.design_ci95[0], scale)}–${bound(x.design_ci95[1], scale)}]` : 'not reached');
+    const p = list.find(({ d }) => d.values)?.d.values.design_percentile ?? data.inputs?.design_percentile ?? 0.95;
+    note.textContent = `Over ${st.runs} runs (seed ${st.seed}): the share of runs that reached each line within its range, what a barrier did with them, `
+      + `and the rock's state at the line: the ${fmt(p * 100, 3)} % design value over the runs that reached it, with its distribution-free 95 % interval `
+      + `("none": too few runs for that bound). Stopped by a barrier, all lines: ${fmt((st.outcomes?.barrier ?? 0) * 100, 4)} % of the runs.${nominal}${lost}`;
+    const across = (d) => (d.across_m ? `${fmt(d.across_m[0], 4)} to ${fmt(d.across_m[1], 4)}` : 'whole face');
+    const barriers = list.some(({ kind }) => kind === 'barrier');
+    el.append(
+      // the line and what it saw first: on a phone they show without scrolling sideways
+      h('thead', {}, h('tr', {}, ['Line', 'Reached (%) [95 % CI]',
+        ...(barriers ? ['Stopped (%) [95 % CI]', 'Broken through (%) [95 % CI]', 'Overtopped (%) [95 % CI]'] : []),
+        `Speed at p${fmt(p * 100, 3)} (m/s) [95 % CI]`, `Kinetic energy at p${fmt(p * 100, 3)} (kJ) [95 % CI]`, `Passing height at p${fmt(p * 100, 3)} (m) [95 % CI]`,
+        'Along the dip (m)', 'Across (m)', ...(barriers ? ['Height (m)', 'Rating (kJ)'] : [])]
+        .map((c) => h('th', { scope: 'col' }, c)))),
+      h('tbody', {}, list.map(({ d, kind, i }) => h('tr', { dataset: { device: `${kind}_${i}` } },
+        h('th', { scope: 'row' }, `${kind === 'barrier' ? 'Barrier' : 'Collector'} ${i} at ${fmt(d.along_dip_m, 4)} m`),
+        h('td', { class: 'num', dataset: { out: 'reached' } }, pct(d.reached)),
+        ...(barriers ? [h('td', { class: 'num', dataset: { out: 'stopped' } }, pct(d.outcomes?.stopped)),
+          h('td', { class: 'num', dataset: { out: 'broken_through' } }, pct(d.outcomes?.broken_through)),
+          h('td', { class: 'num', dataset: { out: 'overtopped' } }, pct(d.outcomes?.overtopped))] : []),
+        h('td', { class: 'num', dataset: { out: 'speed' } }, dv(d.values?.speed_m_s)),
+        h('td', { class: 'num', dataset: { out: 'kinetic_energy' } }, dv(d.values?.kinetic_energy_j, 1e-3)),
+        h('td', { class: 'num', dataset: { out: 'passing_height' } }, dv(d.values?.passing_height_m)),
+        h('td', { class: 'num' }, fmt(d.along_dip_m, 5)),
+        h('td', { class: 'num' }, across(d)),
+        ...(barriers ? [h('td', { class: 'num' }, d.height_m === undefined ? '—' : fmt(d.height_m, 4)),
+          h('td', { class: 'num' }, d.energy_rating_j === undefined ? '—' : fmt(d.energy_rating_j / 1e3, 4))] : [])))),
+    );
+    // The CSV: SI numbers, each share and design value with its interval as two columns.
+    const share = (x) => [csvNumber(x?.probability), csvNumber(x?.ci95?.[0]), csvNumber(x?.ci95?.[1])];
+    const value = (x) => [csvNumber(x?.design_value), csvNumber(x?.design_ci95?.[0]), csvNumber(x?.design_ci95?.[1])];
+    const QUANTITIES = ['speed_m_s', 'kinetic_energy_j', 'translational_energy_j', 'rotational_energy_j', 'passing_height_m'];
+    el.csv = () => [['line', 'index', 'along_dip_m', 'across_from_m', 'across_to_m', 'height_m', 'energy_rating_j', 'reached', 'reached_ci95_low', 'reached_ci95_high',
+      ...['stopped', 'broken_through', 'overtopped'].flatMap((k) => [k, `${k}_ci95_low`, `${k}_ci95_high`]), 'design_percentile',
+      ...QUANTITIES.flatMap((q) => [`${q}_design`, `${q}_design_ci95_low`, `${q}_design_ci95_high`])],
+    ...list.map(({ d, kind, i }) => [kind, i, csvNumber(d.along_dip_m), csvNumber(d.across_m?.[0]), csvNumber(d.across_m?.[1]), csvNumber(d.height_m), csvNumber(d.energy_rating_j),
+      ...share(d.reached), ...share(d.outcomes?.stopped), ...share(d.outcomes?.broken_through), ...share(d.outcomes?.overtopped), csvNumber(d.values?.design_percentile),
+      ...QUANTITIES.flatMap((q) => value(d.values?.[q]))])];
   }
 
   /**
@@ -383,7 +599,7 @@ export function initScene() {
       const impacts = data.impacts ?? [];
       if (!impacts.length) {
         const a = data.migration?.arrival;
-        const words = { at_rest: 'came to rest', left_floor: 'left the floor', lower_end: 'reached the lower end', end_time: 'was still moving at the end time' };
+        const words = { barrier: 'was stopped by a barrier', at_rest: 'came to rest', left_floor: 'left the floor', lower_end: 'reached the lower end', end_time: 'was still moving at the end time' };
         summary.append(h('p', { class: 'answer' }, 'The rock reached no support', a ? ` (it ${words[a.stop_reason] ?? a.stop_reason.replace(/_/g, ' ')} at ${fmt(a.along_dip_m, 4)} m along the dip).` : '.'));
         // where and past which boundary a run left the floor (warning left_floor)
         const left = (data.migration?.warnings ?? []).find((w) => w.code === 'left_floor');
@@ -634,7 +850,8 @@ export function initScene() {
     }
     const pct = (v) => v * 100;
     // The axis follows the data: every probability, every interval bound and the threshold.
-    const values = [...sorted.flatMap((e) => [e.risk, e.riskCi[0], e.riskCi[1]]), acceptable].filter((v) => v > 0).map(pct);
+    const values = [...sorted.flatMap((e) => [e.risk, e.riskCi[0], e.riskCi[1], unprotected?.get(`${e.support}.${e.column_index ?? 0}`)?.risk ?? 0]), acceptable]
+      .filter((v) => v > 0).map(pct);
     let lo = Infinity;
     let hi = 0;
     for (const v of values) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
@@ -693,6 +910,10 @@ export function initScene() {
         { label: 'P above the acceptable', values: sorted.map((e) => (e.verdict === 'exceeded' ? pOf(e) : null)), points: 'only', color: RED, pointSize: 7, value: pShown },
         { label: 'none exceeded: upper bound', values: sorted.map((e) => (e.risk > 0 ? null : pct(e.riskCi[1]))), points: 'only', color: GREY, pointSize: 6, pointFill: '#fff', value: pShown },
         { label: '95 % upper bound', values: sorted.map((e) => pct(e.riskCi[1])), points: 'none', color: '#3b4350', value: pShown },
+        ...(unprotected ? [{
+          label: 'P without protection (same runs)', values: sorted.map((e) => { const b = unprotected.get(`${e.support}.${e.column_index ?? 0}`); return b && b.risk > 0 ? pct(b.risk) : null; }),
+          points: 'only', color: BLUE, pointSize: 6, value: pShown,
+        }] : []),
         ...(acceptable > 0 ? [{ label: 'acceptable probability', values: sorted.map(() => pct(acceptable)), color: '#3b4350', dash: [6, 4], width: 1.5, value: pShown }] : []),
       ],
       draw,
@@ -713,7 +934,7 @@ export function initScene() {
   }
 
   /** Side view (a vertical section along the dip) and plan view, supports as vertical marks coloured by verdict. */
-  function renderFace(data, entries) {
+  function renderFace(data, entries, request) {
     const length = data.inputs?.face?.length_m ?? 120;
     const dip = (data.inputs?.face?.dip_deg ?? 45) * Math.PI / 180;
     const tr = data.migration?.trajectory;
@@ -744,13 +965,20 @@ export function initScene() {
     let k = 2;
     if (zones.length) series.push({ label: 'release zones (Table 1 thirds)', values: joined[k++], color: '#d88a1c', width: 7 });
     if (tr) series.push({ label: 'nominal run', values: joined[k++], color: '#1d5fa8' });
+    // barriers solid brown, collectors dashed violet, over the supports' marks
+    const devices = requestDevices(request ?? data.inputs);
+    const deviceMarks = devices.map((d) => ({ x: d.s, color: d.kind === 'barrier' ? BARRIER : COLLECTOR, dash: d.kind === 'barrier' ? [] : [6, 4], width: 2.5, label: deviceLabel(d) }));
     linePlot(plots.side, {
       x: { label: 'along the dip (m); supports as vertical lines', values: joined[0] },
       y: { label: 'elevation (m)' },
       series,
-      vlines: marks,
+      vlines: [...marks, ...deviceMarks],
       height: 240,
     });
+    const sideNote = document.getElementById('scene-side-note');
+    sideNote.hidden = !devices.length;
+    sideNote.textContent = devices.length ? `Lines across the face: ${devices.map((d) => `${deviceLabel(d)} at ${fmt(d.s, 4)} m`).join('; ')} `
+      + '(barriers solid brown, collectors dashed violet; also on the plan view beside and on the floor below).' : '';
     if (tr) plots.side.csv = () => [['along_dip_m', 'height_m'], ...tr.along_dip_m.map((s, i) => [s, tr.height_m[i]])];
 
     // Plan: along the dip against across the face; columns as points, spanning supports as lines.
@@ -768,6 +996,7 @@ export function initScene() {
       y: { label: 'across the face (m)', range: [-2, 2] },
       series: planSeries,
       vlines: marks.filter((m, i) => entries[i].across_m === null || entries[i].across_m === undefined),
+      draw: devices.length ? (u) => drawDeviceLines(u, devices) : null,
       height: 240,
     });
   }

@@ -1012,6 +1012,259 @@ async function legendLabels(page, plot) {
   return page.locator(`${plot} .u-legend .u-series .u-label`).allTextContents();
 }
 
+/** Changed pixels of the Scene's floor plan with and without its barriers and collectors, by where they lie. */
+async function devicePixels(page) {
+  return page.evaluate(() => {
+    const c = document.getElementById('scene-floor-plan');
+    const grab = () => c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    const { devices } = c.options;
+    // the same frame (the lines' ranges widen it) without the lines drawn
+    c.options.hideDevices = true;
+    c.redraw();
+    const a = grab();
+    c.options.hideDevices = false;
+    c.redraw();
+    const b = grab();
+    const dpr = c.width / parseFloat(c.style.width);
+    const r = c.plotRect;
+    // each line from its ends (the whole face: the plot's height), in CSS pixels
+    const lines = devices.map((d) => {
+      const [x0, y0] = c.facePixel(d.s, d.across ? d.across[0] : -1e4);
+      const [x1, y1] = c.facePixel(d.s, d.across ? d.across[1] : 1e4);
+      return { x: (x0 + x1) / 2, lo: Math.max(r.t, Math.min(y0, y1)), hi: Math.min(r.t + r.h, Math.max(y0, y1)), on: 0 };
+    });
+    let near = 0;
+    let elsewhere = 0;
+    for (let y = Math.ceil(r.t * dpr); y < Math.floor((r.t + r.h) * dpr); y++) {
+      for (let x = Math.ceil(r.l * dpr); x < Math.floor((r.l + r.w) * dpr); x++) {
+        const q = 4 * (y * c.width + x);
+        if (a[q] === b[q] && a[q + 1] === b[q + 1] && a[q + 2] === b[q + 2]) continue;
+        const [cx, cy] = [x / dpr, y / dpr];
+        let hit = false;
+        for (const l of lines) {
+          if (Math.abs(cx - l.x) <= 3 && cy >= l.lo - 3 && cy <= l.hi + 3) { l.on += 1; hit = true; }
+          // the labels beside the lines, one row each from the plot's bottom
+          else if (Math.abs(cx - l.x) <= 200 && cy >= r.t + r.h - 16 * lines.length - 8) hit = true;
+        }
+        if (hit) near += 1; else elsewhere += 1;
+      }
+    }
+    return { near, elsewhere, lines: lines.map((l) => ({ on: l.on, length: (l.hi - l.lo) * dpr })) };
+  });
+}
+
+async function protectionLinesSection(page, context) {
+  const form = '#scene-form';
+  /** Ticks the barrier and collector groups and fills one row each (display units). */
+  const lines = async (p) => {
+    await p.locator(`${form} input[name="scene_barriers"]`).check();
+    await p.locator(`${form} input[name="scene_collectors"]`).check();
+    const b = p.locator('#scene-barriers .device-row').first().locator('input');
+    await b.nth(0).fill('40');
+    await b.nth(1).fill('-1.5');
+    await b.nth(2).fill('2.5');
+    await b.nth(3).fill('1');
+    await b.nth(4).fill('20');
+    await p.locator('#scene-barriers-add').click();
+    const b2 = p.locator('#scene-barriers .device-row').nth(1).locator('input');
+    await b2.nth(0).fill('60');
+    await b2.nth(3).fill('0.5');
+    await b2.nth(4).fill('5');
+    await p.locator('#scene-collectors .device-row').first().locator('input').nth(0).fill('30');
+    await p.locator(`${form} [data-pointer="/monte_carlo/runs"]`).fill('200');
+    // guards on the columns too: the with/without comparison takes both away
+    await p.locator(`${form} input[name="scene_guards"]`).check();
+    await p.locator(`${form} [data-local="guard_rating"]`).fill('2000');
+  };
+  let answer = null;
+  let sent = null;
+
+  await check('barriers: the rows are sent in SI (kJ shown, J sent; an empty across range is the whole face); the card\'s numbers are the answer\'s', async () => {
+    await open(page, '#scene');
+    await lines(page);
+    const done = await rendered(page, 'scene');
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
+    const response = await submit(page, form, '/v1/scene');
+    sent = JSON.parse((await request).postData());
+    assert(JSON.stringify(sent.barriers) === JSON.stringify([
+      { along_dip_m: 40, across_m: [-1.5, 2.5], height_m: 1, energy_rating_j: 20000 },
+      { along_dip_m: 60, across_m: null, height_m: 0.5, energy_rating_j: 5000 }]), `barriers sent: ${JSON.stringify(sent.barriers)}`);
+    assert(JSON.stringify(sent.collectors) === JSON.stringify([{ along_dip_m: 30, across_m: null }]), `collectors sent: ${JSON.stringify(sent.collectors)}`);
+    const text = (await response.text()).trim().split('\n').map((l) => JSON.parse(l));
+    answer = text.find((l) => l.result)?.result ?? text[text.length - 1];
+    await done.done;
+    const st = answer.statistics;
+    assert(st.barriers?.length === 2 && st.collectors?.length === 1, 'no device statistics in the answer');
+    await page.locator('#scene-devices-card').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const rows = page.locator('#scene-devices tbody tr');
+    assert(await rows.count() === 3, `${await rows.count()} device rows for 3 lines`);
+    // shown: the answer's numbers at their shown precision
+    const pct = (x) => `${Number((x.probability * 100).toPrecision(3))} [${Number((x.ci95[0] * 100).toPrecision(2))}–${Number((x.ci95[1] * 100).toPrecision(2))}]`;
+    const devices = [...st.barriers.map((d, i) => ['barrier', i, d]), ...st.collectors.map((d, i) => ['collector', i, d])];
+    for (const [kind, i, d] of devices) {
+      const row = page.locator(`#scene-devices tbody tr[data-device="${kind}_${i + 1}"]`);
+      const reached = (await row.locator('[data-out="reached"]').textContent()).replace(/ × 10⁻\S+/g, '');
+      assert(reached === pct(d.reached).replace(/ × 10⁻\S+/g, ''), `${kind} ${i + 1} reached shown ${reached}, answer ${pct(d.reached)}`);
+      if (kind === 'barrier') {
+        for (const k of ['stopped', 'broken_through', 'overtopped']) {
+          const shownOut = await row.locator(`[data-out="${k}"]`).textContent();
+          assert(shownOut === pct(d.outcomes[k]), `${kind} ${i + 1} ${k} shown ${shownOut}, answer ${pct(d.outcomes[k])}`);
+        }
+      }
+      if (d.values) {
+        const speed = await row.locator('[data-out="speed"]').textContent();
+        assert(speed.startsWith(`${Number(d.values.speed_m_s.design_value.toPrecision(4))} [`), `${kind} ${i + 1} design speed shown ${speed}, answer ${d.values.speed_m_s.design_value}`);
+        const energy = await row.locator('[data-out="kinetic_energy"]').textContent();
+        assert(energy.startsWith(`${Number((d.values.kinetic_energy_j.design_value / 1e3).toPrecision(4))} [`), `${kind} ${i + 1} design energy shown ${energy} kJ, answer ${d.values.kinetic_energy_j.design_value} J`);
+      }
+    }
+    assert(st.barriers[0].reached.probability > 0 && st.barriers[0].outcomes.stopped.probability > 0, 'the first barrier stopped nothing: the check compares nothing');
+    // the outcome with the others, and the warning as the others are shown
+    const outcome = await page.locator('[data-out="statistics.outcomes.barrier"]').textContent();
+    assert(outcome === `${Number((st.outcomes.barrier * 100).toPrecision(4))} %`, `stopped by a barrier shown ${outcome}, answer ${st.outcomes.barrier}`);
+    const broken = (answer.warnings ?? []).find((w) => w.code === 'barrier_broken_through');
+    assert(broken, `no barrier_broken_through warning in the answer: ${(answer.warnings ?? []).map((w) => w.code).join(', ')}`);
+    assert((await page.locator('#scene-warnings').textContent()).includes(broken.message), 'the barrier warning is not shown with the others');
+  });
+
+  await check('barriers: the table\'s CSV downloads with the header block and the answer\'s numbers in SI', async () => {
+    const csv = await downloaded(page, page.locator('#scene-devices-card [data-csv]'));
+    assertCsvHeader(csv, 'barriers and collectors CSV');
+    const [head, ...rows] = csv.text.trim().split('\n').map((l) => l.split(','));
+    const col = (name) => head.indexOf(name);
+    assert(rows.length === 3 && col('reached') > 0 && col('speed_m_s_design') > 0 && col('energy_rating_j') > 0, `CSV: ${head.join()} (${rows.length} rows)`);
+    const b = answer.statistics.barriers[0];
+    assert(rows[0][col('line')] === 'barrier' && Number(rows[0][col('energy_rating_j')]) === 20000 && Number(rows[0][col('reached')]) === b.reached.probability
+      && Number(rows[0][col('stopped_ci95_high')]) === b.outcomes.stopped.ci95[1] && Number(rows[0][col('kinetic_energy_j_design')]) === b.values.kinetic_energy_j.design_value,
+    `first CSV row ${rows[0].join()} against ${JSON.stringify(b).slice(0, 200)}`);
+  });
+
+  await check('barriers: drawn on the floor plan along their lines only (pixels), on the side view, and in the 3-D scene', async () => {
+    await page.locator('#scene-floor').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const d = await devicePixels(page);
+    assert(d.elsewhere === 0, `${d.elsewhere} pixels changed away from the lines and their labels`);
+    for (const [k, l] of d.lines.entries()) assert(l.on >= l.length, `line ${k + 1}: ${l.on} pixels changed along a line ${l.length} pixels long`);
+    const legend = await page.locator('#scene-floor-legend').textContent();
+    assert(/2 barriers as solid lines: at 40 m along the dip over -1\.5 to 2\.5 m across, 1 m high, rated 20 kJ; at 60 m along the dip over the whole face/.test(legend), legend);
+    assert(/1 collector as dashed lines: at 30 m along the dip over the whole face/.test(legend), legend);
+    await page.locator('#scene-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const inScene = await page.evaluate(() => document.getElementById('scene-3d').dataset.devices ?? '');
+    assert(inScene === 'barrier 1,barrier 2,collector 1', `3-D view draws ${inScene || 'no devices'}`);
+    await elementShot(page.locator('#scene-floor'), 'floor-view-barriers.png');
+  });
+
+  await check('barriers: with and without protection per support from the same seeded runs; the unprotected column equals a request without devices', async () => {
+    await page.locator('#scene-unprotected tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
+    const note = await page.locator('#scene-unprotected-note').textContent();
+    assert(/same 200 seeded runs \(seed \d+\)/.test(note) && /common random numbers/.test(note), note);
+    const bare = structuredClone(sent);
+    delete bare.barriers;
+    delete bare.collectors;
+    delete bare.guards;
+    const direct = await post('/v1/scene', bare);
+    assert(direct.status === 200, `direct request: ${direct.status}`);
+    const worst = (s) => Math.max(0, ...Object.values(s.exceedance ?? {}).map((x) => x.probability));
+    const cells = await page.locator('#scene-unprotected tbody tr[data-support]').evaluateAll((trs) => trs.map((tr) => [tr.dataset.support, Number(tr.querySelector('[data-without]').dataset.without), Number(tr.querySelector('[data-with]').dataset.with)]));
+    // shown: every support some run overloaded, with or without protection (the others are 0 both ways, in the CSV)
+    const risky = direct.json.statistics.supports.filter((s) => worst(s) > 0).map((s) => `${s.support}.${s.column_index ?? 0}`);
+    assert(risky.length > 0 && risky.every((k) => cells.some(([key]) => key === k)), `rows ${cells.map((c) => c[0]).join(' ')}; overloaded without protection ${risky.join(' ')}`);
+    const csv = await downloaded(page, page.locator('#scene-unprotected-card [data-csv]'));
+    assertCsvHeader(csv, 'with and without CSV');
+    assert(csv.text.trim().split('\n').length === direct.json.statistics.supports.length + 1, 'the with/without CSV does not list every support');
+    let lower = 0;
+    for (const [key, without, withP] of cells) {
+      const s = direct.json.statistics.supports.find((x) => `${x.support}.${x.column_index ?? 0}` === key);
+      assert(s && without === worst(s), `support ${key}: without protection ${without}, a direct request gives ${s && worst(s)}`);
+      const w = answer.statistics.supports.find((x) => `${x.support}.${x.column_index ?? 0}` === key);
+      assert(withP === worst(w), `support ${key}: with protection ${withP}, the answer ${worst(w)}`);
+      if (withP < without) lower += 1;
+    }
+    assert(lower > 0, `the barriers lowered no support's exceedance: the check compares nothing (${cells.filter((c) => c[1] > 0).map((c) => c.join(' ')).join('; ')}; barriers ${JSON.stringify(answer.statistics.barriers.map((x) => [x.reached.probability, x.outcomes]))})`);
+    const labels = await legendLabels(page, '#scene-support-plot');
+    assert(labels.some((l) => /P without protection \(same runs\)/.test(l)), `risk plot series: ${labels.join(' | ')}`);
+    await elementShot(page.locator('#scene-unprotected-card'), 'scene-unprotected.png');
+    await elementShot(page.locator('.card:has(#scene-support-plot)'), 'scene-risk-protection.png');
+    await elementShot(page.locator('.result-grid:has(#scene-side-plot)'), 'scene-side-plan-barriers.png');
+    await elementShot(page.locator('#scene-devices-card'), 'scene-devices.png');
+  });
+
+  await check('barriers: the printed report carries the lines, the card and the with/without table', async () => {
+    await page.evaluate(() => { window.print = () => {}; });
+    await page.locator('#case-print').click();
+    await page.emulateMedia({ media: 'print' });
+    const text = await page.locator('#report').textContent();
+    for (const want of ['Barriers across the face (m, J)', '/barriers/0/energy_rating_j', '/collectors/0/along_dip_m', 'Barriers and collectors', 'With and without protection, per support', 'Broken through (%) [95 % CI]']) {
+      assert(text.includes(want), `the report lacks "${want}"`);
+    }
+    await screenshot(page, 'report-barriers.png');
+    await page.emulateMedia({ media: 'screen' });
+    await page.evaluate(() => window.dispatchEvent(new Event('afterprint')));
+  });
+
+  await check('barriers: a bad row is marked before sending; a 422 naming /barriers/1/height_m lands on that row\'s height', async () => {
+    await open(page, '#scene');
+    await lines(page);
+    let count = 0;
+    const counter = (r) => { if (r.url().endsWith('/v1/scene')) count += 1; };
+    page.on('request', counter);
+    const height = page.locator('#scene-barriers .device-row').nth(1).locator('input').nth(3);
+    await height.fill('0');
+    await page.locator(`${form} button[type="submit"]`).click();
+    const err = page.locator('#scene-barriers .device-row').nth(1).locator('.field:has([data-col="height_m"]) .field-error');
+    await err.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/\(0, 100\] m/.test(await err.textContent()) && await height.getAttribute('aria-invalid') === 'true', `marked: ${await err.textContent()}`);
+    await page.waitForTimeout(300);
+    assert(count === 0, `${count} requests sent with a bad row`);
+    page.off('request', counter);
+    // the server's own refusal: the page's check is lifted for this request, the 422 comes back
+    await height.fill('1');
+    await page.route('**/v1/scene', async (route) => {
+      const body = JSON.parse(route.request().postData());
+      body.barriers[1].height_m = 250;
+      await route.continue({ postData: JSON.stringify(body) });
+    });
+    const response = await submit(page, form, '/v1/scene');
+    await page.unroute('**/v1/scene');
+    assert(response.status() === 422, `status ${response.status()}`);
+    const problem = await response.json();
+    assert(problem.errors?.some((e) => e.field === '/barriers/1/height_m'), `422 names ${problem.errors?.map((e) => e.field).join(', ')}`);
+    await err.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/100/.test(await err.textContent()) && await height.getAttribute('aria-invalid') === 'true', `the 422 is not beside the row's height: ${await err.textContent()}`);
+    // kJ shown: a server message in J is worded in kJ beside the rating
+    const rating = page.locator('#scene-barriers .device-row').first().locator('input').nth(4);
+    await rating.fill('2e9');
+    await page.locator(`${form} button[type="submit"]`).click();
+    const rerr = page.locator('#scene-barriers .device-row').first().locator('.field:has([data-col="energy_rating_j"]) .field-error');
+    await rerr.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/kJ/.test(await rerr.textContent()), `rating message: ${await rerr.textContent()}`);
+    await screenshot(page, 'scene-barrier-error.png');
+  });
+
+  await check('barriers: the rows travel in the case link; at 390 px the rows and the cards fit the width', async () => {
+    await open(page, '#scene');
+    await lines(page);
+    await submit(page, form, '/v1/scene');
+    await page.waitForFunction(() => location.hash.includes('case='), null, { timeout: WAIT_MS });
+    const phone = await context.newPage();
+    await phone.setViewportSize({ width: 390, height: 844 });
+    await phone.goto(page.url(), { waitUntil: 'load' });
+    await phone.waitForSelector('body[data-ready="true"]', { timeout: WAIT_MS });
+    const values = await phone.locator('#scene-barriers input').evaluateAll((els) => els.map((e) => e.value));
+    assert(values.join() === '40,-1.5,2.5,1,20,60,,,0.5,5', `barrier rows from the link: ${values.join()}`);
+    assert(await phone.locator(`${form} input[name="scene_barriers"]`).isChecked(), 'the barriers group is not ticked from the link');
+    const done = await rendered(phone, 'scene');
+    await submit(phone, form, '/v1/scene');
+    await done.done;
+    await phone.locator('#scene-unprotected tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
+    await noHorizontalScroll(phone, 'scene with barriers');
+    await elementShot(phone.locator('fieldset[data-group="/barriers"]'), 'phone-scene-barrier-rows.png');
+    await elementShot(phone.locator('#scene-devices-card'), 'phone-scene-devices.png');
+    await elementShot(phone.locator('#scene-unprotected-card'), 'phone-scene-unprotected.png');
+    await elementShot(phone.locator('#scene-floor-plan'), 'phone-scene-floor-barriers.png');
+    await phone.close();
+  });
+}
+
 async function floorViewSection(page, context) {
   const form = '#migration-form';
 
@@ -1978,6 +2231,7 @@ async function main() {
     await studySection(page);
     await spallingSection(page);
     await floorViewSection(page, context);
+    await protectionLinesSection(page, context);
     await phoneSection(context);
 
     await check('no JavaScript errors on the page', async () => {
