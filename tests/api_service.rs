@@ -101,3 +101,50 @@ async fn past_the_time_limit_the_work_stops_with_504() {
         "stopped promptly"
     );
 }
+
+/// An ensemble whose first runs show that it cannot finish within twice the time limit is
+/// refused with 422 naming `/monte_carlo/runs`, the projection, the limit and the ways to run it
+/// anyway, long before the limit; one that can finish is not.
+#[tokio::test]
+async fn an_ensemble_that_cannot_finish_in_time_is_refused_at_its_pace() {
+    let app = gangue::app(gangue::config::Config {
+        compute_timeout_s: 20.0,
+        ..Default::default()
+    });
+    // rigid-block runs of a few ms each: 1 000 000 of them take hours
+    let body = serde_json::json!({
+        "method": "rigid_block",
+        "monte_carlo": {"runs": 1_000_000},
+    });
+    let t0 = std::time::Instant::now();
+    let r = common::post(&app, "/v1/migration", &body).await;
+    let p = assert_problem(&r, 422, "invalid_input");
+    assert!(
+        t0.elapsed() < std::time::Duration::from_secs(10),
+        "refused early"
+    );
+    let e = &p["errors"][0];
+    assert_eq!(e["field"], "/monte_carlo/runs", "{p}");
+    let m = e["message"].as_str().unwrap();
+    assert!(
+        m.contains("time limit of 20 s") && m.contains("gangue compute"),
+        "{m}"
+    );
+    // the same in a scene
+    let r = common::post(
+        &app,
+        "/v1/scene",
+        &serde_json::json!({"method": "rigid_block", "monte_carlo": {"runs": 1_000_000}}),
+    )
+    .await;
+    let p = assert_problem(&r, 422, "invalid_input");
+    assert_eq!(p["errors"][0]["field"], "/monte_carlo/runs", "{p}");
+    // a lumped-mass ensemble of as many runs finishes
+    let r = common::post(
+        &app,
+        "/v1/migration",
+        &serde_json::json!({"monte_carlo": {"runs": 200_000}}),
+    )
+    .await;
+    assert_eq!(r.status, 200);
+}

@@ -105,6 +105,8 @@ pub fn until_precise(
     let mut checked_at = Vec::new();
     let mut half_width = 0.5;
     for n in precision::checkpoints(mc.runs) {
+        // progress and pace: the prefix being run (and the nominal run) is the work announced
+        control.set_total(1 + n);
         let (more, _) = scene::ensemble_part(&own, mc, runs.len() as u64..n, control)?;
         runs.extend(more);
         checked_at.push(n);

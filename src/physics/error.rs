@@ -42,6 +42,10 @@ pub enum PhysicsError {
     Numerical(String),
 }
 
+/// How much longer than its time limit an ensemble's projected run time must be, at the pace
+/// of its first runs, before it is refused ([`Control::check_pace`](super::Control::check_pace)).
+pub const PACE_FACTOR: f64 = 2.0;
+
 /// A model parameter an error concerns, in physics terms, with the indices that locate it in a
 /// list. Physics never names request fields: the web layer maps each parameter to the JSON Pointer
 /// of the request actually sent (a standalone request, a batch item, a scene support).
@@ -57,6 +61,8 @@ pub enum Param {
     RockElasticModulus,
     /// Rock Poisson ratio.
     RockPoissonRatio,
+    /// Number of runs of a Monte Carlo ensemble.
+    MonteCarloRuns,
     /// Radius of a sphere rock, m.
     RockRadius,
     /// Rounded-corner radius of a cube rock (point contact), m.

@@ -72,6 +72,7 @@ fn place(param: Param) -> Place {
         Param::FaceNormalStiffness => Path("/face/normal_stiffness_n_m".into()),
         Param::FloorElasticModulus => Path("/face/floor_material/elastic_modulus_pa".into()),
         Param::RigidBlockTimeStep => Path("/rigid_block/time_step_s".into()),
+        Param::MonteCarloRuns => Path("/monte_carlo/runs".into()),
     }
 }
 

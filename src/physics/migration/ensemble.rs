@@ -66,6 +66,7 @@ where
                 out.push(one(i)?);
             }
             control.add_done(end - start);
+            control.check_pace()?;
             Ok(out)
         })
         .collect();
@@ -93,7 +94,7 @@ pub(super) fn ensemble(
 ) -> PhysicsResult<Vec<RunSummary>> {
     const CHUNK: u64 = 256;
     let setup = lumped_mass_setup(case, pr);
-    control.set_total(range.end - range.start);
+    control.announce(range.end - range.start);
     let one = |i: u64| lumped_one(case, pr, &setup, mc, i, control);
     run_in_chunks(range, CHUNK as usize, control, one)
 }
@@ -109,7 +110,7 @@ pub(super) fn ensemble_mapped(
 ) -> PhysicsResult<(Vec<RunSummary>, Vec<RunCells>)> {
     const CHUNK: u64 = 256;
     let setup = lumped_mass_setup(case, pr);
-    control.set_total(range.end - range.start);
+    control.announce(range.end - range.start);
     let one =
         |i: u64| lumped_one_mapped(case, pr, &setup, mc, i, grid, control).map(|r| (r.0, r.1));
     Ok(run_in_chunks(range, CHUNK as usize, control, one)?

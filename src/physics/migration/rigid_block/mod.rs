@@ -1036,7 +1036,7 @@ pub(crate) fn run_part(
             (ensemble(case, &model, mc, range, control)?, Vec::new())
         }
         (Some(mc), Some(g)) if !range.is_empty() => {
-            control.set_total(range.end - range.start);
+            control.announce(range.end - range.start);
             let release_along = model.mean.along(&model.c0);
             let one = |i: u64| rigid_one(case, &model, mc, i, control, release_along, Some(g));
             super::run_in_chunks(range, 16, control, one)?
@@ -1150,7 +1150,7 @@ fn ensemble(
     control: &Control,
 ) -> PhysicsResult<Vec<RunSummary>> {
     const CHUNK: usize = 16;
-    control.set_total(range.end - range.start);
+    control.announce(range.end - range.start);
     let release_along = model.mean.along(&model.c0);
     let one = |i: u64| rigid_one(case, model, mc, i, control, release_along, None).map(|r| r.0);
     super::run_in_chunks(range, CHUNK, control, one)
