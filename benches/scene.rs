@@ -62,6 +62,7 @@ fn case(method: Method, model: ColumnModel, runs: u64) -> SceneCase {
         allowed_impacts: false,
         release_rate: None,
         guards: Vec::new(),
+        design: None,
     }
 }
 
@@ -127,6 +128,7 @@ fn paper_face(runs: u64, columns: bool) -> SceneCase {
         allowed_impacts: false,
         release_rate: None,
         guards: Vec::new(),
+        design: None,
     }
 }
 

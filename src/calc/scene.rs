@@ -40,6 +40,11 @@ impl Calculation for Scene {
                 false,
             );
             attach(&mut r, tail);
+            if let Some(ask) = &case.design {
+                let d = scene::design_search::design_search(case, ask, &runs, control)?;
+                r.plan.push(scene::design_search::design_stage(&d));
+                r.design = Some(d);
+            }
             r.runs = Some(runs);
         }
         Ok(report(r))

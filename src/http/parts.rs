@@ -34,6 +34,20 @@ fn refuse_maps(maps: Option<&MapsDto>, pointer: &str) -> Result<(), ApiError> {
     ck.finish()
 }
 
+/// A scene's design search runs over all of the ensemble's runs at once, which a sharded
+/// computation never holds: a shard request asking for it is refused with 422 before any work.
+fn refuse_design(req: &SceneRequest) -> Result<(), ApiError> {
+    let Some(d) = &req.design else { return Ok(()) };
+    let mut ck = Checker::new();
+    ck.push(
+        "/design",
+        serde_json::to_value(d).unwrap_or_default(),
+        "the design search is not carried through the part files of a sharded computation \
+         (gangue compute/merge): leave design out, or send the request to the service",
+    );
+    ck.finish()
+}
+
 /// The service's wire: requests and answers as the endpoints read and write them.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct HttpWire;
@@ -84,6 +98,7 @@ impl Wire for HttpWire {
         let mut req: SceneRequest = from_value(&v)?;
         let (case, ctx) = req.resolve(config)?;
         refuse_maps(req.migration_output.maps.as_ref(), "/migration_output/maps")?;
+        refuse_design(&req)?;
         let inputs = serde_json::to_vec(&req).map_err(ApiError::internal)?;
         Ok((case, (ctx, req), inputs))
     }

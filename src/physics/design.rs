@@ -360,6 +360,7 @@ mod tests {
             allowed_impacts: false,
             release_rate: None,
             guards: Vec::new(),
+            design: None,
         }
     }
 

@@ -35,6 +35,7 @@ use super::stats::{self, Summary};
 use super::validity::Warning;
 
 mod collectors;
+pub mod design_search;
 mod ensemble;
 use ensemble::compare_single;
 #[cfg(test)]
@@ -181,6 +182,8 @@ pub struct SceneCase {
     pub guards: Vec<Option<f64>>,
     /// Compute each support's allowed impact per design limit ([`allowed_for_entries`](super::design::allowed_for_entries)).
     pub allowed_impacts: bool,
+    /// The design search for guards over the ensemble's runs (None: not asked for).
+    pub design: Option<design_search::DesignAsk>,
 }
 
 /// The failure of a scene: the stage's error and the support entry it concerns (its fields are
@@ -525,6 +528,8 @@ pub struct SceneReport {
     pub warnings: Vec<Warning>,
     /// Per-cell maps of the ensemble (with `migration_output.maps`).
     pub maps: Option<migration::maps::Maps>,
+    /// The design search for guards (with [`SceneCase::design`]).
+    pub design: Option<design_search::DesignSearch>,
 }
 
 /// Bounding radius of a rock (largest distance of a point from its centre of mass), m, and its
@@ -861,6 +866,7 @@ pub fn solve_nominal(
             allowed: None,
             warnings,
             maps: None,
+            design: None,
         };
         return Ok((report, None));
     }
@@ -927,6 +933,7 @@ pub fn solve_nominal(
         allowed: None,
         warnings,
         maps: None,
+        design: None,
     };
     if mc.is_none() {
         // a single run: the rest of the report is the nominal run's

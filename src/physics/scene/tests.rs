@@ -45,6 +45,7 @@ mod guard_properties {
             allowed_impacts: false,
             release_rate: None,
             guards: vec![rating],
+            design: None,
         }
     }
 
