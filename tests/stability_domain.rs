@@ -190,6 +190,8 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             "/release_rate/observed_period_years",
             json!({"monte_carlo": {"runs": 5}, "release_rate": {"observed_events": 643}}),
         ),
+        // the design search runs over an ensemble's runs
+        ("/v1/scene", "/design/", json!({"monte_carlo": {"runs": 5}})),
     ];
     // `map` exists only on grid and contour floors: its fields are varied on a grid in map
     // coordinates, never on the default plane
@@ -198,6 +200,7 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
         || pointer.starts_with("/output/maps/")
         || pointer.starts_with("/migration_output/maps/")
         || pointer.starts_with("/release_rate/")
+        || pointer.starts_with("/design/")
     {
         vec![]
     } else {

@@ -151,7 +151,8 @@ pub struct DesignSearchOutDto {
     /// Every column acceptable (guarded ones with their ratings; the others as they are).
     pub all_acceptable: bool,
     /// Runs the ensemble would need for even 0 exceedances to be acceptable (omitted when its
-    /// runs suffice): the smallest n with z²/(n + z²) ≤ acceptable_probability.
+    /// runs suffice): the smallest n with z²/(n + z²) ≤ acceptable_probability (at most
+    /// 18446744073709551615, which it reaches below about 2e-19).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub runs_needed: Option<u64>,
     /// Inverses of the chain computed: one per active limit and distinct (column, rock) pair.

@@ -102,15 +102,22 @@ pub fn largest_acceptable_count(n: u64, acceptable: f64) -> Option<u64> {
 }
 
 /// The fewest runs n whose Wilson 95 % upper bound of 0 exceedances, z²/(n + z²), is within
-/// `acceptable` (in (0, 1)): ⌈z²(1 − a)/a⌉, adjusted by the interval's own rounding.
+/// `acceptable` (in (0, 1)): ⌈z²(1 − a)/a⌉, adjusted by the interval's own rounding where n is
+/// an exact double (below 2⁵³); saturating at `u64::MAX` for an acceptable probability below
+/// about 2e-19.
 #[must_use]
 pub fn runs_needed_for_zero(acceptable: f64) -> u64 {
+    const EXACT: u64 = 1 << 53;
     let z2 = Z_95 * Z_95;
+    // `as` saturates: an n past u64 is u64::MAX
     let mut n = (z2 * (1.0 - acceptable) / acceptable).ceil().max(1.0) as u64;
+    if n >= EXACT {
+        return n;
+    }
     while n > 1 && upper_bound(0, n - 1) <= acceptable {
         n -= 1;
     }
-    while upper_bound(0, n) > acceptable {
+    while n < EXACT && upper_bound(0, n) > acceptable {
         n += 1;
     }
     n
@@ -366,7 +373,9 @@ mod tests {
     /// Wilson's upper bound of 0 of n is z²/(n + z²): the runs needed solve it.
     #[test]
     fn runs_needed_is_the_first_n_with_a_bound_of_zero_within() {
-        for a in [0.5, 0.1, 0.05, 0.01, 1e-3, 1e-5, 0.123_456] {
+        assert_eq!(runs_needed_for_zero(5e-324), u64::MAX);
+        assert_eq!(runs_needed_for_zero(1e-300), u64::MAX);
+        for a in [0.5, 0.1, 0.05, 0.01, 1e-3, 1e-5, 1e-12, 0.123_456] {
             let n = runs_needed_for_zero(a);
             let z2 = Z_95 * Z_95;
             assert!(upper_bound(0, n) <= a && (n == 1 || upper_bound(0, n - 1) > a));
