@@ -162,12 +162,24 @@ async fn columns_not_guarded_keep_their_exceedance_and_are_named() {
             assert_eq!(e["acceptable"], bound(&a, k) <= ACCEPTABLE);
         }
     }
-    let residual = d["supports"]
+    let residual: Vec<&Value> = d["supports"]
         .as_array()
         .unwrap()
         .iter()
-        .any(|e| e["acceptable"] == false);
-    assert_eq!(d["all_acceptable"], !residual);
+        .filter(|e| e["acceptable"] == false)
+        .collect();
+    assert!(!residual.is_empty(), "no residual risk to name: {d}");
+    assert_eq!(d["all_acceptable"], false);
+    let w = a["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|w| w["code"] == "design_residual_risk")
+        .unwrap_or_else(|| panic!("no residual risk warning: {}", a["warnings"]));
+    for e in residual {
+        let named = format!("support {} column 0 (not guarded", e["support"]);
+        assert!(w["message"].as_str().unwrap().contains(&named), "{w}");
+    }
 }
 
 #[tokio::test]

@@ -43,6 +43,8 @@ impl Calculation for Scene {
             if let Some(ask) = &case.design {
                 let d = scene::design_search::design_search(case, ask, &runs, control)?;
                 r.plan.push(scene::design_search::design_stage(&d));
+                r.warnings
+                    .extend(scene::design_search::residual_risk_warning(case, &d));
                 r.design = Some(d);
             }
             r.runs = Some(runs);

@@ -349,6 +349,48 @@ pub fn design_stage(d: &DesignSearch) -> Stage {
     )
 }
 
+/// The warning naming the support columns whose exceedance stays above the acceptable
+/// probability (None: every one is acceptable): columns not guarded, or every column when the
+/// ensemble has too few runs.
+#[must_use]
+pub fn residual_risk_warning(case: &SceneCase, d: &DesignSearch) -> Option<Warning> {
+    const NAMED: usize = 20;
+    let above: Vec<&EntryDesign> = d.entries.iter().filter(|x| !x.acceptable).collect();
+    if above.is_empty() {
+        return None;
+    }
+    let mut names: Vec<String> = above
+        .iter()
+        .take(NAMED)
+        .map(|x| {
+            let e = &case.supports[x.entry];
+            format!(
+                "support {} column {} ({}, upper bound {:.4})",
+                e.support,
+                e.column_index,
+                if x.guarded { "guarded" } else { "not guarded" },
+                x.exceedance.ci95[1]
+            )
+        })
+        .collect();
+    if above.len() > NAMED {
+        names.push(format!("and {} more", above.len() - NAMED));
+    }
+    Some(Warning {
+        code: "design_residual_risk",
+        message: format!(
+            "{} support column(s) stay above the acceptable probability {}{}: {}",
+            above.len(),
+            d.acceptable_probability,
+            match d.runs_needed {
+                Some(m) => format!(" (the ensemble's {} runs are too few: {m} needed)", d.runs),
+                None => String::new(),
+            },
+            names.join(", ")
+        ),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
