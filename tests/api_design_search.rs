@@ -143,6 +143,43 @@ async fn drawn_rock_sizes_and_densities_get_an_inverse_per_run() {
     );
 }
 
+/// Two limits: a column exceeds when either is passed, so the rating holds the column within
+/// both, and each limit's bound on re-running is within the acceptable probability; the
+/// search's probability (either limit) is at least each limit's.
+#[tokio::test]
+async fn with_two_limits_the_rating_keeps_the_column_within_both() {
+    let app = common::app();
+    let mut body = scene(RUNS, true);
+    body["design_limits"] = json!({"stress_utilisation": 5.0, "max_force_n": 4e5});
+    let mut asked = body.clone();
+    asked["design"] = json!({"acceptable_probability": ACCEPTABLE});
+    let a = ok(&post(&app, "/v1/scene", &asked).await);
+    let d = &a["design"];
+    body["guards"] = guards(d, None, 1.0);
+    let g = ok(&post(&app, "/v1/scene", &body).await);
+    let mut binding = [false, false];
+    for (k, e) in d["supports"].as_array().unwrap().iter().enumerate() {
+        let p = e["exceedance"]["probability"].as_f64().unwrap();
+        for (i, limit) in ["stress_utilisation", "max_force_n"].iter().enumerate() {
+            let before = &a["statistics"]["supports"][k]["exceedance"][limit];
+            binding[i] |= before["ci95"][1].as_f64().unwrap() > ACCEPTABLE;
+            let after = &g["statistics"]["supports"][k]["exceedance"][limit];
+            assert!(
+                after["ci95"][1].as_f64().unwrap() <= ACCEPTABLE,
+                "{k} {limit}: {after}"
+            );
+            assert!(
+                after["probability"].as_f64().unwrap() <= p,
+                "{k} {limit}: {after} vs {e}"
+            );
+        }
+    }
+    assert!(
+        binding[0] && binding[1],
+        "both limits must matter: {binding:?}"
+    );
+}
+
 #[tokio::test]
 async fn columns_not_guarded_keep_their_exceedance_and_are_named() {
     let app = common::app();

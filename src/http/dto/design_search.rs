@@ -24,7 +24,9 @@ pub struct DesignGuardsDto {
 
 /// The design search for guards: for each guarded support column, the smallest energy rating
 /// whose exceedance probability over the ensemble's own runs has a Wilson 95 % upper bound within
-/// `acceptable_probability` (needs `monte_carlo`, not with `impact_velocity_m_s`).
+/// `acceptable_probability` (needs `monte_carlo`, not with `impact_velocity_m_s`). A support
+/// column exceeds when its strike passes some checked limit or the contact capacity; on a column
+/// the search guards, a guard of `guards` is replaced by the search's (the statistics keep it).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DesignSearchDto {
