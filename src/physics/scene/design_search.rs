@@ -136,8 +136,12 @@ pub fn needed_rating(v: f64, allowed: f64, mass: f64) -> f64 {
         left <= 0.0 || left.sqrt() <= allowed
     };
     let mut r = 0.5 * mass * (v * v - allowed * allowed);
-    let mut step = r * f64::EPSILON;
-    while !leaves(r) {
+    // an ulp of v² in rating: the difference can round to 0 when v is just above `allowed`
+    let mut step = r.max(0.5 * mass * v * v) * f64::EPSILON;
+    for _ in 0..200 {
+        if leaves(r) {
+            break;
+        }
         r += step;
         step *= 2.0;
     }
@@ -455,6 +459,8 @@ mod tests {
             (1000.0, 1e-3, 1.0),
             (3.0, 2.999_999_999, 7.0),
             (5.0, 0.0, 2.0),
+            (3.0, 3.0_f64.next_down(), 1.0),
+            (3.0_f64.next_up(), 3.0, 0.7),
         ] {
             let r = needed_rating(v, a, m);
             let exact = 0.5 * m * (v * v - a * a);
