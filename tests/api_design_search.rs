@@ -287,6 +287,14 @@ async fn bad_design_requests_are_refused_naming_the_field() {
                 "invalid_input",
             ),
             (
+                with(
+                    scene(5, false),
+                    json!({"acceptable_probability": 0.01, "guards": {"supports": [1, 2, 3, 1]}}),
+                ),
+                "/design/guards/supports",
+                "invalid_input",
+            ),
+            (
                 with(scene(5, false), json!({"acceptable_probability": 0})),
                 "/design/acceptable_probability",
                 "invalid_input",

@@ -16,7 +16,8 @@ use crate::physics::scene::{SceneCase, SupportEntry};
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, ToSchema, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct DesignGuardsDto {
-    /// Support numbers (from 1) that get a guard on every column (null: every support).
+    /// Support numbers (from 1) that get a guard on every column, at most as many as the face
+    /// has support columns (null: every support).
     #[schema(default = json!(null), example = json!([1, 2]))]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub supports: Option<Vec<u32>>,
@@ -73,8 +74,22 @@ pub fn resolve(
         all.dedup();
         all
     });
+    if supports.len() > entries.len() {
+        ck.push(
+            "/design/guards/supports",
+            json!(supports.len()),
+            format!(
+                "lists {} supports, more than the {} support columns of the face",
+                supports.len(),
+                entries.len()
+            ),
+        );
+        return None;
+    }
+    // sets: a list and a face of thousands each stay O(n log n)
+    let existing: std::collections::BTreeSet<u32> = entries.iter().map(|e| e.support).collect();
     for (i, s) in supports.iter().enumerate() {
-        if !entries.iter().any(|e| e.support == *s) {
+        if !existing.contains(s) {
             ck.push(
                 format!("/design/guards/supports/{i}"),
                 json!(s),
@@ -82,9 +97,10 @@ pub fn resolve(
             );
         }
     }
+    let listed: std::collections::BTreeSet<u32> = supports.iter().copied().collect();
     let guarded = entries
         .iter()
-        .map(|e| supports.contains(&e.support))
+        .map(|e| listed.contains(&e.support))
         .collect();
     (ok && !no_ensemble).then_some(DesignAsk {
         acceptable_probability: a,
