@@ -225,8 +225,8 @@ pub struct MethodComparisonDto {
 /// The answer of `POST /v1/scene`.
 #[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
 pub struct SceneResponse {
-    /// Stages `release`, `migration`, `impact`, `column`, `checks`, `allowed_impacts`: ran or
-    /// skipped, and why.
+    /// Stages `release`, `migration`, `impact`, `column`, `checks`, `allowed_impacts` and, with
+    /// `design`, `design`: ran or skipped, and why.
     pub plan: Vec<PlanStep>,
     /// The migration response of the (nominal) run (omitted with impact_velocity_m_s).
     #[serde(skip_serializing_if = "Option::is_none")]
