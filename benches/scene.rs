@@ -64,6 +64,7 @@ fn case(method: Method, model: ColumnModel, runs: u64) -> SceneCase {
         guards: Vec::new(),
         device_lines: Vec::new(),
         target: None,
+        design: None,
     }
 }
 
@@ -131,6 +132,7 @@ fn paper_face(runs: u64, columns: bool) -> SceneCase {
         guards: Vec::new(),
         device_lines: Vec::new(),
         target: None,
+        design: None,
     }
 }
 

@@ -107,6 +107,16 @@ pub struct Config {
     /// Most time steps of one rigid-block run (default 2e7).
     #[arg(long, env = "GANGUE_MAX_RIGID_STEPS", default_value_t = 2e7)]
     pub max_rigid_steps: f64,
+
+    /// Largest estimated work of a scene's design search for guards, in chain evaluations
+    /// (default 4e6): inverses × 120 evaluations each, the inverses being one per active limit
+    /// and distinct guarded column, or per run when the rock is drawn (README "Limits").
+    #[arg(
+        long,
+        env = "GANGUE_MAX_DESIGN_EVALUATIONS",
+        default_value_t = 4_000_000
+    )]
+    pub max_design_evaluations: u64,
 }
 
 /// The command line: the server (no subcommand, or `serve`), or a sharded computation.

@@ -206,6 +206,8 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             "/monte_carlo/target/half_width",
             json!({"monte_carlo": {"runs": 5, "target": {"statistic": "any_exceeded"}}}),
         ),
+        // the design search runs over an ensemble's runs
+        ("/v1/scene", "/design/", json!({"monte_carlo": {"runs": 5}})),
     ];
     // `map` exists only on grid and contour floors: its fields are varied on a grid in map
     // coordinates, never on the default plane
@@ -215,6 +217,7 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
         || pointer.starts_with("/migration_output/maps/")
         || pointer.starts_with("/release_rate/")
         || pointer.starts_with("/monte_carlo/target/")
+        || pointer.starts_with("/design/")
     {
         vec![]
     } else {

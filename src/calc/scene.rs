@@ -60,6 +60,13 @@ impl Calculation for Scene {
             );
             tail.statistics.target = outcome;
             attach(&mut r, tail);
+            if let Some(ask) = &case.design {
+                let d = scene::design_search::design_search(case, ask, &runs, control)?;
+                r.plan.push(scene::design_search::design_stage(&d));
+                r.warnings
+                    .extend(scene::design_search::residual_risk_warning(case, &d));
+                r.design = Some(d);
+            }
             r.runs = Some(runs);
         }
         Ok(report(r))

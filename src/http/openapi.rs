@@ -150,6 +150,7 @@ const NULL_DEFAULTS: &[&str] = &[
     "observed_events",
     "observed_period_years",
     "maps",
+    "design",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot

@@ -62,6 +62,20 @@ fn refuse_lines(req: &SceneRequest) -> Result<(), ApiError> {
     ck.finish()
 }
 
+/// A scene's design search runs over all of the ensemble's runs at once, which a sharded
+/// computation never holds: a shard request asking for it is refused with 422 before any work.
+fn refuse_design(req: &SceneRequest) -> Result<(), ApiError> {
+    let Some(d) = &req.design else { return Ok(()) };
+    let mut ck = Checker::new();
+    ck.push(
+        "/design",
+        serde_json::to_value(d).unwrap_or_default(),
+        "the design search is not carried through the part files of a sharded computation \
+         (gangue compute/merge): leave design out, or send the request to the service",
+    );
+    ck.finish()
+}
+
 /// Records the refusal of a sharded ensemble with a target (given as its JSON value): the runs
 /// are split between the shards before any ran, so none can stop early.
 fn refuse_target(ck: &mut Checker, target: Option<serde_json::Result<Value>>) {
@@ -136,6 +150,7 @@ impl Wire for HttpWire {
         let (case, ctx) = req.resolve(config)?;
         refuse_maps(req.migration_output.maps.as_ref(), "/migration_output/maps")?;
         refuse_lines(&req)?;
+        refuse_design(&req)?;
         let inputs = serde_json::to_vec(&req).map_err(ApiError::internal)?;
         Ok((case, (ctx, req), inputs))
     }

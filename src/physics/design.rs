@@ -362,6 +362,7 @@ mod tests {
             guards: Vec::new(),
             device_lines: Vec::new(),
             target: None,
+            design: None,
         }
     }
 

@@ -4,6 +4,7 @@
 pub mod batch;
 pub mod column;
 pub mod common;
+pub mod design_search;
 pub mod design_values;
 pub mod devices;
 pub mod floor;

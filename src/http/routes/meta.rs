@@ -140,7 +140,8 @@ fn presets_value(state: &AppState) -> Value {
             "max_rigid_block_steps": c.max_rigid_steps,
             "max_floor_bytes": c.max_floor_bytes,
             "max_map_cells": c.max_map_cells,
-            "max_map_cell_runs": c.max_map_cell_runs
+            "max_map_cell_runs": c.max_map_cell_runs,
+            "max_design_evaluations": c.max_design_evaluations
         }
     })
 }

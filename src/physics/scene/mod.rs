@@ -36,6 +36,7 @@ use super::validity::Warning;
 
 pub mod barrier_design;
 mod collectors;
+pub mod design_search;
 mod devices;
 mod ensemble;
 pub mod target;
@@ -190,6 +191,8 @@ pub struct SceneCase {
     pub device_lines: Vec<usize>,
     /// Stop the ensemble when a statistic is precise enough (None: run every run).
     pub target: Option<target::SceneTarget>,
+    /// The design search for guards over the ensemble's runs (None: not asked for).
+    pub design: Option<design_search::DesignAsk>,
 }
 
 /// The failure of a scene: the stage's error and the support entry it concerns (its fields are
@@ -538,6 +541,8 @@ pub struct SceneReport {
     pub warnings: Vec<Warning>,
     /// Per-cell maps of the ensemble (with `migration_output.maps`).
     pub maps: Option<migration::maps::Maps>,
+    /// The design search for guards (with [`SceneCase::design`]).
+    pub design: Option<design_search::DesignSearch>,
 }
 
 /// Bounding radius of a rock (largest distance of a point from its centre of mass), m, and its
@@ -874,6 +879,7 @@ pub fn solve_nominal(
             allowed: None,
             warnings,
             maps: None,
+            design: None,
         };
         return Ok((report, None));
     }
@@ -940,6 +946,7 @@ pub fn solve_nominal(
         allowed: None,
         warnings,
         maps: None,
+        design: None,
     };
     if mc.is_none() {
         // a single run: the rest of the report is the nominal run's

@@ -47,6 +47,7 @@ mod guard_properties {
             guards: vec![rating],
             device_lines: Vec::new(),
             target: None,
+            design: None,
         }
     }
 

@@ -157,6 +157,7 @@ impl SceneHead {
             warnings,
             inputs,
             model_version: meta.model_version,
+            design: None,
         };
         let mut bytes = to_json_bytes(&resp)?;
         if let Some(m) = self.migration {

@@ -265,6 +265,12 @@ pub struct SceneRequest {
     #[schema(default = json!(null))]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub column_output: Option<ColumnOutputDto>,
+    /// The design search for guards: the smallest energy rating of a guard on each listed
+    /// support's columns that brings its exceedance probability within the acceptable one, over
+    /// the ensemble's own runs (needs `monte_carlo`; null: none).
+    #[schema(default = json!(null), example = json!({"acceptable_probability": 0.01, "guards": {"supports": [1, 2]}}))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub design: Option<super::design_search::DesignSearchDto>,
 }
 
 impl Default for SceneRequest {
@@ -296,6 +302,7 @@ impl Default for SceneRequest {
             allowed_impacts: true,
             migration_output: MigrationOutputDto::default(),
             column_output: None,
+            design: None,
         }
     }
 }
@@ -566,6 +573,7 @@ impl SceneRequest {
             .as_ref()
             .and_then(|m| m.target.as_ref())
             .and_then(|t| t.resolve("/monte_carlo/target", &mut ck));
+        let design = super::design_search::resolve(self, &supports.entries, &mut ck);
         ck.finish()?;
         let case = SceneCase {
             target,
@@ -581,7 +589,9 @@ impl SceneRequest {
             allowed_impacts: self.allowed_impacts,
             release_rate,
             guards,
+            design,
         };
+        super::design_search::check_work(&case, config)?;
         let ctx = SceneContext {
             migration: mreq,
             entry_pointer: supports.pointers,

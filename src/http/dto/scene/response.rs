@@ -242,8 +242,8 @@ pub struct MethodComparisonDto {
 /// The answer of `POST /v1/scene`.
 #[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
 pub struct SceneResponse {
-    /// Stages `release`, `migration`, `impact`, `column`, `checks`, `allowed_impacts`: ran or
-    /// skipped, and why.
+    /// Stages `release`, `migration`, `impact`, `column`, `checks`, `allowed_impacts` and, with
+    /// `design`, `design`: ran or skipped, and why.
     pub plan: Vec<PlanStep>,
     /// The migration response of the (nominal) run (omitted with impact_velocity_m_s).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -273,6 +273,10 @@ pub struct SceneResponse {
     pub inputs: SceneRequest,
     /// Version of the service and its models.
     pub model_version: String,
+    /// The design search for guards: per support column, the smallest guard rating that makes
+    /// it acceptable and its exceedance with it (with `design`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub design: Option<super::super::design_search::DesignSearchOutDto>,
 }
 
 /// A piece of the answer: built here, or serialized earlier by the same code (the part 0 of a
@@ -546,6 +550,10 @@ impl SceneResponse {
             warnings,
             inputs,
             model_version: meta.model_version,
+            design: r
+                .design
+                .as_ref()
+                .map(|d| super::super::design_search::design_dto(case, d)),
         }
     }
 }
