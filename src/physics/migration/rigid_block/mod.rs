@@ -90,6 +90,7 @@
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
+use super::lines::{Crossing, Line, LineAction};
 use super::lumped_mass::{EventKind, Phase, StopReason};
 use super::maps::{CellTrack, MapGrid, RunCells};
 use super::monte_carlo::{self, Distribution};
@@ -104,6 +105,7 @@ use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 
 mod columns;
 mod contacts;
+mod crossing;
 mod run;
 mod settled;
 mod step;
@@ -304,6 +306,8 @@ struct Model<'a> {
     supports: Vec<super::SupportStop>,
     /// The columns among `supports`, by along-dip position.
     columns: columns::Columns,
+    /// Lines across the face (collectors and barriers), sorted along the dip (see `lines`).
+    lines: Vec<Line>,
     end_time: Option<f64>,
     c0: Vector3<f64>,
     v0: Vector3<f64>,
@@ -410,7 +414,7 @@ struct RunOut {
     /// Kinetic energy taken by barriers, J.
     barrier: f64,
     /// Per line of the case, the block's state where it reached it (None: not reached).
-    crossings: Vec<Option<super::Crossing>>,
+    crossings: Vec<Option<Crossing>>,
 }
 
 struct Recorder {
@@ -560,6 +564,12 @@ struct Run {
     off_floor: bool,
     /// Energy at release (with the springs' energy at release), J.
     e_start: f64,
+    /// The next line the block can reach (index into the model's lines).
+    next_line: usize,
+    /// Per line, the block's state where it reached it (None: not reached).
+    crossings: Vec<Option<Crossing>>,
+    /// Kinetic energy taken by barriers, J.
+    barrier: f64,
 }
 
 /// The shear spring of a contact of normal `n` after its point drifted by `d` (m): the old
@@ -736,6 +746,7 @@ impl<'a> Model<'a> {
             span_support: case.stop_length().1,
             supports: case.supports.clone(),
             columns: columns::Columns::new(&case.supports),
+            lines: case.lines.clone(),
             end_time: case.end_time,
             c0,
             v0: pr.v0,
@@ -1088,7 +1099,8 @@ fn nominal_run(
             .support
             .map(|k| super::support_impact_speed(&mean, &case.supports[k], &st.c, &st.v)),
     };
-    let residual = kt + kr + pe + out.stored + out.damping + out.friction - out.e_start;
+    let residual =
+        kt + kr + pe + out.stored + out.damping + out.friction + out.barrier - out.e_start;
     let mut warnings = Vec::new();
     let scale = model.energy_scale(st);
     let allowed = match model.hertz {
