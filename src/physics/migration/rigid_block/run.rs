@@ -280,7 +280,12 @@ impl Model<'_> {
         let st = self.synced(&st, run.half_step, &run.acc, &run.ang_acc);
         run.half_step = None;
         // off the floor, nothing stored: the account must close here
-        self.check_energy(&st, 0.0, run.damping + run.friction + run.barrier, run.e_start)?;
+        self.check_energy(
+            &st,
+            0.0,
+            run.damping + run.friction + run.barrier,
+            run.e_start,
+        )?;
         let t_target = st.t + tau;
         let gravity = Vector3::new(0.0, 0.0, -self.g);
         // lower end inside the flight?
