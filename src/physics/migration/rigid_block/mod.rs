@@ -69,8 +69,8 @@
 //!   closed springs at the end position (the shear springs carried over the last drift) →
 //!   stored. The stepping starts with the velocities put half a step back and a flight starts
 //!   from them brought to the state's time, so no term of the account is first order in Δt.
-//!   KE + PE + stored + damping + friction + residual = the energy at release (with the
-//!   springs' energy at release).
+//!   KE + PE + stored + damping + friction + barriers + residual = the energy at release (with
+//!   the springs' energy at release).
 //! * **Floor edges and holes.** A block vertex off the floor (beyond its extent or over a
 //!   hole) has no contact; once it is below the floor's level there (a hole's surface filled
 //!   in from the data around it, the nearest facet's plane continued beyond a grid's edge) the
@@ -79,6 +79,11 @@
 //!   back over the floor already deep, its ½kₙU² created from nothing (a block landing across
 //!   a grid's upper edge was thrown off at 143 m/s). A sphere touches a floor's boundary edge
 //!   like any other, and stops when its centre leaves the floor.
+//! * **Lines across the face** (collectors and barriers, `migration::lines`): the block
+//!   reaches a line when its centre's along-dip position does; a collector or an overtopped
+//!   barrier only records the block's state there, a barrier stops it (`barrier`) or takes its
+//!   rating of the kinetic energy (booked in the account's `barriers`). Where the state is
+//!   taken (exactly in a flight, at the step's end in a stepped phase) is in `crossing`.
 //! * **Energy never created** is checked at the start of every free flight and at the end:
 //!   KE + PE + stored + dissipated may exceed the energy at release by at most 1 % (linear
 //!   law) or 5 % (Hertz) of the energy in play (m g (|Δs| + |Δz| + drop) + ½ m v₀² and the

@@ -1001,22 +1001,15 @@ impl Model<'_> {
             run.stored = stored;
             run.friction += slip;
         }
+        let mut barrier_event = None;
         if reason == StopReason::Barrier {
             // the barrier takes the kinetic energy the block brought to it (its crossing's)
             let (kt, kr, _) = self.energy(&st);
             run.barrier += kt + kr;
-            if cfg.log_events {
+            barrier_event = cfg.log_events.then(|| {
                 let before = st.v.norm();
-                run.events.push(self.event(
-                    st.t,
-                    EventKind::Barrier,
-                    &st.c,
-                    before,
-                    0.0,
-                    kt + kr,
-                    None,
-                ));
-            }
+                self.event(st.t, EventKind::Barrier, &st.c, before, 0.0, kt + kr, None)
+            });
             st.v = Vector3::zeros();
             st.w = Vector3::zeros();
         }
@@ -1027,6 +1020,7 @@ impl Model<'_> {
         {
             self.close_episode(ep, false, &mut run.events, cfg.log_events);
         }
+        run.events.extend(barrier_event);
         let reason = match (reason, self.span_support) {
             (StopReason::LowerEnd, Some(k)) => {
                 run.support = Some(k);
