@@ -432,7 +432,8 @@ mod tests {
 
     /// Through `ensemble_run`: crossings recorded where the block reached its lines, with
     /// speed and energies consistent with the fall to them; lines up-slope of the start, past
-    /// the end or off the block's across position are not reached; a low barrier the falling
+    /// the end or off the block's across position are not reached, one at the end is; a low
+    /// barrier the falling
     /// block passes over is overtopped and leaves the run as it was.
     #[test]
     fn an_ensemble_run_records_its_crossings_and_overtops_a_low_barrier() {
@@ -440,6 +441,8 @@ mod tests {
         let mut case = drop();
         case.output.events = false;
         case.face.length = 30.0;
+        let nominal = go(&case);
+        let (mass, dt) = (nominal.mass, nominal.rigid_block.unwrap().time_step);
         let mc = MonteCarlo {
             runs: 4,
             friction_coefficient: Some(Distribution::Uniform { min: 0.4, max: 0.6 }),
@@ -465,18 +468,27 @@ mod tests {
                 barrier: None,
             },
             line(25.0, None),
+            line(30.0, None),
             line(35.0, None),
         ];
         let th = case.face.dip_deg.to_radians();
-        let mass = go(&drop()).mass;
         for (r, f) in runs(&with).iter().zip(&free) {
             // the run is the run without lines, bit for bit
             assert_eq!(format!("{:?}", r.0), format!("{:?}", f.0));
             let x = &r.2;
-            assert_eq!(x.len(), 6);
+            assert_eq!(x.len(), 7);
             // up-slope of the start (the centre starts at 10 − 3 sin θ), across off the block,
-            // past the end
-            assert!(x[0].is_none() && x[3].is_none() && x[5].is_none(), "{x:?}");
+            // past the end; one at the end is reached as the run ends there
+            assert!(x[0].is_none() && x[3].is_none() && x[6].is_none(), "{x:?}");
+            assert_eq!(x[5].unwrap().action, LineAction::Passed);
+            // (recorded at the end of the step that reached it, the run's end put back to the
+            // end length inside that step)
+            let t_end = x[5].unwrap().time;
+            assert!(
+                t_end >= r.0.time && t_end <= r.0.time + dt,
+                "{t_end} vs {}",
+                r.0.time
+            );
             let over = x[1].unwrap();
             assert_eq!(over.action, LineAction::Overtopped);
             assert!(over.passing_height > 0.1, "{over:?}");
