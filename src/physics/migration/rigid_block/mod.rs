@@ -69,8 +69,8 @@
 //!   closed springs at the end position (the shear springs carried over the last drift) →
 //!   stored. The stepping starts with the velocities put half a step back and a flight starts
 //!   from them brought to the state's time, so no term of the account is first order in Δt.
-//!   KE + PE + stored + damping + friction + residual = the energy at release (with the
-//!   springs' energy at release).
+//!   KE + PE + stored + damping + friction + barriers + residual = the energy at release (with
+//!   the springs' energy at release).
 //! * **Floor edges and holes.** A block vertex off the floor (beyond its extent or over a
 //!   hole) has no contact; once it is below the floor's level there (a hole's surface filled
 //!   in from the data around it, the nearest facet's plane continued beyond a grid's edge) the
@@ -79,6 +79,11 @@
 //!   back over the floor already deep, its ½kₙU² created from nothing (a block landing across
 //!   a grid's upper edge was thrown off at 143 m/s). A sphere touches a floor's boundary edge
 //!   like any other, and stops when its centre leaves the floor.
+//! * **Lines across the face** (collectors and barriers, `migration::lines`): the block
+//!   reaches a line when its centre's along-dip position does; a collector or an overtopped
+//!   barrier only records the block's state there, a barrier stops it (`barrier`) or takes its
+//!   rating of the kinetic energy (booked in the account's `barriers`). Where the state is
+//!   taken (exactly in a flight, at the step's end in a stepped phase) is in `crossing`.
 //! * **Energy never created** is checked at the start of every free flight and at the end:
 //!   KE + PE + stored + dissipated may exceed the energy at release by at most 1 % (linear
 //!   law) or 5 % (Hertz) of the energy in play (m g (|Δs| + |Δz| + drop) + ½ m v₀² and the
@@ -90,6 +95,7 @@
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
+use super::lines::{Crossing, Line, LineAction};
 use super::lumped_mass::{EventKind, Phase, StopReason};
 use super::maps::{CellTrack, MapGrid, RunCells};
 use super::monte_carlo::{self, Distribution};
@@ -104,6 +110,7 @@ use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 
 mod columns;
 mod contacts;
+mod crossing;
 mod run;
 mod settled;
 mod step;
@@ -304,6 +311,8 @@ struct Model<'a> {
     supports: Vec<super::SupportStop>,
     /// The columns among `supports`, by along-dip position.
     columns: columns::Columns,
+    /// Lines across the face (collectors and barriers), sorted along the dip (see `lines`).
+    lines: Vec<Line>,
     end_time: Option<f64>,
     c0: Vector3<f64>,
     v0: Vector3<f64>,
@@ -410,7 +419,7 @@ struct RunOut {
     /// Kinetic energy taken by barriers, J.
     barrier: f64,
     /// Per line of the case, the block's state where it reached it (None: not reached).
-    crossings: Vec<Option<super::Crossing>>,
+    crossings: Vec<Option<Crossing>>,
 }
 
 struct Recorder {
@@ -560,6 +569,12 @@ struct Run {
     off_floor: bool,
     /// Energy at release (with the springs' energy at release), J.
     e_start: f64,
+    /// The next line the block can reach (index into the model's lines).
+    next_line: usize,
+    /// Per line, the block's state where it reached it (None: not reached).
+    crossings: Vec<Option<Crossing>>,
+    /// Kinetic energy taken by barriers, J.
+    barrier: f64,
 }
 
 /// The shear spring of a contact of normal `n` after its point drifted by `d` (m): the old
@@ -736,6 +751,7 @@ impl<'a> Model<'a> {
             span_support: case.stop_length().1,
             supports: case.supports.clone(),
             columns: columns::Columns::new(&case.supports),
+            lines: case.lines.clone(),
             end_time: case.end_time,
             c0,
             v0: pr.v0,
@@ -1088,7 +1104,8 @@ fn nominal_run(
             .support
             .map(|k| super::support_impact_speed(&mean, &case.supports[k], &st.c, &st.v)),
     };
-    let residual = kt + kr + pe + out.stored + out.damping + out.friction - out.e_start;
+    let residual =
+        kt + kr + pe + out.stored + out.damping + out.friction + out.barrier - out.e_start;
     let mut warnings = Vec::new();
     let scale = model.energy_scale(st);
     let allowed = match model.hertz {

@@ -214,6 +214,9 @@ impl Model<'_> {
             drift_h: 0.0,
             off_floor: false,
             e_start,
+            next_line: super::super::lines::first_reachable(&self.lines, self.mean.along(&st.c)),
+            crossings: vec![None; self.lines.len()],
+            barrier: 0.0,
         };
         (run, e_start)
     }
@@ -228,7 +231,7 @@ impl Model<'_> {
         if let Some(r) = run.rec.as_mut()
             && run.st.t >= r.next
         {
-            let diss = run.damping + run.friction;
+            let diss = run.damping + run.friction + run.barrier;
             let s = self.synced(&run.st, run.half_step, &run.acc, &run.ang_acc);
             self.sample(r, &s, diss, run.stored)?;
             while r.next <= run.st.t {
@@ -277,7 +280,12 @@ impl Model<'_> {
         let st = self.synced(&st, run.half_step, &run.acc, &run.ang_acc);
         run.half_step = None;
         // off the floor, nothing stored: the account must close here
-        self.check_energy(&st, 0.0, run.damping + run.friction, run.e_start)?;
+        self.check_energy(
+            &st,
+            0.0,
+            run.damping + run.friction + run.barrier,
+            run.e_start,
+        )?;
         let t_target = st.t + tau;
         let gravity = Vector3::new(0.0, 0.0, -self.g);
         // lower end inside the flight?
@@ -297,7 +305,16 @@ impl Model<'_> {
             None
         };
         let cross = if column.is_some() { None } else { cross };
-        let t_stop = column.map(|c| st.t + c.0).or(cross.map(|tc| st.t + tc));
+        let mut t_stop = column.map(|c| st.t + c.0).or(cross.map(|tc| st.t + tc));
+        // a barrier that acts inside the flight ends it there (collectors only record)
+        let barrier = if self.lines.is_empty() {
+            None
+        } else {
+            self.lines_in_flight(run, &st, t_stop.unwrap_or(t_target) - st.t)
+        };
+        if let Some((sx, ..)) = &barrier {
+            t_stop = Some(sx.t);
+        }
         let t_final = t_stop.unwrap_or(t_target);
         if run.first_impact_done {
             run.max_bounce = run.max_bounce.max(self.apex_height(&st, t_final));
@@ -307,13 +324,22 @@ impl Model<'_> {
             && r.next < t_final
         {
             let s = self.fly(&st, r.next - st.t);
-            self.sample(r, &s, run.damping + run.friction, run.stored)?;
+            self.sample(r, &s, run.damping + run.friction + run.barrier, run.stored)?;
             r.next += r.interval;
         }
         run.st = self.fly(&st, t_final - st.t);
         run.drift_h = 0.0;
         run.acc = gravity;
         run.ang_acc = Vector3::zeros();
+        if let Some((sx, action, f)) = barrier {
+            run.st = sx;
+            if action == LineAction::Stopped {
+                return Ok(Flight::Stopped(StopReason::Barrier));
+            }
+            self.break_through(run, f, cfg.log_events);
+            run.prev_along = self.mean.along(&run.st.c);
+            return Ok(Flight::Flew);
+        }
         if let Some((_, k)) = column {
             run.support = Some(k);
             return Ok(Flight::Stopped(StopReason::Support));
@@ -890,6 +916,13 @@ impl Model<'_> {
                     .map(|d| (u, st.c.y, d));
             }
         }
+        // lines are reached before the lower end (a barrier stands in front of its support)
+        if !self.lines.is_empty()
+            && let Some(reason) = self.lines_in_step(run, cfg)
+        {
+            return Some(reason);
+        }
+        let st = &mut run.st;
         let along = self.mean.along(&st.c);
         if along >= self.length {
             let frac = if along > run.prev_along {
@@ -949,7 +982,7 @@ impl Model<'_> {
         cfg: &RunSettings,
     ) -> PhysicsResult<RunOut> {
         let lagged = run.st;
-        let st = self.synced(&run.st, run.half_step, &run.acc, &run.ang_acc);
+        let mut st = self.synced(&run.st, run.half_step, &run.acc, &run.ang_acc);
         // the springs at the end position: the normal ones from its overlaps, the shear ones
         // carried over the last drift (the slip on it booked)
         let in_contact = !run.springs.is_empty();
@@ -963,16 +996,31 @@ impl Model<'_> {
                 run.drift_h,
                 &mut run.tris,
                 &mut run.contacts,
+                None,
             );
             run.stored = stored;
             run.friction += slip;
         }
-        self.check_energy(&st, run.stored, run.damping + run.friction, e_start)?;
+        let mut barrier_event = None;
+        if reason == StopReason::Barrier {
+            // the barrier takes the kinetic energy the block brought to it (its crossing's)
+            let (kt, kr, _) = self.energy(&st);
+            run.barrier += kt + kr;
+            barrier_event = cfg.log_events.then(|| {
+                let before = st.v.norm();
+                self.event(st.t, EventKind::Barrier, &st.c, before, 0.0, kt + kr, None)
+            });
+            st.v = Vector3::zeros();
+            st.w = Vector3::zeros();
+        }
+        let lost = run.damping + run.friction + run.barrier;
+        self.check_energy(&st, run.stored, lost, e_start)?;
         if let Some(ep) = run.episode.take()
             && ep.impact
         {
             self.close_episode(ep, false, &mut run.events, cfg.log_events);
         }
+        run.events.extend(barrier_event);
         let reason = match (reason, self.span_support) {
             (StopReason::LowerEnd, Some(k)) => {
                 run.support = Some(k);
@@ -980,21 +1028,22 @@ impl Model<'_> {
             }
             (r, _) => r,
         };
+        let stopped = matches!(reason, StopReason::AtRest | StopReason::Barrier);
         let phase = match reason {
-            StopReason::AtRest => Phase::Stopped,
+            _ if stopped => Phase::Stopped,
             _ if !in_contact => Phase::Flight,
             _ if run.slip_max < 1e-3 * st.v.norm() => Phase::Roll,
             _ => Phase::Slide,
         };
-        let stop_along = (reason == StopReason::AtRest).then(|| self.mean.along(&st.c));
-        if cfg.log_events && reason == StopReason::AtRest {
+        let stop_along = stopped.then(|| self.mean.along(&st.c));
+        if cfg.log_events && stopped {
             run.events
                 .push(self.event(st.t, EventKind::Stop, &st.c, st.v.norm(), 0.0, 0.0, None));
         }
         if let Some(r) = run.rec.as_mut()
             && r.tr.time.last().is_none_or(|&t| t < st.t)
         {
-            self.sample(r, &st, run.damping + run.friction, run.stored)?;
+            self.sample(r, &st, lost, run.stored)?;
         }
         Ok(RunOut {
             st,
@@ -1013,8 +1062,8 @@ impl Model<'_> {
             events: run.events,
             trajectory: run.rec.map(|r| r.tr),
             support: run.support,
-            barrier: 0.0,
-            crossings: Vec::new(),
+            barrier: run.barrier,
+            crossings: run.crossings,
         })
     }
 
@@ -1037,7 +1086,9 @@ impl Model<'_> {
     /// dissipated on the way there: the springs as the last step left them are carried over
     /// the drift `h` (s) since with the velocities of `lagged` (the leapfrog's half-step ones),
     /// rotated into the end's tangent planes and capped at μ times the end's elastic force; a
-    /// spring whose contact is no longer closed releases its energy.
+    /// spring whose contact is no longer closed releases its energy. With `carried`, the
+    /// carried springs of the pairs still closed are pushed there (a pair new at the end has
+    /// none: its next force evaluation sees it as a fresh touch).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn stored_at_end(
         &self,
@@ -1049,6 +1100,7 @@ impl Model<'_> {
         h: f64,
         tris: &mut Vec<FloorTriangle>,
         geos: &mut Vec<Geo>,
+        mut carried: Option<&mut Vec<Spring>>,
     ) -> (f64, f64) {
         let r = self.rot(&end.q);
         self.contacts(&end.c, &r, tris, geos);
@@ -1089,6 +1141,16 @@ impl Model<'_> {
             };
             stored += es_new;
             friction += shear_work(&fs_old, old.energy(), &fs, es_new, &d);
+            if let Some(out) = carried.as_deref_mut() {
+                out.push(Spring {
+                    key: gk.key,
+                    fs,
+                    ks,
+                    rr,
+                    n: gk.n,
+                    u: gk.u,
+                });
+            }
         }
         for sp in springs {
             if !geos.iter().any(|g| g.key == sp.key) {
@@ -1147,8 +1209,14 @@ impl Model<'_> {
 
     /// First time in (0, τ] at which the centre's along-dip position reaches the face length.
     pub(super) fn along_cross(&self, st: &State, tau: f64) -> Option<f64> {
+        self.along_reach(st, self.length, tau)
+    }
+
+    /// First time in [0, τ] at which the centre's along-dip position in free flight from `st`
+    /// reaches `target` (m).
+    pub(super) fn along_reach(&self, st: &State, target: f64, tau: f64) -> Option<f64> {
         let d = self.mean.dip_dir();
-        let s0 = self.mean.along(&st.c) - self.length;
+        let s0 = self.mean.along(&st.c) - target;
         let b = d.dot(&st.v);
         let a = -self.g * d.z; // d²s/dt² = g sin θ
         super::super::terrain::outward_root(s0, b, a).filter(|&t| t <= tau)

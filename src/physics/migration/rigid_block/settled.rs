@@ -18,6 +18,7 @@ impl Model<'_> {
             &a_t,
             cfg.end_t,
             run.rec.as_ref().map(|r| r.next),
+            self.skip_end(run),
         );
         if n_skip < 8 {
             return;
@@ -48,6 +49,9 @@ impl Model<'_> {
             if n_skip < 8 {
                 return;
             }
+        }
+        if !self.lines.is_empty() {
+            self.lines_in_skip(run, n_skip, &v_t, &a_t);
         }
         let nf = n_skip as f64;
         // N leapfrog steps under the constant force, exactly: v ← v + N a h,
@@ -230,8 +234,9 @@ impl Model<'_> {
 
     /// Whole time steps a settled slide on the plane may skip from `st` (velocity `v_t` and
     /// constant acceleration `a_t` in the plane): it stops two steps short of the end time and
-    /// of the lower end, lands on the next trajectory sample, and takes at most 90 % of the
-    /// steps left before a decelerating slide would stop.
+    /// of the along-dip position `end_along` (m: the lower end, or a barrier's line before
+    /// it), lands on the next trajectory sample, and takes at most 90 % of the steps left
+    /// before a decelerating slide would stop.
     pub(super) fn steady_steps(
         &self,
         st: &State,
@@ -239,6 +244,7 @@ impl Model<'_> {
         a_t: &Vector3<f64>,
         end_t: f64,
         next_sample: Option<f64>,
+        end_along: f64,
     ) -> u64 {
         let dt = self.dt;
         let mut n = f64::INFINITY;
@@ -255,7 +261,7 @@ impl Model<'_> {
         }
         // along(N) = s₀ + b N + c N (N + 1) reaches the face length
         let d = self.mean.dip_dir();
-        let s0 = self.mean.along(&st.c) - self.length;
+        let s0 = self.mean.along(&st.c) - end_along;
         let b = d.dot(v_t) * dt;
         let c = 0.5 * d.dot(a_t) * dt * dt;
         n = n.min(steps_to_travel(b, c, -s0).floor() - 2.0);
