@@ -74,7 +74,8 @@ const SCENE_GROUPS = [
       },
       {
         pointer: '/monte_carlo/target/statistic', label: 'Precise enough for', kind: 'select', choice: { value: 'any_exceeded', why: 'the headline probability' },
-        options: [['any_exceeded', 'the probability that a rock overloads some support'], ['every_support', 'every support\'s probability (the widest interval)']],
+        options: [['any_exceeded', 'any support overloaded'], ['every_support', 'every support\'s probability']],
+        hint: 'any support overloaded: the probability that a rock overloads some support; every support: the widest interval over the supports',
       },
       {
         pointer: '/monte_carlo/target/half_width', label: 'Precision ±', unit: 'points', exp: -2, choice: { value: 0.5, why: 'half a percentage point: a 2 % probability known as 1.5–2.5 %' },

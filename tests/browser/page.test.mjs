@@ -2339,6 +2339,7 @@ async function targetSection(page, context) {
     await page.waitForFunction((src) => new RegExp(src).test(document.querySelector('#scene-progress .progress-text')?.textContent ?? ''), re.source, { timeout: WAIT_MS });
     const seen = await page.locator('#scene-progress .progress-text').textContent();
     assert(!/left$/.test(seen), seen);
+    console.log(`      progress line: ${seen.replace(/\u00a0/g, ' ')}`);
     await answer;
     await page.locator('#scene-summary [data-out="statistics.target"]').waitFor({ state: 'visible', timeout: WAIT_MS });
   });
