@@ -7,9 +7,9 @@ import { setFloorLimits } from './js/floor.js';
 import { applyServerDefaults, applyState, formState, setDefaults } from './js/form.js';
 import { csvButton, csvText, download, fmt, h, setCsvHeader, tableRows } from './js/format.js';
 import { initImpact } from './js/impact.js';
-import { initMigration } from './js/migration.js';
+import { arrivalTargetSentence, initMigration } from './js/migration.js';
 import { destroy, joinSeries, linePlot, plotDataUrl, plotPng } from './js/plot.js';
-import { initScene, setSceneRanges } from './js/scene.js';
+import { initScene, sceneTargetSentence, setSceneRanges } from './js/scene.js';
 import { initSpalling, setSpallingDefaults } from './js/spalling.js';
 import { initStudy, setStudyDefaults } from './js/study.js';
 
@@ -259,6 +259,11 @@ const lastResults = {};
 /** Puts a saved case into the forms; with `run`, computes its tab. */
 function openCase(state, { run = false } = {}) {
   if (!state || !state.forms) return;
+  // a case saved before ensembles could stop when precise enough ran a fixed number of runs
+  const scene = state.forms.scene;
+  if (scene && !('local:runs_mode' in scene)) state.forms.scene = { ...scene, 'local:runs_mode': 'fixed' };
+  const migration = state.forms.migration;
+  if (migration && !('toggle:migration_target' in migration)) state.forms.migration = { ...migration, 'toggle:migration_target': false };
   if (state.settings && state.settings !== settings) applySettings(state.settings);
   for (const [name, values] of Object.entries(state.forms)) if (forms[name]) applyState(forms[name], values);
   showTab(state.tab);
@@ -323,8 +328,10 @@ function headline(tab, data) {
   switch (tab) {
     case 'impact': return `v ${val(forms.impact, '/velocity_m_s')} m/s, Pmax ${fmt(data.max_force_n * 1e-3, 4)} kN`;
     case 'column': return Object.keys(data).map((m) => `${m} U ${fmt(data[m].absorbed_energy_j ?? data[m].column_energy_after_contact_j, 4)} J`).join(', ');
-    case 'migration': return `${data.statistics ? `${data.statistics.runs} runs, ` : ''}v ${fmt(data.arrival?.speed_m_s, 4)} m/s`;
-    case 'scene': return data.statistics ? `${data.statistics.runs} runs` : `${(data.impacts ?? []).length} impact(s)`;
+    case 'migration': return `${data.statistics ? `${data.statistics.runs} runs${data.statistics.target ? ` (${data.statistics.target.met ? 'precise enough' : 'target not met'})` : ''}, ` : ''}v ${fmt(data.arrival?.speed_m_s, 4)} m/s`;
+    case 'scene': return data.statistics
+      ? `${data.statistics.runs} runs${data.statistics.target ? ` (${data.statistics.target.met ? 'precise enough' : 'target not met'})` : ''}`
+      : `${(data.impacts ?? []).length} impact(s)`;
     default: return '';
   }
 }
@@ -409,7 +416,7 @@ function figures(tab, data) {
       if (st) {
         const over = (st.supports ?? []).filter((e) => e.verdict === 'exceeded');
         return [
-          ['Runs', `${st.runs} (seed ${st.seed})`],
+          ['Runs', `${st.runs} (seed ${st.seed})${st.target ? `. ${sceneTargetSentence(st.target)}` : ''}`],
           ['P(a rock overloads some support)', st.any_exceeded ? ci(st.any_exceeded) : '—'],
           ['Supports exceeding', `${over.length} of ${(st.supports ?? []).length}`],
           ['Reached the lower end', pct(st.outcomes?.lower_end ?? 0)],
@@ -423,7 +430,7 @@ function figures(tab, data) {
     case 'migration':
       return [['Arrival speed', `${fmt(data.arrival?.speed_m_s, 5)} m/s`], ['Outcome', data.arrival?.stop_reason ?? '—'],
         ['Final position along the dip', `${fmt(data.arrival?.along_dip_m, 5)} m`],
-        ...(data.statistics ? [['Runs', String(data.statistics.runs)], ['Mean arrival speed', `${fmt(data.statistics.speed_m_s?.mean, 5)} m/s`], ['p95 arrival speed', `${fmt(data.statistics.speed_m_s?.p95, 5)} m/s`]] : [])];
+        ...(data.statistics ? [['Runs', `${data.statistics.runs}${data.statistics.target ? `. ${arrivalTargetSentence(data.statistics.target)}` : ''}`], ['Mean arrival speed', `${fmt(data.statistics.speed_m_s?.mean, 5)} m/s`], ['p95 arrival speed', `${fmt(data.statistics.speed_m_s?.p95, 5)} m/s`]] : [])];
     case 'impact':
       return [['Impact velocity', `${val(forms.impact, '/velocity_m_s')} m/s`], ['Max force Pmax', `${fmt(data.max_force_n * 1e-3, 5)} kN`], ['Max approach δmax', `${fmt(data.max_deformation_m * 1e3, 5)} mm`]];
     case 'column':
@@ -559,6 +566,15 @@ function initExports() {
   }
 }
 
+
+/** The CSV header's line on the runs of the tab's last ensemble ("runs 4000 of at most 64000 (seed 42): Stopped at …"). */
+function runsLines(tab) {
+  const st = lastResults[tab]?.data?.statistics;
+  if (!st || typeof st.runs !== 'number') return [];
+  const t = st.target;
+  const words = t ? (tab === 'scene' ? sceneTargetSentence(t) : arrivalTargetSentence(t)) : '';
+  return [`runs ${st.runs}${t ? ` of at most ${t.max_runs}` : ''} (seed ${st.seed})${words ? `: ${words.replace(/\u00a0/g, ' ')}` : ''}`];
+}
 
 function updatePrintHeader() {
   const el = document.getElementById('print-header');
@@ -775,7 +791,7 @@ async function main() {
   setCsvHeader(() => {
     const up = uploadedFloor();
     return [`gangue ${modelVersion || 'unknown'}`, `date ${new Date().toISOString()}`, `case ${linkFor(caseState(currentTab()))}`,
-      ...(up ? [`floor ${up.name} sha256 ${up.sha256 ?? 'not computed'}`] : [])];
+      ...(up ? [`floor ${up.name} sha256 ${up.sha256 ?? 'not computed'}`] : []), ...runsLines(currentTab())];
   });
   panels.impact = initImpact();
   panels.column = initColumn();

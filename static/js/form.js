@@ -11,7 +11,8 @@ let nextId = 0;
  * Builds fieldsets into `form .form-fields` from groups:
  * `{legend, id?, toggle?: {label, checked}, note?, fields: [field]}` where a
  * field is `{pointer | local, label, unit?, exp?, kind?, options?,
- * placeholder?, hint?, choice?}` and kind is number (default), integer, select
+ * placeholder?, hint?, choice?, target?}` (`target`: the request field a
+ * local control stands for, where a problem naming it is shown) and kind is number (default), integer, select
  * or checkbox. `local` names a control that shapes the request but is not a
  * field itself. A group with `toggle` is sent only while its box is ticked.
  * A field's starting value is the server's default (GET /v1/presets, see
@@ -47,6 +48,8 @@ function buildField(field) {
   const data = {};
   if (field.pointer) data.pointer = field.pointer;
   if (field.local) data.local = field.local;
+  // a local control standing for a request field: a problem naming it is marked here
+  if (field.target) data.target = field.target;
   if (field.exp) data.exp = String(field.exp);
   if (field.choice) data.choice = field.choice.why;
   if (field.settings) data.settings = 'true';
@@ -238,7 +241,9 @@ export function locate(pointer, forms) {
   for (let n = keys.length; n > 1; n--) {
     const prefix = keys.slice(0, n).join('/');
     for (const form of forms) {
-      const input = form.querySelector(`[data-pointer="${CSS.escape(prefix)}"], [data-target="${CSS.escape(prefix)}"]`);
+      // of two controls for one field (e.g. the fixed and the most runs), the one in use
+      const all = [...form.querySelectorAll(`[data-pointer="${CSS.escape(prefix)}"], [data-target="${CSS.escape(prefix)}"]`)];
+      const input = all.find((el) => !el.disabled) ?? all[0];
       if (input) return { form, input, target: input.closest('.field, td, th') ?? input.parentElement };
       const group = form.querySelector(`[data-group="${CSS.escape(prefix)}"]`);
       if (group) return { form, input: null, target: group };

@@ -9,6 +9,7 @@ import { postJson } from './api.js';
 import { initPanel } from './panel.js';
 import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
 import { clearFloorViews, defaultMapGrid, offFloor, floorModel, renderFloorViews } from './floorview.js';
+import { groupDigits, targetProgress } from './scene.js';
 
 /** Why the friction spread starts from the page's own values. */
 const FRICTION_SPREAD = 'an example spread: the server has none unless one is sent';
@@ -70,6 +71,20 @@ const MIGRATION_GROUPS = [
       { pointer: '/monte_carlo/restitution_normal/max', label: '<i>e</i><sub>n</sub> max', unit: '' },
       { pointer: '/monte_carlo/restitution_tangential/min', label: '<i>e</i><sub>t</sub> min', unit: '' },
       { pointer: '/monte_carlo/restitution_tangential/max', label: '<i>e</i><sub>t</sub> max', unit: '' },
+    ],
+  },
+  {
+    legend: 'Until precise enough (ensemble)',
+    pointer: '/monte_carlo/target',
+    toggle: { name: 'migration_target', checked: false },
+    note: 'Stops the ensemble at the first of 1 000, 2 000, 4 000, … runs (and at Runs, then the most allowed) where the percentile of the arrival speed is known '
+      + 'to ± the given share of its value (its distribution-free 95 % interval, over the runs that reached the lower end).',
+    fields: [
+      { pointer: '/monte_carlo/target/percentile', label: 'Percentile of the arrival speed', unit: '%', exp: -2, choice: { value: 95, why: 'the design percentile' } },
+      {
+        pointer: '/monte_carlo/target/relative_half_width', label: 'known to ±', unit: '%', exp: -2, choice: { value: 2, why: 'a starting precision to edit' },
+        hint: 'percentile in [1, 99] %; precision in (0, 100] % of its value',
+      },
     ],
   },
   {
@@ -171,10 +186,18 @@ export function initMigration() {
   const mcBox = form.querySelector('input[name="monte_carlo"]');
   const frictionBox = form.querySelector('input[name="friction_spread"]');
   const frictionSet = frictionBox.closest('fieldset');
+  const targetBox = form.querySelector('input[name="migration_target"]');
+  const targetSet = targetBox.closest('fieldset');
+  const runsLabel = form.querySelector('[data-pointer="/monte_carlo/runs"]').closest('.field').querySelector('label');
   const syncFriction = () => {
     frictionBox.disabled = !mcBox.checked;
     frictionSet.disabled = !mcBox.checked || !frictionBox.checked;
+    targetBox.disabled = !mcBox.checked;
+    targetSet.disabled = !mcBox.checked || !targetBox.checked;
+    // with a target, Runs is the most the ensemble may take
+    runsLabel.textContent = mcBox.checked && targetBox.checked ? 'Most runs allowed' : 'Runs';
   };
+  targetBox.addEventListener('change', syncFriction);
   mcBox.addEventListener('change', syncFriction);
   frictionBox.addEventListener('change', syncFriction);
   form.addEventListener('reset', () => setTimeout(syncFriction));
@@ -228,6 +251,13 @@ export function initMigration() {
         delete mc.restitution_normal;
         delete mc.restitution_tangential;
       }
+      if (mc?.target) {
+        const { percentile: p, relative_half_width: r } = mc.target;
+        const errors = [];
+        if (!(p >= 0.01 && p <= 0.99)) errors.push({ field: '/monte_carlo/target/percentile', message: `must be in [1, 99] %, not ${fmt(p * 100, 6)} %` });
+        if (!(r > 0 && r <= 1)) errors.push({ field: '/monte_carlo/target/relative_half_width', message: `must be above 0 and at most 100 %, not ${fmt(r * 100, 6)} %` });
+        if (errors.length) throw { fieldErrors: errors };
+      }
       if (mc) {
         for (const key of ['restitution_normal', 'restitution_tangential']) {
           if (mc[key]) mc[key] = { distribution: 'uniform', ...mc[key] };
@@ -249,7 +279,9 @@ export function initMigration() {
     stream: (request) => Boolean(request.monte_carlo) && !request.compare,
     busy: (request) => (request.compare
       ? 'Computing with both methods…'
-      : request.monte_carlo ? `Running ${request.monte_carlo.runs} runs…` : 'Computing…'),
+      : request.monte_carlo?.target ? `Running up to ${groupDigits(request.monte_carlo.runs)} runs, stopping when precise enough…`
+        : request.monte_carlo ? `Running ${request.monte_carlo.runs} runs…` : 'Computing…'),
+    progressText: (p, request) => targetProgress(p, request),
     render,
     clear: () => {
       empty.hidden = false;
@@ -397,6 +429,11 @@ export function initMigration() {
     statsCaption.textContent = `Monte Carlo ensemble: ${stats.runs} runs, seed ${stats.seed}; ` +
       `${fmt(stats.reached_fraction * 100, 4)} % reached the lower end. ` +
       'Speed, energy and time over the runs that reached it; the rest over all runs.';
+    // an ensemble "until precise enough": where it stopped and how precise the percentile is
+    const outcome = document.getElementById('migration-target-outcome');
+    outcome.hidden = !stats.target;
+    outcome.className = `answer target-outcome ${stats.target?.met ? 'met' : 'unmet'}`;
+    outcome.textContent = stats.target ? `${arrivalTargetSentence(stats.target)}.` : '';
     percentiles.tHead.replaceChildren(h('tr', {},
       h('th', {}, ''),
       STAT_COLUMNS.map((c) => h('th', { class: 'num' }, c)),
@@ -533,4 +570,24 @@ function span(html) {
   const el = document.createElement('span');
   el.innerHTML = html;
   return el;
+}
+
+/**
+ * What a migration ensemble "until precise enough" did, from the answer's `statistics.target`:
+ * "Stopped at 4 000 runs: the p95 arrival speed known to ± 1.6 % (asked ± 2)", or "Ran all …
+ * runs: ± 2.4 %, the target was not met — raise the most runs or loosen the target".
+ */
+export function arrivalTargetSentence(t) {
+  if (!t) return '';
+  const asked = t.target.relative_half_width;
+  const p = `p${fmt(t.target.percentile * 100, 4)}`;
+  const r = t.relative_half_width;
+  let sig = 2;
+  while (typeof r === 'number' && sig < 8 && (Number((r * 100).toPrecision(sig)) <= asked * 100) !== (r <= asked)) sig += 1;
+  const reached = typeof r === 'number' ? `± ${fmt(r * 100, sig)} %` : `too few runs reached the lower end for the ${p}'s interval`;
+  if (t.met) {
+    const at = t.runs_used < t.max_runs ? `Stopped at ${groupDigits(t.runs_used)} runs` : `Met at all ${groupDigits(t.runs_used)} runs`;
+    return `${at}: the ${p} arrival speed known to ${reached} (asked ± ${fmt(asked * 100, 6)})`;
+  }
+  return `Ran all ${groupDigits(t.runs_used)} runs: ${reached}, the target was not met — raise the most runs or loosen the target`;
 }

@@ -19,7 +19,8 @@ import { bringIntoView, hideStatus, showBusy, showInfo, showProblem } from './st
  * - `send(request, {signal, onProgress})`: optional; resolves to an answer
  *   `{ok, data}` or `{ok: false, problem, label?}`.
  * - `stream(request)`: true when progress should be asked for.
- * - `busy(request)`: the busy text. `render(data, request)`, `clear()`.
+ * - `busy(request)`: the busy text. `progressText({done, total, remaining_s}, request)`:
+ *   optional, the progress line in the panel's own words (null: the plain line). `render(data, request)`, `clear()`.
  * Returns `{run}`; `run()` does what pressing the panel's button does.
  */
 export function initPanel(opts) {
@@ -74,6 +75,12 @@ export function initPanel(opts) {
       if (running !== controller) return;
       bar.max = total || 1;
       bar.value = done;
+      // a panel may word it itself (an ensemble that stops when precise enough)
+      const own = opts.progressText?.({ done, total, remaining_s: left }, request);
+      if (own) {
+        text.textContent = own;
+        return;
+      }
       // the server's estimate of the time left at the rate so far
       const eta = typeof left === 'number' ? `, about ${left < 90 ? `${Math.max(1, Math.round(left))} s` : `${Math.round(left / 60)} min`} left` : '';
       text.textContent = `${done} / ${total}${opts.unit ? ` ${opts.unit}` : ''}${eta}`;

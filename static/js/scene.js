@@ -13,6 +13,9 @@ import { clearFloorViews, defaultMapGrid, floorModel, offFloor, renderFloorViews
 import { deviceLabel, initDeviceEditors, requestDevices } from './devices.js';
 import { postJson } from './api.js';
 
+/** The most runs an ensemble "until precise enough" may take, by migration method (the rigid block is far slower). */
+const MAX_RUNS = { lumped_mass: 64000, rigid_block: 2000 };
+
 /** Why the release across the face starts from the page's own range. */
 const RELEASE_ACROSS = 'an assumed range across the face (the server draws none unless asked)';
 
@@ -64,6 +67,24 @@ const SCENE_GROUPS = [
     toggle: { name: 'scene_monte_carlo', checked: true },
     note: 'Restitution at every impact; release points from the zones; the rock\'s size and density drawn in the paper\'s study ranges.',
     fields: [
+      {
+        local: 'runs_mode', label: 'Runs', kind: 'select', choice: { value: 'target', why: 'the server runs a fixed number unless a target is sent; the page stops when the answer is precise enough' },
+        options: [['target', 'until precise enough'], ['fixed', 'a fixed number of runs']],
+        hint: 'until precise enough: checked at 1 000, 2 000, 4 000, … runs, stopping at the first count where the probability\'s 95 % interval is narrow enough',
+      },
+      {
+        pointer: '/monte_carlo/target/statistic', label: 'Precise enough for', kind: 'select', choice: { value: 'any_exceeded', why: 'the headline probability' },
+        options: [['any_exceeded', 'any support overloaded'], ['every_support', 'every support\'s probability']],
+        hint: 'any support overloaded: the probability that a rock overloads some support; every support: the widest interval over the supports',
+      },
+      {
+        pointer: '/monte_carlo/target/half_width', label: 'Precision ±', unit: 'points', exp: -2, choice: { value: 0.5, why: 'half a percentage point: a 2 % probability known as 1.5–2.5 %' },
+        hint: 'half-width of the Wilson 95 % interval, in percentage points (in (0, 50])',
+      },
+      {
+        local: 'max_runs', target: '/monte_carlo/runs', label: 'Most runs allowed', kind: 'integer', choice: { value: MAX_RUNS.lumped_mass, why: 'enough for ± 0.5 points at any probability' },
+        hint: 'default 64 000 with the lumped mass; the rigid block is far slower (it integrates the tumbling block), so 2 000 by default with it',
+      },
       { pointer: '/monte_carlo/runs', label: 'Runs', kind: 'integer' },
       { pointer: '/monte_carlo/seed', label: 'Seed', kind: 'integer' },
       { pointer: '/monte_carlo/release_across_m/min', label: 'Release across the face, from', unit: 'm', choice: { value: 0, why: RELEASE_ACROSS } },
@@ -250,6 +271,7 @@ export function initScene() {
   const sendStat = document.getElementById('scene-send-stat');
   const sourceNotes = [document.getElementById('impact-source'), document.getElementById('column-source')];
   buildForm(form, SCENE_GROUPS);
+  const runsSync = initRunsChoice(form, migrationForm);
   const releaseEditor = initReleaseEditor(form, migrationForm);
   const deviceEditors = initDeviceEditors(form);
   // A velocity typed by hand no longer comes from the Scene.
@@ -312,6 +334,7 @@ export function initScene() {
       else if (request.galerkin.mode_shapes && request.galerkin.mode_shapes !== 'exact') delete request.galerkin.mode_shapes;
       releaseEditor.apply(request, own.local, migrationForm.floor?.current?.() ?? null);
       deviceEditors.apply(request, own.local, m.face.length_m);
+      if (request.monte_carlo) runsSync.apply(request, own.local);
       if (request.monte_carlo) {
         if (own.local.release_zones === 'table1') request.release_zones = 'table1';
         if (request.monte_carlo.release_across_m) request.monte_carlo.release_across_m = { distribution: 'uniform', ...request.monte_carlo.release_across_m };
@@ -331,7 +354,10 @@ export function initScene() {
       return request;
     },
     stream: (request) => Boolean(request.monte_carlo),
-    busy: (request) => (request.monte_carlo ? `Running ${request.monte_carlo.runs} runs along the face…` : 'Computing the scene…'),
+    busy: (request) => (request.monte_carlo?.target
+      ? `Running up to ${groupDigits(request.monte_carlo.runs)} runs along the face, stopping when precise enough…`
+      : request.monte_carlo ? `Running ${request.monte_carlo.runs} runs along the face…` : 'Computing the scene…'),
+    progressText: (p, request) => targetProgress(p, request),
     render,
     clear,
   });
@@ -400,6 +426,12 @@ export function initScene() {
     delete bare.guards;
     delete bare.barriers;
     delete bare.collectors;
+    // the runs the answer used, all of them: an ensemble that stopped when precise enough is
+    // compared over the same runs, not over as many as the bare one would need
+    if (bare.monte_carlo?.target) {
+      delete bare.monte_carlo.target;
+      bare.monte_carlo.runs = data.statistics.runs;
+    }
     // the per-support statistics are all that is compared
     delete bare.migration_output;
     const controller = new AbortController();
@@ -588,6 +620,11 @@ export function initScene() {
           h('strong', { dataset: { out: 'statistics.any_exceeded.probability' } }, `${fmt(any.probability * 100, 3)} %`),
           ` (95 % interval ${fmt(any.ci95[0] * 100, 3)}–${fmt(any.ci95[1] * 100, 3)} %), over ${st.runs} runs, seed ${st.seed}. `) : '',
         `${entries.filter((e) => e.verdict === 'exceeded').length} of ${entries.length} support entries exceed the acceptable probability of ${fmt(acceptableOf(data) * 100, 3)} %.`));
+      // an ensemble "until precise enough": where it stopped and how precise it is
+      if (st.target) {
+        summary.append(h('p', { class: `answer target-outcome ${st.target.met ? 'met' : 'unmet'}`, dataset: { out: 'statistics.target' } },
+          `${sceneTargetSentence(st.target)}.`));
+      }
       summary.append(exceededAnswer(entries));
       if (st.outcomes) {
         summary.append(h('div', { class: 'table-scroll' }, h('table', { class: 'results-table' },
@@ -1051,6 +1088,105 @@ function dedupe(xs, ys) {
     out[1].push(y);
   }
   return out;
+}
+
+/**
+ * The ensemble's runs: "until precise enough" (a target on a probability's Wilson interval,
+ * `monte_carlo.runs` the most runs allowed) or a fixed number. The most runs follows the
+ * migration method (64 000 with the lumped mass, 2 000 with the far slower rigid block)
+ * until it is typed or opened from a case.
+ */
+function initRunsChoice(form, migrationForm) {
+  const mode = form.querySelector('[data-local="runs_mode"]');
+  const fixed = form.querySelector('[data-pointer="/monte_carlo/runs"]');
+  const most = form.querySelector('[data-local="max_runs"]');
+  const targetOnly = [form.querySelector('[data-pointer="/monte_carlo/target/statistic"]'), form.querySelector('[data-pointer="/monte_carlo/target/half_width"]'), most];
+  const method = migrationForm.querySelector('[data-pointer="/method"]');
+  const byMethod = () => MAX_RUNS[method?.value] ?? MAX_RUNS.lumped_mass;
+  // true while the page chose the most runs (not typed, not opened from a case)
+  let auto = true;
+  const sync = () => {
+    const target = mode.value !== 'fixed';
+    for (const el of targetOnly) {
+      el.disabled = !target;
+      el.closest('.field').hidden = !target;
+    }
+    fixed.disabled = target;
+    fixed.closest('.field').hidden = target;
+  };
+  const follow = () => {
+    if (!auto) return;
+    most.value = String(byMethod());
+  };
+  mode.addEventListener('change', sync);
+  most.addEventListener('input', () => { auto = false; });
+  // a case opened from a link or the recent list sets it with a change event
+  most.addEventListener('change', () => { auto = false; });
+  method?.addEventListener('change', follow);
+  form.addEventListener('reset', () => setTimeout(() => { auto = true; follow(); sync(); }));
+  sync();
+  return {
+    /** Sends the target and the most runs, or nothing more for a fixed number; a precision out of range is a field error. */
+    apply(request, local) {
+      const mc = request.monte_carlo;
+      if (local.runs_mode === 'fixed') {
+        delete mc.target;
+        return;
+      }
+      mc.runs = local.max_runs;
+      const hw = mc.target?.half_width;
+      if (!(hw > 0 && hw <= 0.5)) {
+        throw { fieldErrors: [{ field: '/monte_carlo/target/half_width', message: `must be above 0 and at most 50 points, not ${fmt(hw * 100, 6)}` }] };
+      }
+    },
+  };
+}
+
+/** 64000 → "64 000" (no-break spaces between groups of three digits). */
+export function groupDigits(n) {
+  return String(Math.round(n)).replace(/\B(?=(\d{3})+(?!\d))/g, '\u00a0');
+}
+
+/** Percentage points with the fewest digits (2 at least) that keep "within the target" true to the unrounded value. */
+function points(hw, asked) {
+  let sig = 2;
+  const within = hw <= asked;
+  while (sig < 8 && (Number((hw * 100).toPrecision(sig)) <= asked * 100) !== within) sig += 1;
+  return fmt(hw * 100, sig);
+}
+
+const TARGET_WORDS = { any_exceeded: 'any-support probability', every_support: 'every support\'s probability' };
+
+/**
+ * What an ensemble "until precise enough" did, from the answer's `statistics.target`:
+ * "Stopped at 4 000 runs: any-support probability known to ± 0.42 points (asked ± 0.5)", or
+ * "Ran all 64 000 runs: ± 0.61 points, the target was not met — raise the most runs or loosen the target".
+ */
+export function sceneTargetSentence(t) {
+  if (!t) return '';
+  const asked = t.target.half_width;
+  const reached = points(t.half_width, asked);
+  const words = TARGET_WORDS[t.target.statistic] ?? t.target.statistic;
+  if (t.met) {
+    const at = t.runs_used < t.max_runs ? `Stopped at ${groupDigits(t.runs_used)} runs` : `Met at all ${groupDigits(t.runs_used)} runs`;
+    return `${at}: ${words} known to ± ${reached} points (asked ± ${fmt(asked * 100, 6)})`;
+  }
+  return `Ran all ${groupDigits(t.runs_used)} runs: ± ${reached} points, the target was not met — raise the most runs or loosen the target`;
+}
+
+/**
+ * The progress line of an ensemble with a target. The server counts toward the most runs
+ * (its total is 1 + monte_carlo.runs, the nominal run first) whatever check the ensemble is
+ * at, and its time left is the time to run them all, which overstates it when the ensemble
+ * stops early; with per-cell maps the runs used are counted again while the maps are
+ * recorded. So the line says how many runs are done, where the checks come, and no time left.
+ */
+export function targetProgress({ done }, request) {
+  const most = request?.monte_carlo?.target ? request.monte_carlo.runs : null;
+  if (!most) return null;
+  const checks = [1000, 2000, 4000].filter((n) => n < most).map(groupDigits);
+  return `${groupDigits(Math.max(0, done - 1))} runs computed; checked at ${[...checks, ...(most > 4000 ? ['…'] : []), groupDigits(most)].join(', ')} runs `
+    + 'until precise enough, so the time left is not known';
 }
 
 /**

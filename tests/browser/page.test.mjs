@@ -190,6 +190,12 @@ function assertCsvHeader(csv, what) {
   assert(csv.text.trim().length > 0, `${what}: no rows after the header`);
 }
 
+/** The Scene's ensemble as a fixed number of runs (the page's default is "until precise enough"). */
+async function fixedSceneRuns(page, runs) {
+  await page.locator('#scene-form [data-local="runs_mode"]').selectOption('fixed');
+  await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill(runs);
+}
+
 function field(page, form, pointer) {
   return page.locator(`${form} [data-pointer="${pointer}"]`);
 }
@@ -290,7 +296,8 @@ async function pageSection(page) {
     assert(bad.length === 0, bad.join('\n'));
     // The page's own starting values are few and each says why.
     const choices = controls.filter((c) => c.choice);
-    assert(choices.length <= 10 && choices.every((c) => c.choice.length > 20), `page choices: ${choices.map((c) => c.pointer).join(', ')}`);
+    // (four of them the ensembles' targets "until precise enough", which the server has no default for)
+    assert(choices.length <= 14 && choices.every((c) => c.choice.length > 20), `page choices: ${choices.map((c) => c.pointer).join(', ')}`);
     // Settings fields: the recommended preset where it names them, else the server's default.
     const rec = presets.presets.recommended;
     for (const [form, pointer, want] of [
@@ -1071,7 +1078,7 @@ async function protectionLinesSection(page, context) {
     await b2.nth(3).fill('0.5');
     await b2.nth(4).fill('5');
     await p.locator('#scene-collectors .device-row').first().locator('input').nth(0).fill('30');
-    await p.locator(`${form} [data-pointer="/monte_carlo/runs"]`).fill('200');
+    await fixedSceneRuns(p, '200');
     // guards on the columns too: the with/without comparison takes both away
     await p.locator(`${form} input[name="scene_guards"]`).check();
     await p.locator(`${form} [data-local="guard_rating"]`).fill('2000');
@@ -1501,7 +1508,7 @@ async function floorViewSection(page, context) {
 
   await check('scene: the floor view draws the 62 supports where they stand, the Table 1 release zones, the nominal path and the stops', async () => {
     await open(page, '#scene');
-    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    await fixedSceneRuns(page, '100');
     const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
     await submit(page, '#scene-form', '/v1/scene');
     const body = JSON.parse((await request).postData());
@@ -1542,6 +1549,7 @@ async function floorViewSection(page, context) {
     assert(sent === 0, `${sent} requests sent with a zone off the floor`);
     page.off('request', count);
     await rows.nth(2).locator('input').nth(1).fill('118');
+    await fixedSceneRuns(page, '200');
     const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
     const response = await submit(page, '#scene-form', '/v1/scene');
     const body = JSON.parse((await request).postData());
@@ -1599,7 +1607,7 @@ async function floorViewSection(page, context) {
     await open(page, '#migration');
     await field(page, '#migration-form', '/method').selectOption('rigid_block');
     await page.locator('#tab-scene').click();
-    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('300');
+    await fixedSceneRuns(page, '300');
     const answer = page.waitForResponse((r) => r.url().endsWith('/v1/scene') && r.request().method() === 'POST', { timeout: WAIT_MS });
     await page.locator('#scene-form button[type="submit"]').click();
     await page.waitForFunction(() => /^\d+ \/ 301 runs, about \d+ (s|min) left$/.test(document.querySelector('#scene-progress .progress-text')?.textContent ?? ''), null, { timeout: WAIT_MS });
@@ -1620,7 +1628,7 @@ async function floorViewSection(page, context) {
     const events = await page.locator('#scene-form [data-pointer="/release_rate/observed_events"]').inputValue();
     const years = await page.locator('#scene-form [data-pointer="/release_rate/observed_period_years"]').inputValue();
     assert(events === '643' && years === '0.75', `sent ${events} events over ${years} years`);
-    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    await fixedSceneRuns(page, '100');
     const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
     const answer = await submit(page, '#scene-form', '/v1/scene');
     const body = JSON.parse((await request).postData());
@@ -1657,7 +1665,7 @@ async function floorViewSection(page, context) {
 
   await check('protection: guards on every column are sent with their rating; a rating above every rock\'s energy leaves no support at risk and the table says what the guards held', async () => {
     await open(page, '#scene');
-    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    await fixedSceneRuns(page, '100');
     const box = page.locator('#scene-form input[name="scene_guards"]');
     await box.check();
     await page.locator('#scene-form [data-local="guard_rating"]').fill('1e9');
@@ -1698,7 +1706,7 @@ async function floorViewSection(page, context) {
       }
       if (tab === 'scene') {
         await page.locator('#tab-scene').click();
-        await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('60');
+        await fixedSceneRuns(page, '60');
         await submit(page, '#scene-form', '/v1/scene');
         await page.locator('#scene-floor').waitFor({ state: 'visible', timeout: WAIT_MS });
         await page.locator('#scene-dist-plot canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
@@ -1718,12 +1726,12 @@ async function floorViewSection(page, context) {
 
   await check('case: cases can be named; "Compare two cases" picks two different ones, shows the headline figures and overlays the per-support plot', async () => {
     await page.locator('#tab-scene').click();
-    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('60');
+    await fixedSceneRuns(page, '60');
     await submit(page, '#scene-form', '/v1/scene');
     await page.waitForFunction(() => /60 runs/.test(document.querySelector('#case-recent option:nth-child(2)')?.textContent ?? ''), null, { timeout: WAIT_MS });
     await page.locator('#case-name').fill('upper zone, 60 runs');
     await page.locator('#case-name').dispatchEvent('change');
-    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('80');
+    await fixedSceneRuns(page, '80');
     await submit(page, '#scene-form', '/v1/scene');
     await page.locator('#scene-table tbody tr').first().waitFor({ state: 'visible', timeout: WAIT_MS });
     await page.waitForFunction(() => /80 runs/.test(document.querySelector('#case-recent option:nth-child(2)')?.textContent ?? ''), null, { timeout: WAIT_MS });
@@ -1842,7 +1850,7 @@ async function phoneSection(context) {
       await page.route('**/v1/scene', (route) => route.fulfill({ status: 200, contentType: 'application/json', body: JSON.stringify(sceneFixture(JSON.parse(route.request().postData()))) }));
     }
     await open(page);
-    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    await fixedSceneRuns(page, '100');
     await submit(page, '#scene-form', '/v1/scene');
     const row = page.locator('#scene-table tbody tr').first();
     await row.waitFor({ state: 'visible', timeout: WAIT_MS });
@@ -1919,7 +1927,7 @@ async function sceneSection(page) {
 
   await check(`scene${what}: the request follows api.md; an ensemble over the Table 1 supports shows chart, table, verdicts, distributions`, async () => {
     await open(page);
-    await page.locator('#scene-form [data-pointer="/monte_carlo/runs"]').fill('100');
+    await fixedSceneRuns(page, '100');
     const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
     const response = await submit(page, '#scene-form', '/v1/scene');
     const body = JSON.parse((await request).postData());
@@ -2202,6 +2210,232 @@ async function spallingSection(page) {
 
 // ---- main ------------------------------------------------------------------
 
+// ---- ensembles "until precise enough" --------------------------------------
+
+/** The answer of a streamed (NDJSON) or plain response. */
+async function answerOf(response) {
+  const lines = (await response.text()).trim().split('\n').map((l) => JSON.parse(l));
+  return lines.find((l) => l.result)?.result ?? lines[lines.length - 1];
+}
+
+/** "64 000" as the page writes run counts (no-break spaces between groups of three). */
+function grouped(n) {
+  return String(n).replace(/\B(?=(\d{3})+(?!\d))/g, '\u00a0');
+}
+
+/**
+ * Checks a shown sentence against an answer's `statistics.target` (computed here, not by the
+ * page): the runs used, the half-width reached in the unit shown (the digits shown round the
+ * answer's value), the one asked, and the words for met or not met.
+ */
+function assertTargetSentence(text, t, { unit, reached, asked, what }) {
+  const re = t.met
+    ? new RegExp(`^(Stopped at|Met at all) ([\\d\\u00a0]+) runs: ${what} known to ± ([\\d.]+) ${unit} \\(asked ± ([\\d.]+)\\)\\.$`)
+    : new RegExp(`^Ran all ([\\d\\u00a0]+) runs: ± ([\\d.]+) ${unit}, the target was not met — raise the most runs or loosen the target\\.$`);
+  const m = re.exec(text);
+  assert(m, `the sentence "${text}" does not say what statistics.target ${JSON.stringify(t)} says`);
+  const [runs, shownReached, shownAsked] = t.met ? [m[2], m[3], m[4]] : [m[1], m[2], null];
+  assert(runs === grouped(t.runs_used), `runs ${runs}, statistics.target.runs_used ${t.runs_used}`);
+  if (t.met) assert((m[1] === 'Stopped at') === (t.runs_used < t.max_runs), `"${m[1]}" with ${t.runs_used} of ${t.max_runs} runs`);
+  const digits = shownReached.replace(/^0\.0*/, '').replace('.', '').length;
+  const want = Number((reached * 100).toPrecision(Math.max(digits, 1)));
+  assert(Math.abs(Number(shownReached) - want) <= 1e-12 * Math.max(1, want) && digits >= 2, `reached ± ${shownReached}, the answer's ${reached * 100} to ${digits} digits is ${want}`);
+  assert((Number(shownReached) <= asked * 100) === t.met, `± ${shownReached} shown against ± ${asked * 100} asked, met ${t.met}`);
+  if (shownAsked !== null) assert(Number(shownAsked) === Number((asked * 100).toPrecision(12)), `asked ± ${shownAsked}, the request's ${asked * 100}`);
+}
+
+/** Clicks Compute with the request caught and not sent (the page then says there was no answer); resolves to its body. */
+async function requestOnly(page, form, endpoint) {
+  let body = null;
+  const stop = async (route) => { body = route.request().postDataJSON(); await route.abort(); };
+  await page.route(`**${endpoint}`, stop);
+  await page.locator(`${form} button[type="submit"]`).click();
+  await page.waitForFunction((f) => document.querySelector(`${f}`)?.closest('[data-panel]')?.querySelector('.status.error'), form, { timeout: WAIT_MS });
+  await page.unroute(`**${endpoint}`, stop);
+  return body;
+}
+
+async function targetSection(page, context) {
+  await check('precise enough: the Scene\'s ensemble runs until precise enough by default: the request carries the target (any support, ± 0.5 points) and the most runs (64 000; 2 000 with the rigid block)', async () => {
+    await open(page, '#scene');
+    assert(await page.locator('#scene-form [data-local="runs_mode"]').inputValue() === 'target', 'the default is not "until precise enough"');
+    assert(!(await field(page, '#scene-form', '/monte_carlo/runs').isVisible()), 'the fixed number of runs is shown with a target');
+    const most = page.locator('#scene-form [data-local="max_runs"]');
+    assert(await most.inputValue() === '64000', `most runs ${await most.inputValue()}`);
+    assert(/rigid block is far slower.*2 000/.test(await page.locator('#scene-form .field:has([data-local="max_runs"])').textContent()), 'the field does not say the rigid block\'s default');
+    const body = await requestOnly(page, '#scene-form', '/v1/scene');
+    assert(JSON.stringify(body.monte_carlo.target) === JSON.stringify({ statistic: 'any_exceeded', half_width: 0.005 }), `target ${JSON.stringify(body.monte_carlo.target)}`);
+    assert(body.monte_carlo.runs === 64000, `runs ${body.monte_carlo.runs}`);
+    // the rigid block: 2 000 runs at most, and back to 64 000 with the lumped mass
+    await page.locator('#tab-migration').click();
+    await field(page, '#migration-form', '/method').selectOption('rigid_block');
+    await page.locator('#tab-scene').click();
+    assert(await most.inputValue() === '2000', `rigid block: most runs ${await most.inputValue()}`);
+    const rigid = await requestOnly(page, '#scene-form', '/v1/scene');
+    assert(rigid.method === 'rigid_block' && rigid.monte_carlo.runs === 2000 && rigid.monte_carlo.target, `rigid block request ${JSON.stringify(rigid.monte_carlo)}`);
+    await page.locator('#tab-migration').click();
+    await field(page, '#migration-form', '/method').selectOption('lumped_mass');
+    await page.locator('#tab-scene').click();
+    assert(await most.inputValue() === '64000', `back to the lumped mass: most runs ${await most.inputValue()}`);
+    // typed by hand, it stays
+    await most.fill('16000');
+    await page.locator('#tab-migration').click();
+    await field(page, '#migration-form', '/method').selectOption('rigid_block');
+    await field(page, '#migration-form', '/method').selectOption('lumped_mass');
+    await page.locator('#tab-scene').click();
+    assert(await most.inputValue() === '16000', `a typed most runs became ${await most.inputValue()}`);
+  });
+
+  await check('precise enough: "a fixed number of runs" sends no target and its own runs', async () => {
+    await open(page, '#scene');
+    await fixedSceneRuns(page, '150');
+    assert(!(await page.locator('#scene-form [data-local="max_runs"]').isVisible()), 'the most runs is shown for a fixed number');
+    const body = await requestOnly(page, '#scene-form', '/v1/scene');
+    assert(body.monte_carlo.target === undefined && body.monte_carlo.runs === 150, `monte_carlo ${JSON.stringify(body.monte_carlo)}`);
+  });
+
+  await check('precise enough: the Scene answer says where it stopped, equal to statistics.target; in the report and the CSV header too', async () => {
+    await open(page, '#scene');
+    await field(page, '#scene-form', '/monte_carlo/target/half_width').fill('2');
+    const response = await submit(page, '#scene-form', '/v1/scene');
+    const answer = await answerOf(response);
+    const t = answer.statistics.target;
+    assert(t && t.met && t.runs_used < t.max_runs && answer.statistics.runs === t.runs_used, `statistics.target ${JSON.stringify(t)}`);
+    const line = page.locator('#scene-summary [data-out="statistics.target"]');
+    await line.waitFor({ state: 'visible', timeout: WAIT_MS });
+    const text = (await line.textContent()).trim();
+    assertTargetSentence(text, t, { unit: 'points', reached: t.half_width, asked: 0.02, what: 'any-support probability' });
+    assert(/over \d+ runs/.test(await page.locator('#scene-summary').textContent()) && (await page.locator('#scene-summary').textContent()).includes(`over ${t.runs_used} runs`), 'the headline does not give the runs used');
+    await elementShot(page.locator('#scene-summary'), 'scene-target-met.png');
+    // the CSV header block states the runs and the sentence
+    const csv = await downloaded(page, page.locator('#panel-scene .export-bar button[data-csv="scene-support-plot.csv"]').first());
+    const runs = csv.header.find((l) => l.startsWith('# runs '));
+    assert(runs === `# runs ${t.runs_used} of at most ${t.max_runs} (seed ${answer.statistics.seed}): ${text.replace(/\u00a0/g, ' ').replace(/\.$/, '')}`, `CSV header line ${JSON.stringify(runs)}`);
+    // the printed report
+    await page.evaluate(() => { window.print = () => {}; });
+    await page.locator('#case-print').click();
+    const report = await page.locator('#report').textContent();
+    await page.evaluate(() => document.body.classList.remove('printing-report'));
+    assert(report.includes(text.replace(/\.$/, '')), 'the report does not carry the sentence');
+
+    // not met: every allowed run ran
+    await page.locator('#scene-form [data-local="max_runs"]').fill('1000');
+    await field(page, '#scene-form', '/monte_carlo/target/half_width').fill('0.1');
+    const again = await answerOf(await submit(page, '#scene-form', '/v1/scene'));
+    const u = again.statistics.target;
+    assert(u && !u.met && u.runs_used === 1000, `statistics.target ${JSON.stringify(u)}`);
+    await page.waitForFunction(() => document.querySelector('#scene-summary [data-out="statistics.target"]')?.classList.contains('unmet'), null, { timeout: WAIT_MS });
+    assertTargetSentence((await line.textContent()).trim(), u, { unit: 'points', reached: u.half_width, asked: 0.001 });
+    await elementShot(page.locator('#scene-summary'), 'scene-target-unmet.png');
+  });
+
+  await check('precise enough: the progress line counts the runs and names the checks, with no time left that assumes every allowed run', async () => {
+    await open(page, '#scene');
+    await page.locator('#scene-form [data-local="max_runs"]').fill('16000');
+    await field(page, '#scene-form', '/monte_carlo/target/half_width').fill('0.05');
+    const answer = page.waitForResponse((r) => r.url().endsWith('/v1/scene') && r.request().method() === 'POST', { timeout: WAIT_MS });
+    await page.locator('#scene-form button[type="submit"]').click();
+    const re = /^[\d\u00a0]+ runs computed; checked at 1\u00a0000, 2\u00a0000, 4\u00a0000, …, 16\u00a0000 runs until precise enough, so the time left is not known$/;
+    await page.waitForFunction((src) => new RegExp(src).test(document.querySelector('#scene-progress .progress-text')?.textContent ?? ''), re.source, { timeout: WAIT_MS });
+    const seen = await page.locator('#scene-progress .progress-text').textContent();
+    assert(!/left$/.test(seen), seen);
+    console.log(`      progress line: ${seen.replace(/\u00a0/g, ' ')}`);
+    await answer;
+    await page.locator('#scene-summary [data-out="statistics.target"]').waitFor({ state: 'visible', timeout: WAIT_MS });
+  });
+
+  await check('precise enough: the Migration target is off by default and sent when turned on; the answer says where it stopped', async () => {
+    await open(page, '#migration');
+    const form = '#migration-form';
+    await page.locator(`${form} input[name="monte_carlo"]`).check();
+    await field(page, form, '/monte_carlo/runs').fill('300');
+    assert(!(await page.locator(`${form} input[name="migration_target"]`).isChecked()), 'the target is on by default');
+    const plain = await requestOnly(page, form, '/v1/migration');
+    assert(plain.monte_carlo.target === undefined, `a target was sent while off: ${JSON.stringify(plain.monte_carlo.target)}`);
+    await page.locator(`${form} input[name="migration_target"]`).check();
+    await field(page, form, '/monte_carlo/runs').fill('8000');
+    await field(page, form, '/monte_carlo/target/relative_half_width').fill('1');
+    const response = await submit(page, form, '/v1/migration');
+    const sent = response.request().postDataJSON();
+    assert(JSON.stringify(sent.monte_carlo.target) === JSON.stringify({ percentile: 0.95, relative_half_width: 0.01 }) && sent.monte_carlo.runs === 8000,
+      `sent ${JSON.stringify(sent.monte_carlo)}`);
+    const answer = await answerOf(response);
+    const t = answer.statistics.target;
+    assert(t && typeof t.relative_half_width === 'number', `statistics.target ${JSON.stringify(t)}`);
+    const line = page.locator('#migration-target-outcome');
+    await line.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assertTargetSentence((await line.textContent()).trim(), t, { unit: '%', reached: t.relative_half_width, asked: 0.01, what: 'the p95 arrival speed' });
+    assert((await page.locator('#migration-stats-caption').textContent()).includes(`${t.runs_used} runs`), 'the caption does not give the runs used');
+    await elementShot(page.locator('#migration-percentiles-card'), 'migration-target.png');
+    // a percentile out of range is marked before sending
+    await field(page, form, '/monte_carlo/target/percentile').fill('100');
+    await page.locator(`${form} button[type="submit"]`).click();
+    const err = fieldError(page, form, '/monte_carlo/target/percentile');
+    await err.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/\[1, 99\] %/.test(await err.textContent()), await err.textContent());
+  });
+
+  await check('precise enough: a link carries the runs choice and the target; an old link without them opens as a fixed number of runs', async () => {
+    await open(page, '#scene');
+    await field(page, '#scene-form', '/monte_carlo/target/statistic').selectOption('every_support');
+    await field(page, '#scene-form', '/monte_carlo/target/half_width').fill('1.5');
+    await page.locator('#scene-form [data-local="max_runs"]').fill('8000');
+    await page.locator('#tab-migration').click();
+    await page.locator('#migration-form input[name="monte_carlo"]').check();
+    await page.locator('#migration-form input[name="migration_target"]').check();
+    await field(page, '#migration-form', '/monte_carlo/target/relative_half_width').fill('3');
+    await page.locator('#tab-scene').click();
+    const state = await page.evaluate(() => {
+      const out = {};
+      for (const f of ['scene', 'impact', 'column', 'migration']) {
+        const form = document.getElementById(`${f}-form`);
+        out[f] = {};
+        for (const el of form.querySelectorAll('[data-pointer], [data-local], legend input[type="checkbox"]')) {
+          const key = el.dataset.pointer ?? (el.dataset.local ? `local:${el.dataset.local}` : `toggle:${el.name}`);
+          out[f][key] = el.type === 'checkbox' ? el.checked : el.value;
+        }
+      }
+      return out;
+    });
+    const encode = (o) => Buffer.from(JSON.stringify(o)).toString('base64').replace(/\+/g, '-').replace(/\//g, '_').replace(/=+$/, '');
+    const fresh = await context.newPage();
+    await open(fresh, `#scene&case=${encode({ v: 1, tab: 'scene', settings: 'recommended', forms: state })}`);
+    const body = await requestOnly(fresh, '#scene-form', '/v1/scene');
+    assert(JSON.stringify(body.monte_carlo.target) === JSON.stringify({ statistic: 'every_support', half_width: 0.015 }) && body.monte_carlo.runs === 8000,
+      `a new link sent ${JSON.stringify(body.monte_carlo)}`);
+    await fresh.locator('#tab-migration').click();
+    const mig = await requestOnly(fresh, '#migration-form', '/v1/migration');
+    assert(mig.monte_carlo?.target?.relative_half_width === 0.03, `the migration target from the link: ${JSON.stringify(mig.monte_carlo?.target)}`);
+    // a link saved before the target existed: no runs choice, no target fields
+    const old = structuredClone(state);
+    for (const f of Object.values(old)) for (const k of Object.keys(f)) if (/target|runs_mode|max_runs/.test(k)) delete f[k];
+    old.scene['/monte_carlo/runs'] = '120';
+    old.migration['toggle:monte_carlo'] = true;
+    await open(fresh, `#scene&case=${encode({ v: 1, tab: 'scene', settings: 'recommended', forms: old })}`);
+    assert(await fresh.locator('#scene-form [data-local="runs_mode"]').inputValue() === 'fixed', 'an old link opens "until precise enough"');
+    assert(await field(fresh, '#scene-form', '/monte_carlo/runs').isVisible(), 'an old link hides its runs');
+    const oldBody = await requestOnly(fresh, '#scene-form', '/v1/scene');
+    assert(oldBody.monte_carlo.target === undefined && oldBody.monte_carlo.runs === 120, `an old link sent ${JSON.stringify(oldBody.monte_carlo)}`);
+    await fresh.locator('#tab-migration').click();
+    const oldMig = await requestOnly(fresh, '#migration-form', '/v1/migration');
+    assert(oldMig.monte_carlo && oldMig.monte_carlo.target === undefined, `an old link's migration sent ${JSON.stringify(oldMig.monte_carlo)}`);
+    await fresh.close();
+  });
+
+  await check('precise enough: at 390 px the runs choice and the answer fit the width', async () => {
+    const phone = await context.newPage();
+    await phone.setViewportSize({ width: 390, height: 844 });
+    await open(phone, '#scene');
+    await field(phone, '#scene-form', '/monte_carlo/target/half_width').fill('2');
+    await submit(phone, '#scene-form', '/v1/scene');
+    await phone.locator('#scene-summary [data-out="statistics.target"]').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await noHorizontalScroll(phone, 'the scene with a target');
+    await elementShot(phone.locator('#scene-form fieldset[data-group="/monte_carlo"]'), 'phone-scene-runs.png');
+    await elementShot(phone.locator('#scene-summary'), 'phone-scene-target.png');
+    await phone.close();
+  });
+}
+
 async function main() {
   mkdirSync(ARTIFACTS, { recursive: true });
   const profile = mkdtempSync(path.join(tmpdir(), 'gangue-chromium-'));
@@ -2232,6 +2466,7 @@ async function main() {
     await spallingSection(page);
     await floorViewSection(page, context);
     await protectionLinesSection(page, context);
+    await targetSection(page, context);
     await phoneSection(context);
 
     await check('no JavaScript errors on the page', async () => {
