@@ -253,3 +253,23 @@ async fn a_migration_stops_when_its_speed_percentile_is_precise_enough() {
     )
     .await;
 }
+
+/// With per-cell maps, the maps of an ensemble that stopped early are those of the runs used,
+/// recorded as they ran (no second pass).
+#[tokio::test]
+async fn the_maps_of_an_early_stop_are_the_maps_of_the_runs_used() {
+    let app = common::app();
+    let mut s = scene(
+        8000,
+        Some(json!({"statistic": "any_exceeded", "half_width": 0.5})),
+    );
+    s["migration_output"] = json!({"maps": {}});
+    let a = ok(&post(&app, "/v1/scene", &s).await);
+    let used = a["statistics"]["target"]["runs_used"].as_u64().unwrap();
+    assert_eq!(used, 1000);
+    let mut p = scene(used, None);
+    p["migration_output"] = json!({"maps": {}});
+    let plain = ok(&post(&app, "/v1/scene", &p).await);
+    assert!(a["maps"].is_object(), "{}", a["maps"]);
+    assert_eq!(a["maps"], plain["maps"]);
+}

@@ -4,6 +4,7 @@
 use super::{Calculation, Ensemble, Report, Stage};
 use crate::physics::Control;
 use crate::physics::design::{self, EntryAllowed};
+use crate::physics::migration::maps::{self, Maps, RunCells};
 use crate::physics::migration::{Method, MonteCarlo};
 use crate::physics::scene::target::{self, SceneTarget, TargetOutcome};
 use crate::physics::scene::{
@@ -27,15 +28,16 @@ impl Calculation for Scene {
             // with a target, the runs it needs first (the runs of that many, bit for bit)
             let (early, outcome) = match &case.target {
                 Some(t) => {
-                    let (runs, outcome) = until_precise(case, &mc, t, control)?;
+                    let (runs, maps, outcome) = until_precise(case, &mc, t, control)?;
                     mc.runs = outcome.runs;
+                    r.maps = maps;
                     (Some(runs), Some(outcome))
                 }
                 None => (None, None),
             };
             let (runs, other) = match (&case.migration.output.maps, early) {
                 (None, None) => scene::ensemble_part(case, &mc, 0..mc.runs, control)?,
-                (None, Some(runs)) => {
+                (_, Some(runs)) => {
                     let other = if case.compare_methods {
                         Some(other_method(case, &mc, control)?)
                     } else {
@@ -43,7 +45,7 @@ impl Calculation for Scene {
                     };
                     (runs, other)
                 }
-                (Some(g), _) => {
+                (Some(g), None) => {
                     let (runs, other, maps) = scene::ensemble_part_mapped(case, &mc, g, control)?;
                     r.maps = Some(maps);
                     (runs, other)
@@ -103,19 +105,28 @@ pub fn until_precise(
     mc: &MonteCarlo,
     t: &SceneTarget,
     control: &Control,
-) -> Result<(Vec<SceneRun>, TargetOutcome), SceneError> {
+) -> Result<(Vec<SceneRun>, Option<Maps>, TargetOutcome), SceneError> {
     let own = SceneCase {
         compare_methods: false,
         ..case.clone()
     };
+    let grid = case.migration.output.maps.as_ref();
     let mut runs: Vec<SceneRun> = Vec::new();
+    let mut cells: Vec<RunCells> = Vec::new();
     let mut checked_at = Vec::new();
     let mut half_width = 0.5;
     for n in precision::checkpoints(mc.runs) {
         // progress and pace: the prefix being run (and the nominal run) is the work announced
         control.set_total(1 + n);
-        let (more, _) = scene::ensemble_part(&own, mc, runs.len() as u64..n, control)?;
-        runs.extend(more);
+        let range = runs.len() as u64..n;
+        match grid {
+            None => runs.extend(scene::ensemble_part(&own, mc, range, control)?.0),
+            Some(g) => {
+                let (more, c) = scene::ensemble_cells(&own, mc, range, g, control)?;
+                runs.extend(more);
+                cells.extend(c);
+            }
+        }
         checked_at.push(n);
         half_width = target::measured_half_width(case, t, &runs);
         if half_width <= t.half_width {
@@ -130,7 +141,9 @@ pub fn until_precise(
         max_runs: mc.runs,
         checked_at,
     };
-    Ok((runs, outcome))
+    control.check()?;
+    let maps = grid.map(|g| maps::build_maps(g, &cells));
+    Ok((runs, maps, outcome))
 }
 
 /// The runs of `mc` with the other migration method (`compare_methods`).

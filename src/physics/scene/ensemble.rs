@@ -63,6 +63,23 @@ pub fn ensemble_part_mapped(
     Ok((runs, other, maps))
 }
 
+/// The runs of `range` of the case's own method with the cells each entered on `grid` (see
+/// [`migration::maps`]), in run order: the prefixes of an ensemble with a target and maps.
+///
+/// Errors: as `calc::scene::Scene::solve`.
+pub fn ensemble_cells(
+    case: &SceneCase,
+    mc: &MonteCarlo,
+    range: std::ops::Range<u64>,
+    grid: &MapGrid,
+    control: &Control,
+) -> SceneResult<(Vec<SceneRun>, Vec<RunCells>)> {
+    let pairs = ensemble_with(case, mc, range, Some(grid), control, |r, c| {
+        (r, c.unwrap_or_default())
+    })?;
+    Ok(pairs.into_iter().unzip())
+}
+
 /// Runs the runs of `range`: the migration of each run (the `/v1/migration` streams), then its
 /// strike.
 fn ensemble(

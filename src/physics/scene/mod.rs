@@ -50,8 +50,8 @@ pub use collectors::{
 };
 pub use devices::{BarrierStatistics, DeviceStatistics, crossing_columns, scene_lines};
 pub use ensemble::{
-    ENTRY_COLUMNS, EnsembleReport, SceneRecords, ensemble_part, ensemble_part_mapped,
-    ensemble_report, entry_columns, outcomes_of,
+    ENTRY_COLUMNS, EnsembleReport, SceneRecords, ensemble_cells, ensemble_part,
+    ensemble_part_mapped, ensemble_report, entry_columns, outcomes_of,
 };
 
 /// Impact speed below which a support counts as reached without an impact, m/s.
