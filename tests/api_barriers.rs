@@ -288,3 +288,103 @@ async fn bad_devices_are_refused_naming_the_field() {
     );
     ok(&post(&app, "/v1/scene", &s).await);
 }
+
+/// The barrier search's answer checked by re-running the scene with the barriers it proposes:
+/// each support's exceedance is the one it reported, bit for bit (the same seeded runs), and
+/// when it says acceptable every upper bound is within the acceptable probability.
+#[tokio::test]
+async fn the_barrier_search_is_checked_by_rerunning_the_scene_with_its_barriers() {
+    let app = common::app();
+    let acceptable = 0.05;
+    let mut s = common::risky_scene(RUNS, 5);
+    s["migration_output"] = json!({});
+    s["design"] = json!({
+        "acceptable_probability": acceptable,
+        "barriers": {"every_kth_support": 1},
+    });
+    let a = ok(&post(&app, "/v1/scene", &s).await);
+    let d = &a["design"]["barriers"];
+    let proposed = d["barriers"].as_array().unwrap();
+    assert!(!proposed.is_empty(), "{d}");
+    assert_eq!(d["candidates"].as_array().unwrap().len(), 3);
+    assert!(
+        a["plan"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["stage"] == "design_barriers")
+    );
+    // no guard searched when only barriers are asked for
+    assert!(
+        a["design"]["supports"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|e| e["guarded"] == false)
+    );
+    let mut check = common::risky_scene(RUNS, 5);
+    check["migration_output"] = json!({});
+    check["barriers"] = json!(
+        proposed
+            .iter()
+            .map(|b| json!({
+                "along_dip_m": b["along_dip_m"],
+                "height_m": b["height_m"],
+                "energy_rating_j": b["energy_rating_j"],
+            }))
+            .collect::<Vec<_>>()
+    );
+    let c = ok(&post(&app, "/v1/scene", &check).await);
+    for (want, got) in d["supports"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(c["statistics"]["supports"].as_array().unwrap())
+    {
+        // one design limit: the support's exceedance is that limit's
+        assert_eq!(
+            want["exceedance"], got["exceedance"]["stress_utilisation"],
+            "{want} {got}"
+        );
+        let upper = want["exceedance"]["ci95"][1].as_f64().unwrap();
+        assert_eq!(want["acceptable"], json!(upper <= acceptable));
+    }
+    if d["all_acceptable"] == true {
+        assert!(
+            c["statistics"]["supports"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|s| s["exceedance"]["stress_utilisation"]["ci95"][1]
+                    .as_f64()
+                    .unwrap()
+                    <= acceptable)
+        );
+    }
+    // each proposed rating and height is the rounded-up design percentile: positive
+    for b in proposed {
+        assert!(b["energy_rating_j"].as_f64().unwrap() > 0.0);
+        assert!(b["height_m"].as_f64().unwrap() >= 0.01);
+    }
+}
+
+#[tokio::test]
+async fn a_barrier_search_past_the_run_limit_or_malformed_is_refused() {
+    let app = common::app();
+    let mut s = common::risky_scene(400_000, 5);
+    s["design"] = json!({"acceptable_probability": 0.05, "barriers": {"every_kth_support": 1}});
+    assert_rejections(
+        &app,
+        "/v1/scene",
+        vec![(s, "/design/barriers", "invalid_input")],
+    )
+    .await;
+    let mut s = common::risky_scene(10, 5);
+    s["design"] = json!({"acceptable_probability": 0.05, "barriers": {"every_kth_support": 0}});
+    assert_rejections(
+        &app,
+        "/v1/scene",
+        vec![(s, "/design/barriers/every_kth_support", "invalid_input")],
+    )
+    .await;
+}

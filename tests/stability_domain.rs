@@ -207,7 +207,26 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             json!({"monte_carlo": {"runs": 5, "target": {"statistic": "any_exceeded"}}}),
         ),
         // the design search runs over an ensemble's runs
-        ("/v1/scene", "/design/", json!({"monte_carlo": {"runs": 5}})),
+        (
+            "/v1/scene",
+            "/design/acceptable_probability",
+            json!({"monte_carlo": {"runs": 5}}),
+        ),
+        (
+            "/v1/scene",
+            "/design/guards/",
+            json!({"monte_carlo": {"runs": 5}, "design": {"acceptable_probability": 0.1}}),
+        ),
+        (
+            "/v1/scene",
+            "/design/barriers/every_kth_support",
+            json!({"monte_carlo": {"runs": 5}, "design": {"acceptable_probability": 0.1}}),
+        ),
+        (
+            "/v1/scene",
+            "/design/barriers/offset_m",
+            json!({"monte_carlo": {"runs": 5}, "design": {"acceptable_probability": 0.1, "barriers": {"every_kth_support": 1}}}),
+        ),
     ];
     // `map` exists only on grid and contour floors: its fields are varied on a grid in map
     // coordinates, never on the default plane

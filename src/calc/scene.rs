@@ -68,6 +68,19 @@ impl Calculation for Scene {
                 r.warnings
                     .extend(scene::design_search::residual_risk_warning(case, &d));
                 r.design = Some(d);
+                if let Some(search) = &ask.barriers {
+                    let b = scene::barrier_design::design_barriers(case, &mc, search, control)?;
+                    r.plan.push(Stage::ran(
+                        "design_barriers",
+                        format!(
+                            "greedy barrier search over {} candidates, {} ensembles of {} runs",
+                            b.candidates.len(),
+                            b.ensembles,
+                            mc.runs
+                        ),
+                    ));
+                    r.barrier_design = Some(b);
+                }
             }
             r.runs = Some(runs);
         }

@@ -9,6 +9,7 @@ use super::common::Checker;
 use super::scene::{ProbabilityDto, SceneRequest};
 use crate::config::Config;
 use crate::http::error::ApiError;
+use crate::physics::scene::barrier_design::{self, BarrierDesign, BarrierSearch};
 use crate::physics::scene::design_search::{self, DesignAsk, DesignSearch};
 use crate::physics::scene::{SceneCase, SupportEntry};
 
@@ -35,10 +36,33 @@ pub struct DesignSearchDto {
     /// its Wilson 95 % interval (as `statistics.supports[].exceedance` reports it), in (0, 1).
     #[schema(exclusive_minimum = 0.0, exclusive_maximum = 1.0, example = 0.01)]
     pub acceptable_probability: f64,
-    /// The supports that get a guard (null: every support).
+    /// The supports that get a guard (null: every support, unless `barriers` is given).
     #[schema(default = json!(null), example = json!({"supports": [1, 2]}))]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub guards: Option<DesignGuardsDto>,
+    /// Search for the fewest barriers across the face, in front of every k-th support (null:
+    /// no barrier search).
+    #[schema(default = json!(null), example = json!({"every_kth_support": 10}))]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub barriers: Option<DesignBarriersDto>,
+}
+
+/// Where barriers may stand: candidates in front of every k-th support.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DesignBarriersDto {
+    /// A candidate in front of every k-th distinct support position from the top of the face
+    /// (1: every support), in [1, 1000].
+    #[schema(minimum = 1, maximum = 1000, example = 10)]
+    pub every_kth_support: u32,
+    /// How far up-slope of its support a candidate stands, m, in [0, 10] (default 1).
+    #[schema(default = 1.0, minimum = 0.0, maximum = 10.0, example = 1.0)]
+    #[serde(default = "default_offset")]
+    pub offset_m: f64,
+}
+
+fn default_offset() -> f64 {
+    1.0
 }
 
 /// The design search of `req` over the support `entries`, checked (`/design`): an ensemble
@@ -68,8 +92,30 @@ pub fn resolve(
         "",
     );
     let last = entries.iter().map(|e| e.support).max().unwrap_or(0);
+    let barriers = d.barriers.map(|b| {
+        let ok = ck.count(
+            "/design/barriers/every_kth_support",
+            u64::from(b.every_kth_support),
+            1,
+            1000,
+            "",
+        ) & ck.closed("/design/barriers/offset_m", b.offset_m, 0.0, 10.0, "m");
+        (
+            ok,
+            BarrierSearch {
+                acceptable: a,
+                every: b.every_kth_support as usize,
+                offset: b.offset_m,
+            },
+        )
+    });
+    // with a barrier search and no guards listed, no guard is searched for
+    let no_guards = barriers.is_some() && d.guards.is_none();
     let listed = d.guards.get_or_insert_with(Default::default);
     let supports = listed.supports.get_or_insert_with(|| {
+        if no_guards {
+            return Vec::new();
+        }
         let mut all: Vec<u32> = entries.iter().map(|e| e.support).collect();
         all.dedup();
         all
@@ -102,18 +148,40 @@ pub fn resolve(
         .iter()
         .map(|e| listed.contains(&e.support))
         .collect();
-    (ok && !no_ensemble).then_some(DesignAsk {
+    let barriers_ok = barriers.is_none_or(|b| b.0);
+    (ok && barriers_ok && !no_ensemble).then_some(DesignAsk {
         acceptable_probability: a,
         guarded,
+        barriers: barriers.map(|b| b.1),
     })
 }
 
 /// Refuses (422 naming `/design`) a design search whose work, estimated before running
-/// ([`design_search::estimated_evaluations`]), passes `max_design_evaluations`.
+/// ([`design_search::estimated_evaluations`]), passes `max_design_evaluations`; and (naming
+/// `/design/barriers`) a barrier search whose runs, (c + 1)(c + 2)/2 ensembles for c candidates
+/// ([`barrier_design::search_runs`]), pass `max_runs`.
 pub fn check_work(case: &SceneCase, config: &Config) -> Result<(), ApiError> {
     let (Some(ask), Some(mc)) = (&case.design, &case.migration.monte_carlo) else {
         return Ok(());
     };
+    if let Some(b) = &ask.barriers {
+        let c = barrier_design::candidates(case, b.every, b.offset).len();
+        let runs = barrier_design::search_runs(c, mc.runs);
+        if runs > config.max_runs as f64 {
+            let mut ck = Checker::new();
+            ck.push(
+                "/design/barriers",
+                json!(runs),
+                format!(
+                    "the barrier search would run up to {runs} runs ({c} candidates: up to \
+                     (c + 1)(c + 2)/2 ensembles of {} runs), more than the limit {} (max_runs): \
+                     take every k-th support with a larger k, or fewer runs",
+                    mc.runs, config.max_runs
+                ),
+            );
+            return ck.finish();
+        }
+    }
     let work = design_search::estimated_evaluations(case, &ask.guarded, mc.runs);
     if work <= config.max_design_evaluations {
         return Ok(());
@@ -179,12 +247,20 @@ pub struct DesignSearchOutDto {
     pub chain_evaluations: u64,
     /// Per support column, in the order of `statistics.supports`.
     pub supports: Vec<DesignEntryDto>,
+    /// The barrier search (with `design.barriers`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub barriers: Option<BarrierDesignOutDto>,
 }
 
 /// The answer of a design search on `case`.
 #[must_use]
-pub fn design_dto(case: &SceneCase, d: &DesignSearch) -> DesignSearchOutDto {
+pub fn design_dto(
+    case: &SceneCase,
+    d: &DesignSearch,
+    barriers: Option<&BarrierDesign>,
+) -> DesignSearchOutDto {
     DesignSearchOutDto {
+        barriers: barriers.map(|b| barrier_design_dto(case, b, d.acceptable_probability)),
         method: design_search::METHOD.into(),
         acceptable_probability: d.acceptable_probability,
         runs: d.runs,
@@ -208,5 +284,103 @@ pub fn design_dto(case: &SceneCase, d: &DesignSearch) -> DesignSearchOutDto {
                 }
             })
             .collect(),
+    }
+}
+
+/// A barrier the search proposes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, ToSchema)]
+pub struct ProposedBarrierDto {
+    /// The support it stands in front of (number from 1).
+    pub support: u32,
+    /// Along-dip position, m.
+    pub along_dip_m: f64,
+    /// Height, m: the design percentile of the passing height at its line when it was chosen,
+    /// rounded up to the centimetre (at least 1 cm).
+    pub height_m: f64,
+    /// Energy rating, J: the design percentile of the kinetic energy at its line when it was
+    /// chosen, rounded up to three significant digits.
+    pub energy_rating_j: f64,
+}
+
+/// A support column with the proposed barriers in place.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct BarrierResidualDto {
+    /// Support number (from 1).
+    pub support: u32,
+    /// Column of that support (from 0).
+    pub column_index: u32,
+    /// Probability over all runs of striking it past some checked limit (or the capacity) with
+    /// the barriers in place, with its Wilson 95 % interval.
+    pub exceedance: ProbabilityDto,
+    /// The interval's upper bound is within `acceptable_probability`.
+    pub acceptable: bool,
+}
+
+/// The barrier search's answer.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema)]
+pub struct BarrierDesignOutDto {
+    /// How the barriers were found, in words.
+    pub method: String,
+    /// The candidates: support number and along-dip position, m.
+    pub candidates: Vec<ProposedBarrierSpotDto>,
+    /// The barriers proposed, in the order chosen (send them as `barriers` to check them).
+    pub barriers: Vec<ProposedBarrierDto>,
+    /// Per support column, in the order of `statistics.supports`.
+    pub supports: Vec<BarrierResidualDto>,
+    /// Every column acceptable with the barriers in place.
+    pub all_acceptable: bool,
+    /// Ensembles run by the search.
+    pub ensembles: u64,
+}
+
+/// A candidate position of the barrier search.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, ToSchema)]
+pub struct ProposedBarrierSpotDto {
+    /// The support it stands in front of (number from 1).
+    pub support: u32,
+    /// Along-dip position, m.
+    pub along_dip_m: f64,
+}
+
+/// The barrier search's answer on `case`.
+#[must_use]
+pub fn barrier_design_dto(
+    case: &SceneCase,
+    d: &BarrierDesign,
+    acceptable: f64,
+) -> BarrierDesignOutDto {
+    BarrierDesignOutDto {
+        method: barrier_design::METHOD.into(),
+        candidates: d
+            .candidates
+            .iter()
+            .map(|&(support, along_dip_m)| ProposedBarrierSpotDto {
+                support,
+                along_dip_m,
+            })
+            .collect(),
+        barriers: d
+            .barriers
+            .iter()
+            .map(|b| ProposedBarrierDto {
+                support: b.support,
+                along_dip_m: b.along_dip,
+                height_m: b.height,
+                energy_rating_j: b.rating,
+            })
+            .collect(),
+        supports: d
+            .residual
+            .iter()
+            .zip(&case.supports)
+            .map(|(p, e)| BarrierResidualDto {
+                support: e.support,
+                column_index: e.column_index,
+                exceedance: p.into(),
+                acceptable: p.ci95[1] <= acceptable,
+            })
+            .collect(),
+        all_acceptable: d.acceptable,
+        ensembles: d.ensembles,
     }
 }

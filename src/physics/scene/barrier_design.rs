@@ -18,6 +18,14 @@ use crate::physics::control::Control;
 use crate::physics::migration::{Barrier, Line, MonteCarlo};
 use crate::physics::stats::percentile_sorted;
 
+/// The method, in words (the answer's `design.barriers.method`).
+pub const METHOD: &str = "greedy over the candidates on the ensemble's own seeded runs (common \
+    random numbers): each round sizes every candidate left at the design percentile of what \
+    reaches its line (kinetic energy for the rating, passing height for the height), tries each \
+    with the barriers chosen so far and keeps the one that leaves the fewest supports above the \
+    acceptable probability (then the least summed exceedance); it stops when every support's \
+    Wilson 95 % upper bound is within it or no candidate is left. Greedy: not proven the fewest.";
+
 /// What the search is asked.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BarrierSearch {

@@ -34,6 +34,8 @@ pub struct DesignAsk {
     pub acceptable_probability: f64,
     /// Per entry of [`SceneCase::supports`], whether it gets a guard.
     pub guarded: Vec<bool>,
+    /// The barrier search, when asked ([`super::barrier_design`]).
+    pub barriers: Option<super::barrier_design::BarrierSearch>,
 }
 
 /// The answer for one support entry.

@@ -543,6 +543,8 @@ pub struct SceneReport {
     pub maps: Option<migration::maps::Maps>,
     /// The design search for guards (with [`SceneCase::design`]).
     pub design: Option<design_search::DesignSearch>,
+    /// The barrier search's answer (with `design.barriers`).
+    pub barrier_design: Option<barrier_design::BarrierDesign>,
 }
 
 /// Bounding radius of a rock (largest distance of a point from its centre of mass), m, and its
@@ -880,6 +882,7 @@ pub fn solve_nominal(
             warnings,
             maps: None,
             design: None,
+            barrier_design: None,
         };
         return Ok((report, None));
     }
@@ -947,6 +950,7 @@ pub fn solve_nominal(
         warnings,
         maps: None,
         design: None,
+        barrier_design: None,
     };
     if mc.is_none() {
         // a single run: the rest of the report is the nominal run's

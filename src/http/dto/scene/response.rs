@@ -550,10 +550,9 @@ impl SceneResponse {
             warnings,
             inputs,
             model_version: meta.model_version,
-            design: r
-                .design
-                .as_ref()
-                .map(|d| super::super::design_search::design_dto(case, d)),
+            design: r.design.as_ref().map(|d| {
+                super::super::design_search::design_dto(case, d, r.barrier_design.as_ref())
+            }),
         }
     }
 }
