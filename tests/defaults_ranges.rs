@@ -98,6 +98,12 @@ fn context(path: &str, pointer: &str) -> Value {
             json!({"face": {"floor_material": {"elastic_modulus_pa": 4.38e9, "poisson_ratio": 0.3}}}),
         ),
         ("/v1/column", "/end_time_s", json!({"model": "coupled"})),
+        // A target's fields are required together.
+        (
+            "/v1/migration",
+            "/monte_carlo/target/",
+            json!({"monte_carlo": {"runs": 5, "target": {"percentile": 0.5, "relative_half_width": 0.1}}}),
+        ),
         (
             "/v1/spalling",
             "/",
