@@ -210,3 +210,63 @@ async fn bad_release_rates_are_refused_naming_the_field() {
         assert!(e["message"].as_str().unwrap().contains(words), "{e}");
     }
 }
+
+/// Rates per release zone: the zones are drawn in proportion to their rates, so the answer is
+/// that of the same zones weighted by the rates with their sum as the face's rate, bit for bit;
+/// a count of rates other than the zones', or rates without zones, is refused naming the field.
+#[tokio::test]
+async fn rates_per_zone_weight_the_zones_and_add_up() {
+    let app = common::app();
+    let rates = [100.0, 300.0, 200.0];
+    let mut by_zone = common::risky_scene(300, 9);
+    by_zone["release_zones"] = json!("table1");
+    by_zone["release_rate"] = json!({"rocks_per_year_by_zone": rates});
+    let a = post(&app, "/v1/scene", &by_zone).await;
+    assert_eq!(a.status, 200, "{}", String::from_utf8_lossy(&a.body));
+    let a = a.json();
+    let length = 120.0;
+    let third = length / 3.0;
+    let mut weighted = common::risky_scene(300, 9);
+    weighted["release_zones"] = json!([
+        {"from_along_dip_m": 0.0, "to_along_dip_m": third, "weight": rates[0]},
+        {"from_along_dip_m": third, "to_along_dip_m": 2.0 * third, "weight": rates[1]},
+        {"from_along_dip_m": 2.0 * third, "to_along_dip_m": length, "weight": rates[2]},
+    ]);
+    weighted["release_rate"] = json!({"rocks_per_year": 600.0});
+    let b = post(&app, "/v1/scene", &weighted).await.json();
+    assert_eq!(a["statistics"], b["statistics"]);
+    assert!(
+        a["statistics"]["any_overloads_per_year"]["per_year"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
+    let mut wrong = by_zone.clone();
+    wrong["release_rate"] = json!({"rocks_per_year_by_zone": [1.0, 2.0]});
+    let mut no_zones = common::risky_scene(10, 9);
+    no_zones["release_rate"] = json!({"rocks_per_year_by_zone": [1.0]});
+    let mut negative = by_zone.clone();
+    negative["release_rate"] = json!({"rocks_per_year_by_zone": [1.0, -2.0, 3.0]});
+    common::assert_rejections(
+        &app,
+        "/v1/scene",
+        vec![
+            (
+                wrong,
+                "/release_rate/rocks_per_year_by_zone",
+                "invalid_input",
+            ),
+            (
+                no_zones,
+                "/release_rate/rocks_per_year_by_zone",
+                "invalid_input",
+            ),
+            (
+                negative,
+                "/release_rate/rocks_per_year_by_zone/1",
+                "invalid_input",
+            ),
+        ],
+    )
+    .await;
+}

@@ -219,16 +219,24 @@ number_schemas! {
     observed_period_schema => OBSERVED_PERIOD;
 }
 
-/// How many rocks are released on the face: a rate, or events counted over a period. Give
-/// `rocks_per_year`, or `observed_events` with `observed_period_years` (the rate is then
-/// estimated from the count, and its own uncertainty widens the intervals).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema, Default)]
+/// How many rocks are released on the face: a rate, a rate per release zone, or events counted
+/// over a period. Give `rocks_per_year`, or `rocks_per_year_by_zone`, or `observed_events` with
+/// `observed_period_years` (the rate is then estimated from the count, and its own uncertainty
+/// widens the intervals).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct ReleaseRateDto {
     /// Rocks released per year, 1/year.
     #[schema(schema_with = rocks_per_year_schema)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rocks_per_year: Option<f64>,
+    /// Rocks released per year in each release zone, 1/year, each in [0, 1e9] and their sum in
+    /// [1e-6, 1e9], one per zone of `release_zones` (needed): the ensemble draws the zones in
+    /// proportion to these rates (they replace the zones' weights), so each support's overloads
+    /// per year are Σ rate × probability over the zones.
+    #[schema(default = json!(null), example = json!([150.0, 375.0, 118.0]))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rocks_per_year_by_zone: Option<Vec<f64>>,
     /// Release events counted (e.g. the Spalling tab's spalling count), in [0, 1e9].
     #[schema(default = json!(null), minimum = 0, maximum = 1_000_000_000, example = 643)]
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -243,6 +251,35 @@ impl ReleaseRateDto {
     /// The release rate, its fields checked against their ranges and against each other
     /// (`base`: the object's JSON Pointer).
     pub fn resolve(&self, base: &str, ck: &mut Checker) -> Option<ReleaseRate> {
+        if let Some(rates) = &self.rocks_per_year_by_zone {
+            if self.rocks_per_year.is_some()
+                || self.observed_events.is_some()
+                || self.observed_period_years.is_some()
+            {
+                ck.push(
+                    base,
+                    serde_json::to_value(self).unwrap_or(Value::Null),
+                    "give rocks_per_year, rocks_per_year_by_zone, or observed_events with \
+                     observed_period_years (one form only)",
+                );
+                return None;
+            }
+            let mut ok = true;
+            for (i, &r) in rates.iter().enumerate() {
+                ok &= ck.closed(
+                    &format!("{base}/rocks_per_year_by_zone/{i}"),
+                    r,
+                    0.0,
+                    1e9,
+                    "1/year",
+                );
+            }
+            let total: f64 = rates.iter().sum();
+            if ok {
+                ok = ROCKS_PER_YEAR.check(ck, &format!("{base}/rocks_per_year_by_zone"), total);
+            }
+            return ok.then_some(ReleaseRate::PerYear(total));
+        }
         match (
             self.rocks_per_year,
             self.observed_events,

@@ -548,12 +548,13 @@ impl SceneRequest {
             .and_then(|m| m.side_length_m)
             .map_or(cube_side, |d| d.max.unwrap_or(cube_side).max(cube_side));
         check_contact_lengths(&supports, side_max, &mut ck);
-        let release_zones = self.resolve_release_zones(length, &mut ck);
+        let mut release_zones = self.resolve_release_zones(length, &mut ck);
         let draws = self.resolve_draws(&mut ck);
         let mut limits = self.resolve_design_limits(&mut ck);
         super::design_values::check_design_percentile(&mut ck, self.design_percentile);
         limits.design_percentile = self.design_percentile;
         let release_rate = self.resolve_release_rate(&mut ck);
+        self.zone_rates(release_zones.as_deref_mut(), &mut ck);
         let guards = resolve_guards(
             self.guards.as_deref().unwrap_or(&[]),
             &supports.entries,
@@ -791,6 +792,35 @@ impl SceneRequest {
             return None;
         }
         r.resolve("/release_rate", ck)
+    }
+
+    /// With `release_rate.rocks_per_year_by_zone`: one rate per release zone (zones needed), the
+    /// rates becoming the zones' weights (the ensemble draws the zones in proportion to them).
+    fn zone_rates(&self, zones: Option<&mut [ReleaseZone]>, ck: &mut Checker) {
+        let Some(rates) = self
+            .release_rate
+            .as_ref()
+            .and_then(|r| r.rocks_per_year_by_zone.as_ref())
+        else {
+            return;
+        };
+        match zones {
+            Some(z) if z.len() == rates.len() => {
+                for (zone, &r) in z.iter_mut().zip(rates) {
+                    zone.weight = r;
+                }
+            }
+            Some(z) => ck.push(
+                "/release_rate/rocks_per_year_by_zone",
+                json!(rates.len()),
+                format!("one rate per release zone: {} zones", z.len()),
+            ),
+            None => ck.push(
+                "/release_rate/rocks_per_year_by_zone",
+                json!(rates.len()),
+                "rates per zone need release_zones",
+            ),
+        }
     }
 
     /// The design limits: utilisation in (0, 100], force (N) and energy (J) in (0, 1e12],
