@@ -539,7 +539,8 @@ function initExports() {
     const panel = card.closest('[data-panel]')?.dataset.panel ?? 'gangue';
     const bar = h('div', { class: 'export-bar' });
     const tables = [...card.querySelectorAll('table')];
-    if (tables.length) {
+    // a card with its own CSV buttons (data-exports="own") gets none here
+    if (tables.length && card.dataset.exports !== 'own') {
       bar.append(csvButton(`${panel}_${slug(title)}.csv`, () => tables.flatMap((t) => (t.csv ? t.csv() : tableRows(t))), 'CSV'));
     }
     for (const canvas of card.querySelectorAll('canvas.floor-plan')) {

@@ -19,8 +19,8 @@ const ZONE = '#d88a1c';
 const STOP = '#1c2430';
 const BARRIER = '#7a3e12';
 const COLLECTOR = '#6b3fa0';
-/** A barrier the design search proposes, not yet applied: orange, long dashes. */
-const PROPOSED = '#e07b00';
+/** A barrier the design search proposes, not yet applied: teal long dashes on a white halo. */
+const PROPOSED = '#0097a7';
 /** The colour of a drawn line by its kind. */
 const deviceColour = (d) => (d.kind === 'barrier' ? BARRIER : d.kind === 'proposed' ? PROPOSED : COLLECTOR);
 /** Map colour: pale yellow (low) through red to purple (high). */
@@ -432,6 +432,16 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     const [a, b] = d.across ?? [yr[0] - 1e3, yr[1] + 1e3];
     const [ax, ay] = model.face2view(d.s, a);
     const [bx, by] = model.face2view(d.s, b);
+    if (d.kind === 'proposed') {
+      // a white halo under the dashes: the line stands out on the map and the relief alike
+      ctx.strokeStyle = 'rgba(255, 255, 255, 0.9)';
+      ctx.lineWidth = 7;
+      ctx.setLineDash([]);
+      ctx.beginPath();
+      ctx.moveTo(px(ax), py(ay));
+      ctx.lineTo(px(bx), py(by));
+      ctx.stroke();
+    }
     ctx.strokeStyle = ctx.fillStyle = deviceColour(d);
     ctx.lineWidth = d.kind === 'collector' ? 2 : 3;
     ctx.setLineDash(d.kind === 'barrier' ? [] : d.kind === 'proposed' ? [10, 5] : [6, 4]);
@@ -978,7 +988,7 @@ export function planLegend(drawn, { model, supports, release, tr, stops, unplace
       + collectors.map((d) => `at ${fmt(d.s, 4)} m along the dip over ${span(d)}`).join('; ')));
   }
   if (proposed.length) {
-    items.push(h('li', { dataset: { out: 'proposed' } }, sw(PROPOSED, 'dash'), `${proposed.length} barrier${proposed.length === 1 ? '' : 's'} the design search proposes, not yet applied, as orange long-dashed lines: `
+    items.push(h('li', { dataset: { out: 'proposed' } }, sw(PROPOSED, 'dash'), `${proposed.length} barrier${proposed.length === 1 ? '' : 's'} the design search proposes, not yet applied, as teal long-dashed lines on a white halo: `
       + proposed.map((d) => `at ${fmt(d.s, 4)} m along the dip in front of support ${d.support}, ${fmt(d.height, 3)} m high, rated ${fmt(d.rating / 1e3, 4)} kJ`).join('; ')));
   }
   if (release.zones?.length) items.push(h('li', {}, sw(ZONE, 'box'), `release zones${release.table1 ? ' (Table 1 thirds)' : ''}: ${release.zones.map((z) => `${fmt(z.from, 4)}–${fmt(z.to, 4)} m`).join(', ')}`));

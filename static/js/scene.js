@@ -205,10 +205,10 @@ const GREY = '#7d8794';
 const BLUE = '#1d5fa8';
 const BARRIER = '#7a3e12';
 const COLLECTOR = '#6b3fa0';
-/** A barrier the design search proposes, not yet applied (long dashes). */
-const PROPOSED = '#e07b00';
+/** A barrier the design search proposes, not yet applied (teal long dashes, as on the floor plan). */
+const PROPOSED = '#0097a7';
 
-/** Barriers (solid, labelled with height and rating), proposed barriers (orange, long dashes) and collectors (dashed) on a uPlot of along the dip against across. */
+/** Barriers (solid, labelled with height and rating), proposed barriers (teal, long dashes) and collectors (dashed) on a uPlot of along the dip against across. */
 function drawDeviceLines(u, devices) {
   const { ctx } = u;
   const r = devicePixelRatio;
@@ -603,7 +603,7 @@ export function initScene() {
       words.push(h('p', { class: 'answer', dataset: { out: 'design.guards' } }, need.length
         ? `Guards needed on ${need.length} of ${guarded.length} guarded support columns, the largest rated ${fmt(top / 1e3, 4)} kJ; `
         : `No guarded column needs a guard: all ${guarded.length} are acceptable as they are; `,
-      over.length ? `${over.length} stay above the acceptable probability (${over.slice(0, 8).map(name).join(', ')}${over.length > 8 ? ', …' : ''}).` : 'every guarded column is then acceptable.'));
+      over.length ? `${over.length} of the guarded columns stay above the acceptable probability (${over.slice(0, 8).map(name).join(', ')}${over.length > 8 ? ', …' : ''}).` : 'every guarded column is then acceptable.'));
     }
     if (bd) {
       const over = bd.supports.filter((e) => !e.acceptable);
@@ -1231,7 +1231,7 @@ export function initScene() {
     let k = 2;
     if (zones.length) series.push({ label: 'release zones (Table 1 thirds)', values: joined[k++], color: '#d88a1c', width: 7 });
     if (tr) series.push({ label: 'nominal run', values: joined[k++], color: '#1d5fa8' });
-    // barriers solid brown, proposed barriers long-dashed orange, collectors dashed violet, over the supports' marks
+    // barriers solid brown, proposed barriers long-dashed teal, collectors dashed violet, over the supports' marks
     const devices = [...requestDevices(request ?? data.inputs), ...proposedDevices(data)];
     const deviceMarks = devices.map((d) => ({
       x: d.s, color: d.kind === 'barrier' ? BARRIER : d.kind === 'proposed' ? PROPOSED : COLLECTOR,

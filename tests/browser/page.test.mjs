@@ -296,8 +296,9 @@ async function pageSection(page) {
     assert(bad.length === 0, bad.join('\n'));
     // The page's own starting values are few and each says why.
     const choices = controls.filter((c) => c.choice);
-    // (four of them the ensembles' targets "until precise enough", which the server has no default for)
-    assert(choices.length <= 14 && choices.every((c) => c.choice.length > 20), `page choices: ${choices.map((c) => c.pointer).join(', ')}`);
+    // (four of them the ensembles' targets "until precise enough" and one the design search's acceptable
+    // probability, which the server has no default for)
+    assert(choices.length <= 15 && choices.every((c) => c.choice.length > 20), `page choices: ${choices.map((c) => c.pointer).join(', ')}`);
     // Settings fields: the recommended preset where it names them, else the server's default.
     const rec = presets.presets.recommended;
     for (const [form, pointer, want] of [
@@ -2563,15 +2564,15 @@ async function designSection(page, context) {
     assert(legend.includes(`${bd.barriers.length} barrier`) && legend.includes(`in front of support ${first.support}`) && /not yet applied/.test(legend), `floor plan legend: ${legend}`);
     const drawn = await page.evaluate(() => document.getElementById('scene-floor-plan').options.devices.map((d) => `${d.kind} ${d.index}`).join(','));
     assert(drawn === bd.barriers.map((_, i) => `proposed ${i + 1}`).join(','), `the floor plan draws ${drawn}`);
-    // the proposed lines change the plan's pixels where they stand, and in their own orange
-    const orange = await page.evaluate(() => {
+    // the proposed lines are drawn in their own teal
+    const teal = await page.evaluate(() => {
       const c = document.getElementById('scene-floor-plan');
       const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
       let n = 0;
-      for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - 0xe0) < 8 && Math.abs(d[i + 1] - 0x7b) < 8 && d[i + 2] < 16) n += 1;
+      for (let i = 0; i < d.length; i += 4) if (d[i] < 16 && Math.abs(d[i + 1] - 0x97) < 8 && Math.abs(d[i + 2] - 0xa7) < 8) n += 1;
       return n;
     });
-    assert(orange > 50, `${orange} orange pixels on the floor plan`);
+    assert(teal > 50, `${teal} teal pixels on the floor plan`);
     await elementShot(page.locator('#scene-design-card'), 'scene-design-barriers.png');
     await elementShot(page.locator('#scene-floor'), 'floor-view-proposed.png');
   });
