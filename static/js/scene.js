@@ -589,7 +589,7 @@ export function initScene() {
       + (guarded.length ? ` Guards (${guarded.length} column${guarded.length === 1 ? '' : 's'}): ${design.method}; the rating is the smallest that makes the column acceptable, `
         + 'and a column that stays above it with every run held gets the rating that holds every run that reached it.' : ' No guard searched.')
       + (bd ? ` Barriers: ${bd.method}` : '')
-      + (check ? ' The barriers and guards below were applied and the scene re-run with the same runs: the last column is that re-run, the check.' : '');
+      + (check ? ' The proposed protection was applied (the Barriers rows, and the Guards group with the largest rating) and the scene re-run with the same runs: the last column is that re-run, the check.' : '');
     const words = [];
     if (design.runs_needed !== undefined && design.runs_needed !== null) {
       words.push(h('p', { class: 'answer design-runs-needed', dataset: { out: 'design.runs_needed' } },
