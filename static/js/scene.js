@@ -1247,7 +1247,8 @@ export function initScene() {
     const sideNote = document.getElementById('scene-side-note');
     sideNote.hidden = !devices.length;
     sideNote.textContent = devices.length ? `Lines across the face: ${devices.map((d) => `${deviceLabel(d)} at ${fmt(d.s, 4)} m`).join('; ')} `
-      + '(barriers solid brown, collectors dashed violet; also on the plan view beside and on the floor below).' : '';
+      + `(barriers solid brown, collectors dashed violet${devices.some((d) => d.kind === 'proposed') ? ', barriers the design search proposes, not yet applied, long-dashed teal' : ''}; `
+      + 'also on the plan view beside and on the floor below).' : '';
     if (tr) plots.side.csv = () => [['along_dip_m', 'height_m'], ...tr.along_dip_m.map((s, i) => [s, tr.height_m[i]])];
 
     // Plan: along the dip against across the face; columns as points, spanning supports as lines.

@@ -2575,6 +2575,9 @@ async function designSection(page, context) {
     assert(teal > 50, `${teal} teal pixels on the floor plan`);
     await elementShot(page.locator('#scene-design-card'), 'scene-design-barriers.png');
     await elementShot(page.locator('#scene-floor'), 'floor-view-proposed.png');
+    const side = await page.locator('#scene-side-note').textContent();
+    assert(side.includes(`proposed barrier 1: `) && /long-dashed teal/.test(side), `side view note: ${side}`);
+    await elementShot(page.locator('.result-grid:has(#scene-side-plot)'), 'scene-side-plan-proposed.png');
   });
 
   await check('design: "apply" fills the Barriers rows with the proposed barriers and re-runs; the re-run\'s exceedances are the answer\'s design.barriers.supports', async () => {
