@@ -539,7 +539,8 @@ function initExports() {
     const panel = card.closest('[data-panel]')?.dataset.panel ?? 'gangue';
     const bar = h('div', { class: 'export-bar' });
     const tables = [...card.querySelectorAll('table')];
-    if (tables.length) {
+    // a card with its own CSV buttons (data-exports="own") gets none here
+    if (tables.length && card.dataset.exports !== 'own') {
       bar.append(csvButton(`${panel}_${slug(title)}.csv`, () => tables.flatMap((t) => (t.csv ? t.csv() : tableRows(t))), 'CSV'));
     }
     for (const canvas of card.querySelectorAll('canvas.floor-plan')) {
@@ -663,12 +664,14 @@ function buildReport() {
     const panel = document.querySelector(`[data-panel="${tab}"]`);
     const checks = [...panel.querySelectorAll('.checks-card table')].filter((t) => !t.closest('[hidden]'));
     if (checks.length) parts.push(h('h2', {}, 'Checks'), ...checks.map((t) => t.cloneNode(true)));
-    // result cards marked for the report (the Scene's barriers and collectors, with and without protection)
+    // result cards marked for the report (the Scene's design, barriers and collectors, with and without protection)
     for (const card of panel.querySelectorAll('.results .card[data-report]')) {
       if (card.closest('[hidden]')) continue;
-      const table = card.querySelector('table');
+      // its note, its answer in words and every table it shows (the design card has two)
+      const tables = [...card.querySelectorAll('table')].filter((t) => !t.hidden);
       const note = card.querySelector('.note')?.textContent.trim();
-      parts.push(h('h2', {}, card.querySelector('h3')?.textContent.trim() ?? ''), ...(note ? [h('p', {}, note)] : []), ...(table ? [table.cloneNode(true)] : []));
+      const answers = [...card.querySelectorAll('p.answer')].map((p) => h('p', {}, p.textContent.trim()));
+      parts.push(h('h2', {}, card.querySelector('h3')?.textContent.trim() ?? ''), ...(note ? [h('p', {}, note)] : []), ...answers, ...tables.map((t) => t.cloneNode(true)));
     }
     const figs = [];
     for (const el of panel.querySelectorAll('.results .plot, .results canvas.floor-plan, .results .view3d canvas')) {

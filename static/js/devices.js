@@ -170,7 +170,8 @@ export function requestDevices(request) {
   return out;
 }
 
-/** A device's label on the drawings: "barrier 1: 1 m, 20 kJ", "collector 1". */
+/** A device's label on the drawings: "barrier 1: 1 m, 20 kJ", "collector 1", "proposed barrier 1: 0.6 m, 12 kJ". */
 export function deviceLabel(d) {
+  if (d.kind === 'proposed') return `proposed barrier ${d.index}: ${fmt(d.height, 3)} m, ${fmt(d.rating / 1e3, 3)} kJ`;
   return d.kind === 'barrier' ? `barrier ${d.index}: ${fmt(d.height, 3)} m, ${fmt(d.rating / 1e3, 3)} kJ` : `collector ${d.index}`;
 }

@@ -19,6 +19,10 @@ const ZONE = '#d88a1c';
 const STOP = '#1c2430';
 const BARRIER = '#7a3e12';
 const COLLECTOR = '#6b3fa0';
+/** A barrier the design search proposes, not yet applied: teal long dashes on a white halo. */
+const PROPOSED = '#0097a7';
+/** The colour of a drawn line by its kind. */
+const deviceColour = (d) => (d.kind === 'barrier' ? BARRIER : d.kind === 'proposed' ? PROPOSED : COLLECTOR);
 /** Map colour: pale yellow (low) through red to purple (high). */
 const MAPC = (t) => {
   const u = Math.max(0, Math.min(1, t));
@@ -428,9 +432,19 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     const [a, b] = d.across ?? [yr[0] - 1e3, yr[1] + 1e3];
     const [ax, ay] = model.face2view(d.s, a);
     const [bx, by] = model.face2view(d.s, b);
-    ctx.strokeStyle = ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
-    ctx.lineWidth = d.kind === 'barrier' ? 3 : 2;
-    ctx.setLineDash(d.kind === 'barrier' ? [] : [6, 4]);
+    if (d.kind === 'proposed') {
+      // a white halo under the dashes: the line stands out on the map and the relief alike
+      ctx.strokeStyle = 'rgba(255, 255, 255, 0.9)';
+      ctx.lineWidth = 7;
+      ctx.setLineDash([]);
+      ctx.beginPath();
+      ctx.moveTo(px(ax), py(ay));
+      ctx.lineTo(px(bx), py(by));
+      ctx.stroke();
+    }
+    ctx.strokeStyle = ctx.fillStyle = deviceColour(d);
+    ctx.lineWidth = d.kind === 'collector' ? 2 : 3;
+    ctx.setLineDash(d.kind === 'barrier' ? [] : d.kind === 'proposed' ? [10, 5] : [6, 4]);
     ctx.beginPath();
     ctx.moveTo(px(ax), py(ay));
     ctx.lineTo(px(bx), py(by));
@@ -449,7 +463,7 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     const x = Math.max(M.l + 2, lx + 5 + w <= M.l + plotW ? lx + 5 : lx - 5 - w);
     ctx.fillStyle = 'rgba(255, 255, 255, 0.8)';
     ctx.fillRect(x - 2, base - 11, w + 4, 14);
-    ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
+    ctx.fillStyle = deviceColour(d);
     ctx.fillText(text, x, base);
   }
   // The nominal path, coloured by speed.
@@ -834,7 +848,8 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
   }
   // Barriers as fences of their height across their range (the whole face: the drawn strip),
   // collectors as dashed lines on the floor.
-  for (const d of devices) {
+  const built = devices.filter((d) => d.kind !== 'proposed');
+  for (const d of built) {
     const [a, b] = d.across ?? [-10, 10];
     const n = 24;
     const foot = Array.from({ length: n + 1 }, (_, k) => {
@@ -862,7 +877,7 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
       scene.add(line);
     }
   }
-  box.dataset.devices = devices.map((d) => `${d.kind} ${d.index}`).join(',');
+  box.dataset.devices = built.map((d) => `${d.kind} ${d.index}`).join(',');
   // Release zones: their limits as orange lines across; a point as an orange ball.
   for (const zn of release.zones ?? []) {
     for (const s of [zn.from, zn.to]) {
@@ -962,6 +977,7 @@ export function planLegend(drawn, { model, supports, release, tr, stops, unplace
   }
   const barriers = devices.filter((d) => d.kind === 'barrier');
   const collectors = devices.filter((d) => d.kind === 'collector');
+  const proposed = devices.filter((d) => d.kind === 'proposed');
   const span = (d) => (d.across ? `${fmt(d.across[0], 4)} to ${fmt(d.across[1], 4)} m across` : 'the whole face');
   if (barriers.length) {
     items.push(h('li', { dataset: { out: 'barriers' } }, sw(BARRIER), `${barriers.length} barrier${barriers.length === 1 ? '' : 's'} as solid lines: `
@@ -970,6 +986,10 @@ export function planLegend(drawn, { model, supports, release, tr, stops, unplace
   if (collectors.length) {
     items.push(h('li', { dataset: { out: 'collectors' } }, sw(COLLECTOR, 'dash'), `${collectors.length} collector${collectors.length === 1 ? '' : 's'} as dashed lines: `
       + collectors.map((d) => `at ${fmt(d.s, 4)} m along the dip over ${span(d)}`).join('; ')));
+  }
+  if (proposed.length) {
+    items.push(h('li', { dataset: { out: 'proposed' } }, sw(PROPOSED, 'dash'), `${proposed.length} barrier${proposed.length === 1 ? '' : 's'} the design search proposes, not yet applied, as teal long-dashed lines on a white halo: `
+      + proposed.map((d) => `at ${fmt(d.s, 4)} m along the dip in front of support ${d.support}, ${fmt(d.height, 3)} m high, rated ${fmt(d.rating / 1e3, 4)} kJ`).join('; ')));
   }
   if (release.zones?.length) items.push(h('li', {}, sw(ZONE, 'box'), `release zones${release.table1 ? ' (Table 1 thirds)' : ''}: ${release.zones.map((z) => `${fmt(z.from, 4)}–${fmt(z.to, 4)} m`).join(', ')}`));
   if (release.point) items.push(h('li', {}, sw(ZONE, 'ring'), `release point at ${fmt(release.point.s, 4)} m along the dip, ${fmt(release.point.across, 4)} m across`));

@@ -313,6 +313,12 @@ export function localise(message, input) {
     const single = new RegExp(`${num}\\s*${si}(?![a-zA-Z/²³])`, 'g');
     text = text.replace(single, (_, a) => `${conv(a)} ${unit}`);
   }
+  // a percentage sent as a fraction: the server's bare range "(0, 1)" is "(0, 100) %" beside it
+  if (unit === '%' && exp === -2) {
+    const num = '(-?\\d+(?:\\.\\d+)?(?:e[+-]?\\d+)?)';
+    const range = new RegExp(`([\\[(])\\s*${num}\\s*,\\s*${num}\\s*([\\])])(?!\\s*[a-zA-Z%])`, 'g');
+    text = text.replace(range, (_, open, a, b, close) => `${open}${fmt(Number(a) * 100, 6)}, ${fmt(Number(b) * 100, 6)}${close} %`);
+  }
   return humanMessage(text);
 }
 

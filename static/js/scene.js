@@ -124,6 +124,40 @@ const SCENE_GROUPS = [
     fields: [],
   },
   {
+    legend: 'Design the protection',
+    pointer: '/design',
+    toggle: { name: 'scene_design', checked: false },
+    note: 'What protection must take: over the ensemble\'s own seeded runs, the smallest guard rating on each guarded support column and the fewest barriers '
+      + 'across the face that bring each column\'s exceedance within the acceptable probability (judged on the upper bound of its Wilson 95 % interval). '
+      + 'Needs the Monte Carlo ensemble.',
+    fields: [
+      {
+        pointer: '/design/acceptable_probability', label: 'Acceptable probability', unit: '%', exp: -2,
+        choice: { value: 1, why: 'a starting 1 % to edit (the server has no default)' },
+        hint: 'in (0, 100) %, sent as a fraction: the largest exceedance probability a support column may have',
+      },
+      {
+        local: 'design_guards', target: '/design/guards', label: 'Guards on', kind: 'select', choice: { value: 'every', why: 'the server\'s default guards every support' },
+        options: [['every', 'every support'], ['listed', 'listed supports'], ['none', 'none']],
+        hint: 'each guarded column gets the smallest energy rating that makes it acceptable',
+      },
+      {
+        local: 'design_barriers', target: '/design/barriers', label: 'Barriers', kind: 'select', choice: { value: 'off', why: 'the server searches no barriers unless asked' },
+        options: [['off', 'off'], ['every_kth', 'candidates in front of every k-th support']],
+        hint: 'a greedy search for the fewest barriers, each with its height and rating',
+      },
+      {
+        local: 'design_every_kth', target: '/design/barriers/every_kth_support', label: 'A candidate in front of every k-th support, k', kind: 'integer',
+        choice: { value: 10, why: 'a candidate every 10 supports' },
+        hint: 'k in [1, 1000], counted from the top of the face; fewer candidates run fewer ensembles',
+      },
+      {
+        local: 'design_offset', target: '/design/barriers/offset_m', label: 'Candidate up-slope of its support by', unit: 'm',
+        choice: { value: 1, why: 'the server\'s default 1 m' }, hint: 'in [0, 10] m',
+      },
+    ],
+  },
+  {
     legend: 'Release rate (overloads per year)',
     pointer: '/release_rate',
     toggle: { name: 'scene_release_rate', checked: false },
@@ -171,8 +205,10 @@ const GREY = '#7d8794';
 const BLUE = '#1d5fa8';
 const BARRIER = '#7a3e12';
 const COLLECTOR = '#6b3fa0';
+/** A barrier the design search proposes, not yet applied (teal long dashes, as on the floor plan). */
+const PROPOSED = '#0097a7';
 
-/** Barriers (solid, labelled with height and rating) and collectors (dashed) on a uPlot of along the dip against across. */
+/** Barriers (solid, labelled with height and rating), proposed barriers (teal, long dashes) and collectors (dashed) on a uPlot of along the dip against across. */
 function drawDeviceLines(u, devices) {
   const { ctx } = u;
   const r = devicePixelRatio;
@@ -184,9 +220,10 @@ function drawDeviceLines(u, devices) {
   for (const [k, d] of devices.entries()) {
     const x = u.valToPos(d.s, 'x', true);
     const [a, b] = d.across ?? [ylo, yhi];
-    ctx.strokeStyle = ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
-    ctx.lineWidth = (d.kind === 'barrier' ? 3 : 2) * r;
-    ctx.setLineDash(d.kind === 'barrier' ? [] : [6 * r, 4 * r]);
+    const colour = d.kind === 'barrier' ? BARRIER : d.kind === 'proposed' ? PROPOSED : COLLECTOR;
+    ctx.strokeStyle = ctx.fillStyle = colour;
+    ctx.lineWidth = (d.kind === 'collector' ? 2 : 3) * r;
+    ctx.setLineDash(d.kind === 'barrier' ? [] : d.kind === 'proposed' ? [10 * r, 5 * r] : [6 * r, 4 * r]);
     ctx.beginPath();
     ctx.moveTo(x, u.valToPos(Math.max(a, ylo), 'y', true));
     ctx.lineTo(x, u.valToPos(Math.min(b, yhi), 'y', true));
@@ -200,7 +237,7 @@ function drawDeviceLines(u, devices) {
     const ty = u.bbox.top + (12 + 15 * k) * r;
     ctx.fillStyle = 'rgba(255, 255, 255, 0.85)';
     ctx.fillRect(tx - 2 * r, ty - 11 * r, w + 4 * r, 14 * r);
-    ctx.fillStyle = d.kind === 'barrier' ? BARRIER : COLLECTOR;
+    ctx.fillStyle = colour;
     ctx.fillText(text, tx, ty);
   }
   ctx.restore();
@@ -274,6 +311,7 @@ export function initScene() {
   const runsSync = initRunsChoice(form, migrationForm);
   const releaseEditor = initReleaseEditor(form, migrationForm);
   const deviceEditors = initDeviceEditors(form);
+  const designEditor = initDesignEditor(form);
   // A velocity typed by hand no longer comes from the Scene.
   impactForm.addEventListener('input', (ev) => {
     if (ev.target.dataset?.pointer === '/velocity_m_s') for (const note of sourceNotes) note.hidden = true;
@@ -334,6 +372,7 @@ export function initScene() {
       else if (request.galerkin.mode_shapes && request.galerkin.mode_shapes !== 'exact') delete request.galerkin.mode_shapes;
       releaseEditor.apply(request, own.local, migrationForm.floor?.current?.() ?? null);
       deviceEditors.apply(request, own.local, m.face.length_m);
+      designEditor.apply(request, own.local);
       if (request.monte_carlo) runsSync.apply(request, own.local);
       if (request.monte_carlo) {
         if (own.local.release_zones === 'table1') request.release_zones = 'table1';
@@ -376,6 +415,7 @@ export function initScene() {
     supportSummary.textContent = '';
     distTable.replaceChildren();
     renderProtection(null);
+    renderDesign(null);
     renderDevices(null);
     renderUnprotected(null);
     planList.replaceChildren();
@@ -396,6 +436,7 @@ export function initScene() {
     renderSummary(data, entries);
     renderTable(data, entries);
     renderProtection(data);
+    renderDesign(data, request);
     renderDevices(data, request);
     renderUnprotected(null);
     renderSupportChart(entries, acceptableOf(data));
@@ -404,7 +445,7 @@ export function initScene() {
     renderFloorViews('scene', {
       inputs: data.inputs ?? data.migration?.inputs, request: request ?? data.inputs, upload: migrationForm.floor?.current?.() ?? null,
       tr: data.migration?.trajectory ?? null, runsCsv, arrival: data.migration?.arrival ?? null, verdicts, maps: data.maps ?? null,
-      devices: requestDevices(request ?? data.inputs),
+      devices: [...requestDevices(request ?? data.inputs), ...proposedDevices(data)],
     });
     distSelect.replaceChildren(...entries.map((e, i) => h('option', { value: String(i) }, label(e))));
     const worst = entries.reduce((b, e, i) => ((e.risk ?? -1) > (entries[b]?.risk ?? -1) ? i : b), 0);
@@ -426,6 +467,7 @@ export function initScene() {
     delete bare.guards;
     delete bare.barriers;
     delete bare.collectors;
+    delete bare.design;
     // the runs the answer used, all of them: an ensemble that stopped when precise enough is
     // compared over the same runs, not over as many as the bare one would need
     if (bare.monte_carlo?.target) {
@@ -503,6 +545,193 @@ export function initScene() {
     );
     card.hidden = false;
     renderSupportChart(withP, acceptableOf(data));
+  }
+
+  /** The design answer whose barriers were applied, kept to show beside the re-run (its check). */
+  let appliedDesign = null;
+
+  /**
+   * "What protection must take": the design search's answer as a table an engineer can copy
+   * into a specification (per support column the guard rating, the runs needing it, the
+   * exceedance with its interval and whether it is acceptable; the proposed barriers and each
+   * column's exceedance with them), a tab-separated copy, CSVs, and a button that applies the
+   * barriers (and guards) and re-runs the scene. After applying, the re-run's answer carries no
+   * design: the card then shows the applied design beside the re-run's exceedances.
+   */
+  function renderDesign(data, request = null) {
+    const card = document.getElementById('scene-design-card');
+    const note = document.getElementById('scene-design-note');
+    const answer = document.getElementById('scene-design-answer');
+    const barriersTable = document.getElementById('scene-design-barriers');
+    const table = document.getElementById('scene-design-table');
+    const actions = document.getElementById('scene-design-actions');
+    for (const el of [answer, barriersTable, table, actions]) el.replaceChildren();
+    barriersTable.hidden = true;
+    let design = data?.design ?? null;
+    let check = null;
+    let positions = data?.statistics?.supports ?? [];
+    if (!design && appliedDesign && data?.statistics) {
+      ({ design, positions } = appliedDesign);
+      check = new Map(supportEntries(data).map((e) => [`${e.support}.${e.column_index ?? 0}`, e]));
+      appliedDesign = null;
+    }
+    card.hidden = !design;
+    if (!design) return;
+    const a = design.acceptable_probability;
+    const bd = design.barriers ?? null;
+    const guarded = design.supports.filter((e) => e.guarded);
+    const pc = (x) => `${fmt(x.probability * 100, 3)} [${fmt(x.ci95[0] * 100, 2)}–${fmt(x.ci95[1] * 100, 2)}]`;
+    const yes = (ok) => (ok ? 'yes' : 'no');
+    const name = (e) => `#${e.support}${e.column_index ? `.${e.column_index}` : ''}`;
+    const at = (i) => positions[i]?.along_dip_m;
+    note.textContent = `Judged against an acceptable probability of ${fmt(a * 100, 4)} % on the upper bound of each support column's Wilson 95 % interval, `
+      + `over the ensemble's own ${groupDigits(design.runs)} seeded runs.`
+      + (guarded.length ? ` Guards (${guarded.length} column${guarded.length === 1 ? '' : 's'}): ${design.method}; the rating is the smallest that makes the column acceptable, `
+        + 'and a column that stays above it with every run held gets the rating that holds every run that reached it.' : ' No guard searched.')
+      + (bd ? ` Barriers: ${bd.method}` : '')
+      + (check ? ' The proposed protection was applied (the Barriers rows, and the Guards group with the largest rating) and the scene re-run with the same runs: the last column is that re-run, the check.' : '');
+    const words = [];
+    if (design.runs_needed !== undefined && design.runs_needed !== null) {
+      words.push(h('p', { class: 'answer design-runs-needed', dataset: { out: 'design.runs_needed' } },
+        h('strong', {}, 'Not achievable with these runs: '),
+        `needs at least ${groupDigits(design.runs_needed)} runs for 0 exceedances to be acceptable (with ${groupDigits(design.runs)} runs even no exceedance has an upper bound above ${fmt(a * 100, 4)} %).`));
+    }
+    if (guarded.length) {
+      const over = guarded.filter((e) => !e.acceptable);
+      const need = guarded.filter((e) => e.rating_j > 0);
+      const top = need.reduce((m, e) => Math.max(m, e.rating_j), 0);
+      words.push(h('p', { class: 'answer', dataset: { out: 'design.guards' } }, need.length
+        ? `Guards needed on ${need.length} of ${guarded.length} guarded support columns, the largest rated ${fmt(top / 1e3, 4)} kJ; `
+        : `No guarded column needs a guard: all ${guarded.length} are acceptable as they are; `,
+      over.length ? `${over.length} of the guarded columns stay above the acceptable probability (${over.slice(0, 8).map(name).join(', ')}${over.length > 8 ? ', …' : ''}).` : 'every guarded column is then acceptable.'));
+    }
+    if (bd) {
+      const over = bd.supports.filter((e) => !e.acceptable);
+      words.push(h('p', { class: 'answer', dataset: { out: 'design.barriers' } },
+        bd.barriers.length ? `${bd.barriers.length} barrier${bd.barriers.length === 1 ? '' : 's'} proposed from ${bd.candidates.length} candidates (${bd.ensembles} ensembles run); with them `
+          : `No barrier proposed from ${bd.candidates.length} candidates (${bd.ensembles} ensembles run); `,
+        bd.all_acceptable ? 'every support column is acceptable.' : `${over.length} support column${over.length === 1 ? '' : 's'} stay above the acceptable probability (${over.slice(0, 8).map(name).join(', ')}${over.length > 8 ? ', …' : ''}).`));
+      if (bd.barriers.length) {
+        barriersTable.hidden = false;
+        barriersTable.append(h('caption', {}, 'Proposed barriers across the face (whole width), in the order chosen'),
+          h('thead', {}, h('tr', {}, ['Barrier', 'Along the dip (m)', 'In front of support', 'Height (m)', 'Energy rating (kJ)'].map((c) => h('th', { scope: 'col' }, c)))),
+          h('tbody', {}, bd.barriers.map((b, i) => h('tr', { dataset: { barrier: String(i + 1) } },
+            h('th', { scope: 'row' }, `Barrier ${i + 1}`),
+            h('td', { class: 'num', dataset: { out: 'along_dip_m' } }, fmt(b.along_dip_m, 6)),
+            h('td', { class: 'num', dataset: { out: 'support' } }, `#${b.support}`),
+            h('td', { class: 'num', dataset: { out: 'height_m' } }, fmt(b.height_m, 4)),
+            h('td', { class: 'num', dataset: { out: 'energy_rating_kj' } }, fmt(b.energy_rating_j / 1e3, 4))))));
+      }
+    }
+    if (!words.length) words.push(h('p', { class: 'answer' }, design.all_acceptable ? 'Every support column is acceptable.' : 'Some support columns stay above the acceptable probability.'));
+    answer.append(...words);
+
+    const rows = design.supports.map((e, i) => ({ e, i, r: bd?.supports[i] ?? null, c: check?.get(`${e.support}.${e.column_index ?? 0}`) ?? null }));
+    const withGuard = guarded.length ? 'with the guard' : 'as it is';
+    table.append(h('caption', {}, 'Per support column'),
+      h('thead', {}, h('tr', {}, ['Support', 'Along the dip (m)', 'Guard rating (kJ)', 'Runs needing a guard', `Exceedance ${withGuard} (%) [95 % CI]`, 'Acceptable',
+        ...(bd ? ['Exceedance with the barriers (%) [95 % CI]', 'Acceptable with the barriers'] : []),
+        ...(check ? ['Re-run with them applied (%) [95 % CI]'] : [])].map((c) => h('th', { scope: 'col' }, c)))),
+      h('tbody', {}, rows.map(({ e, i, r, c }) => h('tr', { class: (r ? !r.acceptable : !e.acceptable) ? 'verdict-exceeded' : '', dataset: { support: `${e.support}.${e.column_index ?? 0}` } },
+        h('th', { scope: 'row' }, name(e)),
+        h('td', { class: 'num' }, fmt(at(i), 5)),
+        h('td', { class: 'num', dataset: { out: 'rating' } }, e.guarded ? fmt(e.rating_j / 1e3, 4) : 'not guarded'),
+        h('td', { class: 'num', dataset: { out: 'runs_needing_guard' } }, String(e.runs_needing_guard)),
+        h('td', { class: 'num', dataset: { out: 'exceedance' } }, pc(e.exceedance)),
+        h('td', { dataset: { out: 'acceptable' } }, yes(e.acceptable)),
+        ...(bd ? [h('td', { class: 'num', dataset: { out: 'barrier_exceedance' } }, r ? pc(r.exceedance) : '—'),
+          h('td', { dataset: { out: 'barrier_acceptable' } }, r ? yes(r.acceptable) : '—')] : []),
+        ...(check ? [h('td', { class: 'num', dataset: { out: 'check' } }, c ? pc({ probability: c.risk, ci95: c.riskCi }) : '—')] : [])))));
+
+    // a copy for a spreadsheet: display units in the headers, plain numbers in the cells
+    const n = (x, sig = 6) => (x === null || x === undefined ? '' : String(Number(x.toPrecision(sig))));
+    const pcts = (x) => [n(x.probability * 100), n(x.ci95[0] * 100), n(x.ci95[1] * 100)];
+    const tsv = () => {
+      const out = [];
+      if (bd?.barriers.length) {
+        out.push(['Barrier', 'Along the dip (m)', 'In front of support', 'Height (m)', 'Energy rating (kJ)']);
+        bd.barriers.forEach((b, i) => out.push([i + 1, n(b.along_dip_m, 12), b.support, n(b.height_m), n(b.energy_rating_j / 1e3)]));
+        out.push([]);
+      }
+      out.push(['Support', 'Column', 'Along the dip (m)', 'Guard rating (kJ)', 'Runs needing a guard', `Exceedance ${withGuard} (%)`, '95 % CI low (%)', '95 % CI high (%)', 'Acceptable',
+        ...(bd ? ['Exceedance with the barriers (%)', '95 % CI low (%)', '95 % CI high (%)', 'Acceptable with the barriers'] : [])]);
+      for (const { e, i, r } of rows) {
+        out.push([e.support, e.column_index ?? 0, n(at(i), 12), e.guarded ? n(e.rating_j / 1e3) : '', e.runs_needing_guard, ...pcts(e.exceedance), yes(e.acceptable),
+          ...(bd ? [...(r ? pcts(r.exceedance) : ['', '', '']), r ? yes(r.acceptable) : ''] : [])]);
+      }
+      return `${out.map((r) => r.join('\t')).join('\n')}\n`;
+    };
+    table.tsv = tsv;
+    const copied = h('span', { class: 'note', id: 'scene-design-copied', role: 'status' });
+    const copy = h('button', { type: 'button', class: 'export', id: 'scene-design-copy' }, 'Copy as table');
+    copy.addEventListener('click', async () => {
+      const text = tsv();
+      const ok = await copyText(text);
+      copied.textContent = ok ? `Copied ${text.trim().split('\n').length} lines, tab-separated: paste them into a spreadsheet.` : 'The browser refused the copy: use the CSV.';
+    });
+    const csvRows = () => [['support', 'column_index', 'along_dip_m', 'guarded', 'guard_rating_j', 'runs_needing_guard', 'exceedance', 'exceedance_ci95_low', 'exceedance_ci95_high', 'acceptable',
+      ...(bd ? ['barrier_exceedance', 'barrier_exceedance_ci95_low', 'barrier_exceedance_ci95_high', 'barrier_acceptable'] : [])],
+    ...rows.map(({ e, i, r }) => [e.support, e.column_index ?? 0, csvNumber(at(i)), e.guarded, csvNumber(e.rating_j), e.runs_needing_guard,
+      csvNumber(e.exceedance.probability), csvNumber(e.exceedance.ci95[0]), csvNumber(e.exceedance.ci95[1]), e.acceptable,
+      ...(bd ? [csvNumber(r?.exceedance.probability), csvNumber(r?.exceedance.ci95[0]), csvNumber(r?.exceedance.ci95[1]), r?.acceptable ?? ''] : [])])];
+    actions.append(copy, csvButton('scene_design.csv', csvRows, 'CSV: per support column'));
+    if (bd?.barriers.length) {
+      actions.append(csvButton('scene_design_barriers.csv', () => [['barrier', 'support', 'along_dip_m', 'height_m', 'energy_rating_j'],
+        ...bd.barriers.map((b, i) => [i + 1, b.support, csvNumber(b.along_dip_m), csvNumber(b.height_m), csvNumber(b.energy_rating_j)])], 'CSV: proposed barriers'));
+    }
+    const guardsToApply = guarded.filter((e) => e.rating_j > 0);
+    if (!check && (bd?.barriers.length || guardsToApply.length)) {
+      const what = [bd?.barriers.length ? 'barriers' : '', guardsToApply.length ? 'guards' : ''].filter(Boolean).join(' and ');
+      const apply = h('button', { type: 'button', class: 'primary', id: 'scene-design-apply' }, `Apply the proposed ${what} and re-run`);
+      apply.addEventListener('click', () => applyDesign(design, request, data.statistics?.supports ?? []));
+      actions.append(apply);
+      if (guardsToApply.length) {
+        const top = Math.max(...guardsToApply.map((e) => e.rating_j));
+        actions.append(h('p', { class: 'note', id: 'scene-design-guard-note' }, `The Guards group takes one rating for every support: applying puts the largest, ${fmt(top / 1e3, 4)} kJ, `
+          + 'on every column (more than most need); the table gives each column\'s own rating for the specification.'));
+      }
+    }
+    actions.append(copied);
+  }
+
+  /**
+   * Fills the Barriers rows with the proposed barriers (after the ones the search kept), the
+   * Guards group with the largest proposed rating, the same runs (a fixed count, the seed
+   * unchanged), unticks the design search and re-runs the scene: its answer is the check.
+   */
+  function applyDesign(design, request, positions) {
+    const change = (el) => el.dispatchEvent(new Event('change', { bubbles: true }));
+    const tick = (name, on) => {
+      const box = form.querySelector(`input[name="${name}"]`);
+      if (box.checked !== on) { box.checked = on; change(box); }
+    };
+    const proposed = design.barriers?.barriers ?? [];
+    if (proposed.length) {
+      const store = form.querySelector('[data-local="barriers_json"]');
+      const kept = request?.barriers?.length ? JSON.parse(store.value || '[]') : [];
+      tick('scene_barriers', true);
+      store.value = JSON.stringify([...kept, ...proposed.map((b) => [String(b.along_dip_m), '', '', String(b.height_m), String(b.energy_rating_j / 1e3)])]);
+      change(store);
+    }
+    const ratings = design.supports.filter((e) => e.guarded && e.rating_j > 0).map((e) => e.rating_j);
+    if (ratings.length) {
+      tick('scene_guards', true);
+      const rating = form.querySelector('[data-local="guard_rating"]');
+      rating.value = String(Math.max(...ratings));
+      change(rating);
+    }
+    // the same runs: an ensemble that stopped when precise enough is re-run at the count it used
+    if (request?.monte_carlo?.target) {
+      const mode = form.querySelector('[data-local="runs_mode"]');
+      mode.value = 'fixed';
+      change(mode);
+      const runs = form.querySelector('[data-pointer="/monte_carlo/runs"]');
+      runs.value = String(design.runs);
+      change(runs);
+    }
+    tick('scene_design', false);
+    appliedDesign = { design, positions };
+    form.requestSubmit();
   }
 
   /**
@@ -1002,9 +1231,12 @@ export function initScene() {
     let k = 2;
     if (zones.length) series.push({ label: 'release zones (Table 1 thirds)', values: joined[k++], color: '#d88a1c', width: 7 });
     if (tr) series.push({ label: 'nominal run', values: joined[k++], color: '#1d5fa8' });
-    // barriers solid brown, collectors dashed violet, over the supports' marks
-    const devices = requestDevices(request ?? data.inputs);
-    const deviceMarks = devices.map((d) => ({ x: d.s, color: d.kind === 'barrier' ? BARRIER : COLLECTOR, dash: d.kind === 'barrier' ? [] : [6, 4], width: 2.5, label: deviceLabel(d) }));
+    // barriers solid brown, proposed barriers long-dashed teal, collectors dashed violet, over the supports' marks
+    const devices = [...requestDevices(request ?? data.inputs), ...proposedDevices(data)];
+    const deviceMarks = devices.map((d) => ({
+      x: d.s, color: d.kind === 'barrier' ? BARRIER : d.kind === 'proposed' ? PROPOSED : COLLECTOR,
+      dash: d.kind === 'barrier' ? [] : d.kind === 'proposed' ? [10, 5] : [6, 4], width: 2.5, label: deviceLabel(d),
+    }));
     linePlot(plots.side, {
       x: { label: 'along the dip (m); supports as vertical lines', values: joined[0] },
       y: { label: 'elevation (m)' },
@@ -1015,7 +1247,8 @@ export function initScene() {
     const sideNote = document.getElementById('scene-side-note');
     sideNote.hidden = !devices.length;
     sideNote.textContent = devices.length ? `Lines across the face: ${devices.map((d) => `${deviceLabel(d)} at ${fmt(d.s, 4)} m`).join('; ')} `
-      + '(barriers solid brown, collectors dashed violet; also on the plan view beside and on the floor below).' : '';
+      + `(barriers solid brown, collectors dashed violet${devices.some((d) => d.kind === 'proposed') ? ', barriers the design search proposes, not yet applied, long-dashed teal' : ''}; `
+      + 'also on the plan view beside and on the floor below).' : '';
     if (tr) plots.side.csv = () => [['along_dip_m', 'height_m'], ...tr.along_dip_m.map((s, i) => [s, tr.height_m[i]])];
 
     // Plan: along the dip against across the face; columns as points, spanning supports as lines.
@@ -1293,4 +1526,99 @@ function initReleaseEditor(form, migrationForm) {
       if (errors.length) throw { fieldErrors: errors };
     },
   };
+}
+
+/**
+ * The "Design the protection" group: the guarded supports (every one, a typed list, none) and
+ * the barrier candidates (off, or every k-th support with its offset). `apply` turns them into
+ * the request's `design` (fractions and SI) or throws `{fieldErrors}` naming `/design/...`, so
+ * that nothing is sent with a value outside its range.
+ */
+function initDesignEditor(form) {
+  const guards = form.querySelector('[data-local="design_guards"]');
+  const barriers = form.querySelector('[data-local="design_barriers"]');
+  const kth = form.querySelector('[data-local="design_every_kth"]');
+  const offset = form.querySelector('[data-local="design_offset"]');
+  const list = h('input', {
+    type: 'text', id: 'scene-design-list', autocomplete: 'off', spellcheck: 'false', placeholder: 'e.g. 1, 5, 12',
+    dataset: { local: 'design_guard_list', kind: 'select', target: '/design/guards/supports' },
+  });
+  const listField = h('div', { class: 'field field-number' }, h('label', { for: list.id }, 'Guarded supports'),
+    h('div', { class: 'control' }, list, h('span', { class: 'unit' }, 'numbers')),
+    h('p', { class: 'hint' }, 'support numbers from 1, separated by commas or spaces'),
+    h('p', { class: 'field-error', hidden: true, role: 'alert' }));
+  guards.closest('.field').after(listField);
+  const sync = () => {
+    const listed = guards.value === 'listed';
+    list.disabled = !listed;
+    listField.hidden = !listed;
+    for (const el of [kth, offset]) {
+      el.disabled = barriers.value !== 'every_kth';
+      el.closest('.field').hidden = el.disabled;
+    }
+  };
+  guards.addEventListener('change', sync);
+  barriers.addEventListener('change', sync);
+  form.addEventListener('reset', () => setTimeout(sync));
+  sync();
+  return {
+    /** Puts `design` into the request (when its group is ticked), or throws `{fieldErrors}`. */
+    apply(request, local) {
+      const d = request.design;
+      if (!d) return;
+      const errors = [];
+      const count = request.support_rows ? request.support_rows.count : (request.supports?.length ?? 1);
+      const a = d.acceptable_probability;
+      if (!(a > 0 && a < 1)) errors.push({ field: '/design/acceptable_probability', message: `must be above 0 and below 100 %, not ${fmt(a * 100, 6)} %` });
+      if (!request.monte_carlo || typeof request.impact_velocity_m_s === 'number') {
+        errors.push({ field: '/design', message: 'the design search runs over the ensemble\'s runs: tick the Monte Carlo ensemble and leave the impact velocity empty' });
+      }
+      const withBarriers = local.design_barriers === 'every_kth';
+      if (withBarriers) {
+        const k = local.design_every_kth;
+        const off = local.design_offset;
+        if (!(Number.isInteger(k) && k >= 1 && k <= 1000)) errors.push({ field: '/design/barriers/every_kth_support', message: `must be a whole number in [1, 1000], not ${fmt(k, 6)}` });
+        if (!(off >= 0 && off <= 10)) errors.push({ field: '/design/barriers/offset_m', message: `must be in [0, 10] m, not ${fmt(off, 6)} m` });
+        d.barriers = { every_kth_support: k, offset_m: off };
+      }
+      if (local.design_guards === 'listed') {
+        const text = String(local.design_guard_list ?? '').trim();
+        const words = text.split(/[\s,;]+/).filter(Boolean);
+        const numbers = words.map(Number);
+        const bad = words.find((w, i) => !(Number.isInteger(numbers[i]) && numbers[i] >= 1 && numbers[i] <= count));
+        if (!words.length) errors.push({ field: '/design/guards/supports', message: 'list at least one support number' });
+        else if (bad !== undefined) errors.push({ field: '/design/guards/supports', message: `"${bad}" is not a support: the supports are numbered 1 to ${count}` });
+        d.guards = { supports: [...new Set(numbers)] };
+      } else if (local.design_guards === 'every') {
+        // with a barrier search the server guards nothing unless the supports are listed
+        if (withBarriers) d.guards = { supports: Array.from({ length: count }, (_, i) => i + 1) };
+      } else if (!withBarriers) {
+        errors.push({ field: '/design/guards', message: 'nothing to design: guard some supports or search for barriers' });
+      }
+      if (errors.length) throw { fieldErrors: errors };
+    },
+  };
+}
+
+/** The barriers a design answer proposes, as marks drawn in their own style before they are applied. */
+function proposedDevices(data) {
+  return (data?.design?.barriers?.barriers ?? []).map((b, i) => ({
+    kind: 'proposed', index: i + 1, s: b.along_dip_m, across: null, height: b.height_m, rating: b.energy_rating_j, support: b.support,
+  }));
+}
+
+/** Puts text on the clipboard (a hidden text area where the Clipboard API is refused); true when copied. */
+async function copyText(text) {
+  try {
+    await navigator.clipboard.writeText(text);
+    return true;
+  } catch {
+    const area = h('textarea', { readonly: true, style: 'position: fixed; opacity: 0' });
+    area.value = text;
+    document.body.append(area);
+    area.select();
+    const ok = document.execCommand('copy');
+    area.remove();
+    return ok;
+  }
 }

@@ -296,8 +296,9 @@ async function pageSection(page) {
     assert(bad.length === 0, bad.join('\n'));
     // The page's own starting values are few and each says why.
     const choices = controls.filter((c) => c.choice);
-    // (four of them the ensembles' targets "until precise enough", which the server has no default for)
-    assert(choices.length <= 14 && choices.every((c) => c.choice.length > 20), `page choices: ${choices.map((c) => c.pointer).join(', ')}`);
+    // (four of them the ensembles' targets "until precise enough" and one the design search's acceptable
+    // probability, which the server has no default for)
+    assert(choices.length <= 15 && choices.every((c) => c.choice.length > 20), `page choices: ${choices.map((c) => c.pointer).join(', ')}`);
     // Settings fields: the recommended preset where it names them, else the server's default.
     const rec = presets.presets.recommended;
     for (const [form, pointer, want] of [
@@ -2436,6 +2437,237 @@ async function targetSection(page, context) {
   });
 }
 
+/** The first number of a shown cell ("1.23 [0.4–2.1]" → 1.23). */
+function firstShown(text) {
+  return parseShown(String(text).trim().split(/\s|\[/)[0]);
+}
+
+/** A number as the page shows it to `sig` significant digits (toPrecision, trailing zeros dropped). */
+function asShown(x, sig) {
+  return x === 0 ? 0 : Number(x.toPrecision(sig));
+}
+
+async function designSection(page, context) {
+  const form = '#scene-form';
+  /** Ticks the design group with an acceptable probability (in %), the guards choice and the barriers (k, offset m), over a fixed number of runs. */
+  const design = async (p, { percent, guards = 'every', list = '', barriers = null, runs = '200' }) => {
+    await fixedSceneRuns(p, runs);
+    await p.locator(`${form} input[name="scene_design"]`).check();
+    await field(p, form, '/design/acceptable_probability').fill(percent);
+    await p.locator(`${form} [data-local="design_guards"]`).selectOption(guards);
+    if (guards === 'listed') await p.locator('#scene-design-list').fill(list);
+    if (barriers) {
+      await p.locator(`${form} [data-local="design_barriers"]`).selectOption('every_kth');
+      await p.locator(`${form} [data-local="design_every_kth"]`).fill(barriers.k);
+      await p.locator(`${form} [data-local="design_offset"]`).fill(barriers.offset);
+    }
+  };
+  let sent = null;
+  let answer = null;
+
+  await check('design: guards on listed supports are sent as fractions; the card\'s ratings, runs and exceedances are the answer\'s; too few runs said plainly', async () => {
+    await open(page, '#scene');
+    await design(page, { percent: '1', guards: 'listed', list: '5, 30 62' });
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
+    const done = await rendered(page, 'scene');
+    const response = await submit(page, form, '/v1/scene');
+    sent = JSON.parse((await request).postData());
+    assert(JSON.stringify(sent.design) === JSON.stringify({ acceptable_probability: 0.01, guards: { supports: [5, 30, 62] } }), `design sent: ${JSON.stringify(sent.design)}`);
+    answer = await answerOf(response);
+    await done.done;
+    const d = answer.design;
+    assert(d && d.supports.length === answer.statistics.supports.length, `no design in the answer: ${JSON.stringify(answer).slice(0, 300)}`);
+    // 200 runs: even no exceedance has a Wilson upper bound 3.84/203.84 above 1 %
+    assert(d.runs_needed > 200, `runs_needed ${d.runs_needed}`);
+    const needed = await page.locator('#scene-design-answer [data-out="design.runs_needed"]').textContent();
+    assert(needed.includes(`needs at least ${grouped(d.runs_needed)} runs for 0 exceedances to be acceptable`), `runs needed: ${needed}`);
+    const rows = await page.locator('#scene-design-table tbody tr').evaluateAll((trs) => trs.map((tr) => ({
+      key: tr.dataset.support, ...Object.fromEntries([...tr.querySelectorAll('[data-out]')].map((c) => [c.dataset.out, c.textContent])),
+    })));
+    assert(rows.length === d.supports.length, `${rows.length} rows for ${d.supports.length} support columns`);
+    let guarded = 0;
+    d.supports.forEach((e, i) => {
+      const r = rows[i];
+      assert(r.key === `${e.support}.${e.column_index}`, `row ${i} is ${r.key}, the answer's ${e.support}.${e.column_index}`);
+      if (e.guarded) {
+        guarded += 1;
+        assert(firstShown(r.rating) === asShown(e.rating_j / 1e3, 4), `#${e.support} rating shown ${r.rating} kJ, answer ${e.rating_j} J`);
+      } else assert(r.rating === 'not guarded', `#${e.support}: ${r.rating}`);
+      assert(Number(r.runs_needing_guard) === e.runs_needing_guard, `#${e.support} runs ${r.runs_needing_guard}, answer ${e.runs_needing_guard}`);
+      const [p, lo, hi] = r.exceedance.match(/[\d.]+(?:\s*×\s*10[⁻⁰¹²³⁴⁵⁶⁷⁸⁹]+)?/g).map(parseShown);
+      assert(p === asShown(e.exceedance.probability * 100, 3) && lo === asShown(e.exceedance.ci95[0] * 100, 2) && hi === asShown(e.exceedance.ci95[1] * 100, 2),
+        `#${e.support} exceedance ${r.exceedance}, answer ${JSON.stringify(e.exceedance)}`);
+      assert(r.acceptable === (e.acceptable ? 'yes' : 'no'), `#${e.support} acceptable ${r.acceptable}, answer ${e.acceptable}`);
+    });
+    assert(guarded === 3, `${guarded} guarded columns, 3 listed`);
+    assert(d.supports.some((e) => e.guarded && e.rating_j > 0), 'no guarded column needs a guard: the ratings compare nothing');
+    await elementShot(page.locator('#scene-design-card'), 'scene-design-guards.png');
+  });
+
+  await check('design: "copy as table" puts a tab-separated table on the clipboard; the CSV downloads with the header block and the answer\'s numbers in SI', async () => {
+    await page.evaluate(() => {
+      window.copiedText = null;
+      navigator.clipboard.writeText = async (t) => { window.copiedText = t; };
+    });
+    await page.locator('#scene-design-copy').click();
+    await page.waitForFunction(() => window.copiedText !== null, null, { timeout: WAIT_MS });
+    const lines = (await page.evaluate(() => window.copiedText)).trim().split('\n').map((l) => l.split('\t'));
+    assert(lines[0][0] === 'Support' && lines[0].includes('Guard rating (kJ)') && lines.length === answer.design.supports.length + 1, `copied: ${lines.slice(0, 2).join(' | ')}`);
+    const e = answer.design.supports.find((x) => x.guarded && x.rating_j > 0);
+    const row = lines.find((l) => l[0] === String(e.support));
+    assert(Number(row[3]) === asShown(e.rating_j / 1e3, 6) && Number(row[4]) === e.runs_needing_guard, `copied row ${row.join(' | ')}, answer ${JSON.stringify(e)}`);
+    assert(/Copied \d+ lines, tab-separated/.test(await page.locator('#scene-design-copied').textContent()), 'no word that it was copied');
+    const csv = await downloaded(page, page.locator('#scene-design-card button[data-csv="scene_design.csv"]'));
+    assertCsvHeader(csv, 'design CSV');
+    const table = csv.text.trim().split('\n').map((l) => l.split(','));
+    const col = (n) => table[0].indexOf(n);
+    const got = table.find((r) => r[0] === String(e.support));
+    assert(Number(got[col('guard_rating_j')]) === e.rating_j && Number(got[col('exceedance')]) === e.exceedance.probability
+      && Number(got[col('exceedance_ci95_high')]) === e.exceedance.ci95[1] && got[col('acceptable')] === String(e.acceptable), `CSV row ${got.join(',')}, answer ${JSON.stringify(e)}`);
+  });
+
+  await check('design: the printed report carries the "What protection must take" card', async () => {
+    await page.evaluate(() => { window.print = () => {}; });
+    await page.locator('#case-print').click();
+    await page.emulateMedia({ media: 'print' });
+    const text = await page.locator('#report').textContent();
+    for (const want of ['What protection must take', 'Guard rating (kJ)', 'Runs needing a guard', 'needs at least']) assert(text.includes(want), `the report lacks "${want}"`);
+    await screenshot(page, 'report-design.png');
+    await page.emulateMedia({ media: 'screen' });
+    await page.evaluate(() => window.dispatchEvent(new Event('afterprint')));
+  });
+
+  let barrierAnswer = null;
+  await check('design: barriers every k-th support are sent in SI; the proposed barriers are in the card and drawn on the floor plan in their own style', async () => {
+    await open(page, '#scene');
+    await design(page, { percent: '5', guards: 'none', barriers: { k: '10', offset: '1.5' } });
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
+    const done = await rendered(page, 'scene');
+    const response = await submit(page, form, '/v1/scene');
+    sent = JSON.parse((await request).postData());
+    assert(JSON.stringify(sent.design) === JSON.stringify({ acceptable_probability: 0.05, barriers: { every_kth_support: 10, offset_m: 1.5 } }), `design sent: ${JSON.stringify(sent.design)}`);
+    barrierAnswer = await answerOf(response);
+    await done.done;
+    const bd = barrierAnswer.design?.barriers;
+    assert(bd?.barriers.length > 0, `no barrier proposed: the check compares nothing (${JSON.stringify(bd)?.slice(0, 300)})`);
+    const rows = await page.locator('#scene-design-barriers tbody tr').evaluateAll((trs) => trs.map((tr) => Object.fromEntries([...tr.querySelectorAll('[data-out]')].map((c) => [c.dataset.out, c.textContent]))));
+    assert(rows.length === bd.barriers.length, `${rows.length} barrier rows, ${bd.barriers.length} proposed`);
+    bd.barriers.forEach((b, i) => {
+      const r = rows[i];
+      assert(parseShown(r.along_dip_m) === asShown(b.along_dip_m, 6) && r.support === `#${b.support}` && parseShown(r.height_m) === asShown(b.height_m, 4)
+        && parseShown(r.energy_rating_kj) === asShown(b.energy_rating_j / 1e3, 4), `barrier ${i + 1} shown ${JSON.stringify(r)}, answer ${JSON.stringify(b)}`);
+    });
+    const residual = await page.locator('#scene-design-table tbody [data-out="barrier_exceedance"]').allTextContents();
+    bd.supports.forEach((e, i) => assert(firstShown(residual[i]) === asShown(e.exceedance.probability * 100, 3), `#${e.support} with the barriers ${residual[i]}, answer ${e.exceedance.probability}`));
+    const legend = await page.locator('#scene-floor-legend [data-out="proposed"]').textContent();
+    const first = bd.barriers[0];
+    assert(legend.includes(`${bd.barriers.length} barrier`) && legend.includes(`in front of support ${first.support}`) && /not yet applied/.test(legend), `floor plan legend: ${legend}`);
+    const drawn = await page.evaluate(() => document.getElementById('scene-floor-plan').options.devices.map((d) => `${d.kind} ${d.index}`).join(','));
+    assert(drawn === bd.barriers.map((_, i) => `proposed ${i + 1}`).join(','), `the floor plan draws ${drawn}`);
+    // the proposed lines are drawn in their own teal
+    const teal = await page.evaluate(() => {
+      const c = document.getElementById('scene-floor-plan');
+      const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (d[i] < 16 && Math.abs(d[i + 1] - 0x97) < 8 && Math.abs(d[i + 2] - 0xa7) < 8) n += 1;
+      return n;
+    });
+    assert(teal > 50, `${teal} teal pixels on the floor plan`);
+    await elementShot(page.locator('#scene-design-card'), 'scene-design-barriers.png');
+    await elementShot(page.locator('#scene-floor'), 'floor-view-proposed.png');
+    const side = await page.locator('#scene-side-note').textContent();
+    assert(side.includes(`proposed barrier 1: `) && /long-dashed teal/.test(side), `side view note: ${side}`);
+    await elementShot(page.locator('.result-grid:has(#scene-side-plot)'), 'scene-side-plan-proposed.png');
+  });
+
+  await check('design: "apply" fills the Barriers rows with the proposed barriers and re-runs; the re-run\'s exceedances are the answer\'s design.barriers.supports', async () => {
+    const bd = barrierAnswer.design.barriers;
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/scene'));
+    const done = await rendered(page, 'scene');
+    const response = page.waitForResponse((r) => r.url().endsWith('/v1/scene') && r.request().method() === 'POST', { timeout: WAIT_MS });
+    await page.locator('#scene-design-apply').click();
+    const body = JSON.parse((await request).postData());
+    assert(body.design === undefined, 'the re-run searches again');
+    assert(JSON.stringify(body.barriers) === JSON.stringify(bd.barriers.map((b) => ({ along_dip_m: b.along_dip_m, across_m: null, height_m: b.height_m, energy_rating_j: b.energy_rating_j }))),
+      `barriers sent ${JSON.stringify(body.barriers)}, proposed ${JSON.stringify(bd.barriers)}`);
+    assert(body.guards === undefined && body.monte_carlo.runs === barrierAnswer.statistics.runs && body.monte_carlo.seed === sent.monte_carlo.seed, `runs ${body.monte_carlo.runs}, guards ${JSON.stringify(body.guards)}`);
+    const rerun = await answerOf(await response);
+    await done.done;
+    const rows = await page.locator('#scene-barriers .device-row').count();
+    assert(rows === bd.barriers.length, `${rows} barrier rows on the form`);
+    rerun.statistics.supports.forEach((s, i) => {
+      const want = bd.supports[i];
+      assert(JSON.stringify(s.exceedance.stress_utilisation) === JSON.stringify(want.exceedance), `#${s.support}: re-run ${JSON.stringify(s.exceedance)}, design ${JSON.stringify(want.exceedance)}`);
+    });
+    const check = await page.locator('#scene-design-table tbody [data-out="check"]').allTextContents();
+    const residual = await page.locator('#scene-design-table tbody [data-out="barrier_exceedance"]').allTextContents();
+    assert(check.length === bd.supports.length && check.every((c, i) => c === residual[i]), `the check column differs: ${check.slice(0, 5)} vs ${residual.slice(0, 5)}`);
+    assert(!(await page.locator('#scene-floor-legend [data-out="proposed"]').count()), 'the applied barriers are still drawn as proposed');
+    await elementShot(page.locator('#scene-design-card'), 'scene-design-check.png');
+  });
+
+  await check('design: a bad value is marked before sending; a 422 naming /design/acceptable_probability lands on its field', async () => {
+    await open(page, '#scene');
+    await design(page, { percent: '0' });
+    let count = 0;
+    const counter = (r) => { if (r.url().endsWith('/v1/scene')) count += 1; };
+    page.on('request', counter);
+    await page.locator(`${form} button[type="submit"]`).click();
+    const err = fieldError(page, form, '/design/acceptable_probability');
+    await err.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/above 0 and below 100 %/.test(await err.textContent()), `marked: ${await err.textContent()}`);
+    await page.locator(`${form} [data-local="design_barriers"]`).selectOption('every_kth');
+    await page.locator(`${form} [data-local="design_every_kth"]`).fill('0');
+    await page.locator(`${form} button[type="submit"]`).click();
+    const k = page.locator(`${form} .field:has([data-local="design_every_kth"]) .field-error`);
+    await k.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/\[1, 1000\]/.test(await k.textContent()), `k marked: ${await k.textContent()}`);
+    // a listed support the face does not have
+    await page.locator(`${form} [data-local="design_every_kth"]`).fill('10');
+    await page.locator(`${form} [data-local="design_guards"]`).selectOption('listed');
+    await page.locator('#scene-design-list').fill('5, 99');
+    await page.locator(`${form} button[type="submit"]`).click();
+    const list = page.locator(`${form} .field:has(#scene-design-list) .field-error`);
+    await list.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(/"99" is not a support: the supports are numbered 1 to 62/.test(await list.textContent()), `list marked: ${await list.textContent()}`);
+    await page.locator(`${form} [data-local="design_guards"]`).selectOption('every');
+    await page.waitForTimeout(300);
+    assert(count === 0, `${count} requests sent with bad values`);
+    page.off('request', counter);
+    // the server's own refusal: the page's check passed, the body is altered on the way
+    await field(page, form, '/design/acceptable_probability').fill('1');
+    await page.locator(`${form} [data-local="design_every_kth"]`).fill('10');
+    await page.route('**/v1/scene', async (route) => {
+      const body = JSON.parse(route.request().postData());
+      body.design.acceptable_probability = 1.5;
+      await route.continue({ postData: JSON.stringify(body) });
+    });
+    await submit(page, form, '/v1/scene');
+    await page.unroute('**/v1/scene');
+    const err2 = fieldError(page, form, '/design/acceptable_probability');
+    await err2.waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(await field(page, form, '/design/acceptable_probability').getAttribute('aria-invalid') === 'true', 'the field is not marked invalid');
+    // the server's range (0, 1) said in the field's unit
+    assert(/\(0, 100\) %/.test(await err2.textContent()), `the 422 beside the field: ${await err2.textContent()}`);
+    await elementShot(page.locator(`${form} fieldset[data-group="/design"]`), 'scene-design-form.png');
+  });
+
+  await check('design: at 390 px the design group and the card fit the width', async () => {
+    const phone = await context.newPage();
+    await phone.setViewportSize({ width: 390, height: 844 });
+    await open(phone, '#scene');
+    await design(phone, { percent: '5', guards: 'every', barriers: { k: '20', offset: '1' } });
+    const done = await rendered(phone, 'scene');
+    await submit(phone, form, '/v1/scene');
+    await done.done;
+    await phone.locator('#scene-design-card').waitFor({ state: 'visible', timeout: WAIT_MS });
+    await noHorizontalScroll(phone, 'the scene with a design');
+    await elementShot(phone.locator(`${form} fieldset[data-group="/design"]`), 'phone-scene-design-form.png');
+    await elementShot(phone.locator('#scene-design-card'), 'phone-scene-design.png');
+    await phone.close();
+  });
+}
+
 async function main() {
   mkdirSync(ARTIFACTS, { recursive: true });
   const profile = mkdtempSync(path.join(tmpdir(), 'gangue-chromium-'));
@@ -2455,19 +2687,23 @@ async function main() {
     page.on('pageerror', (err) => pageErrors.push(err.message));
     page.on('console', (msg) => { if (msg.type() === 'error') pageErrors.push(msg.text()); });
 
-    await pageSection(page);
-    await impactSection(page);
-    await columnSection(page);
-    await migrationSection(page);
-    await floorSection(page);
-    await caseSection(page, context);
-    await sceneSection(page);
-    await studySection(page);
-    await spallingSection(page);
-    await floorViewSection(page, context);
-    await protectionLinesSection(page, context);
-    await targetSection(page, context);
-    await phoneSection(context);
+    // GANGUE_BROWSER_SECTIONS=design,target runs only those sections (while working on them)
+    const only = process.env.GANGUE_BROWSER_SECTIONS?.split(',');
+    const want = (name) => !only || only.includes(name);
+    if (want('page')) await pageSection(page);
+    if (want('impact')) await impactSection(page);
+    if (want('column')) await columnSection(page);
+    if (want('migration')) await migrationSection(page);
+    if (want('floor')) await floorSection(page);
+    if (want('case')) await caseSection(page, context);
+    if (want('scene')) await sceneSection(page);
+    if (want('study')) await studySection(page);
+    if (want('spalling')) await spallingSection(page);
+    if (want('floorview')) await floorViewSection(page, context);
+    if (want('lines')) await protectionLinesSection(page, context);
+    if (want('design')) await designSection(page, context);
+    if (want('target')) await targetSection(page, context);
+    if (want('phone')) await phoneSection(context);
 
     await check('no JavaScript errors on the page', async () => {
       // 404 and 422 answers are logged by Chromium as failed resources; they are expected here.
