@@ -37,16 +37,6 @@ fn csv_rows(answer: &Value) -> Vec<std::collections::HashMap<String, String>> {
         .collect()
 }
 
-/// Type-7 percentile of sorted values.
-fn type7(sorted: &[f64], p: f64) -> f64 {
-    let h = (sorted.len() - 1) as f64 * p;
-    let lo = h.floor() as usize;
-    if lo + 1 >= sorted.len() {
-        return sorted[sorted.len() - 1];
-    }
-    sorted[lo] + (h - lo as f64) * (sorted[lo + 1] - sorted[lo])
-}
-
 #[tokio::test]
 async fn collectors_record_each_run_as_the_csv_says_and_change_nothing_else() {
     let app = common::app();
@@ -99,7 +89,10 @@ async fn collectors_record_each_run_as_the_csv_says_and_change_nothing_else() {
         let v = &c["values"];
         assert_eq!(v["speed_m_s"]["count"], reached);
         let dv = v["speed_m_s"]["design_value"].as_f64().unwrap();
-        assert!(common::rel(dv, type7(&speeds, 0.95)) < 1e-12, "{dv}");
+        assert!(
+            common::rel(dv, common::type7(&speeds, 0.95)) < 1e-12,
+            "{dv}"
+        );
         let mean = speeds.iter().sum::<f64>() / reached as f64;
         let m = v["speed_m_s"]["summary"]["mean"].as_f64().unwrap();
         assert!(common::rel(m, mean) < 1e-12, "{m} vs {mean}");

@@ -352,27 +352,10 @@ async fn work_past_the_limit_is_refused_before_running() {
 
 #[test]
 fn a_sharded_scene_refuses_design_naming_the_field() {
-    let dir = std::env::temp_dir().join(format!("gangue-design-shard-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     let mut body = scene(5, false);
     body["design"] = json!({"acceptable_probability": 0.05});
-    let req = dir.join("scene.json");
-    std::fs::write(&req, serde_json::to_vec(&body).unwrap()).unwrap();
-    let out = common::gangue_cli(&[
-        "compute",
-        "--request",
-        req.to_str().unwrap(),
-        "--kind",
-        "scene",
-        "--shard",
-        "0/2",
-        "--out",
-        dir.join("part").to_str().unwrap(),
-    ]);
-    assert!(!out.status.success(), "design in a scene shard is refused");
-    let text =
-        String::from_utf8_lossy(&out.stderr).into_owned() + &String::from_utf8_lossy(&out.stdout);
+    let (ok, text) = common::scene_shard(&body, "design-shard");
+    assert!(!ok, "design in a scene shard is refused");
     assert!(text.contains("/design"), "{text}");
     assert!(text.contains("sharded"), "{text}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

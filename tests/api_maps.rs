@@ -447,28 +447,9 @@ async fn migration_maps_of_merged_shards_are_the_bytes_of_one_request() {
 
 #[test]
 fn a_sharded_scene_refuses_maps_naming_the_field() {
-    let dir = scratch("scene");
     let body = json!({"monte_carlo": {"runs": 5}, "migration_output": {"maps": {}}});
-    let req = dir.join("scene.json");
-    std::fs::write(&req, serde_json::to_vec(&body).unwrap()).unwrap();
-    let out = gangue(&[
-        "compute",
-        "--request",
-        req.to_str().unwrap(),
-        "--kind",
-        "scene",
-        "--shard",
-        "0/2",
-        "--out",
-        dir.join("part").to_str().unwrap(),
-    ]);
-    assert!(
-        !out.status.success(),
-        "maps in a scene shard must be refused"
-    );
-    let text =
-        String::from_utf8_lossy(&out.stderr).into_owned() + &String::from_utf8_lossy(&out.stdout);
+    let (ok, text) = common::scene_shard(&body, "maps-shard");
+    assert!(!ok, "maps in a scene shard must be refused");
     assert!(text.contains("/migration_output/maps"), "{text}");
     assert!(text.contains("sharded"), "{text}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -127,8 +127,6 @@ async fn bad_targets_are_refused_naming_the_field() {
 /// A sharded scene cannot stop early, nor carry lines: each refused naming its field.
 #[test]
 fn a_sharded_scene_refuses_a_target_and_devices_naming_the_field() {
-    let dir = std::env::temp_dir().join(format!("gangue-target-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     for (body, field) in [
         (
             json!({"monte_carlo": {"runs": 5, "target": {"statistic": "any_exceeded", "half_width": 0.1}}}),
@@ -143,115 +141,10 @@ fn a_sharded_scene_refuses_a_target_and_devices_naming_the_field() {
             "/collectors",
         ),
     ] {
-        let req = dir.join("scene.json");
-        std::fs::write(&req, serde_json::to_vec(&body).unwrap()).unwrap();
-        let out = common::gangue_cli(&[
-            "compute",
-            "--request",
-            req.to_str().unwrap(),
-            "--kind",
-            "scene",
-            "--shard",
-            "0/2",
-            "--out",
-            dir.join("part").to_str().unwrap(),
-        ]);
-        assert!(
-            !out.status.success(),
-            "{field} in a scene shard must be refused"
-        );
-        let text = String::from_utf8_lossy(&out.stderr).into_owned()
-            + &String::from_utf8_lossy(&out.stdout);
+        let (ok, text) = common::scene_shard(&body, "target-shard");
+        assert!(!ok, "{field} in a scene shard must be refused");
         assert!(text.contains(field) && text.contains("sharded"), "{text}");
     }
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// A migration ensemble with a target on the arrival speed's percentile: the answer of the runs
-/// used, bit for bit, and an unreachable target runs every allowed run.
-#[tokio::test]
-async fn a_migration_stops_when_its_speed_percentile_is_precise_enough() {
-    let app = common::app();
-    let body = |runs: u64, target: Option<Value>| {
-        let mut b = json!({"monte_carlo": {"runs": runs, "seed": 5}});
-        if let Some(t) = target {
-            b["monte_carlo"]["target"] = t;
-        }
-        b
-    };
-    let t = json!({"percentile": 0.95, "relative_half_width": 0.05});
-    let a = ok(&post(&app, "/v1/migration", &body(64_000, Some(t.clone()))).await);
-    let o = &a["statistics"]["target"];
-    assert_eq!(o["met"], true, "{o}");
-    let used = o["runs_used"].as_u64().unwrap();
-    assert!(used < 64_000, "{o}");
-    let checked: Vec<u64> = o["checked_at_runs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_u64().unwrap())
-        .collect();
-    assert_eq!(*checked.last().unwrap(), used);
-    assert!(
-        checked.iter().enumerate().all(|(k, &n)| n == 1000 << k),
-        "{checked:?}"
-    );
-    assert!(o["relative_half_width"].as_f64().unwrap() <= 0.05);
-    let plain = ok(&post(&app, "/v1/migration", &body(used, None)).await);
-    let mut st = a["statistics"].clone();
-    st.as_object_mut().unwrap().remove("target");
-    assert_eq!(st, plain["statistics"]);
-    assert_eq!(a["arrival"], plain["arrival"]);
-    // the prefix before was not precise enough
-    if checked.len() > 1 {
-        let tight = json!({"percentile": 0.95, "relative_half_width": o["relative_half_width"]});
-        let b = ok(&post(
-            &app,
-            "/v1/migration",
-            &body(checked[checked.len() - 2], Some(tight)),
-        )
-        .await);
-        assert!(
-            b["statistics"]["target"]["relative_half_width"]
-                .as_f64()
-                .unwrap()
-                > 0.05,
-            "{}",
-            b["statistics"]["target"]
-        );
-    }
-    // unreachable: every run, met false
-    let t = json!({"percentile": 0.5, "relative_half_width": 1e-9});
-    let a = ok(&post(&app, "/v1/migration", &body(1200, Some(t))).await);
-    let o = &a["statistics"]["target"];
-    assert_eq!(
-        (o["met"].clone(), o["runs_used"].clone()),
-        (json!(false), json!(1200))
-    );
-    assert_eq!(o["checked_at_runs"], json!([1000, 1200]));
-    assert_rejections(
-        &app,
-        "/v1/migration",
-        vec![
-            (
-                body(
-                    10,
-                    Some(json!({"percentile": 1.0, "relative_half_width": 0.1})),
-                ),
-                "/monte_carlo/target/percentile",
-                "invalid_input",
-            ),
-            (
-                body(
-                    10,
-                    Some(json!({"percentile": 0.5, "relative_half_width": 0.0})),
-                ),
-                "/monte_carlo/target/relative_half_width",
-                "invalid_input",
-            ),
-        ],
-    )
-    .await;
 }
 
 /// With per-cell maps, the maps of an ensemble that stopped early are those of the runs used,

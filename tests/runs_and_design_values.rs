@@ -227,16 +227,6 @@ fn binomial_cdf(n: u64, p: f64, k: u64) -> f64 {
         .sum()
 }
 
-/// Type-7 percentile of sorted values.
-fn type7(sorted: &[f64], p: f64) -> f64 {
-    let h = (sorted.len() - 1) as f64 * p;
-    let lo = h.floor() as usize;
-    if lo + 1 >= sorted.len() {
-        return sorted[sorted.len() - 1];
-    }
-    sorted[lo] + (h - lo as f64) * (sorted[lo + 1] - sorted[lo])
-}
-
 #[tokio::test]
 async fn design_values_are_what_the_runs_csv_gives() {
     let app = common::app();
@@ -287,14 +277,14 @@ async fn design_values_are_what_the_runs_csv_gives() {
             for (key, q) in [("p50", 0.5), ("p95", 0.95), ("p99", 0.99)] {
                 assert_eq!(
                     sm[key].as_f64().unwrap(),
-                    type7(&sorted, q),
+                    common::type7(&sorted, q),
                     "{field} {key}"
                 );
             }
             assert_eq!(sm["max"].as_f64().unwrap(), sorted[sorted.len() - 1]);
             assert_eq!(
                 d["design_value"].as_f64().unwrap(),
-                type7(&sorted, p),
+                common::type7(&sorted, p),
                 "{field}"
             );
             // the interval: l the largest rank with P(B ≤ l − 1) ≤ 2.5 %, u the smallest with

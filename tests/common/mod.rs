@@ -188,3 +188,37 @@ pub fn gangue_cli(args: &[&str]) -> std::process::Output {
         .output()
         .expect("the gangue binary runs")
 }
+
+/// Type-7 percentile (Hyndman–Fan) of ascending values: the service's definition.
+pub fn type7(sorted: &[f64], p: f64) -> f64 {
+    let h = (sorted.len() - 1) as f64 * p;
+    let lo = h.floor() as usize;
+    if lo + 1 >= sorted.len() {
+        return sorted[sorted.len() - 1];
+    }
+    sorted[lo] + (h - lo as f64) * (sorted[lo + 1] - sorted[lo])
+}
+
+/// `gangue compute` of shard 0 of 2 of the scene request `body`, in a scratch folder named by
+/// `tag`: whether it succeeded, and what it printed (stderr, then stdout).
+pub fn scene_shard(body: &Value, tag: &str) -> (bool, String) {
+    let dir = std::env::temp_dir().join(format!("gangue-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let req = dir.join("scene.json");
+    std::fs::write(&req, serde_json::to_vec(body).unwrap()).unwrap();
+    let out = gangue_cli(&[
+        "compute",
+        "--request",
+        req.to_str().unwrap(),
+        "--kind",
+        "scene",
+        "--shard",
+        "0/2",
+        "--out",
+        dir.join("part").to_str().unwrap(),
+    ]);
+    let text =
+        String::from_utf8_lossy(&out.stderr).into_owned() + &String::from_utf8_lossy(&out.stdout);
+    let _ = std::fs::remove_dir_all(&dir);
+    (out.status.success(), text)
+}
