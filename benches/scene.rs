@@ -44,9 +44,9 @@ fn case(method: Method, model: ColumnModel, runs: u64) -> SceneCase {
         ..ColumnCase::default()
     };
     column.impact.contact.law = gangue::physics::material::ContactLaw::HertzPoint;
-    SceneCase {
-        migration: m,
-        supports: vec![SupportEntry {
+    SceneCase::new(
+        m,
+        vec![SupportEntry {
             support: 1,
             column_index: 0,
             along_dip: 30.0,
@@ -54,18 +54,7 @@ fn case(method: Method, model: ColumnModel, runs: u64) -> SceneCase {
             column: Column::default(),
         }],
         column,
-        impact_velocity: None,
-        release_zones: None,
-        draws: SceneDraws::default(),
-        limits: DesignLimits::default(),
-        compare_methods: false,
-        allowed_impacts: false,
-        release_rate: None,
-        guards: Vec::new(),
-        device_lines: Vec::new(),
-        target: None,
-        design: None,
-    }
+    )
 }
 
 /// The rigid block on the paper's 120 m face: released in Table 1's thirds, across U[−1.5, 1.5] m,

@@ -333,7 +333,7 @@ mod tests {
     use crate::physics::column::{ColumnCase, ColumnModel};
     use crate::physics::material::{Column, ContactLaw};
     use crate::physics::migration::MigrationCase;
-    use crate::physics::scene::{SceneDraws, SupportEntry, rock_extent};
+    use crate::physics::scene::{SupportEntry, rock_extent};
 
     fn case(model: ColumnModel, law: ContactLaw) -> SceneCase {
         let mut column = ColumnCase {
@@ -342,9 +342,9 @@ mod tests {
             ..ColumnCase::default()
         };
         column.impact.contact.law = law;
-        SceneCase {
-            migration: MigrationCase::default(),
-            supports: vec![SupportEntry {
+        SceneCase::new(
+            MigrationCase::default(),
+            vec![SupportEntry {
                 support: 1,
                 column_index: 0,
                 along_dip: 30.0,
@@ -352,18 +352,7 @@ mod tests {
                 column: Column::default(),
             }],
             column,
-            impact_velocity: None,
-            release_zones: None,
-            draws: SceneDraws::default(),
-            limits: DesignLimits::default(),
-            compare_methods: false,
-            allowed_impacts: false,
-            release_rate: None,
-            guards: Vec::new(),
-            device_lines: Vec::new(),
-            target: None,
-            design: None,
-        }
+        )
     }
 
     fn rock_of(case: &SceneCase) -> (Rock, f64) {

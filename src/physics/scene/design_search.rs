@@ -437,26 +437,18 @@ mod tests {
     #[test]
     fn needed_rating_leaves_at_most_the_allowed_speed() {
         let case = SceneCase {
-            migration: MigrationCase::default(),
-            supports: vec![SupportEntry {
-                support: 1,
-                column_index: 0,
-                along_dip: 30.0,
-                across: None,
-                column: Column::default(),
-            }],
-            column: ColumnCase::default(),
-            impact_velocity: None,
-            release_zones: None,
-            draws: SceneDraws::default(),
-            limits: DesignLimits::default(),
-            compare_methods: false,
-            allowed_impacts: false,
-            release_rate: None,
             guards: vec![Some(0.0)],
-            design: None,
-            device_lines: Vec::new(),
-            target: None,
+            ..SceneCase::new(
+                MigrationCase::default(),
+                vec![SupportEntry {
+                    support: 1,
+                    column_index: 0,
+                    along_dip: 30.0,
+                    across: None,
+                    column: Column::default(),
+                }],
+                ColumnCase::default(),
+            )
         };
         for (v, a, m) in [
             (10.0, 3.0, 40.5),

@@ -195,6 +195,32 @@ pub struct SceneCase {
     pub design: Option<design_search::DesignAsk>,
 }
 
+impl SceneCase {
+    /// A scene of `migration` with these support entries and column stage, and every other
+    /// input at its default: no scene draws, release zones, guards, devices, design search or
+    /// target; the default design limits; allowed impacts not computed.
+    #[must_use]
+    pub fn new(migration: MigrationCase, supports: Vec<SupportEntry>, column: ColumnCase) -> Self {
+        let guards = vec![None; supports.len()];
+        Self {
+            migration,
+            supports,
+            column,
+            impact_velocity: None,
+            release_zones: None,
+            draws: SceneDraws::default(),
+            limits: DesignLimits::default(),
+            compare_methods: false,
+            release_rate: None,
+            guards,
+            allowed_impacts: false,
+            device_lines: Vec::new(),
+            design: None,
+            target: None,
+        }
+    }
+}
+
 /// The failure of a scene: the stage's error and the support entry it concerns (its fields are
 /// then relative to that entry's support object).
 #[derive(Debug, Clone, PartialEq)]

@@ -28,26 +28,18 @@ mod guard_properties {
 
     fn guarded(rating: Option<f64>) -> SceneCase {
         SceneCase {
-            migration: MigrationCase::default(),
-            supports: vec![SupportEntry {
-                support: 1,
-                column_index: 0,
-                along_dip: 30.0,
-                across: None,
-                column: Column::default(),
-            }],
-            column: ColumnCase::default(),
-            impact_velocity: None,
-            release_zones: None,
-            draws: SceneDraws::default(),
-            limits: DesignLimits::default(),
-            compare_methods: false,
-            allowed_impacts: false,
-            release_rate: None,
             guards: vec![rating],
-            device_lines: Vec::new(),
-            target: None,
-            design: None,
+            ..SceneCase::new(
+                MigrationCase::default(),
+                vec![SupportEntry {
+                    support: 1,
+                    column_index: 0,
+                    along_dip: 30.0,
+                    across: None,
+                    column: Column::default(),
+                }],
+                ColumnCase::default(),
+            )
         }
     }
 
