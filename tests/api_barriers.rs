@@ -381,3 +381,34 @@ async fn a_barrier_search_past_the_run_limit_or_malformed_is_refused() {
     )
     .await;
 }
+
+/// Barriers and collectors give the same bytes on 1 and 3 solver threads, in both methods.
+#[tokio::test]
+async fn devices_give_the_same_bytes_whatever_the_thread_count() {
+    let app = |threads| {
+        gangue::app(gangue::config::Config {
+            solver_threads: Some(threads),
+            ..Default::default()
+        })
+    };
+    let (one, three) = (app(1), app(3));
+    for (method, runs) in [("lumped_mass", 400), ("rigid_block", 12)] {
+        let mut s = common::risky_scene(runs, 13);
+        s["method"] = json!(method);
+        s["barriers"] = json!([{"along_dip_m": 30.0, "height_m": 0.3, "energy_rating_j": 600.0}]);
+        s["collectors"] = json!([{"along_dip_m": 20.0}, {"along_dip_m": 60.0}]);
+        let a = post(&one, "/v1/scene", &s).await;
+        let b = post(&three, "/v1/scene", &s).await;
+        assert_eq!(a.status, 200, "{}", String::from_utf8_lossy(&a.body));
+        assert!(
+            a.body == b.body,
+            "{method}: same bytes with 1 and 3 threads"
+        );
+        assert!(
+            a.json()["statistics"]["collectors"][0]["reached"]["probability"]
+                .as_f64()
+                .unwrap()
+                > 0.0
+        );
+    }
+}
