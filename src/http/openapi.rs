@@ -151,6 +151,10 @@ const NULL_DEFAULTS: &[&str] = &[
     "observed_period_years",
     "maps",
     "design",
+    "barriers",
+    "collectors",
+    "target",
+    "rocks_per_year_by_zone",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot
