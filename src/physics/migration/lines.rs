@@ -108,14 +108,14 @@ pub fn first_reachable(lines: &[Line], start: f64) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::super::{EventKind, Method, MigrationCase, StopReason, run};
     use super::*;
     use crate::physics::control::Control;
 
     /// A rock released on the plane at rest with no drop: it slides from the release point,
     /// friction work μ m g cos θ per metre whatever its speed.
-    fn slide(method: Method) -> MigrationCase {
+    pub(crate) fn slide(method: Method) -> MigrationCase {
         let mut c = MigrationCase {
             method,
             ..MigrationCase::default()
@@ -127,7 +127,8 @@ mod tests {
         c
     }
 
-    fn line(along_dip: f64, barrier: Option<Barrier>) -> Line {
+    /// A line across the whole face at `along_dip` (m), with `barrier` on it.
+    pub(crate) fn line(along_dip: f64, barrier: Option<Barrier>) -> Line {
         Line {
             along_dip,
             across: None,

@@ -13,7 +13,7 @@
 //! answer states it, and gives each support's residual exceedance with the barriers in place.
 
 use super::devices::scene_lines;
-use super::{Probability, SceneCase, SceneResult, SceneRun, ensemble_part, probability};
+use super::{Probability, SceneCase, SceneResult, ensemble_part, overloads, probability};
 use crate::physics::control::Control;
 use crate::physics::migration::{Barrier, Line, MonteCarlo};
 use crate::physics::stats::percentile_sorted;
@@ -103,19 +103,6 @@ fn ceil_3(x: f64) -> f64 {
     if up < x { up + scale } else { up }
 }
 
-/// Per entry, the runs that struck it past some limit (or the capacity).
-fn exceedances(case: &SceneCase, runs: &[SceneRun]) -> Vec<u64> {
-    let mut c = vec![0u64; case.supports.len()];
-    for r in runs {
-        if let Some(k) = r.summary.support
-            && r.exceeded.iter().any(|&x| x)
-        {
-            c[k] += 1;
-        }
-    }
-    c
-}
-
 /// The scene `case` with `barriers` and `collectors` as its only devices.
 fn with_lines(case: &SceneCase, barriers: &[Line], collectors: &[Line]) -> SceneCase {
     let (lines, device_lines) = scene_lines(barriers, collectors);
@@ -177,7 +164,7 @@ pub fn design_barriers(
         let c = with_lines(case, &lines_of(&chosen), &collectors);
         let (runs, _) = ensemble_part(&c, mc, 0..n, control)?;
         ensembles += 1;
-        let counts = exceedances(case, &runs);
+        let counts = overloads(case, &runs);
         if score(&counts, n, search.acceptable).0 == 0 || left.is_empty() {
             break counts;
         }
@@ -209,7 +196,7 @@ pub fn design_barriers(
             let t = with_lines(case, &lines_of(&trial), &[]);
             let (runs, _) = ensemble_part(&t, mc, 0..n, control)?;
             ensembles += 1;
-            let s = score(&exceedances(case, &runs), n, search.acceptable);
+            let s = score(&overloads(case, &runs), n, search.acceptable);
             if best.as_ref().is_none_or(|b| s < b.0) {
                 best = Some((s, i, barrier));
             }

@@ -290,7 +290,7 @@ pub fn design_search(
                     needs[k].push(rating);
                 }
             }
-            None => exceeded[k] += u64::from(r.exceeded.iter().any(|&x| x)),
+            None => exceeded[k] += u64::from(r.overloaded()),
         }
     }
     let c_star = largest_acceptable_count(n, ask.acceptable_probability);

@@ -436,11 +436,11 @@ fn statistics_of<R: SceneRecords + ?Sized>(
             for (c, &x) in exceeded[k].iter_mut().zip(&r.exceeded) {
                 *c += u64::from(x);
             }
-            overloaded[k] += u64::from(r.exceeded.iter().any(|&x| x));
+            overloaded[k] += u64::from(r.overloaded());
             held[k] += u64::from(r.guard == Guard::Held);
             through[k] += u64::from(r.guard == Guard::BrokenThrough);
         }
-        any += u64::from(r.exceeded.iter().any(|&x| x));
+        any += u64::from(r.overloaded());
         if let Some((k, x)) = entry_columns(r) {
             for (p, x) in first[k].iter_mut().zip(x) {
                 p.push(x);

@@ -436,6 +436,28 @@ pub struct SceneRun {
     pub crossings: migration::Crossings,
 }
 
+impl SceneRun {
+    /// The run struck its support past some checked limit (or past the contact capacity).
+    #[must_use]
+    pub fn overloaded(&self) -> bool {
+        self.exceeded.iter().any(|&x| x)
+    }
+}
+
+/// Per support entry of `case`, the runs that overloaded it ([`SceneRun::overloaded`]).
+#[must_use]
+pub fn overloads(case: &SceneCase, runs: &[SceneRun]) -> Vec<u64> {
+    let mut c = vec![0u64; case.supports.len()];
+    for r in runs {
+        if let Some(k) = r.summary.support
+            && r.overloaded()
+        {
+            c[k] += 1;
+        }
+    }
+    c
+}
+
 /// Fractions of all runs by how they ended (summing to 1).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Outcomes {

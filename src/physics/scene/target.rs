@@ -5,7 +5,7 @@
 //! asked for. The prefixes do not depend on the machine or the thread count (run i is seeded by
 //! (seed, i) whatever the split), so the answer is the ensemble of that many runs, bit for bit.
 
-use super::{SceneCase, SceneRun};
+use super::{SceneCase, SceneRun, overloads};
 use crate::physics::stats::precision::probability_half_width;
 
 /// The statistic a target is set on.
@@ -53,22 +53,14 @@ fn half_width(k: u64, n: u64) -> f64 {
 #[must_use]
 pub fn measured_half_width(case: &SceneCase, target: &SceneTarget, runs: &[SceneRun]) -> f64 {
     let n = runs.len() as u64;
-    let over = |r: &SceneRun| r.exceeded.iter().any(|&x| x);
     match target.statistic {
         TargetStatistic::AnyExceeded => {
-            half_width(runs.iter().filter(|r| over(r)).count() as u64, n)
+            half_width(runs.iter().filter(|r| r.overloaded()).count() as u64, n)
         }
-        TargetStatistic::EverySupport => {
-            let mut k = vec![0u64; case.supports.len()];
-            for r in runs {
-                if let Some(e) = r.summary.support
-                    && over(r)
-                {
-                    k[e] += 1;
-                }
-            }
-            k.iter().map(|&k| half_width(k, n)).fold(0.0, f64::max)
-        }
+        TargetStatistic::EverySupport => overloads(case, runs)
+            .iter()
+            .map(|&k| half_width(k, n))
+            .fold(0.0, f64::max),
     }
 }
 

@@ -240,6 +240,7 @@ mod tests {
     };
     use super::*;
     use crate::physics::control::Control;
+    use crate::physics::migration::lines::tests::line;
     use crate::physics::migration::monte_carlo::Distribution;
 
     /// Relative error of the arrival's kinetic energy after a barrier broken through by a
@@ -248,24 +249,9 @@ mod tests {
     /// restarts from it).
     const TOL_THROUGH: f64 = 1e-6;
 
+    /// The block released at rest on the plane at 5 m ([`lines::tests::slide`]).
     fn slide() -> MigrationCase {
-        let mut c = MigrationCase {
-            method: Method::RigidBlock,
-            ..MigrationCase::default()
-        };
-        c.release.drop_height = 0.0;
-        c.release.along_dip = 5.0;
-        c.face.length = 60.0;
-        c.output.events = true;
-        c
-    }
-
-    fn line(along_dip: f64, barrier: Option<Barrier>) -> Line {
-        Line {
-            along_dip,
-            across: None,
-            barrier,
-        }
+        super::super::super::lines::tests::slide(Method::RigidBlock)
     }
 
     fn barrier(along_dip: f64, height: f64, rating: f64) -> Line {
