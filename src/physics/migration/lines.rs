@@ -249,4 +249,56 @@ pub(crate) mod tests {
         assert_eq!(first_reachable(&lines, 10.5), 3);
         assert_eq!(first_reachable(&lines, 25.0), 4);
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, ..Default::default() })]
+
+        /// Over the documented ranges (dip, friction, drop, release, line position, barrier
+        /// height and rating from the smallest to the largest), a barrier never creates energy
+        /// and takes at most its rating, the account stays closed, and a rock it stops rests on
+        /// its line at rest; both methods (the rigid block on fewer, shorter faces).
+        #[test]
+        fn a_barrier_takes_at_most_its_rating_and_keeps_the_account(
+            dip in 35.0f64..=55.0,
+            mu in 0.05f64..=1.0,
+            drop in 0.0f64..=5.0,
+            release in 0.0f64..=20.0,
+            at in 0.0f64..=1.0,
+            height in proptest::prop_oneof![proptest::strategy::Just(1e-9), 1e-6f64..=100.0],
+            rating_exp in -3.0f64..=12.0,
+            rigid in proptest::bool::weighted(0.1),
+        ) {
+            let mut c = slide(if rigid { Method::RigidBlock } else { Method::LumpedMass });
+            c.face.dip_deg = dip;
+            c.face.friction_coefficient = mu;
+            c.face.length = if rigid { 30.0 } else { 60.0 };
+            c.release.drop_height = drop;
+            c.release.along_dip = release;
+            let rating = 10f64.powf(rating_exp);
+            let along = release + at * (c.face.length - release);
+            c.lines = vec![line(along, Some(Barrier { height, rating }))];
+            let ctl = Control::unlimited();
+            let r = run(&c, &ctl).unwrap();
+            let e = &r.energy;
+            let total = e.total_start;
+            // at most the rating, to the rounding of the energy in play
+            proptest::prop_assert!(
+                e.barriers >= 0.0 && e.barriers <= rating * (1.0 + 1e-12) + 1e-12 * total,
+                "{e:?}"
+            );
+            let mut free = c;
+            free.lines.clear();
+            let f = run(&free, &ctl).unwrap();
+            // the rigid block's residual stays within what its own property tests bound (0.2 %
+            // of the energy in play), the lumped mass's is rounding
+            let tol = if rigid { 2.0 * f.energy.residual.abs() + 2e-3 * total } else { 1e-9 * total };
+            proptest::prop_assert!(e.residual.abs() <= tol, "{e:?} vs free {:?}", f.energy);
+            if r.arrival.stop_reason == StopReason::Barrier {
+                proptest::prop_assert_eq!(r.arrival.speed, 0.0);
+                let reach = if rigid { 0.01 } else { 1e-9 };
+                proptest::prop_assert!((r.arrival.along_dip - along).abs() <= reach * along.max(1.0),
+                    "stopped at {} for a line at {along}", r.arrival.along_dip);
+            }
+        }
+    }
 }

@@ -826,8 +826,13 @@ impl<'a, 'r> Run<'a, 'r> {
             return None;
         }
         let before = v2.sqrt();
-        // every velocity scales by f: the kinetic energy (per kg) by f²
-        let lost = (trans + rot) * (1.0 - f * f);
+        // every velocity scales by f: the kinetic energy (per kg) by f². What is booked is the
+        // rating itself (or all of the energy when stopped), not E(1 − f²), whose cancellation
+        // would book a small rating with the rounding of a large energy
+        let lost = match (action, line.barrier) {
+            (LineAction::BrokenThrough, Some(b)) => b.rating / m,
+            _ => trans + rot,
+        };
         s.v *= f;
         s.spin = (s.spin.0 * f * f, s.spin.1 * f);
         s.e_barrier += lost;
