@@ -36,6 +36,14 @@ const KNOWN_ELSEWHERE: &[(&str, &str, &str)] = &[];
 /// L of a cube; a zone's A∩B at most min(A, B) and A∩C at most min(A, C); a map's far edges
 /// beyond its near ones).
 const RELATED: &[(&str, &str)] = &[
+    // a release point off the floor, a quaternion far from unit length, an orientation or a
+    // spin sent with the lumped mass: refused naming the vector
+    ("/release/position_m/0", "/release/position_m"),
+    ("/release/orientation_wxyz/0", "/release/orientation_wxyz"),
+    (
+        "/release/angular_velocity_rad_s/0",
+        "/release/angular_velocity_rad_s",
+    ),
     ("/column/outer_diameter_m", "/column/inner_diameter_m"),
     (
         "/supports/0/column/outer_diameter_m",
@@ -134,6 +142,17 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             "/v1/migration",
             "/rock/dimensions_m",
             json!({"rock": {"shape": "cuboid", "dimensions_m": [0.4, 0.3, 0.2]}}),
+        ),
+        // orientation and spin are the rigid block's
+        (
+            "/v1/migration",
+            "/release/orientation_wxyz",
+            json!({"method": "rigid_block", "rock": {"shape": "sphere"}, "end_time_s": 0.2}),
+        ),
+        (
+            "/v1/migration",
+            "/release/angular_velocity_rad_s",
+            json!({"method": "rigid_block", "rock": {"shape": "sphere"}, "end_time_s": 0.2}),
         ),
         (
             "/v1/migration",

@@ -155,6 +155,11 @@ const NULL_DEFAULTS: &[&str] = &[
     "collectors",
     "target",
     "rocks_per_year_by_zone",
+    "position_m",
+    "velocity_m_s",
+    "orientation_wxyz",
+    "angular_velocity_rad_s",
+    "release_velocity_m_s",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot
@@ -164,6 +169,10 @@ const ARRAY_BOUNDS: &[(&str, &str, u64, u64, f64, f64)] = &[
     ("RockDto", "dimensions_m", 3, 3, 0.01, 5.0),
     ("RandomShapeDto", "semi_axes_m", 3, 3, 0.005, 2.5),
     ("RockDto", "vertices_m", 4, 1000, -10.0, 10.0),
+    ("ReleaseDto", "position_m", 2, 2, -1e7, 1e7),
+    ("ReleaseDto", "velocity_m_s", 3, 3, -1000.0, 1000.0),
+    ("ReleaseDto", "orientation_wxyz", 4, 4, -1.000001, 1.000001),
+    ("ReleaseDto", "angular_velocity_rad_s", 3, 3, -1e4, 1e4),
 ];
 
 /// Adds the documented array lengths and item bounds of [`ARRAY_BOUNDS`].

@@ -131,6 +131,8 @@ pub enum Param {
     ReleaseAcross,
     /// Along-dip release position, m.
     ReleaseAlongDip,
+    /// Plan point [x, y] of the release, m.
+    ReleasePoint,
     /// The release zones of a scene ensemble.
     ReleaseZones,
     /// Rock–floor friction coefficient.

@@ -20,6 +20,12 @@ pub enum RockShape {
         /// Edge lengths, m.
         dimensions: [f64; 3],
     },
+    /// Polyhedron inscribed in the ellipsoid of full axes `[a, b, c]` along x, y, z (the
+    /// block's measured dimensions), scaled to the ellipsoid's volume π a b c / 6.
+    Ellipsoid {
+        /// Full axes (dimensions), m.
+        dimensions: [f64; 3],
+    },
     /// Convex polyhedron given by points (its hull), m, relative to any origin.
     Polyhedron {
         /// Vertex coordinates, m.
@@ -106,11 +112,12 @@ impl Rock {
         match &self.shape {
             RockShape::Sphere { radius } => 4.0 / 3.0 * PI * radius.powi(3),
             RockShape::Cuboid { dimensions } => dimensions.iter().product(),
+            RockShape::Ellipsoid { dimensions } => PI / 6.0 * dimensions.iter().product::<f64>(),
             _ => self.side_length.powi(3),
         }
     }
 
-    /// Mass of the block, kg (cube ρL³, sphere 4/3πr³ρ, cuboid ρabc).
+    /// Mass of the block, kg (cube ρL³, sphere 4/3πr³ρ, cuboid ρabc, ellipsoid ρπabc/6).
     #[must_use]
     pub fn mass(&self) -> f64 {
         self.density * self.volume()

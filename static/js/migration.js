@@ -11,6 +11,22 @@ import { destroy, joinSeries, linePlot, plotMessage } from './plot.js';
 import { clearFloorViews, defaultMapGrid, offFloor, floorModel, renderFloorViews } from './floorview.js';
 import { groupDigits, targetProgress } from './scene.js';
 
+/** The vector fields the form reads component by component (`…/0`, `…/1`, …), sent as arrays. */
+const VECTOR_FIELDS = ['/rock/dimensions_m', '/release/velocity_m_s', '/release/orientation_wxyz', '/release/angular_velocity_rad_s'];
+
+/** Turns the objects {0: …, 1: …} the form builds at the vector fields into arrays. */
+export function vectorsToArrays(request) {
+  for (const pointer of VECTOR_FIELDS) {
+    const keys = pointer.split('/').slice(1);
+    const parent = keys.slice(0, -1).reduce((o, k) => (o ? o[k] : undefined), request);
+    const last = keys[keys.length - 1];
+    const v = parent?.[last];
+    if (v && typeof v === 'object' && !Array.isArray(v)) {
+      parent[last] = Object.keys(v).sort((a, b) => a - b).map((k) => v[k]);
+    }
+  }
+}
+
 /** Why the friction spread starts from the page's own values. */
 const FRICTION_SPREAD = 'an example spread: the server has none unless one is sent';
 
@@ -37,8 +53,8 @@ const MIGRATION_GROUPS = [
       },
       {
         pointer: '/rock/shape', label: 'Shape', kind: 'select',
-        options: [['cube', 'cube'], ['sphere', 'sphere (r = L/2)']],
-        hint: 'the shape sets the mass and, for the rigid block, how it tumbles',
+        options: [['cube', 'cube'], ['sphere', 'sphere (r = L/2)'], ['cuboid', 'cuboid (dimensions below)'], ['ellipsoid', 'ellipsoid (dimensions below)']],
+        hint: 'the shape sets the mass and, for the rigid block, how it tumbles; a cuboid or an ellipsoid takes its measured dimensions',
       },
       { pointer: '/rock/side_length_m', label: 'Cube side <i>L</i>', unit: 'mm', exp: -3 },
       { pointer: '/rock/density_kg_m3', label: 'Density <i>ρ</i>', unit: 'kg/m³' },
@@ -50,6 +66,16 @@ const MIGRATION_GROUPS = [
     ],
   },
   {
+    legend: 'Block dimensions (cuboid, ellipsoid)',
+    pointer: '/rock/dimensions_m',
+    toggle: { name: 'rock_dimensions', checked: false },
+    note: 'The measured dimensions a × b × c along the block\'s own x, y, z axes; an ellipsoid is a 64-point polyhedron with the ellipsoid\'s volume πabc/6.',
+    fields: [0, 1, 2].map((k) => ({
+      pointer: `/rock/dimensions_m/${k}`, label: ['<i>a</i> (x)', '<i>b</i> (y)', '<i>c</i> (z)'][k], unit: 'mm', exp: -3,
+      choice: { value: [460, 300, 200][k], why: 'a plate-like block to edit' },
+    })),
+  },
+  {
     legend: 'Release',
     pointer: '/release',
     fields: [
@@ -57,6 +83,32 @@ const MIGRATION_GROUPS = [
       { pointer: '/release/along_dip_m', label: 'Along the dip', unit: 'm' },
       { pointer: '/release/across_m', label: 'Across the face', unit: 'm' },
       { pointer: '/release/speed_m_s', label: 'Initial speed (down-dip)', unit: 'm/s' },
+    ],
+  },
+  {
+    legend: 'Release velocity vector',
+    pointer: '/release/velocity_m_s',
+    toggle: { name: 'release_velocity', checked: false },
+    note: 'Instead of the down-dip speed: [v<sub>x</sub>, v<sub>y</sub>, v<sub>z</sub>] in the face frame (x down the dip, y across, z up). On the floor (drop height 0) only its part along the floor is kept.',
+    fields: [0, 1, 2].map((k) => ({
+      pointer: `/release/velocity_m_s/${k}`, label: `<i>v</i><sub>${'xyz'[k]}</sub>`, unit: 'm/s',
+      choice: { value: [1, 0, 0][k], why: 'a starting velocity to edit' },
+    })),
+  },
+  {
+    legend: 'Release orientation and spin (rigid block)',
+    pointer: '/release/orientation_wxyz',
+    toggle: { name: 'release_orientation', checked: false },
+    note: 'The unit quaternion [w, x, y, z] turning the block\'s own axes into the face frame (identity: its a, b, c along x, y, z), and its initial angular velocity in the face frame. The block starts with its lowest point on the floor, lifted by the drop height.',
+    fields: [
+      ...[0, 1, 2, 3].map((k) => ({
+        pointer: `/release/orientation_wxyz/${k}`, label: `<i>q</i><sub>${'wxyz'[k]}</sub>`, unit: '',
+        choice: { value: [1, 0, 0, 0][k], why: 'the identity rotation to edit' },
+      })),
+      ...[0, 1, 2].map((k) => ({
+        pointer: `/release/angular_velocity_rad_s/${k}`, label: `<i>ω</i><sub>${'xyz'[k]}</sub>`, unit: 'rad/s',
+        choice: { value: 0, why: 'not spinning' },
+      })),
     ],
   },
   {
@@ -71,6 +123,11 @@ const MIGRATION_GROUPS = [
       { pointer: '/monte_carlo/restitution_normal/max', label: '<i>e</i><sub>n</sub> max', unit: '' },
       { pointer: '/monte_carlo/restitution_tangential/min', label: '<i>e</i><sub>t</sub> min', unit: '' },
       { pointer: '/monte_carlo/restitution_tangential/max', label: '<i>e</i><sub>t</sub> max', unit: '' },
+      {
+        pointer: '/monte_carlo/release_orientation', label: 'Release orientation', kind: 'select',
+        options: [['fixed', 'fixed (the release\'s)'], ['uniform', 'uniformly random per run (rigid block)']],
+        hint: 'a block\'s orientation at release is rarely known: draw it per run',
+      },
     ],
   },
   {
@@ -239,6 +296,7 @@ export function initMigration() {
     unit: 'runs',
     build: ([own]) => {
       const request = own.request;
+      vectorsToArrays(request);
       floor.apply(request, own.local);
       const model = floorModel({ face: request.face }, floor.current());
       const r = request.release ?? {};

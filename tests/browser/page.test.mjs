@@ -720,6 +720,28 @@ async function migrationSection(page) {
 
   await screenshot(page, 'migration.png');
 
+  await check('migration: an ellipsoid block thrown with a velocity vector, orientation and spin is sent as arrays in SI, and the page shows the server\'s answer', async () => {
+    await open(page, '#migration');
+    await page.locator(`${form} [data-pointer="/method"]`).selectOption('rigid_block');
+    await page.locator(`${form} [data-pointer="/rock/shape"]`).selectOption('ellipsoid');
+    for (const name of ['rock_dimensions', 'release_velocity', 'release_orientation']) {
+      await page.locator(`${form} input[name="${name}"]`).check();
+    }
+    await page.locator(`${form} [data-pointer="/release/angular_velocity_rad_s/1"]`).fill('5');
+    const answer = await submit(page, form, '/v1/migration');
+    const sent = JSON.parse(answer.request().postData());
+    const same = (a, b) => JSON.stringify(a) === JSON.stringify(b);
+    assert(same(sent.rock.dimensions_m, [0.46, 0.3, 0.2]), `dimensions ${JSON.stringify(sent.rock.dimensions_m)}`);
+    assert(same(sent.release.velocity_m_s, [1, 0, 0]), `velocity ${JSON.stringify(sent.release.velocity_m_s)}`);
+    assert(same(sent.release.orientation_wxyz, [1, 0, 0, 0]), `orientation ${JSON.stringify(sent.release.orientation_wxyz)}`);
+    assert(same(sent.release.angular_velocity_rad_s, [0, 5, 0]), `spin ${JSON.stringify(sent.release.angular_velocity_rad_s)}`);
+    assert(answer.status() === 200, `status ${answer.status()}`);
+    const direct = await post('/v1/migration', sent);
+    assert(direct.status === 200, `direct ${direct.status}`);
+    assertClose(await shown(page, 'arrival.speed_m_s'), direct.json.arrival.speed_m_s, 1e-5, 'arrival speed (m/s)');
+    await screenshot(page, 'migration-release-state.png');
+  });
+
   await check('migration: "Compare both methods" sends the form with each method and overlays both speed curves and arrival speeds', async () => {
     await open(page, '#migration');
     const methods = [];

@@ -527,6 +527,10 @@ pub enum ShapeKind {
     Sphere,
     /// Cuboid with edges `dimensions_m` (migration).
     Cuboid,
+    /// Polyhedron of the ellipsoid with full axes `dimensions_m` (the block's measured
+    /// dimensions): 64 points of a Fibonacci lattice on it, scaled to its volume π a b c / 6
+    /// (migration).
+    Ellipsoid,
     /// Convex hull of `vertices_m` (rigid-block migration).
     Polyhedron,
     /// Random polyhedron by the ellipsoid method (rigid-block migration).
@@ -700,6 +704,17 @@ impl RockDto {
                         p("dimensions_m"),
                         Value::Null,
                         "a cuboid needs dimensions_m [a, b, c] in m",
+                    );
+                    RockShape::Cube
+                }
+            },
+            ShapeKind::Ellipsoid => match self.dimensions_m {
+                Some(d) => RockShape::Ellipsoid { dimensions: d },
+                None => {
+                    checker.push(
+                        p("dimensions_m"),
+                        Value::Null,
+                        "an ellipsoid needs dimensions_m [a, b, c] (its full axes) in m",
                     );
                     RockShape::Cube
                 }

@@ -65,6 +65,7 @@ fn place(param: Param) -> Place {
         Param::FloorContourPoint(c, k) => Path(format!("/face/floor/contours/{c}/points_m/{k}")),
         Param::FloorResolution => Path("/face/floor/resolution_m".into()),
         Param::ReleaseAcross => Path("/release/across_m".into()),
+        Param::ReleasePoint => Path("/release/position_m".into()),
         Param::ReleaseAlongDip => Path("/release/along_dip_m".into()),
         Param::ReleaseZones => Path("/release_zones".into()),
         Param::FaceFriction => Path("/face/friction_coefficient".into()),

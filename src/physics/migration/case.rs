@@ -111,6 +111,16 @@ pub struct Release {
     pub across: f64,
     /// Initial speed along the floor's down-dip direction, m/s (default 0).
     pub speed: f64,
+    /// The floor point in plan, [x, y] m, in the floor's own coordinates (map [E, N] on a floor
+    /// given in map coordinates), instead of `along_dip` and `across` (default none).
+    pub point: Option<[f64; 2]>,
+    /// Initial velocity [vx, vy, vz] in the face frame, m/s, instead of `speed` (default none).
+    pub velocity: Option<[f64; 3]>,
+    /// Rigid block: orientation [w, x, y, z], the unit quaternion turning the block's own axes
+    /// (those its shape is given in) into the face frame (default none: resting face-down).
+    pub orientation: Option<[f64; 4]>,
+    /// Rigid block: initial angular velocity [ωx, ωy, ωz] in the face frame, rad/s (default 0).
+    pub angular_velocity: Option<[f64; 3]>,
 }
 
 impl Default for Release {
@@ -120,6 +130,10 @@ impl Default for Release {
             along_dip: 0.0,
             across: 0.0,
             speed: 0.0,
+            point: None,
+            velocity: None,
+            orientation: None,
+            angular_velocity: None,
         }
     }
 }
@@ -156,6 +170,12 @@ pub struct MonteCarlo {
     /// μ, drawn once per run and clipped to [0, 2], counted in a `friction_clipped` warning
     /// (default: the face's μ for every run).
     pub friction_coefficient: Option<Distribution>,
+    /// The release velocity's components [vx, vy, vz] in the face frame, m/s, drawn once per run
+    /// from the run's release stream (default: the release's velocity for every run).
+    pub release_velocity: Option<[Distribution; 3]>,
+    /// Rigid block: a uniformly random orientation per run from the run's release stream
+    /// (default false: the release's orientation for every run).
+    pub random_orientation: bool,
 }
 
 impl Default for MonteCarlo {
@@ -166,6 +186,8 @@ impl Default for MonteCarlo {
             restitution_normal: Distribution::Uniform { min: 0.2, max: 0.4 },
             restitution_tangential: Distribution::Uniform { min: 0.7, max: 0.9 },
             friction_coefficient: None,
+            release_velocity: None,
+            random_orientation: false,
         }
     }
 }

@@ -180,7 +180,17 @@ fn lumped_run(
         let et = monte_carlo::sample(&mc.restitution_tangential, &mut rng).clamp(0.0, 1.0);
         (en, et)
     };
-    let mut o = simulate(setup, mu, &mut draw, rec, Some(control))?;
+    let drawn = monte_carlo::drawn_release(mc, i, &case.release).map(|rel| Setup {
+        v0: super::release::start_velocity(&rel, &pr.down_dip, &pr.normal, pr.on_floor.is_some()).0,
+        ..*setup
+    });
+    let mut o = simulate(
+        drawn.as_ref().unwrap_or(setup),
+        mu,
+        &mut draw,
+        rec,
+        Some(control),
+    )?;
     let on_floor = matches!(o.phase, Phase::Slide | Phase::Roll | Phase::Stopped);
     let crossings = std::mem::take(&mut o.crossings);
     let summary = RunSummary {
@@ -197,8 +207,14 @@ fn lumped_run(
         impact_speed: o.support.map_or(0.0, |k| {
             support_impact_speed(&mean, &case.supports[k], &o.p, &o.v)
         }),
-        release_along_dip: case.release.along_dip,
-        release_across: case.release.across,
+        release_along_dip: match case.release.point {
+            None => case.release.along_dip,
+            Some(_) => pr.release_along,
+        },
+        release_across: match case.release.point {
+            None => case.release.across,
+            Some(_) => pr.base.y,
+        },
         side_length: case.rock.side_length,
         density: case.rock.density,
         stop_along_dip: mean.along(&o.p),

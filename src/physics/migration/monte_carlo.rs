@@ -74,6 +74,53 @@ pub fn run_stream(seed: u64, index: u64) -> Pcg64 {
     Pcg64::new((hi << 64) | lo, stream)
 }
 
+/// Constant that separates a run's release stream from its stream of friction and
+/// restitution draws ([`release_stream`]).
+const RELEASE_STREAM: u64 = 0x5245_4C45_4153_4521;
+
+/// The stream of run `index`'s release draws (velocity, then orientation): [`run_stream`] of
+/// seed ⊕ 0x52454C4541534521, so that drawing the release leaves the run's friction and
+/// restitution draws as they were (the same impacts draw the same e_n, e_t).
+#[must_use]
+pub fn release_stream(seed: u64, index: u64) -> Pcg64 {
+    run_stream(seed ^ RELEASE_STREAM, index)
+}
+
+/// A uniformly random rotation as a unit quaternion [w, x, y, z] (Shoemake 1992: u₁, u₂, u₃
+/// uniform, q = (√(1−u₁) sin 2πu₂, √(1−u₁) cos 2πu₂, √u₁ sin 2πu₃, √u₁ cos 2πu₃) as
+/// [x, y, z, w]).
+pub fn uniform_rotation(rng: &mut Pcg64) -> [f64; 4] {
+    let (u1, u2, u3) = (uniform01(rng), uniform01(rng), uniform01(rng));
+    let tau = 2.0 * std::f64::consts::PI;
+    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+    let (s2, c2) = (tau * u2).sin_cos();
+    let (s3, c3) = (tau * u3).sin_cos();
+    [b * c3, a * s2, a * c2, b * s3]
+}
+
+/// The release of run `index` of `mc`: `release` with its velocity and orientation drawn
+/// when the ensemble varies them (None: it does not, and `release` holds for every run).
+#[must_use]
+pub fn drawn_release(
+    mc: &super::MonteCarlo,
+    index: u64,
+    release: &super::Release,
+) -> Option<super::Release> {
+    if mc.release_velocity.is_none() && !mc.random_orientation {
+        return None;
+    }
+    let mut rng = release_stream(mc.seed, index);
+    let mut r = *release;
+    if let Some(ds) = &mc.release_velocity {
+        r.velocity = Some(ds.map(|d| sample(&d, &mut rng)));
+        r.speed = 0.0;
+    }
+    if mc.random_orientation {
+        r.orientation = Some(uniform_rotation(&mut rng));
+    }
+    Some(r)
+}
+
 /// Uniform deviate in [0, 1) with 53 random bits.
 pub fn uniform01(rng: &mut Pcg64) -> f64 {
     (rng.next_u64() >> 11) as f64 * (1.0 / 9_007_199_254_740_992.0)
@@ -118,6 +165,37 @@ pub fn sample(d: &Distribution, rng: &mut Pcg64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    /// Uniform rotations turn a fixed axis to a uniform direction: over 40 000 draws each
+    /// component of the turned z axis has mean 0 and mean square 1/3 within 4.5 standard errors
+    /// (a component u of a uniform direction is uniform on [−1, 1]: var u = 1/3, var u² = 4/45), and
+    /// every quaternion is a unit one.
+    #[test]
+    fn uniform_rotations_turn_an_axis_to_a_uniform_direction() {
+        let n = 40_000;
+        let mut rng = release_stream(9, 0);
+        let (mut m1, mut m2) = ([0.0; 3], [0.0; 3]);
+        for _ in 0..n {
+            let [w, x, y, z] = uniform_rotation(&mut rng);
+            assert!((w * w + x * x + y * y + z * z - 1.0).abs() < 1e-12);
+            // the z axis turned by q: third column of its rotation matrix
+            let col = [
+                2.0 * (x * z + w * y),
+                2.0 * (y * z - w * x),
+                1.0 - 2.0 * (x * x + y * y),
+            ];
+            for k in 0..3 {
+                m1[k] += col[k] / f64::from(n);
+                m2[k] += col[k] * col[k] / f64::from(n);
+            }
+        }
+        let se1 = (1.0 / (3.0 * f64::from(n))).sqrt();
+        let se2 = (4.0 / (45.0 * f64::from(n))).sqrt();
+        for k in 0..3 {
+            assert!(m1[k].abs() < 4.5 * se1, "{m1:?}");
+            assert!((m2[k] - 1.0 / 3.0).abs() < 4.5 * se2, "{m2:?}");
+        }
+    }
+
     use super::*;
 
     #[test]

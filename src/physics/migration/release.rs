@@ -28,6 +28,45 @@ pub(super) struct Prepared {
     /// The resting block overhung the floor at the release point and was moved onto it by
     /// this much: [along the dip, across], m (see [`place_block`]).
     pub(super) moved: Option<[f64; 2]>,
+    /// Unit normal of the floor's facet under the release point.
+    pub(super) normal: Vector3<f64>,
+    /// Unit down-dip direction of that facet.
+    pub(super) down_dip: Vector3<f64>,
+    /// A release on the floor whose velocity had a component normal to the floor: that
+    /// component, m/s (removed: see [`start_velocity`]).
+    pub(super) projected: Option<f64>,
+}
+
+/// The velocity at the start, m/s, of `rel` on a floor of unit normal `normal` and down-dip
+/// direction `down_dip` there: `velocity` as given, else `speed` down the dip. A rock released
+/// on the floor (`on_floor`) keeps only the velocity's component along the floor: into the floor
+/// the floor holds it, out of it a release must be lifted (`drop_height_m` > 0). The component
+/// removed is returned when it is more than rounding.
+pub(super) fn start_velocity(
+    rel: &super::Release,
+    down_dip: &Vector3<f64>,
+    normal: &Vector3<f64>,
+    on_floor: bool,
+) -> (Vector3<f64>, Option<f64>) {
+    let v = rel
+        .velocity
+        .map_or_else(|| down_dip * rel.speed, Vector3::from);
+    on_floor_velocity(v, normal, on_floor)
+}
+
+/// `v` (m/s) with its component along the unit `normal` removed when `on_floor`, and that
+/// component when it is more than rounding (see [`start_velocity`]).
+pub(super) fn on_floor_velocity(
+    v: Vector3<f64>,
+    normal: &Vector3<f64>,
+    on_floor: bool,
+) -> (Vector3<f64>, Option<f64>) {
+    let vn = v.dot(normal);
+    if !on_floor || vn == 0.0 {
+        return (v, None);
+    }
+    let big = vn.abs() > 1e-12 * v.norm();
+    (v - normal * vn, big.then_some(vn))
 }
 
 pub(super) fn prepare(case: &MigrationCase) -> PhysicsResult<Prepared> {
@@ -80,9 +119,34 @@ pub(super) fn prepare_on(case: &MigrationCase, floor: Arc<Floor>) -> PhysicsResu
     let mean = floor.mean;
     let mut y = rel.across;
     let mut moved = None;
-    let (mut x, mut facet) = match face.floor {
-        FloorSpec::Plane => (rel.along_dip * mean.cos, 0),
-        _ => {
+    let (mut x, mut facet) = match (rel.point, &face.floor) {
+        (Some(pt), spec) => {
+            let [px, py] = match spec {
+                FloorSpec::Mapped { map, .. } => map.to_face(pt),
+                _ => pt,
+            };
+            y = py;
+            let f = floor
+                .locate(px, py, 1.0, 0.0)
+                .or_else(|| floor.locate(px, py, 0.0, 0.0))
+                .filter(|_| !matches!(spec, FloorSpec::Plane) || px >= 0.0)
+                .ok_or_else(|| {
+                    let ext = floor.extent();
+                    PhysicsError::invalid(
+                        Param::ReleasePoint,
+                        pt[0],
+                        format!(
+                            "the release point [{}, {}] (face coordinates [{px:.4}, {py:.4}] m) is \
+                             not over the floor (x in [{:.4}, {:.4}], y in [{:.4}, {:.4}] m in \
+                             face coordinates, holes excepted)",
+                            pt[0], pt[1], ext[0], ext[1], ext[2], ext[3]
+                        ),
+                    )
+                })?;
+            (px, f)
+        }
+        (None, FloorSpec::Plane) => (rel.along_dip * mean.cos, 0),
+        (None, _) => {
             let ext = floor.extent();
             if !(y >= ext[2] && y <= ext[3]) {
                 return Err(PhysicsError::invalid(
@@ -218,16 +282,35 @@ pub(super) fn prepare_on(case: &MigrationCase, floor: Arc<Floor>) -> PhysicsResu
         rel.drop_height > 8.0 * f64::EPSILON * (1.0 + x.abs().max(y.abs()).max(z_floor.abs()));
     let drop = if lifted { rel.drop_height } else { 0.0 };
     let p0 = Vector3::new(x, y, z_floor + drop);
-    let v0 = pl.down_dip() * rel.speed;
+    let normal = pl.normal();
+    let down_dip = pl.down_dip();
+    let (v0, projected) = start_velocity(rel, &down_dip, &normal, drop == 0.0);
     let g = case.gravity;
     let z_end = mean.z_at(face.length);
-    let e0 = 0.5 * rel.speed * rel.speed + g * (p0.z - z_end);
+    let e0 = 0.5 * v0.norm_squared() + g * (p0.z - z_end);
+    // on the plane the release's along_dip is exact; a floor's (or a plan point's) is measured
+    let release_along = match (&face.floor, rel.point) {
+        (FloorSpec::Plane, None) => rel.along_dip,
+        _ => mean.along(&Vector3::new(x, y, z_floor)),
+    };
+    if rel.point.is_some()
+        && release_along.partial_cmp(&face.length) != Some(std::cmp::Ordering::Less)
+    {
+        return Err(PhysicsError::invalid(
+            Param::ReleasePoint,
+            rel.point.map_or(0.0, |p| p[0]),
+            format!(
+                "the release point lies {release_along:.4} m along the dip, not above the face's \
+                 lower end at length_m = {} m",
+                face.length
+            ),
+        ));
+    }
     Ok(Prepared {
-        // on the plane the release's along_dip is exact; a floor's is measured
-        release_along: match face.floor {
-            FloorSpec::Plane => rel.along_dip,
-            _ => mean.along(&Vector3::new(x, y, z_floor)),
-        },
+        release_along,
+        normal,
+        down_dip,
+        projected,
         base: Vector3::new(x, y, z_floor),
         on_floor: (drop == 0.0).then_some(facet),
         floor,
@@ -245,6 +328,17 @@ pub(super) fn prepare_on(case: &MigrationCase, floor: Arc<Floor>) -> PhysicsResu
 /// onto the floor at the release (`release_moved`, by how much), a run that left the floor
 /// (`left_floor`: where, and past which boundary).
 pub(super) fn start_and_end_warnings(pr: &Prepared, r: &mut MigrationResult) {
+    if let Some(vn) = pr.projected {
+        r.warnings.push(Warning {
+            code: "release_velocity_projected",
+            message: format!(
+                "the rock starts on the floor (drop_height_m 0) and its release velocity had a \
+                 component of {vn:.4} m/s normal to the floor ({}): it starts with the \
+                 component along the floor only; lift it (drop_height_m > 0) to start in flight",
+                if vn < 0.0 { "into it" } else { "away from it" }
+            ),
+        });
+    }
     if let Some([ds, dy]) = pr.moved {
         r.warnings.push(Warning {
             code: "release_moved",

@@ -64,6 +64,9 @@ pub struct BlockShape {
     pub smallest_dimension: f64,
     /// Index of the largest face (the face the block rests on at release; 0 for a sphere).
     pub largest_face: usize,
+    /// The rotation from the principal body axes to the axes the shape was given in (its
+    /// vertices' or dimensions' frame; identity for a sphere).
+    pub given_axes: UnitQuaternion<f64>,
 }
 
 impl BlockShape {
@@ -146,6 +149,7 @@ impl BlockShape {
             r_max: radius,
             smallest_dimension: 2.0 * radius,
             largest_face: 0,
+            given_axes: UnitQuaternion::identity(),
         }
     }
 
@@ -305,6 +309,9 @@ impl BlockShape {
             r_max,
             smallest_dimension,
             largest_face,
+            given_axes: UnitQuaternion::from_rotation_matrix(
+                &nalgebra::Rotation3::from_matrix_unchecked(rot),
+            ),
         }
     }
 
@@ -317,6 +324,7 @@ impl BlockShape {
         match &rock.shape {
             RockShape::Cube => Self::cuboid([rock.side_length; 3], rho),
             RockShape::Cuboid { dimensions } => Self::cuboid(*dimensions, rho),
+            RockShape::Ellipsoid { dimensions } => Self::ellipsoid(*dimensions, rho),
             RockShape::Sphere { radius } => Ok(Self::sphere(*radius, rho)),
             RockShape::Polyhedron { vertices } => Self::hull(vertices, rho, Param::RockVertices),
             RockShape::RandomPolyhedron {
@@ -339,6 +347,34 @@ impl BlockShape {
                 if i & 4 == 0 { -0.5 } else { 0.5 } * d[2],
             ]);
         }
+        Self::hull(&pts, density, Param::RockDimensions)
+    }
+
+    /// Number of points of an [`Self::ellipsoid`].
+    pub const ELLIPSOID_POINTS: usize = 64;
+
+    /// The polyhedron of an ellipsoid with full axes `d` = [a, b, c] (m) along x, y, z: the hull
+    /// of [`Self::ELLIPSOID_POINTS`] points of a Fibonacci lattice on it (point k at
+    /// z = 1 − (2k + 1)/N of the unit sphere, longitude k times the golden angle, stretched by
+    /// the semi-axes), scaled so that its volume is the ellipsoid's π a b c / 6 (its extents
+    /// then exceed the axes by the same factor, 1.016 for N = 64).
+    ///
+    /// Errors: [`PhysicsError::InvalidInput`] on `RockDimensions` when an axis is zero.
+    pub fn ellipsoid(d: [f64; 3], density: f64) -> PhysicsResult<Self> {
+        let n = Self::ELLIPSOID_POINTS;
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        let unit: Vec<[f64; 3]> = (0..n)
+            .map(|k| {
+                let z = 1.0 - (2.0 * k as f64 + 1.0) / n as f64;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let (s, c) = (golden * k as f64).sin_cos();
+                [0.5 * d[0] * r * c, 0.5 * d[1] * r * s, 0.5 * d[2] * z]
+            })
+            .collect();
+        let first = Self::hull(&unit, density, Param::RockDimensions)?;
+        let target = std::f64::consts::PI / 6.0 * d[0] * d[1] * d[2];
+        let k = (target / first.volume).cbrt();
+        let pts: Vec<[f64; 3]> = unit.iter().map(|p| p.map(|c| c * k)).collect();
         Self::hull(&pts, density, Param::RockDimensions)
     }
 

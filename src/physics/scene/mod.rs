@@ -848,6 +848,9 @@ fn scale_rock(rock: &mut Rock, l: f64) {
         RockShape::Cuboid { dimensions } => RockShape::Cuboid {
             dimensions: dimensions.map(|d| d * k),
         },
+        RockShape::Ellipsoid { dimensions } => RockShape::Ellipsoid {
+            dimensions: dimensions.map(|d| d * k),
+        },
         s => s.clone(),
     };
     rock.side_length = l;

@@ -483,6 +483,32 @@ pub struct ReleaseDto {
     /// Initial speed along the floor's down-dip direction, m/s, in [0, 1000].
     #[schema(schema_with = release_speed_schema)]
     pub speed_m_s: f64,
+    /// The floor point in plan [x, y], m, instead of `along_dip_m`/`across_m`: in the floor's
+    /// own coordinates (map [E, N] on a floor with `map`, face [x, y] otherwise); each in
+    /// [−1e7, 1e7]; 422 when it is not over the floor (null: `along_dip_m`, `across_m`).
+    #[schema(default = json!(null), example = json!([12.0, 0.5]))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub position_m: Option<[f64; 2]>,
+    /// Initial velocity [vx, vy, vz] in the face frame (x down the dip, y across, z up), m/s,
+    /// instead of `speed_m_s`, each in [−1000, 1000]. A rock released on the floor
+    /// (`drop_height_m` 0) keeps its component along the floor (warning
+    /// `release_velocity_projected` when there was another) (null: `speed_m_s` down the dip).
+    #[schema(default = json!(null), example = json!([1.0, 0.0, -0.5]))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub velocity_m_s: Option<[f64; 3]>,
+    /// Rigid block: orientation [w, x, y, z], the unit quaternion (norm within 1e-6 of 1, then
+    /// normalised) turning the block's own axes — those its shape is given in (`dimensions_m`,
+    /// `vertices_m`, the ellipsoid's axes) — into the face frame. The block is placed with its
+    /// lowest point on the floor's facet under the release point, then lifted by
+    /// `drop_height_m` (null: resting face-down on its largest face).
+    #[schema(default = json!(null), example = json!([1.0, 0.0, 0.0, 0.0]))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientation_wxyz: Option<[f64; 4]>,
+    /// Rigid block: initial angular velocity [ωx, ωy, ωz] in the face frame, rad/s, each in
+    /// [−1e4, 1e4] (null: not spinning).
+    #[schema(default = json!(null), example = json!([0.0, 5.0, 0.0]))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub angular_velocity_rad_s: Option<[f64; 3]>,
 }
 
 impl Default for ReleaseDto {
@@ -492,6 +518,10 @@ impl Default for ReleaseDto {
             along_dip_m: RELEASE_ALONG_DIP.value(),
             across_m: RELEASE_ACROSS.value(),
             speed_m_s: RELEASE_SPEED.value(),
+            position_m: None,
+            velocity_m_s: None,
+            orientation_wxyz: None,
+            angular_velocity_rad_s: None,
         }
     }
 }
@@ -715,6 +745,23 @@ macro_rules! monte_carlo_dto {
             #[schema(default = json!(null))]
             #[serde(skip_serializing_if = "Option::is_none")]
             pub critical_damping_ratio: Option<DistributionDto>,
+            /// The release velocity [vx, vy, vz] in the face frame, m/s, drawn once per run,
+            /// each component from its distribution within [−1000, 1000], from a stream of the
+            /// run's own apart from its friction and restitution draws (null: the release's
+            /// velocity for every run). A release on the floor keeps the drawn velocity's
+            /// component along the floor.
+            #[schema(default = json!(null), example = json!([
+                {"distribution": "uniform", "min": 0.0, "max": 1.0},
+                {"distribution": "uniform", "min": -0.5, "max": 0.5},
+                {"distribution": "uniform", "min": 0.0, "max": 0.0}
+            ]))]
+            #[serde(skip_serializing_if = "Option::is_none")]
+            pub release_velocity_m_s: Option<[DistributionDto; 3]>,
+            /// Rigid block: the release orientation of every run, `fixed` (the release's) or
+            /// `uniform` (a uniformly random rotation per run, drawn after the release velocity
+            /// from the same stream).
+            #[schema(default = "fixed", example = "fixed")]
+            pub release_orientation: $crate::http::dto::migration::ReleaseOrientationDto,
             $(
                 $(#[$fmeta])*
                 #[schema(default = json!(null))]
@@ -736,6 +783,8 @@ macro_rules! monte_carlo_dto {
                     ),
                     friction_coefficient: None,
                     critical_damping_ratio: None,
+                    release_velocity_m_s: None,
+                    release_orientation: $crate::http::dto::migration::ReleaseOrientationDto::Fixed,
                     $( $field: None, )*
                 }
             }
@@ -751,6 +800,8 @@ macro_rules! monte_carlo_dto {
                     restitution_tangential: m.restitution_tangential,
                     friction_coefficient: m.friction_coefficient,
                     critical_damping_ratio: m.critical_damping_ratio,
+                    release_velocity_m_s: m.release_velocity_m_s,
+                    release_orientation: m.release_orientation,
                     // a scene's own fields (its target among them) stay with the scene
                     ..MonteCarloDto::default()
                 }
@@ -759,6 +810,128 @@ macro_rules! monte_carlo_dto {
     };
 }
 pub(crate) use monte_carlo_dto;
+
+/// How the release orientation varies between the runs of an ensemble.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ReleaseOrientationDto {
+    /// The release's orientation for every run.
+    #[default]
+    Fixed,
+    /// A uniformly random rotation per run (rigid block).
+    Uniform,
+}
+
+impl ReleaseDto {
+    /// The physics release (checked by [`MigrationRequest`]'s checks); the orientation
+    /// normalised.
+    pub(crate) fn resolve(&self) -> Release {
+        Release {
+            drop_height: self.drop_height_m,
+            along_dip: self.along_dip_m,
+            across: self.across_m,
+            speed: self.speed_m_s,
+            point: self.position_m,
+            velocity: self.velocity_m_s,
+            orientation: self.orientation_wxyz.map(|q| {
+                let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+                q.map(|c| c / n)
+            }),
+            angular_velocity: self.angular_velocity_rad_s,
+        }
+    }
+
+    /// The release's own checks under `base` ("/release"): the vectors' components in their
+    /// ranges, a unit quaternion, one of each pair of alternatives; the orientation and spin
+    /// for the rigid block only.
+    pub(crate) fn check(&self, base: &str, rigid: bool, ck: &mut Checker) {
+        let p = |f: &str| format!("{base}/{f}");
+        if let Some(pt) = self.position_m {
+            for (k, v) in pt.iter().enumerate() {
+                ck.closed(&format!("{base}/position_m/{k}"), *v, -1e7, 1e7, "m");
+            }
+            for (name, v) in [
+                ("along_dip_m", self.along_dip_m),
+                ("across_m", self.across_m),
+            ] {
+                if v != 0.0 {
+                    ck.push(
+                        p(name),
+                        num(v),
+                        "give the release point either as position_m or as along_dip_m and \
+                         across_m, not both",
+                    );
+                }
+            }
+        }
+        if let Some(v) = self.velocity_m_s {
+            for (k, c) in v.iter().enumerate() {
+                ck.closed(
+                    &format!("{base}/velocity_m_s/{k}"),
+                    *c,
+                    -1000.0,
+                    1000.0,
+                    "m/s",
+                );
+            }
+            if self.speed_m_s != 0.0 {
+                ck.push(
+                    p("speed_m_s"),
+                    num(self.speed_m_s),
+                    "give the release velocity either as velocity_m_s or as speed_m_s, not both",
+                );
+            }
+        }
+        if let Some(q) = self.orientation_wxyz {
+            let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+            let mut inside = true;
+            for (k, c) in q.iter().enumerate() {
+                inside &= ck.closed(
+                    &format!("{base}/orientation_wxyz/{k}"),
+                    *c,
+                    -1.000_001,
+                    1.000_001,
+                    "",
+                );
+            }
+            if !inside {
+                // each component out of range is named already
+            } else if !rigid {
+                ck.push(
+                    p("orientation_wxyz"),
+                    json!(q),
+                    "an orientation belongs to the rigid-block method (a point mass has none)",
+                );
+            } else if !(n.is_finite() && (n - 1.0).abs() <= 1e-6) {
+                ck.push(
+                    p("orientation_wxyz"),
+                    json!(q),
+                    format!("must be a unit quaternion [w, x, y, z]: its norm {n} is not within 1e-6 of 1"),
+                );
+            }
+        }
+        if let Some(w) = self.angular_velocity_rad_s {
+            let mut inside = true;
+            for (k, c) in w.iter().enumerate() {
+                inside &= ck.closed(
+                    &format!("{base}/angular_velocity_rad_s/{k}"),
+                    *c,
+                    -1e4,
+                    1e4,
+                    "rad/s",
+                );
+            }
+            if inside && !rigid {
+                ck.push(
+                    p("angular_velocity_rad_s"),
+                    json!(w),
+                    "an initial spin belongs to the rigid-block method (the lumped mass's spin \
+                     follows from its motion)",
+                );
+            }
+        }
+    }
+}
 
 monte_carlo_dto! {
     /// A seeded Monte Carlo ensemble.
@@ -925,12 +1098,7 @@ impl MigrationRequest {
                 restitution_tangential: self.face.restitution_tangential,
             },
             rock,
-            release: Release {
-                drop_height: self.release.drop_height_m,
-                along_dip: self.release.along_dip_m,
-                across: self.release.across_m,
-                speed: self.release.speed_m_s,
-            },
+            release: self.release.resolve(),
             lumped_mass: LumpedMassOptions {
                 motion: match self.lumped_mass.motion {
                     MotionDto::Slide => Motion::Slide,
@@ -1015,7 +1183,7 @@ impl MigrationRequest {
             ck.push(
                 "/rock/shape",
                 json!(self.rock.shape),
-                "polyhedra belong to the rigid-block method; the lumped mass takes cube, sphere or cuboid",
+                "polyhedra belong to the rigid-block method; the lumped mass takes cube, sphere, cuboid or ellipsoid",
             );
         }
         let r = &self.release;
@@ -1030,6 +1198,7 @@ impl MigrationRequest {
         );
         RELEASE_ACROSS.check(ck, "/release/across_m", r.across_m);
         RELEASE_SPEED.check(ck, "/release/speed_m_s", r.speed_m_s);
+        r.check("/release", rigid, ck);
         STOP_NORMAL_SPEED.check(
             ck,
             "/lumped_mass/stop_normal_speed_m_s",
@@ -1083,7 +1252,34 @@ impl MigrationRequest {
             friction_coefficient: mc
                 .friction_coefficient
                 .map(|d| d.resolve("/monte_carlo/friction_coefficient", 0.0, 2.0, ck)),
+            release_velocity: mc.release_velocity_m_s.map(|ds| {
+                [0, 1, 2].map(|k| {
+                    ds[k].resolve(
+                        &format!("/monte_carlo/release_velocity_m_s/{k}"),
+                        -1000.0,
+                        1000.0,
+                        ck,
+                    )
+                })
+            }),
+            random_orientation: mc.release_orientation == ReleaseOrientationDto::Uniform,
         };
+        if mc.release_orientation == ReleaseOrientationDto::Uniform {
+            if !rigid {
+                ck.push(
+                    "/monte_carlo/release_orientation",
+                    json!("uniform"),
+                    "a random orientation belongs to the rigid-block method",
+                );
+            } else if self.release.orientation_wxyz.is_some() {
+                ck.push(
+                    "/monte_carlo/release_orientation",
+                    json!("uniform"),
+                    "release.orientation_wxyz fixes the orientation that `uniform` would draw: \
+                     give one of them",
+                );
+            }
+        }
         let damping_distribution = mc.critical_damping_ratio.as_ref().map(|d| {
             if !rigid {
                 ck.push(

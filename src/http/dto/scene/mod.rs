@@ -766,13 +766,13 @@ impl SceneRequest {
         if draws.side_length.is_some()
             && !matches!(
                 self.rock.shape,
-                ShapeKind::Cube | ShapeKind::Sphere | ShapeKind::Cuboid
+                ShapeKind::Cube | ShapeKind::Sphere | ShapeKind::Cuboid | ShapeKind::Ellipsoid
             )
         {
             ck.push(
                 "/monte_carlo/side_length_m",
                 Value::Null,
-                "the side length is drawn for a cube, sphere or cuboid rock only",
+                "the side length is drawn for a cube, sphere, cuboid or ellipsoid rock only",
             );
         }
         draws

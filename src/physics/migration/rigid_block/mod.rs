@@ -317,6 +317,14 @@ struct Model<'a> {
     c0: Vector3<f64>,
     v0: Vector3<f64>,
     q0: UnitQuaternion<f64>,
+    /// Body angular velocity at the release, rad/s.
+    w0: Vector3<f64>,
+    /// The floor point under the release, m.
+    floor_pt: Vector3<f64>,
+    /// Down-dip direction of the facet under the release point.
+    floor_down_dip_at_release: Vector3<f64>,
+    /// Lift above the floor at the release, m.
+    drop: f64,
     z_end: f64,
     rest_offset: f64,
     /// Vertical drop below the centre that keeps the block clear of the floor (r_max(1 + s)).
@@ -337,9 +345,56 @@ struct Model<'a> {
     on_floor_at_start: bool,
     /// Unit normal of the floor facet under the release point.
     floor_normal_at_release: Vector3<f64>,
-    /// The energy in play before any travel, J: m g (drop + ten static overlaps and ten static
-    /// shear displacements) + ½ m v₀² (the scale of [`Model::check_energy`] at the release).
+    /// The energy in play before any travel but the kinetic energy at the release, J: m g
+    /// (drop + ten static overlaps and ten static shear displacements) (with the run's kinetic
+    /// energy at its release, the scale of [`Model::check_energy`] there).
     energy_in_play: f64,
+}
+
+/// What a run draws: friction μ, damping ratio β, and the start when the release is drawn
+/// (None: the model's own).
+#[derive(Debug, Clone, Copy)]
+struct Draws {
+    mu: f64,
+    beta: f64,
+    start: Option<State>,
+}
+
+/// The block's state at the release `rel` on the facet of unit normal `nf` and down-dip
+/// direction `down_dip` under `floor_pt`: its orientation (the release's, turned from the
+/// shape's given axes to its principal ones, else resting face-down), its centre with its lowest
+/// point `static_overlap` into the facet's plane then lifted by the drop, its velocity (a block on
+/// the floor keeps the component along it) and its body angular velocity.
+fn start_state(
+    shape: &BlockShape,
+    rel: &super::Release,
+    floor_pt: &Vector3<f64>,
+    nf: &Vector3<f64>,
+    down_dip: &Vector3<f64>,
+    static_overlap: f64,
+) -> State {
+    let (q, h) = match rel.orientation {
+        None => (shape.resting_orientation(nf), shape.rest_height()),
+        Some([w, x, y, z]) => {
+            let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z))
+                * shape.given_axes;
+            let h = match shape.sphere_radius {
+                Some(r) => r,
+                None => shape
+                    .vertices
+                    .iter()
+                    .map(|v| -nf.dot(&(q * v)))
+                    .fold(f64::NEG_INFINITY, f64::max),
+            };
+            (q, h)
+        }
+    };
+    let c = floor_pt + nf * (h - static_overlap) + Vector3::z() * rel.drop_height;
+    let v = super::release::start_velocity(rel, down_dip, nf, rel.drop_height == 0.0).0;
+    let w = rel
+        .angular_velocity
+        .map_or_else(Vector3::zeros, |w| q.inverse() * Vector3::from(w));
+    State { t: 0.0, c, v, q, w }
 }
 
 /// State of the block: centre, velocity (half step), orientation, body angular velocity.
@@ -411,6 +466,8 @@ struct RunOut {
     friction: f64,
     stored: f64,
     e_start: f64,
+    /// Kinetic energy at the release (translation and rotation), J.
+    ke_start: f64,
     steps: u64,
     max_overlap: f64,
     events: Vec<Event>,
@@ -569,6 +626,8 @@ struct Run {
     off_floor: bool,
     /// Energy at release (with the springs' energy at release), J.
     e_start: f64,
+    /// Kinetic energy at the release (translation and rotation), J.
+    ke_start: f64,
     /// The next line the block can reach (index into the model's lines).
     next_line: usize,
     /// Per line, the block's state where it reached it (None: not reached).
@@ -710,9 +769,9 @@ impl<'a> Model<'a> {
             })?;
         let pl = floor.facet_plane(facet);
         let nf = pl.normal();
-        let q0 = shape.resting_orientation(&nf);
         let rest_offset = shape.rest_height() - static_overlap;
-        let c0 = floor_pt + nf * rest_offset + Vector3::z() * rel.drop_height;
+        let start = start_state(&shape, rel, &floor_pt, &nf, &pl.down_dip(), static_overlap);
+        let (c0, q0) = (start.c, start.q);
         let mean = floor.mean;
         let z_end = mean.z_at(case.face.length) + rest_offset * mean.normal().z;
         // steepest floor slope
@@ -754,8 +813,12 @@ impl<'a> Model<'a> {
             lines: case.lines.clone(),
             end_time: case.end_time,
             c0,
-            v0: pr.v0,
+            v0: start.v,
             q0,
+            w0: start.w,
+            floor_pt,
+            floor_down_dip_at_release: pl.down_dip(),
+            drop: rel.drop_height,
             z_end,
             rest_offset,
             clear_drop: shape.r_max * (1.0 + slope),
@@ -774,7 +837,6 @@ impl<'a> Model<'a> {
                     Some(_) => static_overlap,
                 };
                 m * g * (rel.drop_height + 10.0 * (static_overlap + shear))
-                    + 0.5 * m * pr.v0.norm_squared()
             },
             shape,
         })
@@ -1107,7 +1169,7 @@ fn nominal_run(
     let residual =
         kt + kr + pe + out.stored + out.damping + out.friction + out.barrier - out.e_start;
     let mut warnings = Vec::new();
-    let scale = model.energy_scale(st);
+    let scale = model.energy_scale(st, out.ke_start);
     let allowed = match model.hertz {
         None => ACCOUNT_TOLERANCE_LINEAR,
         Some(_) => ACCOUNT_TOLERANCE_HERTZ,
@@ -1193,8 +1255,10 @@ fn rigid_one(
         Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, 0.999),
         None => o.critical_damping_ratio,
     };
+    let start = monte_carlo::drawn_release(mc, i, &case.release).map(|rel| model.start_of(&rel));
     let mut track = grid.map(|g| CellTrack::new(g, model.mean));
-    let r = model.simulate_tracked(mu, beta, None, false, track.as_mut(), Some(control))?;
+    let draws = Draws { mu, beta, start };
+    let r = model.simulate_tracked(draws, None, false, track.as_mut(), Some(control))?;
     let (kt, kr, _) = model.energy(&r.st);
     if let Some(t) = track.as_mut() {
         // the end state as reported (velocities synchronised with the position)
@@ -1214,8 +1278,14 @@ fn rigid_one(
         impact_speed: r.support.map_or(0.0, |k| {
             super::support_impact_speed(&model.mean, &case.supports[k], &r.st.c, &r.st.v)
         }),
-        release_along_dip: case.release.along_dip,
-        release_across: case.release.across,
+        release_along_dip: match case.release.point {
+            None => case.release.along_dip,
+            Some(_) => release_along,
+        },
+        release_across: match case.release.point {
+            None => case.release.across,
+            Some(_) => model.floor_pt.y,
+        },
         side_length: case.rock.side_length,
         density: case.rock.density,
         stop_along_dip: model.mean.along(&r.st.c),

@@ -2,6 +2,7 @@
 //! form, episodes (impacts, ground phases), stops, samples and the energy books.
 
 use super::*;
+use crate::physics::migration::Release;
 use crate::physics::migration::maps::CellTrack;
 
 impl Model<'_> {
@@ -16,7 +17,29 @@ impl Model<'_> {
         events: bool,
         control: Option<&Control>,
     ) -> PhysicsResult<RunOut> {
-        self.simulate_tracked(mu, beta, record, events, None, control)
+        let draws = Draws {
+            mu,
+            beta,
+            start: None,
+        };
+        self.simulate_tracked(draws, record, events, None, control)
+    }
+
+    /// The block's state at the release `rel` (a drawn velocity or orientation) on the model's
+    /// release point (see [`start_state`]).
+    pub(super) fn start_of(&self, rel: &Release) -> State {
+        let rel = Release {
+            drop_height: self.drop,
+            ..*rel
+        };
+        start_state(
+            &self.shape,
+            &rel,
+            &self.floor_pt,
+            &self.floor_normal_at_release,
+            &self.floor_down_dip_at_release,
+            self.static_overlap,
+        )
     }
 
     /// [`Self::simulate`], following the centre's path on a map's cells when `track` is given:
@@ -24,16 +47,15 @@ impl Model<'_> {
     /// a cell apart (see `maps`).
     pub(super) fn simulate_tracked(
         &self,
-        mu: f64,
-        beta: f64,
+        draws: Draws,
         record: Option<(f64, usize)>,
         events: bool,
         mut track: Option<&mut CellTrack<'_>>,
         control: Option<&Control>,
     ) -> PhysicsResult<RunOut> {
         let cfg = RunSettings {
-            mu,
-            beta,
+            mu: draws.mu,
+            beta: draws.beta,
             end_t: self.end_time.unwrap_or(f64::INFINITY),
             has_columns: !self.columns.is_empty(),
             plane_normal: match &self.floor.kind {
@@ -42,7 +64,7 @@ impl Model<'_> {
             },
             log_events: events,
         };
-        let (mut run, e_start) = self.release(record);
+        let (mut run, e_start) = self.release(record, draws.start.as_ref());
         let mut prev: Option<State> = None;
         let reason = loop {
             if let Some(t) = track.as_deref_mut() {
@@ -100,14 +122,18 @@ impl Model<'_> {
     /// The run at release, with the energy at the start (J): a block released on the floor
     /// has its contacts closed already (with unloaded shear springs) and the acceleration of
     /// their elastic forces.
-    pub(super) fn release(&self, record: Option<(f64, usize)>) -> (Run, f64) {
-        let mut st = State {
+    pub(super) fn release(
+        &self,
+        record: Option<(f64, usize)>,
+        start: Option<&State>,
+    ) -> (Run, f64) {
+        let mut st = start.copied().unwrap_or(State {
             t: 0.0,
             c: self.c0,
             v: self.v0,
             q: self.q0,
-            w: Vector3::zeros(),
-        };
+            w: self.w0,
+        });
         let mut springs = Vec::new();
         let mut contacts = Vec::new();
         let mut tris = Vec::new();
@@ -159,6 +185,7 @@ impl Model<'_> {
         }
         let (k0, r0, p0) = self.energy(&st);
         let e_start = k0 + r0 + p0 + stored;
+        let ke_start = k0 + r0;
         let on_floor = self.on_floor_at_start;
         let episode = on_floor.then(|| Episode {
             t0: 0.0,
@@ -214,6 +241,7 @@ impl Model<'_> {
             drift_h: 0.0,
             off_floor: false,
             e_start,
+            ke_start,
             next_line: super::super::lines::first_reachable(&self.lines, self.mean.along(&st.c)),
             crossings: vec![None; self.lines.len()],
             barrier: 0.0,
@@ -284,7 +312,7 @@ impl Model<'_> {
             &st,
             0.0,
             run.damping + run.friction + run.barrier,
-            run.e_start,
+            (run.e_start, run.ke_start),
         )?;
         let t_target = st.t + tau;
         let gravity = Vector3::new(0.0, 0.0, -self.g);
@@ -384,11 +412,11 @@ impl Model<'_> {
         st: &State,
         stored: f64,
         lost: f64,
-        e_start: f64,
+        (e_start, ke_start): (f64, f64),
     ) -> PhysicsResult<()> {
         let (kt, kr, pe) = self.energy(st);
         let excess = kt + kr + pe + stored + lost - e_start;
-        let scale = self.energy_scale(st);
+        let scale = self.energy_scale(st, ke_start);
         let tol = match self.hertz {
             None => ENERGY_TOLERANCE_LINEAR,
             Some(_) => ENERGY_TOLERANCE_HERTZ,
@@ -406,10 +434,10 @@ impl Model<'_> {
 
     /// The energy in play at the state `st` (J): the energy in play at release and m g times
     /// the travel since (along the dip and down).
-    pub(super) fn energy_scale(&self, st: &State) -> f64 {
+    pub(super) fn energy_scale(&self, st: &State, ke_start: f64) -> f64 {
         let travel =
             (self.mean.along(&st.c) - self.mean.along(&self.c0)).abs() + (st.c.z - self.c0.z).abs();
-        self.energy_in_play + self.m * self.g * travel
+        self.energy_in_play + ke_start + self.m * self.g * travel
     }
 
     /// Refuses a run past its step budget; polls the control every 4096 steps.
@@ -1014,7 +1042,7 @@ impl Model<'_> {
             st.w = Vector3::zeros();
         }
         let lost = run.damping + run.friction + run.barrier;
-        self.check_energy(&st, run.stored, lost, e_start)?;
+        self.check_energy(&st, run.stored, lost, (e_start, run.ke_start))?;
         if let Some(ep) = run.episode.take()
             && ep.impact
         {
@@ -1057,6 +1085,7 @@ impl Model<'_> {
             friction: run.friction,
             stored: run.stored,
             e_start,
+            ke_start: run.ke_start,
             steps: run.steps,
             max_overlap: run.max_overlap,
             events: run.events,
