@@ -357,14 +357,27 @@ impl RunRecords for [RunSummary] {
     }
 
     fn order_values(&self, col: usize, ranks: &[u64]) -> Result<Vec<f64>, Self::Error> {
-        let mut work: Vec<f64> = self.iter().filter_map(|r| run_columns(r)[col]).collect();
-        // selection (O(n)) of the ranks asked for, in ascending order
-        let mut start = 0;
-        for &k in ranks {
-            work[start..].select_nth_unstable_by(k as usize - start, f64::total_cmp);
-            start = k as usize + 1;
+        // the column's present values as order keys, the room for all of them taken at once
+        fn keys<const C: usize>(runs: &[RunSummary]) -> Vec<u64> {
+            let mut keys = Vec::with_capacity(runs.len());
+            keys.extend(
+                runs.iter()
+                    .filter_map(|r| run_columns(r)[C].map(stats::order_key)),
+            );
+            keys
         }
-        Ok(ranks.iter().map(|&k| work[k as usize]).collect())
+        let mut work = match col {
+            0 => keys::<0>(self),
+            1 => keys::<1>(self),
+            2 => keys::<2>(self),
+            3 => keys::<3>(self),
+            4 => keys::<4>(self),
+            5 => keys::<5>(self),
+            6 => keys::<6>(self),
+            // no such column: no values
+            _ => Vec::new(),
+        };
+        Ok(stats::select_ranks(&mut work, ranks))
     }
 }
 

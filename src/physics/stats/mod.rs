@@ -228,6 +228,51 @@ impl SecondPass {
     }
 }
 
+/// The key of `x` in the order of `f64::total_cmp`: `order_key(a) < order_key(b)` exactly
+/// when `a.total_cmp(&b)` is `Less`, and [`from_order_key`] gives `x` back bit for bit. Keys
+/// compare as plain integers, so a selection over them costs one transform per value instead
+/// of two per comparison.
+#[must_use]
+#[inline]
+pub fn order_key(x: f64) -> u64 {
+    let b = x.to_bits();
+    // total_cmp's transform (negative values' magnitude bits flipped), then the sign bit
+    // flipped so that the signed order becomes the unsigned one
+    (b ^ (((b as i64 >> 63) as u64) >> 1)) ^ (1 << 63)
+}
+
+/// The value whose [`order_key`] is `k`.
+#[must_use]
+#[inline]
+pub fn from_order_key(k: u64) -> f64 {
+    let t = k ^ (1 << 63);
+    f64::from_bits(t ^ (((t as i64 >> 63) as u64) >> 1))
+}
+
+/// The values at the 0-based ascending `ranks` (each below `keys.len()`) of a column given by
+/// its [`order_key`]s, sorted by `f64::total_cmp`, found by selection; `keys` is reordered. The
+/// middle rank is selected first and the ranks on either side within their part only, so a
+/// rank next to one already selected (⌊h⌋ + 1 after ⌊h⌋) scans the part between its
+/// neighbours, not the whole tail. The value at a rank is unique, so the result does not depend
+/// on the order of selection.
+#[must_use]
+pub fn select_ranks(keys: &mut [u64], ranks: &[u64]) -> Vec<f64> {
+    fn within(w: &mut [u64], offset: u64, ranks: &[u64]) {
+        let mid = ranks.len() / 2;
+        let Some(&k) = ranks.get(mid) else {
+            return;
+        };
+        let (left, _, right) = w.select_nth_unstable((k - offset) as usize);
+        within(left, offset, &ranks[..mid]);
+        within(right, k + 1, &ranks[mid + 1..]);
+    }
+    within(keys, 0, ranks);
+    ranks
+        .iter()
+        .map(|&k| from_order_key(keys[k as usize]))
+        .collect()
+}
+
 /// Percentile levels reported (5th, 50th, 95th, 99th).
 pub const PERCENTILES: [f64; 4] = [0.05, 0.50, 0.95, 0.99];
 
@@ -308,5 +353,83 @@ mod tests {
         assert_eq!(s.histogram.counts[0], 3);
         assert_eq!(s.std, Some(0.0));
         assert!(summarize(&[]).is_none());
+    }
+
+    /// The selected values are those of the column sorted by `total_cmp` (the independent
+    /// reference), bit for bit, with repeated values, signed zeros, one value, and ranks at both
+    /// ends and next to each other.
+    #[test]
+    fn selected_ranks_are_those_of_the_sorted_column() {
+        let mut state = 7u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            state >> 11
+        };
+        for n in [1usize, 2, 3, 10, 101, 1000, 4097] {
+            for levels in [4u64, 1000] {
+                let column: Vec<f64> = (0..n)
+                    .map(|_| match next() % 5 {
+                        0 => 0.0,
+                        1 => -0.0,
+                        _ => (next() % levels) as f64 - 0.5 * levels as f64,
+                    })
+                    .collect();
+                let mut sorted = column.clone();
+                sorted.sort_by(f64::total_cmp);
+                let all: Vec<u64> = (0..n as u64).collect();
+                for ranks in [order_ranks(n as u64), vec![0], vec![n as u64 - 1], all] {
+                    let mut work: Vec<u64> = column.iter().map(|&x| order_key(x)).collect();
+                    let got = select_ranks(&mut work, &ranks);
+                    let want: Vec<u64> = ranks
+                        .iter()
+                        .map(|&k| sorted[k as usize].to_bits())
+                        .collect();
+                    let got: Vec<u64> = got.iter().map(|x| x.to_bits()).collect();
+                    assert_eq!(got, want, "n = {n}, ranks {ranks:?}");
+                }
+            }
+        }
+    }
+
+    /// The keys order values as `total_cmp` does and give them back bit for bit: every pair of
+    /// special values (signed zeros and infinities, NaNs of both signs, subnormals, the extremes)
+    /// and of pseudo-random bit patterns.
+    #[test]
+    fn order_keys_order_as_total_cmp_and_give_the_value_back() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            -f64::NAN,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            5e-324,
+            -5e-324,
+            f64::MAX,
+            f64::MIN,
+            1.0,
+            -1.0,
+        ];
+        let mut state = 11u64;
+        for _ in 0..200 {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            xs.push(f64::from_bits(state));
+        }
+        for &a in &xs {
+            assert_eq!(from_order_key(order_key(a)).to_bits(), a.to_bits());
+            for &b in &xs {
+                assert_eq!(
+                    order_key(a).cmp(&order_key(b)),
+                    a.total_cmp(&b),
+                    "{a:e} {b:e}"
+                );
+            }
+        }
     }
 }

@@ -48,7 +48,7 @@ impl Run<'_, '_> {
         let col = self.column_reach(&s.v, &gv, dt);
         let dt = col.map_or(dt, |c| c.0);
         let p_start = s.p;
-        self.push_segment(Segment {
+        self.push_segment(|s| Segment {
             t0: s.t,
             dt,
             p0: s.p,
@@ -105,8 +105,11 @@ impl Run<'_, '_> {
         let z = pl.z(s.p.x, s.p.y);
         set_height(s, z, g, 1.0);
         // on the floor's surface itself: a strike accepted a rounding
-        // tolerance outside the struck facet may lie under a neighbour's plane
-        if let Some(top) = floor_surface_above(floor, &s.p) {
+        // tolerance outside the struck facet may lie under a neighbour's plane (a plane floor
+        // is one facet, whose height the rock has just been given: nothing to check)
+        if !floor.is_single_facet()
+            && let Some(top) = floor_surface_above(floor, &s.p)
+        {
             set_height(s, top, g, 1.0);
         }
         s.on_surface = Some(s.p);
@@ -140,15 +143,14 @@ impl Run<'_, '_> {
         s.spin = (0.0, Vector3::zeros());
         let r = -en * vn;
         let rebound = vt * et + n * r;
-        let ev = EventRec {
+        self.push_event(|s| EventRec {
             t: s.t,
             kind: EventKind::Impact,
             p: s.p,
             speed_before,
             speed_after: rebound.norm(),
             lost,
-        };
-        self.push_event(ev);
+        });
         let s = &mut self.s;
         if r < su.v_stop || r < MIN_REBOUND {
             s.rebound_cutoff |= r >= su.v_stop;

@@ -65,8 +65,7 @@ impl Run<'_, '_> {
         }
         let du = ve * dt + 0.5 * ae * dt * dt;
         self.s.undecelerated = ae * ve >= 0.0;
-        let s = &self.s;
-        self.push_segment(Segment {
+        self.push_segment(|s| Segment {
             t0: s.t,
             dt,
             p0: s.p,
@@ -193,8 +192,7 @@ impl Run<'_, '_> {
             exit = None;
         }
         let fric = fdir * (mu * gn);
-        let s = &self.s;
-        self.push_segment(Segment {
+        self.push_segment(|s| Segment {
             t0: s.t,
             dt,
             p0: s.p,

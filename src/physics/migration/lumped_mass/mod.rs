@@ -432,21 +432,40 @@ pub(crate) fn check_above_floor(floor: &Floor, p: &Vector3<f64>, t: f64) -> Phys
 }
 
 /// [`check_above_floor`] with the floor's height under p (None: off the floor) given.
+#[inline]
 fn check_above_height(z: Option<f64>, p: &Vector3<f64>, t: f64) -> PhysicsResult<()> {
     if let Some(z) = z {
         let tol = 1e-9 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()).max(z.abs()));
         if p.z < z - tol || p.z.is_nan() {
-            return Err(PhysicsError::Numerical(format!(
-                "lumped mass: the rock is {:.3e} m below the floor at t = {t} s, \
-                 ({}, {}, {}): invariant violated",
-                z - p.z,
-                p.x,
-                p.y,
-                p.z
-            )));
+            return Err(below_floor(z, p, t));
         }
     }
     Ok(())
+}
+
+/// The error of a rock found `z − p.z` m below the floor (height `z`, m) at `p` at time `t`, s:
+/// out of line, so that the checks that never fail stay a few instructions.
+#[cold]
+#[inline(never)]
+fn below_floor(z: f64, p: &Vector3<f64>, t: f64) -> PhysicsError {
+    PhysicsError::Numerical(format!(
+        "lumped mass: the rock is {:.3e} m below the floor at t = {t} s, \
+         ({}, {}, {}): invariant violated",
+        z - p.z,
+        p.x,
+        p.y,
+        p.z
+    ))
+}
+
+/// The error of a rock on the ground off the floor at time `t`, s (out of line, see
+/// [`below_floor`]).
+#[cold]
+#[inline(never)]
+fn on_ground_off_floor(t: f64) -> PhysicsError {
+    PhysicsError::Numerical(format!(
+        "lumped mass: the rock is on the ground off the floor at t = {t} s: invariant violated"
+    ))
 }
 
 /// Runs one trajectory. `draw` gives (e_n, e_t) at each impact, e_n first.
@@ -569,17 +588,21 @@ impl<'a, 'r> Run<'a, 'r> {
         run
     }
 
-    /// Records an event when the run is recorded.
-    fn push_event(&mut self, ev: EventRec) {
+    /// Records the event `ev` makes of the rock's state when the run is recorded (an ensemble's
+    /// runs, unrecorded, neither build nor compute it).
+    #[inline]
+    fn push_event(&mut self, ev: impl FnOnce(&St) -> EventRec) {
         if let Some(r) = self.rec.as_deref_mut() {
-            r.events.push(ev);
+            r.events.push(ev(&self.s));
         }
     }
 
-    /// Records a trajectory piece when the run is recorded.
-    fn push_segment(&mut self, seg: Segment) {
+    /// Records the trajectory piece `seg` makes of the rock's state (at the piece's start) when
+    /// the run is recorded.
+    #[inline]
+    fn push_segment(&mut self, seg: impl FnOnce(&St) -> Segment) {
         if let Some(r) = self.rec.as_deref_mut() {
-            r.segments.push(seg);
+            r.segments.push(seg(&self.s));
         }
     }
 
@@ -606,9 +629,10 @@ impl<'a, 'r> Run<'a, 'r> {
         if s.slide_start.is_none() {
             s.slide_start = Some(self.mean.along(&s.p));
         }
-        let ev = EventRec {
+        let roll = self.roll;
+        self.push_event(|s| EventRec {
             t: s.t,
-            kind: if self.roll {
+            kind: if roll {
                 EventKind::RollStart
             } else {
                 EventKind::SlideStart
@@ -617,8 +641,7 @@ impl<'a, 'r> Run<'a, 'r> {
             speed_before,
             speed_after: s.v.norm(),
             lost,
-        };
-        self.push_event(ev);
+        });
     }
 
     /// Moves onto facet `fb` at a facet change. Where the new facet falls away faster than the
@@ -644,15 +667,14 @@ impl<'a, 'r> Run<'a, 'r> {
                     spin_normal.unwrap_or(nb).cross(&s.v) / self.su.radius,
                 );
             }
-            let ev = EventRec {
+            self.push_event(|s| EventRec {
                 t: s.t,
                 kind: EventKind::TakeOff,
                 p: s.p,
                 speed_before: sp,
                 speed_after: sp,
                 lost: 0.0,
-            };
-            self.push_event(ev);
+            });
             None
         } else {
             self.reattach(&nb, vn.min(0.0));
@@ -836,31 +858,27 @@ impl<'a, 'r> Run<'a, 'r> {
         s.v *= f;
         s.spin = (s.spin.0 * f * f, s.spin.1 * f);
         s.e_barrier += lost;
-        let ev = EventRec {
+        self.push_event(|s| EventRec {
             t: s.t,
             kind: EventKind::Barrier,
             p: s.p,
             speed_before: before,
             speed_after: s.v.norm(),
             lost,
-        };
-        self.push_event(ev);
+        });
         // a stopped rock is at rest against the barrier
         (action == LineAction::Stopped).then_some((Phase::Stopped, StopReason::Barrier))
     }
 
     /// Invariants checked at every event and piece end: never below the floor, never on the
     /// ground off the floor.
+    #[inline]
     fn check_invariants(&self) -> PhysicsResult<()> {
         let s = &self.s;
         let z = self.floor.height_at(s.p.x, s.p.y);
         check_above_height(z, &s.p, s.t)?;
         if s.ground.is_some() && z.is_none() {
-            return Err(PhysicsError::Numerical(format!(
-                "lumped mass: the rock is on the ground off the floor at t = {} s: invariant \
-                 violated",
-                s.t
-            )));
+            return Err(on_ground_off_floor(s.t));
         }
         Ok(())
     }
@@ -882,15 +900,14 @@ impl<'a, 'r> Run<'a, 'r> {
         };
         let stopped = phase == Phase::Stopped;
         if stopped {
-            let ev = EventRec {
-                t: self.s.t,
+            self.push_event(|s| EventRec {
+                t: s.t,
                 kind: EventKind::Stop,
-                p: self.s.p,
+                p: s.p,
                 speed_before: 0.0,
                 speed_after: 0.0,
                 lost: 0.0,
-            };
-            self.push_event(ev);
+            });
         }
         let s = &self.s;
         let (e_rot, omega) = match (phase, s.ground) {

@@ -67,6 +67,16 @@ impl GridFloor {
         }
     }
 
+    /// Height of facet f's plane at (x, y), m: [`GridFloor::plane`]'s `z`, read in place from
+    /// the table (no copy of the whole plane).
+    #[inline]
+    pub(super) fn plane_z(&self, f: Facet, x: f64, y: f64) -> f64 {
+        match self.planes.get(f as usize) {
+            Some(p) => p.z(x, y),
+            None => self.plane_of(f).z(x, y),
+        }
+    }
+
     pub(super) fn plane_of(&self, f: Facet) -> FacetPlane {
         let (i, j) = self.cell_of(f);
         let d = self.cells.d;
@@ -184,7 +194,7 @@ impl GridFloor {
             // inside one triangle by more than the margin: its plane alone (inside_tri accepts
             // the point, and refuses it for every other facet)
             let f = self.facet(ci, cj, u32::from(fx <= fy));
-            return (!is_hole(f)).then(|| self.plane(f).z(x, y));
+            return (!is_hole(f)).then(|| self.plane_z(f, x, y));
         }
         // the cells along one axis: cell k, and a neighbour only within the margin
         let span = |near_lo: bool, near_hi: bool, k: usize, n: usize| {
@@ -204,7 +214,7 @@ impl GridFloor {
                 for half in 0..2 {
                     let f = self.facet(ni, nj, half);
                     if !is_hole(f) && self.near_facet(f, (ni, nj), (x, y), g, tol, te) {
-                        let z = self.plane(f).z(x, y);
+                        let z = self.plane_z(f, x, y);
                         top = Some(top.map_or(z, |t: f64| t.max(z)));
                     }
                 }

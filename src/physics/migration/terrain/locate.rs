@@ -17,7 +17,7 @@ impl Floor {
             FloorKind::Grid(g) => {
                 let f = Self::grid_facet(g, x, y, 0.0, 0.0)?;
                 return (!g.holes.get(f as usize).copied().unwrap_or(false))
-                    .then(|| g.plane(f).z(x, y));
+                    .then(|| g.plane_z(f, x, y));
             }
             FloorKind::Mesh(_) => {}
         }

@@ -130,6 +130,13 @@ impl Floor {
         }
     }
 
+    /// True for the plane, a floor of one facet: the floor's surface at any point is that
+    /// facet's plane.
+    #[inline]
+    pub(crate) fn is_single_facet(&self) -> bool {
+        matches!(self.kind, FloorKind::Plane(_))
+    }
+
     /// Plan extent [x_min, x_max, y_min, y_max] (infinite for the plane), m.
     pub(crate) fn extent(&self) -> [f64; 4] {
         match &self.kind {
