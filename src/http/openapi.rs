@@ -102,6 +102,7 @@ pub struct Presets {
         routes::column::column,
         routes::migration::migration,
         routes::scene::scene,
+        routes::calibrate::calibrate,
         routes::spalling::spalling,
         routes::study::study,
         routes::batch::batch,
@@ -112,6 +113,7 @@ pub struct Presets {
         (name = "column", description = "Column vibration and energy after an impact"),
         (name = "migration", description = "Rockfall migration down the face"),
         (name = "scene", description = "The whole chain along the face, support by support"),
+        (name = "calibrate", description = "Back-analysis: migration parameters from field observations"),
         (name = "spalling", description = "Coal-wall spalling statistics by face zone (Table 1)"),
         (name = "study", description = "Parameter sweeps, sensitivity measures and orderings, energy proportions"),
         (name = "batch", description = "Many requests in one call, answered as NDJSON"),
@@ -155,6 +157,8 @@ const NULL_DEFAULTS: &[&str] = &[
     "collectors",
     "target",
     "rocks_per_year_by_zone",
+    "releases",
+    "rock",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot
