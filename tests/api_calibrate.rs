@@ -504,3 +504,42 @@ async fn a_release_off_a_grid_floor_is_named_in_its_item() {
         "{p}"
     );
 }
+
+/// A calibration is a batch item kind: its line is the endpoint's answer, its problem names
+/// `/items/i/request/…`.
+#[tokio::test]
+async fn a_calibration_runs_as_a_batch_item() {
+    let app = common::app();
+    let mut ok = calibration(&json!({"runout_m": [10.0, 12.0, 14.0]}), 30);
+    ok["search"] = json!({"points": 4, "refinements": 0});
+    let mut bad = ok.clone();
+    bad["parameters"][0]["max"] = json!(2.0);
+    let direct = post(&app, "/v1/calibrate", &ok).await;
+    assert_eq!(
+        direct.status,
+        200,
+        "{}",
+        String::from_utf8_lossy(&direct.body)
+    );
+    let r = post(
+        &app,
+        "/v1/batch",
+        &json!({"items": [{"kind": "calibrate", "request": ok}, {"kind": "calibrate", "request": bad}]}),
+    )
+    .await;
+    assert_eq!(r.status, 200);
+    let text = String::from_utf8(r.body).unwrap();
+    let lines: Vec<Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert!(
+        lines[0]["result"] == direct.json(),
+        "the item's answer is the endpoint's"
+    );
+    assert_eq!(lines[1]["status"], 422);
+    assert_eq!(
+        lines[1]["problem"]["errors"][0]["field"],
+        "/items/1/request/parameters/0/max"
+    );
+}

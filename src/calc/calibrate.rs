@@ -1083,6 +1083,59 @@ mod tests {
         );
     }
 
+    /// A small lumped-mass calibration of μ on a 30° face.
+    fn small_case() -> CalibrationCase {
+        let mut base = MigrationCase::default();
+        base.face.dip_deg = 30.0;
+        base.face.length = 2000.0;
+        base.face.friction_coefficient = 0.75;
+        base.monte_carlo = Some(MonteCarlo {
+            runs: 40,
+            ..MonteCarlo::default()
+        });
+        CalibrationCase {
+            base,
+            releases: Vec::new(),
+            observed: Observed::Runout(vec![8.0, 10.0, 12.0, 14.0]),
+            collectors: Vec::new(),
+            parameters: vec![Bounds {
+                parameter: Parameter::FrictionCoefficient,
+                min: 0.6,
+                max: 0.9,
+            }],
+            objective: Objective::Ks,
+            search: Search {
+                points: 4,
+                refinements: 2,
+            },
+        }
+    }
+
+    #[test]
+    fn progress_counts_the_runs_made_of_the_most_the_search_can_make() {
+        let case = small_case();
+        let control = Control::unlimited();
+        let r = solve(&case, &control).unwrap().result;
+        let (done, total) = control.progress();
+        // 1 + 4 × 3 + 2 evaluations at most, of 40 runs; the points met again are not run
+        assert_eq!(total, 15 * 40);
+        assert_eq!(done, r.evaluations.len() as u64 * 40);
+        assert!(
+            r.evaluations.len() < 15,
+            "{} evaluations",
+            r.evaluations.len()
+        );
+    }
+
+    #[test]
+    fn a_cancelled_calibration_stops_with_the_cancellation() {
+        let control = Control::unlimited();
+        control.cancel();
+        let e = solve(&small_case(), &control).unwrap_err();
+        assert_eq!(e.error, PhysicsError::Cancelled);
+        assert_eq!(control.progress().0, 0, "no run was made");
+    }
+
     #[test]
     fn ecdf_keeps_the_last_point_and_at_most_max() {
         let s: Vec<f64> = (0..1000).map(f64::from).collect();
