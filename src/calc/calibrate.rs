@@ -731,7 +731,8 @@ pub fn solve(
             .saturating_mul(case.runs_per_evaluation()),
     );
     let mut evaluations: Vec<Evaluation> = Vec::new();
-    let mut cache: Vec<(Vec<u64>, f64)> = Vec::new();
+    // the objective of every point run, by the bits of its values (a point met again is not run)
+    let mut cache: std::collections::HashMap<Vec<u64>, f64> = std::collections::HashMap::new();
     let key = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
 
     let base: Vec<f64> = case
@@ -747,7 +748,7 @@ pub fn solve(
         values: base.clone(),
         objective: base_objective,
     });
-    cache.push((key(&base), base_objective));
+    cache.insert(key(&base), base_objective);
 
     let mins: Vec<f64> = case.parameters.iter().map(|b| b.min).collect();
     let maxs: Vec<f64> = case.parameters.iter().map(|b| b.max).collect();
@@ -758,14 +759,14 @@ pub fn solve(
     for round in 0..=case.search.refinements {
         for values in grid(&lo, &hi, points) {
             let k = key(&values);
-            let known = cache.iter().find(|(c, _)| *c == k).map(|c| c.1);
+            let known = cache.get(&k).copied();
             let (objective, fresh) = match known {
                 Some(o) => (o, None),
                 None => {
                     let s = ev.samples(&values, control)?;
                     let t = ev.terms(&s);
                     let o = ev.objective(&t);
-                    cache.push((k, o));
+                    cache.insert(k, o);
                     evaluations.push(Evaluation {
                         stage: EvaluationStage::Grid(round),
                         values: values.clone(),
@@ -816,12 +817,12 @@ pub fn solve(
             let mut values = best.clone();
             values[j] = v;
             let k = key(&values);
-            let objective = match cache.iter().find(|(c, _)| *c == k) {
-                Some(c) => c.1,
+            let objective = match cache.get(&k) {
+                Some(&o) => o,
                 None => {
                     let s = ev.samples(&values, control)?;
                     let o = ev.objective(&ev.terms(&s));
-                    cache.push((k, o));
+                    cache.insert(k, o);
                     evaluations.push(Evaluation {
                         stage: EvaluationStage::Sensitivity,
                         values,
