@@ -4,6 +4,7 @@ use serde::Serialize;
 use utoipa::{OpenApi, ToSchema};
 
 use crate::http::dto;
+use crate::http::dto::calibrate;
 use crate::http::error::FieldError;
 use crate::http::routes;
 
@@ -168,7 +169,42 @@ const ARRAY_BOUNDS: &[(&str, &str, u64, u64, f64, f64)] = &[
     ("RockDto", "dimensions_m", 3, 3, 0.01, 5.0),
     ("RandomShapeDto", "semi_axes_m", 3, 3, 0.005, 2.5),
     ("RockDto", "vertices_m", 4, 1000, -10.0, 10.0),
+    (
+        "ObservedDto",
+        "runout_m",
+        1,
+        OBS,
+        -calibrate::MAX_OBSERVED_M,
+        calibrate::MAX_OBSERVED_M,
+    ),
+    (
+        "ObservedDto",
+        "horizontal_runout_m",
+        1,
+        OBS,
+        0.0,
+        calibrate::MAX_OBSERVED_M,
+    ),
+    (
+        "CollectorObservationDto",
+        "speed_m_s",
+        0,
+        OBS,
+        0.0,
+        calibrate::MAX_COLLECTOR_VALUE,
+    ),
+    (
+        "CollectorObservationDto",
+        "passing_height_m",
+        0,
+        OBS,
+        0.0,
+        calibrate::MAX_COLLECTOR_VALUE,
+    ),
 ];
+
+/// Most values of an observed array of a calibration.
+const OBS: u64 = calibrate::MAX_OBSERVATIONS as u64;
 
 /// Adds the documented array lengths and item bounds of [`ARRAY_BOUNDS`].
 fn add_array_bounds(doc: &mut serde_json::Value) {

@@ -9,7 +9,7 @@ use super::common::Bound::{Closed, Open};
 use super::common::{Checker, Meta, NumberField, PlanStep, RockDto, Warning, non_null};
 use super::migration::{
     FACE_CRITICAL_DAMPING, FACE_FRICTION, FACE_RESTITUTION_NORMAL, FACE_RESTITUTION_TANGENTIAL,
-    FloorDto, MethodDto, MigrationRequest, MonteCarloDto, RELEASE_SPEED, ReleaseDto,
+    FloorDto, MethodDto, MigrationRequest, MonteCarloDto, ReleaseDto,
 };
 use super::study::OrderedMap;
 use crate::calc::Report;
@@ -29,6 +29,9 @@ pub const MAX_COLLECTORS: usize = 16;
 
 /// Largest |value| of an observed runout or stopping coordinate, m (the longest face's length).
 pub const MAX_OBSERVED_M: f64 = 10_000.0;
+
+/// Largest observed speed (m/s) or passing height (m) at a collector.
+pub const MAX_COLLECTOR_VALUE: f64 = 1000.0;
 
 /// Grid points per parameter and round: [4, 21] (3 would not shrink the box: 2/(3 − 1) = 1).
 pub const POINTS: (u64, u64) = (4, 21);
@@ -395,14 +398,23 @@ impl CalibrateRequest {
                     "a collector needs speed_m_s or passing_height_m (or both)",
                 );
             }
-            for (name, v, hi) in [
-                ("speed_m_s", &c.speed_m_s, RELEASE_SPEED.hi),
-                ("passing_height_m", &c.passing_height_m, Closed(1000.0)),
+            for (name, v, unit) in [
+                ("speed_m_s", &c.speed_m_s, "m/s"),
+                ("passing_height_m", &c.passing_height_m, "m"),
             ] {
                 let field = format!("{at}/{name}");
                 ck.count(&field, v.len() as u64, 0, MAX_OBSERVATIONS as u64, "values");
-                if let Some(j) = v.iter().position(|x| !(*x >= 0.0 && *x <= 1000.0)) {
-                    ck.range(&format!("{field}/{j}"), v[j], Closed(0.0), hi, "");
+                if let Some(j) = v
+                    .iter()
+                    .position(|x| !(0.0..=MAX_COLLECTOR_VALUE).contains(x))
+                {
+                    ck.range(
+                        &format!("{field}/{j}"),
+                        v[j],
+                        Closed(0.0),
+                        Closed(MAX_COLLECTOR_VALUE),
+                        unit,
+                    );
                 }
             }
             out.push(CollectorObservation {
