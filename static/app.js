@@ -2,6 +2,7 @@
 // cases, comparison), export buttons and the printable report.
 
 import { getJson } from './js/api.js';
+import { initCalibrate } from './js/calibrate.js';
 import { initColumn } from './js/column.js';
 import { setFloorLimits } from './js/floor.js';
 import { applyServerDefaults, applyState, formState, setDefaults } from './js/form.js';
@@ -13,7 +14,7 @@ import { initScene, sceneTargetSentence, setSceneRanges } from './js/scene.js';
 import { initSpalling, setSpallingDefaults } from './js/spalling.js';
 import { initStudy, setStudyDefaults } from './js/study.js';
 
-const TABS = ['scene', 'impact', 'column', 'migration', 'study', 'spalling'];
+const TABS = ['scene', 'impact', 'column', 'migration', 'calibrate', 'study', 'spalling'];
 const CASE_FORMS = ['scene', 'impact', 'column', 'migration'];
 const RECENT_KEY = 'gangue.recent.v1';
 const RECENT_MAX = 12;
@@ -800,6 +801,7 @@ async function main() {
   panels.column = initColumn();
   panels.migration = initMigration();
   panels.scene = initScene();
+  initCalibrate();
   initStudy();
   initSpalling();
   initTabs();

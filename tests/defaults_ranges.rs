@@ -8,8 +8,10 @@
 //! the field, the value just outside is 422 naming exactly that field by its JSON Pointer.
 //! Bounds that depend on another field are documented as such and listed in [`CROSS_FIELD`].
 //!
-//! Routes: impact, column, migration, spalling and study (the study's own fields; its `base` is a
-//! column request, checked on `/v1/column`).
+//! Routes: impact, column, migration, spalling, study and calibrate (the study's and the
+//! calibration's own fields; their `base` is a column or migration request, checked on
+//! `/v1/column` and `/v1/migration`). A calibration needs observations and parameters, so its
+//! "empty" request is the smallest one that has them ([`context`]).
 
 mod common;
 #[path = "common/openapi.rs"]
@@ -25,6 +27,7 @@ const ROUTES: &[(&str, &str)] = &[
     ("/v1/migration", "MigrationRequest"),
     ("/v1/spalling", "SpallingRequest"),
     ("/v1/study", "StudyRequest"),
+    ("/v1/calibrate", "CalibrateRequest"),
 ];
 
 /// Documented derived defaults (filled from other fields; the description says how), by the
@@ -108,6 +111,14 @@ fn context(path: &str, pointer: &str) -> Value {
             "/v1/spalling",
             "/",
             json!({"events": [{"support": 1, "resistance_n": 5e6, "spalling": true}]}),
+        ),
+        // A calibration's required fields: two observed runouts, one parameter, a small search.
+        (
+            "/v1/calibrate",
+            "",
+            json!({"base": {"monte_carlo": {"runs": 10}},
+                   "observed": {"runout_m": [100.0, 110.0]},
+                   "parameters": [{"name": "friction_coefficient", "min": 0.1, "max": 0.3}]}),
         ),
     ];
     table
@@ -259,15 +270,26 @@ fn outward(bound: f64, closed: bool, up: bool, integer: bool) -> f64 {
 async fn mismatches(app: &axum::Router, doc: &Value, path: &str, schema: &str) -> Vec<String> {
     let mut out = Vec::new();
     let s = &doc["components"]["schemas"][schema];
-    // (1) Defaults: documented == filled in for `{}`.
-    let r = common::post(app, path, &json!({})).await;
+    // (1) Defaults: documented == filled in for `{}` (a calibration: its smallest request).
+    let empty = context(path, "");
+    let r = common::post(app, path, &empty).await;
     assert_eq!(
         r.status,
         200,
-        "{path} {{}}: {}",
+        "{path} {empty}: {}",
         String::from_utf8_lossy(&r.body)
     );
-    check_defaults(doc, s, &r.json()["inputs"], "", &mut out);
+    // What was sent is not a default (a calibration's base is checked on /v1/migration).
+    let mut unsent = s.clone();
+    if let (Some(props), Some(sent)) = (
+        unsent.get_mut("properties").and_then(Value::as_object_mut),
+        empty.as_object(),
+    ) {
+        for k in sent.keys() {
+            props.remove(k);
+        }
+    }
+    check_defaults(doc, &unsent, &r.json()["inputs"], "", &mut out);
     // (2) Ranges: documented == enforced.
     let mut all = Vec::new();
     let walk = Walk {

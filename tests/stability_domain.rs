@@ -6,7 +6,7 @@
 //! outside a documented bound the answer is 422 naming exactly that field (documented bound ==
 //! enforced bound).
 //!
-//! For each POST body schema (impact, column, migration, scene, study, spalling) the test walks
+//! For each POST body schema (impact, column, migration, scene, study, spalling, calibrate) the test walks
 //! the properties (through `$ref`, nullable `oneOf` and the first item of arrays of objects such
 //! as `/supports/0` or `/zones/0`), and for every numeric leaf with a documented minimum or maximum
 //! sends, one field at a time with everything else at its default: the bound, the value just
@@ -258,6 +258,11 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
         || pointer.starts_with("/design/")
     {
         vec![]
+    } else if path == "/v1/calibrate" {
+        // a calibration needs observations and parameters: its smallest request
+        vec![json!({"base": {"monte_carlo": {"runs": 10}},
+                    "observed": {"runout_m": [100.0, 110.0]},
+                    "parameters": [{"name": "friction_coefficient", "min": 0.1, "max": 0.3}]})]
     } else {
         vec![json!({})]
     };
@@ -376,6 +381,8 @@ const ENDPOINTS: &[(&str, &[&str])] = &[
     // column request's.
     ("/v1/study", &["/base/output"]),
     ("/v1/spalling", &[]),
+    // A calibration's base is a migration request, walked on /v1/migration.
+    ("/v1/calibrate", &["/base"]),
 ];
 
 /// One request of the walk: a documented numeric field set to one extreme value.

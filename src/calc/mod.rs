@@ -8,6 +8,7 @@
 //! Callers — the HTTP routes, batch items, shards and the command line, the benches — call
 //! this layer, never a route; nothing here knows about requests, JSON or HTTP.
 
+pub mod calibrate;
 pub mod column;
 pub mod impact;
 pub mod migration;

@@ -47,6 +47,7 @@ pub fn app(config: Config) -> Router {
         .route("/v1/column", post(routes::column::column))
         .route("/v1/migration", post(routes::migration::migration))
         .route("/v1/scene", post(routes::scene::scene))
+        .route("/v1/calibrate", post(routes::calibrate::calibrate))
         .route("/v1/spalling", post(routes::spalling::spalling))
         .route("/v1/study", post(routes::study::study))
         .route("/v1/batch", post(routes::batch::batch))

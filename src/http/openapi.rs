@@ -4,6 +4,7 @@ use serde::Serialize;
 use utoipa::{OpenApi, ToSchema};
 
 use crate::http::dto;
+use crate::http::dto::calibrate;
 use crate::http::error::FieldError;
 use crate::http::routes;
 
@@ -102,6 +103,7 @@ pub struct Presets {
         routes::column::column,
         routes::migration::migration,
         routes::scene::scene,
+        routes::calibrate::calibrate,
         routes::spalling::spalling,
         routes::study::study,
         routes::batch::batch,
@@ -112,6 +114,7 @@ pub struct Presets {
         (name = "column", description = "Column vibration and energy after an impact"),
         (name = "migration", description = "Rockfall migration down the face"),
         (name = "scene", description = "The whole chain along the face, support by support"),
+        (name = "calibrate", description = "Back-analysis: migration parameters from field observations"),
         (name = "spalling", description = "Coal-wall spalling statistics by face zone (Table 1)"),
         (name = "study", description = "Parameter sweeps, sensitivity measures and orderings, energy proportions"),
         (name = "batch", description = "Many requests in one call, answered as NDJSON"),
@@ -160,6 +163,8 @@ const NULL_DEFAULTS: &[&str] = &[
     "orientation_wxyz",
     "angular_velocity_rad_s",
     "release_velocity_m_s",
+    "releases",
+    "rock",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot
@@ -173,7 +178,42 @@ const ARRAY_BOUNDS: &[(&str, &str, u64, u64, f64, f64)] = &[
     ("ReleaseDto", "velocity_m_s", 3, 3, -1000.0, 1000.0),
     ("ReleaseDto", "orientation_wxyz", 4, 4, -1.000001, 1.000001),
     ("ReleaseDto", "angular_velocity_rad_s", 3, 3, -1e4, 1e4),
+    (
+        "ObservedDto",
+        "runout_m",
+        1,
+        OBS,
+        -calibrate::MAX_OBSERVED_M,
+        calibrate::MAX_OBSERVED_M,
+    ),
+    (
+        "ObservedDto",
+        "horizontal_runout_m",
+        1,
+        OBS,
+        0.0,
+        calibrate::MAX_OBSERVED_M,
+    ),
+    (
+        "CollectorObservationDto",
+        "speed_m_s",
+        0,
+        OBS,
+        0.0,
+        calibrate::MAX_COLLECTOR_VALUE,
+    ),
+    (
+        "CollectorObservationDto",
+        "passing_height_m",
+        0,
+        OBS,
+        0.0,
+        calibrate::MAX_COLLECTOR_VALUE,
+    ),
 ];
+
+/// Most values of an observed array of a calibration.
+const OBS: u64 = calibrate::MAX_OBSERVATIONS as u64;
 
 /// Adds the documented array lengths and item bounds of [`ARRAY_BOUNDS`].
 fn add_array_bounds(doc: &mut serde_json::Value) {

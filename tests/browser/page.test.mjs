@@ -2231,6 +2231,100 @@ async function spallingSection(page) {
   });
 }
 
+
+// ---- calibrate ----------------------------------------------------------------
+
+async function calibrateSection(page) {
+  const status = await endpointStatus('/v1/calibrate');
+  if (status === 404) {
+    skip('calibrate', 'the server answers 404 for POST /v1/calibrate');
+    return;
+  }
+  // A face where rocks stop (30°, μ ≈ 0.75): the observed runouts are a direct ensemble's.
+  const face = { dip_deg: 30, length_m: 2000, friction_coefficient: 0.75 };
+  const observed = await post('/v1/migration', {
+    face,
+    monte_carlo: { runs: 150, seed: 7, restitution_normal: { min: 0.25, max: 0.45 } },
+    output: { runs_csv: true, events: false },
+  });
+  const rows = observed.json.runs_csv.trim().split('\n');
+  const header = rows[0].split(',');
+  const runoutAt = header.indexOf('runout_m');
+  const runouts = rows.slice(1).map((r) => Number(r.split(',')[runoutAt]));
+
+  const setMigration = async () => {
+    await open(page, '#migration');
+    await page.locator('#migration-form [data-pointer="/face/length_m"]').fill('2000');
+    await page.locator('#migration-form [data-pointer="/face/dip_deg"]').fill('30');
+    await page.locator('#migration-form [data-pointer="/face/friction_coefficient"]').fill('0.75');
+    const mc = page.locator('#migration-form input[name="monte_carlo"]');
+    if (!(await mc.isChecked())) await mc.check();
+    await page.locator('#migration-form [data-pointer="/monte_carlo/runs"]').fill('150');
+    await page.locator('#tab-calibrate').click();
+  };
+
+  await check('calibrate: pasted runouts are calibrated on the Migration tab\'s case; best values, objective, sensitivity and the ECDF plot shown as answered', async () => {
+    await setMigration();
+    await page.locator('#calibrate-csv').fill(`runout_m\n${runouts.join('\n')}\n`);
+    await page.locator('#calibrate-points').fill('4');
+    await page.locator('#calibrate-refinements').fill('2');
+    const done = await rendered(page, 'calibrate');
+    const response = await submit(page, '#calibrate-form', '/v1/calibrate');
+    const sent = response.request().postDataJSON();
+    const answer = await answerOf(response);
+    await done.done;
+    assert(sent.base.face.dip_deg === 30 && sent.base.face.friction_coefficient === 0.75, `base face ${JSON.stringify(sent.base.face)}`);
+    assert(sent.base.monte_carlo.runs === 150, `base runs ${sent.base.monte_carlo.runs}`);
+    assert(sent.observed.runout_m.length === runouts.length && sent.observed.runout_m[3] === runouts[3], 'the observations sent are the CSV\'s');
+    assert(JSON.stringify(sent.parameters.map((p) => p.name)) === '["restitution_normal","friction_coefficient"]', `parameters ${JSON.stringify(sent.parameters)}`);
+    assert(sent.search.points === 4 && sent.search.refinements === 2, `search ${JSON.stringify(sent.search)}`);
+    for (const name of ['restitution_normal', 'friction_coefficient']) {
+      assertClose(await shown(page, `best/${name}`), answer.best[name], 1e-3, `best ${name}`);
+      assertClose(await shown(page, `base_values/${name}`), answer.base_values[name], 1e-3, `base ${name}`);
+    }
+    assertClose(await shown(page, 'objective/best'), answer.objective.best, 1e-3, 'objective at the best');
+    assertClose(await shown(page, 'objective/base'), answer.objective.base, 1e-3, 'objective at the base');
+    assert(answer.objective.best < answer.objective.base, 'the best is no better than the base');
+    const sensitivityRows = await page.locator('#calibrate-sensitivity tbody tr').count();
+    assert(sensitivityRows === 2, `${sensitivityRows} sensitivity rows`);
+    await page.locator('#calibrate-ecdf-0 canvas').first().waitFor({ state: 'attached', timeout: WAIT_MS });
+    const label = await page.locator('#calibrate-ecdf-0').getAttribute('aria-label');
+    assert(/observed/.test(label) && /runout \(m\)/.test(label), `plot label ${label}`);
+  });
+
+  await screenshot(page, 'calibrate.png');
+  await elementShot(page.locator('#calibrate-results'), 'calibrate-results.png');
+
+  await check('calibrate: a CSV without a known column is refused beside the observations, unsent', async () => {
+    let posted = false;
+    const watch = (r) => { if (r.url().endsWith('/v1/calibrate')) posted = true; };
+    page.on('request', watch);
+    await page.locator('#calibrate-csv').fill('distance\n12\n13\n');
+    await page.locator('#calibrate-form button[type="submit"]').click();
+    await page.locator('#calibrate-csv[aria-invalid="true"]').waitFor({ state: 'attached', timeout: WAIT_MS });
+    const text = await page.locator('#calibrate-status').textContent();
+    assert(/runout_m/.test(text), `status: ${text}`);
+    page.off('request', watch);
+    assert(!posted, 'the request was sent');
+  });
+
+  await check('calibrate: release columns send one release per observed run, the rest of the release the base\'s', async () => {
+    const csv = ['release_along_dip_m,release_across_m,runout_m', ...runouts.slice(0, 20).map((r, i) => `${i % 3},${(i % 5) - 2},${r}`)].join('\n');
+    await page.locator('#calibrate-csv').fill(csv);
+    await page.locator('#calibrate-points').fill('4');
+    await page.locator('#calibrate-refinements').fill('0');
+    const done = await rendered(page, 'calibrate');
+    const response = await submit(page, '#calibrate-form', '/v1/calibrate');
+    const sent = response.request().postDataJSON();
+    const answer = await answerOf(response);
+    await done.done;
+    assert(sent.releases.length === 20, `${sent.releases?.length} releases`);
+    const r = sent.releases[4].release;
+    assert(r.along_dip_m === 1 && r.across_m === 2 && r.drop_height_m === sent.base.release.drop_height_m, `release 4 ${JSON.stringify(r)}`);
+    assert(answer.runs_per_evaluation === 150 * 20, `runs per evaluation ${answer.runs_per_evaluation}`);
+  });
+}
+
 // ---- main ------------------------------------------------------------------
 
 // ---- ensembles "until precise enough" --------------------------------------
@@ -2721,6 +2815,7 @@ async function main() {
     if (want('scene')) await sceneSection(page);
     if (want('study')) await studySection(page);
     if (want('spalling')) await spallingSection(page);
+    if (want('calibrate')) await calibrateSection(page);
     if (want('floorview')) await floorViewSection(page, context);
     if (want('lines')) await protectionLinesSection(page, context);
     if (want('design')) await designSection(page, context);

@@ -105,6 +105,21 @@ calls = [
         lambda: mod("api.study.study").sync_detailed(client=client, body=M.StudyRequest()),
         M.StudyResponse,
     ),
+    (
+        "calibrate",
+        lambda: mod("api.calibrate.calibrate").sync_detailed(
+            client=client,
+            body=M.CalibrateRequest.from_dict(
+                {
+                    "base": {"monte_carlo": {"runs": 20}},
+                    "observed": {"runout_m": [100.0, 110.0, 119.0]},
+                    "parameters": [{"name": "friction_coefficient", "min": 0.1, "max": 0.3}],
+                    "search": {"points": 4, "refinements": 0},
+                }
+            ),
+        ),
+        M.CalibrateResponse,
+    ),
 ]
 for name, call, model in calls:
     try:

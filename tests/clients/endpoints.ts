@@ -25,6 +25,7 @@ type Expected =
   | "/v1/column"
   | "/v1/migration"
   | "/v1/scene"
+  | "/v1/calibrate"
   | "/v1/spalling"
   | "/v1/study"
   | "/v1/batch";
@@ -48,6 +49,12 @@ export const migration: Body<"/v1/migration"> = {
 };
 export const scene: Body<"/v1/scene"> = { method: "lumped_mass", column_model: "decoupled" };
 export const spalling: Body<"/v1/spalling"> = {};
+export const calibrate: Body<"/v1/calibrate"> = {
+  observed: { runout_m: [10.0, 12.0] },
+  parameters: [{ name: "friction_coefficient", min: 0.3, max: 0.8 }],
+  objective: "ks",
+  search: { points: 4, refinements: 1 },
+};
 export const study: Body<"/v1/study"> = { grid: "one_at_a_time" };
 export const batch: Body<"/v1/batch"> = {
   items: [
@@ -67,6 +74,7 @@ export function readAnswers(
   s: Ok<"/v1/scene", "post">["application/json"],
   sp: Ok<"/v1/spalling", "post">["application/json"],
   st: Ok<"/v1/study", "post">["application/json"],
+  cal: Ok<"/v1/calibrate", "post">["application/json"],
   line: Ok<"/v1/batch", "post">["application/x-ndjson"],
   problem: Schemas["Problem"],
 ): number {
@@ -79,10 +87,11 @@ export function readAnswers(
   const sceneImpacts: number = s.impacts.length;
   const zones: number = sp.zones.length;
   const version: string = st.model_version;
+  const best: number = cal.objective.best;
   const index: number = line.index;
   const pointers: string[] = problem.errors.map((e) => e.field);
   return (
     status.length + Object.keys(limits).length + html.length + force + energy + impacts +
-    sceneImpacts + zones + version.length + index + pointers.length
+    sceneImpacts + zones + version.length + best + index + pointers.length
   );
 }

@@ -22,17 +22,20 @@ pub enum BatchKind {
     Study,
     /// `POST /v1/spalling`.
     Spalling,
+    /// `POST /v1/calibrate`.
+    Calibrate,
 }
 
 impl BatchKind {
     /// Every kind, as named on the wire.
-    pub const NAMES: [&'static str; 6] = [
+    pub const NAMES: [&'static str; 7] = [
         "impact",
         "column",
         "migration",
         "scene",
         "study",
         "spalling",
+        "calibrate",
     ];
 
     fn parse(s: &str) -> Option<Self> {
@@ -43,6 +46,7 @@ impl BatchKind {
             "scene" => Self::Scene,
             "study" => Self::Study,
             "spalling" => Self::Spalling,
+            "calibrate" => Self::Calibrate,
             _ => return None,
         })
     }

@@ -2,6 +2,7 @@
 //! conversions into the plain physics structs.
 
 pub mod batch;
+pub mod calibrate;
 pub mod column;
 pub mod common;
 pub mod design_search;

@@ -18,6 +18,7 @@ use serde_json::Value;
 
 use crate::config::Config;
 use crate::http::dto::batch::{BatchKind, check_item, json_items, ndjson_items};
+use crate::http::dto::calibrate::CalibrateRequest;
 use crate::http::dto::column::ColumnRequest;
 use crate::http::dto::impact::ImpactRequest;
 use crate::http::dto::migration::MigrationRequest;
@@ -26,7 +27,7 @@ use crate::http::dto::spalling::SpallingRequest;
 use crate::http::dto::study::StudyRequest;
 use crate::http::error::ApiError;
 use crate::http::json::{from_value, is_json, parse_json, read_body};
-use crate::http::routes::{column, impact, migration, scene, spalling, study};
+use crate::http::routes::{calibrate, column, impact, migration, scene, spalling, study};
 use crate::http::runner::{AppState, NDJSON, run_solver_without_deadline, to_json_bytes};
 use crate::physics::Control;
 
@@ -275,6 +276,11 @@ pub fn run_item(
             let mut req: SceneRequest = from_value(&item.request).map_err(nest)?;
             let (case, ctx) = req.resolve(config).map_err(nest)?;
             to_json_bytes(&scene::solve(&case, ctx, req, control).map_err(nest)?)
+        }
+        BatchKind::Calibrate => {
+            let mut req: CalibrateRequest = from_value(&item.request).map_err(nest)?;
+            let case = req.resolve(config).map_err(nest)?;
+            to_json_bytes(&calibrate::solve(&case, req, control).map_err(nest)?)
         }
     }
 }

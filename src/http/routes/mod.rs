@@ -2,6 +2,7 @@
 //! serialize.
 
 pub mod batch;
+pub mod calibrate;
 pub mod column;
 pub mod impact;
 pub mod meta;

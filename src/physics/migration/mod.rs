@@ -33,6 +33,8 @@ use self::release::{
 };
 pub(crate) use self::release::{build_floor, release_span};
 pub use self::report::*;
+/// The built floor of a face, shared by the runs of an ensemble (see [`build_floor`]).
+pub(crate) use self::terrain::Floor;
 use self::trajectory::{arrival_of, sample_trajectory, xyz};
 pub(crate) use self::trajectory::{first_column_reach, support_impact_speed};
 pub use crate::physics::stats::{Histogram, Summary};
