@@ -527,7 +527,6 @@ impl<'a> Evaluator<'a> {
             .ok_or_else(|| PhysicsError::Numerical("a calibration needs an ensemble".into()))?;
         let releases = case.releases.len().max(1);
         let mut out: Samples = vec![Vec::new(); self.observed.len()];
-        let cos = case.base.face.dip_deg.to_radians().cos();
         let chunk = match case.base.method {
             Method::LumpedMass => 256,
             Method::RigidBlock => 8,
@@ -555,7 +554,7 @@ impl<'a> Evaluator<'a> {
                         t = 1;
                     }
                     Observed::HorizontalRunout(_) => {
-                        out[0].push(horizontal_runout(s, cos));
+                        out[0].push(horizontal_runout(s, floor));
                         t = 1;
                     }
                     Observed::StopPoints(_) => {
@@ -617,11 +616,14 @@ impl<'a> Evaluator<'a> {
     }
 }
 
-/// The horizontal distance from the release point to the stop point of run `s`, m: the along-dip
-/// runout projected on the horizontal (× cos θ of the mean plane) and the across displacement.
+/// The horizontal distance from the release point to the stop point of run `s` on `floor`, m:
+/// both points placed on the floor in plan ([`migration::Floor::plan_x`] of their along-dip and
+/// across positions; on the plane the along-dip runout × cos θ), then their plan distance.
 #[must_use]
-pub fn horizontal_runout(s: &RunSummary, cos_dip: f64) -> f64 {
-    (s.runout * cos_dip).hypot(s.stop_across - s.release_across)
+pub(crate) fn horizontal_runout(s: &RunSummary, floor: &migration::Floor) -> f64 {
+    let dx = floor.plan_x(s.stop_along_dip, s.stop_across)
+        - floor.plan_x(s.release_along_dip, s.release_across);
+    dx.hypot(s.stop_across - s.release_across)
 }
 
 /// The two-sample Kolmogorov–Smirnov distance sup_x |F_a(x) − F_b(x)| of two sorted samples (1

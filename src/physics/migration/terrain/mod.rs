@@ -137,6 +137,46 @@ impl Floor {
         matches!(self.kind, FloorKind::Plane(_))
     }
 
+    /// The face x, m, of the floor point at across position `y` whose foot on the mean plane
+    /// lies `along` m down the dip (for a rock at rest, the plan point where it lies): on the
+    /// plane the mean plane's own point x₀ + along cos θ; on a grid
+    /// or mesh the root of along(x, y, z_floor(x, y)) = along, by bisection over the floor's
+    /// extent (over a hole, and outside the extent, the mean plane's own point stands in).
+    #[must_use]
+    pub(crate) fn plan_x(&self, along: f64, y: f64) -> f64 {
+        let m = self.mean;
+        let on_mean = m.x0 + along * m.cos;
+        if matches!(self.kind, FloorKind::Plane(_)) {
+            return on_mean;
+        }
+        let ext = self.extent();
+        let along_at = |x: f64| {
+            self.locate(x, y, 0.0, 0.0).map_or_else(
+                || along - (on_mean - x) * m.cos,
+                |f| m.along(&Vector3::new(x, y, self.facet_plane(f).z(x, y))),
+            )
+        };
+        let (mut lo, mut hi) = (ext[0], ext[1]);
+        if along_at(lo) >= along {
+            return lo.min(on_mean);
+        }
+        if along_at(hi) <= along {
+            return hi.max(on_mean);
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if along_at(mid) < along {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+
     /// Plan extent [x_min, x_max, y_min, y_max] (infinite for the plane), m.
     pub(crate) fn extent(&self) -> [f64; 4] {
         match &self.kind {
