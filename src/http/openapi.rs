@@ -155,6 +155,7 @@ const NULL_DEFAULTS: &[&str] = &[
     "collectors",
     "target",
     "rocks_per_year_by_zone",
+    "zones",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot

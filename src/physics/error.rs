@@ -135,6 +135,8 @@ pub enum Param {
     ReleaseZones,
     /// Rock–floor friction coefficient.
     FaceFriction,
+    /// The zone map of a floor of several materials (`face.zones`).
+    FaceZones,
     /// Distribution of the drawn friction coefficient of an ensemble.
     DrawnFriction,
     /// Normal contact stiffness of the floor, N/m.

@@ -1242,6 +1242,7 @@ impl Model<'_> {
             speed_after: after,
             energy_lost: lost,
             peak_contact_force: peak,
+            zone: None,
         }
     }
 
