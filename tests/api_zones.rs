@@ -304,6 +304,51 @@ async fn a_code_grid_gives_the_polygons_answer() {
     assert_eq!(grid["inputs"]["face"]["zones"]["kind"], "esri_ascii");
 }
 
+/// The rigid block takes each contact's zone: a cube sliding down a 30° plane (μ 0.2) into a
+/// zone of μ 0.9 (> tan 30°) stops in it, past the boundary, where the one-material cube slides
+/// on to the lower end; a μ given for the block alone does the same.
+#[tokio::test]
+async fn the_rigid_block_takes_each_contact_s_zone() {
+    let app = common::app();
+    let th = 30f64.to_radians();
+    let sb = 4.0;
+    let base = json!({"method": "rigid_block", "rock": {"shape": "cube", "side_length_m": 0.5},
+        "face": {"dip_deg": 30, "length_m": 12.0},
+        "release": {"drop_height_m": 0.0, "speed_m_s": 2.0}, "end_time_s": 6.0});
+    let plain = ok(&app, &base).await;
+    assert_eq!(
+        plain["arrival"]["stop_reason"], "lower_end",
+        "{}",
+        plain["arrival"]
+    );
+    let zoned = with_face(
+        base.clone(),
+        "zones",
+        json!({"polygons": split_at(sb * th.cos()),
+               "materials": [{"code": 1}, {"code": 2, "friction_coefficient": 0.9}]}),
+    );
+    let b = ok(&app, &zoned).await;
+    assert_eq!(b["arrival"]["stop_reason"], "at_rest", "{}", b["arrival"]);
+    let s = b["arrival"]["along_dip_m"].as_f64().unwrap();
+    assert!(s > sb && s < 12.0, "{s}");
+    // μ given for the block alone acts the same
+    let block_only = with_face(
+        base.clone(),
+        "zones",
+        json!({"polygons": split_at(sb * th.cos()),
+               "materials": [{"code": 1},
+                             {"code": 2, "rigid_block": {"friction_coefficient": 0.9}}]}),
+    );
+    let c = ok(&app, &block_only).await;
+    assert_eq!(physics_of(c.clone()), physics_of(b.clone()));
+    let e = &b["energy"];
+    let total = e["total_start_j"].as_f64().unwrap();
+    assert!(
+        e["residual_j"].as_f64().unwrap().abs() < 2e-3 * total,
+        "{e}"
+    );
+}
+
 #[tokio::test]
 async fn bad_zones_name_their_pointer() {
     let app = common::app();

@@ -100,7 +100,7 @@ use super::lumped_mass::{EventKind, Phase, StopReason};
 use super::maps::{CellTrack, MapGrid, RunCells};
 use super::monte_carlo::{self, Distribution};
 use super::shape::BlockShape;
-use super::terrain::{Floor, FloorKind, FloorTriangle, MeanPlane};
+use super::terrain::{Floor, FloorKind, FloorTriangle, MeanPlane, Zones, per_run_values};
 use super::{
     Arrival, EnergyBudget, Event, MigrationCase, MigrationResult, MonteCarlo, RunSummary,
     Trajectory, Warning,
@@ -293,6 +293,9 @@ struct Hertz {
 /// Everything a run needs that does not change between Monte Carlo runs.
 struct Model<'a> {
     floor: &'a Floor,
+    /// The floor's materials when they differ (None: one material, `kn`, `ks` and the run's
+    /// μ and β at every contact).
+    zones: Option<&'a Zones>,
     shape: BlockShape,
     mean: MeanPlane,
     g: f64,
@@ -435,7 +438,9 @@ fn v3(v: &Vector3<f64>) -> [f64; 3] {
 
 /// What stays fixed through one run.
 #[derive(Debug, Clone, Copy)]
-struct RunSettings {
+struct RunSettings<'z> {
+    /// Per material of a floor of several materials, (μ, β) of this run.
+    zone: Option<&'z [(f64, f64)]>,
     /// Friction coefficient of the run.
     mu: f64,
     /// Critical damping ratio of the contacts' dashpots.
@@ -613,10 +618,63 @@ fn shear_spring(
     (fs, es_new, slipping, work)
 }
 
+/// The rigid-block options of `o` with the contact parameters of material `m`.
+fn options_on(o: &RigidBlockOptions, m: &super::Material) -> RigidBlockOptions {
+    RigidBlockOptions {
+        normal_stiffness: m.block.normal_stiffness,
+        shear_stiffness: m.block.shear_stiffness,
+        critical_damping_ratio: m.block.critical_damping_ratio,
+        critical_damping_ratio_distribution: m.block.critical_damping_ratio_distribution,
+        ..*o
+    }
+}
+
+/// Per material, its (μ, β) in a run: nominal, or drawn from `rng` once per distinct
+/// distribution, μ's first then β's (as a one-material run draws μ then β).
+fn material_draws(zones: &Zones, rng: Option<&mut rand_pcg::Pcg64>) -> Vec<(f64, f64)> {
+    let ms = zones.materials();
+    let (mu, beta) = match rng {
+        None => (
+            ms.iter().map(|m| m.block.friction_coefficient).collect(),
+            ms.iter().map(|m| m.block.critical_damping_ratio).collect(),
+        ),
+        Some(rng) => {
+            let mu = per_run_values(
+                ms.iter().map(|m| {
+                    (
+                        m.block.friction_coefficient,
+                        m.block.friction_coefficient_distribution,
+                    )
+                }),
+                super::MU_MAX,
+                |d| monte_carlo::sample(d, rng),
+            );
+            let beta = per_run_values(
+                ms.iter().map(|m| {
+                    (
+                        m.block.critical_damping_ratio,
+                        m.block.critical_damping_ratio_distribution,
+                    )
+                }),
+                0.999,
+                |d| monte_carlo::sample(d, rng),
+            );
+            (mu, beta)
+        }
+    };
+    mu.into_iter().zip(beta).collect::<Vec<(f64, f64)>>()
+}
+
 impl<'a> Model<'a> {
-    /// Builds the model of a case on its floor; `pr` gives the release point.
-    fn new(case: &MigrationCase, pr: &'a super::Prepared) -> PhysicsResult<Self> {
-        let o = &case.rigid_block;
+    /// Builds the model of a case on its floor; `pr` gives the release point. On a floor of
+    /// several materials the release's material gives the resting overlap, and the time step
+    /// is the smallest any material needs.
+    fn new(case: &'a MigrationCase, pr: &'a super::Prepared) -> PhysicsResult<Self> {
+        let release_xy = pr.p0;
+        let zones = case.face.zones.as_ref();
+        let o_rel =
+            zones.map(|z| options_on(&case.rigid_block, z.material_at(release_xy.x, release_xy.y)));
+        let o = o_rel.as_ref().unwrap_or(&case.rigid_block);
         let shape = BlockShape::of_rock(&case.rock)?;
         let floor = &pr.floor;
         let g = pr.g;
@@ -677,7 +735,18 @@ impl<'a> Model<'a> {
         if hertz.is_none() {
             impact.check_overlap(&shape, o.normal_stiffness)?;
         }
-        let (dt_crit, dt_bound, k_rest) = step::critical_step(o, &shape, hertz, &impact, g);
+        let (mut dt_crit, mut dt_bound, k_rest) = step::critical_step(o, &shape, hertz, &impact, g);
+        if let Some(z) = zones {
+            for mat in z.materials() {
+                let om = options_on(&case.rigid_block, mat);
+                if hertz.is_none() {
+                    impact.check_overlap(&shape, om.normal_stiffness)?;
+                }
+                let (c, b, _) = step::critical_step(&om, &shape, hertz, &impact, g);
+                dt_crit = dt_crit.min(c);
+                dt_bound = dt_bound.min(b);
+            }
+        }
         // safety ≤ 1 keeps the step within PFC's Δt_crit and within half the damped limit
         let dt_max = dt_crit.min(dt_bound);
         let mut dt = match o.time_step {
@@ -737,6 +806,7 @@ impl<'a> Model<'a> {
         let t_contact = std::f64::consts::PI * (m / (nc * k_rest)).sqrt();
         Ok(Model {
             floor,
+            zones: zones.filter(|z| !z.is_uniform()),
             mean,
             g,
             m,
@@ -762,7 +832,8 @@ impl<'a> Model<'a> {
             gap: (5.0 * dt).max(1e-3),
             t_contact,
             max_steps: o.max_steps,
-            skip_slides: true,
+            // a settled slide is skipped with one μ: not across zones
+            skip_slides: zones.is_none_or(Zones::is_uniform),
             stop_off_floor: true,
             isotropic: iso,
             static_overlap,
@@ -1072,14 +1143,27 @@ fn nominal_run(
     control: &Control,
 ) -> PhysicsResult<MigrationResult> {
     let o = &case.rigid_block;
-    let mu = case.face.friction_coefficient;
-    let out = model.simulate(
+    let (mu, beta, zone) = match &case.face.zones {
+        Some(z) => {
+            let d = material_draws(z, None);
+            let rel = z.material_index(model.c0.x, model.c0.y);
+            (d[rel].0, d[rel].1, Some(d))
+        }
+        None => (
+            case.face.friction_coefficient,
+            o.critical_damping_ratio,
+            None,
+        ),
+    };
+    let out = model.simulate_tracked(
         mu,
-        o.critical_damping_ratio,
+        beta,
+        zone.as_deref(),
         case.output
             .trajectory
             .then_some((case.output.sample_interval, case.output.max_samples)),
         case.output.events,
+        None,
         Some(control),
     )?;
     let st = &out.st;
@@ -1185,16 +1269,35 @@ fn rigid_one(
 ) -> PhysicsResult<(RunSummary, Option<RunCells>, super::ensemble::Crossings)> {
     let o = &case.rigid_block;
     let mut rng = monte_carlo::run_stream(mc.seed, i);
-    let mu = match &mc.friction_coefficient {
-        Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, super::MU_MAX),
-        None => case.face.friction_coefficient,
-    };
-    let beta = match &o.critical_damping_ratio_distribution {
-        Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, 0.999),
-        None => o.critical_damping_ratio,
+    let (mu, beta, zone) = match &case.face.zones {
+        // per material, drawn once per distinct distribution: μ's, then β's
+        Some(z) => {
+            let d = material_draws(z, Some(&mut rng));
+            let rel = z.material_index(model.c0.x, model.c0.y);
+            (d[rel].0, d[rel].1, Some(d))
+        }
+        None => {
+            let mu = match &mc.friction_coefficient {
+                Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, super::MU_MAX),
+                None => case.face.friction_coefficient,
+            };
+            let beta = match &o.critical_damping_ratio_distribution {
+                Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, 0.999),
+                None => o.critical_damping_ratio,
+            };
+            (mu, beta, None)
+        }
     };
     let mut track = grid.map(|g| CellTrack::new(g, model.mean));
-    let r = model.simulate_tracked(mu, beta, None, false, track.as_mut(), Some(control))?;
+    let r = model.simulate_tracked(
+        mu,
+        beta,
+        zone.as_deref(),
+        None,
+        false,
+        track.as_mut(),
+        Some(control),
+    )?;
     let (kt, kr, _) = model.energy(&r.st);
     if let Some(t) = track.as_mut() {
         // the end state as reported (velocities synchronised with the position)
