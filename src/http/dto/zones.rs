@@ -8,7 +8,7 @@ use serde_json::{Value, json};
 use sha2::{Digest, Sha256};
 use utoipa::ToSchema;
 
-use super::common::Checker;
+use super::common::{Checker, FieldDefault, NumberField, number_schemas};
 use super::floor::{self as formats, Sorted};
 use super::migration::{
     DistributionDto, FACE_CRITICAL_DAMPING, FACE_FRICTION, FACE_NORMAL_STIFFNESS,
@@ -23,6 +23,60 @@ use crate::physics::migration::{
 pub const MAX_NAME_CHARS: usize = 200;
 /// Largest |coordinate| of a polygon vertex, m (map coordinates included).
 pub const MAX_ZONE_COORDINATE: f64 = 1e8;
+
+/// A material's field: the face-level field's interval and unit, its default the face's.
+const fn per_zone(field: NumberField, description: &'static str) -> NumberField {
+    NumberField {
+        description,
+        default: FieldDefault::Derived,
+        nullable: true,
+        ..field
+    }
+}
+
+/// `face.zones.materials[].friction_coefficient` (and the block's).
+pub const ZONE_FRICTION: NumberField = per_zone(
+    FACE_FRICTION,
+    "Coulomb friction μ of the material, in [0, 2] (default: face.friction_coefficient).",
+);
+/// `face.zones.materials[].restitution_normal`.
+pub const ZONE_RESTITUTION_NORMAL: NumberField = per_zone(
+    FACE_RESTITUTION_NORMAL,
+    "Normal restitution e_n of the material, in [0, 1] (default: face.restitution_normal).",
+);
+/// `face.zones.materials[].restitution_tangential`.
+pub const ZONE_RESTITUTION_TANGENTIAL: NumberField = per_zone(
+    FACE_RESTITUTION_TANGENTIAL,
+    "Tangential restitution e_t of the material, in [0, 1] (default: \
+     face.restitution_tangential).",
+);
+/// `face.zones.materials[].rigid_block.normal_stiffness_n_m`.
+pub const ZONE_NORMAL_STIFFNESS: NumberField = per_zone(
+    FACE_NORMAL_STIFFNESS,
+    "Normal contact stiffness k_n on the material, N/m, in [1e3, 1e12] (default: \
+     face.normal_stiffness_n_m).",
+);
+/// `face.zones.materials[].rigid_block.shear_stiffness_n_m`.
+pub const ZONE_SHEAR_STIFFNESS: NumberField = per_zone(
+    FACE_SHEAR_STIFFNESS,
+    "Shear contact stiffness k_s on the material, N/m, in [1e3, 1e12] (default: \
+     face.shear_stiffness_n_m).",
+);
+/// `face.zones.materials[].rigid_block.critical_damping_ratio`.
+pub const ZONE_CRITICAL_DAMPING: NumberField = per_zone(
+    FACE_CRITICAL_DAMPING,
+    "Critical damping ratio β on the material, in [0, 1) (default: \
+     face.critical_damping_ratio).",
+);
+
+number_schemas! {
+    zone_friction_schema => ZONE_FRICTION;
+    zone_restitution_normal_schema => ZONE_RESTITUTION_NORMAL;
+    zone_restitution_tangential_schema => ZONE_RESTITUTION_TANGENTIAL;
+    zone_normal_stiffness_schema => ZONE_NORMAL_STIFFNESS;
+    zone_shear_stiffness_schema => ZONE_SHEAR_STIFFNESS;
+    zone_critical_damping_schema => ZONE_CRITICAL_DAMPING;
+}
 
 /// One polygon of a zone map.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
@@ -43,21 +97,21 @@ pub struct ZonePolygonDto {
 pub struct ZoneBlockDto {
     /// Normal contact stiffness k_n, N/m, in [1e3, 1e12] (default: `face.normal_stiffness_n_m`).
     #[serde(skip_serializing_if = "Option::is_none")]
-    #[schema(example = 1e8)]
+    #[schema(schema_with = zone_normal_stiffness_schema)]
     pub normal_stiffness_n_m: Option<f64>,
     /// Shear contact stiffness k_s, N/m, in [1e3, 1e12] (default: `face.shear_stiffness_n_m`).
     #[serde(skip_serializing_if = "Option::is_none")]
-    #[schema(example = 1e8)]
+    #[schema(schema_with = zone_shear_stiffness_schema)]
     pub shear_stiffness_n_m: Option<f64>,
     /// Critical damping ratio β, in [0, 1) (default: `face.critical_damping_ratio`, drawn from
     /// `monte_carlo.critical_damping_ratio` in an ensemble; given here, it is not drawn).
     #[serde(skip_serializing_if = "Option::is_none")]
-    #[schema(example = 0.35)]
+    #[schema(schema_with = zone_critical_damping_schema)]
     pub critical_damping_ratio: Option<f64>,
     /// Coulomb friction μ of the block's contacts, in [0, 2] (default: the material's μ and
     /// its draw; given here, it is not drawn).
     #[serde(skip_serializing_if = "Option::is_none")]
-    #[schema(example = 0.5)]
+    #[schema(schema_with = zone_friction_schema)]
     pub friction_coefficient: Option<f64>,
 }
 
@@ -77,17 +131,17 @@ pub struct ZoneMaterialDto {
     /// Coulomb friction μ, in [0, 2] (default: `face.friction_coefficient`; given without a
     /// distribution, it is μ in every run of an ensemble too).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    #[schema(example = 0.5)]
+    #[schema(schema_with = zone_friction_schema)]
     pub friction_coefficient: Option<f64>,
     /// Normal restitution e_n, in [0, 1] (default: `face.restitution_normal`; given without a
     /// distribution, it is e_n at every impact of an ensemble too).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    #[schema(example = 0.3)]
+    #[schema(schema_with = zone_restitution_normal_schema)]
     pub restitution_normal: Option<f64>,
     /// Tangential restitution e_t, in [0, 1] (default: `face.restitution_tangential`; as
     /// `restitution_normal`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    #[schema(example = 0.8)]
+    #[schema(schema_with = zone_restitution_tangential_schema)]
     pub restitution_tangential: Option<f64>,
     /// e_n drawn at every impact on this material in an ensemble, bounds in [0, 1] (default:
     /// `monte_carlo.restitution_normal`, unless `restitution_normal` is given).
@@ -230,7 +284,7 @@ pub(crate) fn resolve_zones(
             &b,
             "friction_coefficient",
             m.friction_coefficient,
-            FACE_FRICTION,
+            ZONE_FRICTION,
             face.friction_coefficient,
         );
         let rn = value(
@@ -238,7 +292,7 @@ pub(crate) fn resolve_zones(
             &b,
             "restitution_normal",
             m.restitution_normal,
-            FACE_RESTITUTION_NORMAL,
+            ZONE_RESTITUTION_NORMAL,
             face.restitution_normal,
         );
         let rt = value(
@@ -246,7 +300,7 @@ pub(crate) fn resolve_zones(
             &b,
             "restitution_tangential",
             m.restitution_tangential,
-            FACE_RESTITUTION_TANGENTIAL,
+            ZONE_RESTITUTION_TANGENTIAL,
             face.restitution_tangential,
         );
         let dist = |d: &Option<DistributionDto>,
@@ -298,7 +352,7 @@ pub(crate) fn resolve_zones(
                 &bb,
                 "normal_stiffness_n_m",
                 rb.normal_stiffness_n_m,
-                FACE_NORMAL_STIFFNESS,
+                ZONE_NORMAL_STIFFNESS,
                 face.normal_stiffness_n_m,
             ),
             shear_stiffness: value(
@@ -306,7 +360,7 @@ pub(crate) fn resolve_zones(
                 &bb,
                 "shear_stiffness_n_m",
                 rb.shear_stiffness_n_m,
-                FACE_SHEAR_STIFFNESS,
+                ZONE_SHEAR_STIFFNESS,
                 face.shear_stiffness_n_m,
             ),
             critical_damping_ratio: value(
@@ -314,7 +368,7 @@ pub(crate) fn resolve_zones(
                 &bb,
                 "critical_damping_ratio",
                 rb.critical_damping_ratio,
-                FACE_CRITICAL_DAMPING,
+                ZONE_CRITICAL_DAMPING,
                 face.critical_damping_ratio,
             ),
             critical_damping_ratio_distribution: if rb.critical_damping_ratio.is_some() {
@@ -327,7 +381,7 @@ pub(crate) fn resolve_zones(
                 &bb,
                 "friction_coefficient",
                 rb.friction_coefficient,
-                FACE_FRICTION,
+                ZONE_FRICTION,
                 mu,
             ),
             friction_coefficient_distribution: if rb.friction_coefficient.is_some() {
