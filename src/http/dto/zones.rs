@@ -175,6 +175,7 @@ pub struct ZonesDto {
     pub esri_ascii: Option<String>,
     /// Polygons with codes, instead of `esri_ascii`; later polygons win where they overlap.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schema(example = json!([{"code": 2, "points_m": [[40.0, -20.0], [80.0, -20.0], [80.0, 20.0], [40.0, 20.0]]}]))]
     pub polygons: Option<Vec<ZonePolygonDto>>,
     /// Code outside every polygon, on NODATA cells and off the code grid (default: the first
     /// material's).
@@ -182,6 +183,8 @@ pub struct ZonesDto {
     #[schema(example = 1)]
     pub outside_code: Option<i64>,
     /// The materials, one per code (1 to 64).
+    #[schema(example = json!([{"code": 1, "name": "scree"},
+                              {"code": 2, "name": "meadow", "friction_coefficient": 0.5}]))]
     pub materials: Vec<ZoneMaterialDto>,
 }
 

@@ -672,9 +672,28 @@ impl<'a> Model<'a> {
     fn new(case: &'a MigrationCase, pr: &'a super::Prepared) -> PhysicsResult<Self> {
         let release_xy = pr.p0;
         let zones = case.face.zones.as_ref();
-        let o_rel =
-            zones.map(|z| options_on(&case.rigid_block, z.material_at(release_xy.x, release_xy.y)));
+        let rel_index = zones.map(|z| z.material_index(release_xy.x, release_xy.y));
+        let o_rel = zones
+            .zip(rel_index)
+            .map(|(z, i)| options_on(&case.rigid_block, &z.materials()[i]));
         let o = o_rel.as_ref().unwrap_or(&case.rigid_block);
+        // a material's own stiffness is named by its place in the zone map
+        let stiffness_param = |i: Option<usize>, k: f64| match i {
+            Some(i) if k != case.rigid_block.normal_stiffness => Param::ZoneNormalStiffness(i),
+            _ => Param::FaceNormalStiffness,
+        };
+        let rename = |e: PhysicsError, i: Option<usize>, k: f64| match e {
+            PhysicsError::InvalidInput {
+                param: Param::FaceNormalStiffness,
+                value,
+                message,
+            } => PhysicsError::InvalidInput {
+                param: stiffness_param(i, k),
+                value,
+                message,
+            },
+            e => e,
+        };
         let shape = BlockShape::of_rock(&case.rock)?;
         let floor = &pr.floor;
         let g = pr.g;
@@ -710,7 +729,10 @@ impl<'a> Model<'a> {
         };
         let rock_compliance = (1.0 - case.rock.poisson_ratio.powi(2)) / case.rock.elastic_modulus;
         let (field, what) = match (hertz, o.floor_material) {
-            (None, _) => (Param::FaceNormalStiffness, o.normal_stiffness),
+            (None, _) => (
+                stiffness_param(rel_index, o.normal_stiffness),
+                o.normal_stiffness,
+            ),
             // a given floor softer than the rock is what sinks it
             (Some(_), Some(f))
                 if (1.0 - f.poisson_ratio.powi(2)) / f.elastic_modulus > rock_compliance =>
@@ -733,14 +755,18 @@ impl<'a> Model<'a> {
         let rel = &case.release;
         let impact = step::ImpactBounds::of(case, pr, g);
         if hertz.is_none() {
-            impact.check_overlap(&shape, o.normal_stiffness)?;
+            impact
+                .check_overlap(&shape, o.normal_stiffness)
+                .map_err(|e| rename(e, rel_index, o.normal_stiffness))?;
         }
         let (mut dt_crit, mut dt_bound, k_rest) = step::critical_step(o, &shape, hertz, &impact, g);
         if let Some(z) = zones {
-            for mat in z.materials() {
+            for (i, mat) in z.materials().iter().enumerate() {
                 let om = options_on(&case.rigid_block, mat);
                 if hertz.is_none() {
-                    impact.check_overlap(&shape, om.normal_stiffness)?;
+                    impact
+                        .check_overlap(&shape, om.normal_stiffness)
+                        .map_err(|e| rename(e, Some(i), om.normal_stiffness))?;
                 }
                 let (c, b, _) = step::critical_step(&om, &shape, hertz, &impact, g);
                 dt_crit = dt_crit.min(c);
