@@ -340,7 +340,7 @@ async fn the_rigid_block_takes_each_contact_s_zone() {
                              {"code": 2, "rigid_block": {"friction_coefficient": 0.9}}]}),
     );
     let c = ok(&app, &block_only).await;
-    assert_eq!(physics_of(c.clone()), physics_of(b.clone()));
+    assert_eq!(physics_of(c), physics_of(b.clone()));
     let e = &b["energy"];
     let total = e["total_start_j"].as_f64().unwrap();
     assert!(

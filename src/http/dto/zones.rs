@@ -210,6 +210,7 @@ pub(crate) fn echo<S: serde::Serializer>(z: &Option<ZonesDto>, s: S) -> Result<S
 
 impl ZonesDto {
     /// SHA-256 of the object as sent (keys sorted, compact).
+    #[must_use]
     pub fn digest(&self) -> String {
         let v = serde_json::to_value(self).unwrap_or(Value::Null);
         let bytes = serde_json::to_vec(&Sorted(&v)).unwrap_or_default();
