@@ -240,6 +240,7 @@ export function initMigration() {
     build: ([own]) => {
       const request = own.request;
       floor.apply(request, own.local);
+      floor.applyZones(request);
       const model = floorModel({ face: request.face }, floor.current());
       const r = request.release ?? {};
       const off = offFloor(model, r.along_dip_m ?? 0, r.across_m ?? 0);
