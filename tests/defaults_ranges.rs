@@ -63,7 +63,7 @@ const CROSS_FIELD: &[(&str, &str)] = &[
 /// Objects echoed by their hash rather than field by field (api.md: a grid or contour floor is
 /// echoed as `{"kind", "sha256"}`): their own defaults are checked by
 /// [`floor_defaults_are_those_the_floor_is_hashed_with`].
-const HASHED: &[&str] = &["/face/floor"];
+const HASHED: &[&str] = &["/face/floor", "/face/zones"];
 
 /// A base request in which a field is used rather than refused as not applicable: (path,
 /// pointer prefix, base body).
@@ -99,6 +99,13 @@ fn context(path: &str, pointer: &str) -> Value {
             "/v1/migration",
             "/face/floor_material/",
             json!({"face": {"floor_material": {"elastic_modulus_pa": 4.38e9, "poisson_ratio": 0.3}}}),
+        ),
+        // A zone map's materials need their codes and a map.
+        (
+            "/v1/migration",
+            "/face/zones/",
+            json!({"face": {"zones": {"polygons": [{"code": 1, "points_m": [[0.0, -1.0], [1.0, -1.0], [1.0, 1.0]]}],
+                                      "materials": [{"code": 1}]}}}),
         ),
         ("/v1/column", "/end_time_s", json!({"model": "coupled"})),
         // A target's fields are required together.

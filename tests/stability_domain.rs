@@ -89,6 +89,12 @@ fn map_grid() -> Value {
            "map": {"origin_m": [0, 0], "dip_direction_deg": 90}})
 }
 
+/// A floor of two materials: code 2 down-dip of x = 5 m, the outside (code 1) above.
+fn zones() -> Value {
+    json!({"polygons": [{"code": 2, "points_m": [[5.0, -100.0], [500.0, -100.0], [500.0, 100.0], [5.0, 100.0]]}],
+           "materials": [{"code": 1}, {"code": 2, "friction_coefficient": 0.5}]})
+}
+
 /// The coal floor's elastic constants as a `face.floor_material`.
 fn floor_material() -> Value {
     json!({"elastic_modulus_pa": 4.38e9, "poisson_ratio": 0.3})
@@ -182,6 +188,24 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
             "/face/floor_material/",
             json!({"face": {"floor_material": floor_material()}}),
         ),
+        // a floor's zones: the materials' fields are varied on a map of two codes, in both
+        // methods (the block's contact fields on the rigid block), a scene too
+        (
+            "/v1/migration",
+            "/face/zones/",
+            json!({"face": {"length_m": 20, "zones": zones()}}),
+        ),
+        (
+            "/v1/migration",
+            "/face/zones/materials/0/rigid_block/",
+            json!({"method": "rigid_block", "end_time_s": 0.3, "rock": {"shape": "cube", "side_length_m": 0.5},
+                   "face": {"length_m": 6, "zones": zones()}}),
+        ),
+        (
+            "/v1/scene",
+            "/face/zones/",
+            json!({"face": {"zones": zones()}}),
+        ),
         // per-cell maps are made over an ensemble
         (
             "/v1/migration",
@@ -250,6 +274,7 @@ fn contexts(path: &str, pointer: &str) -> Vec<Value> {
     // `map` exists only on grid and contour floors: its fields are varied on a grid in map
     // coordinates, never on the default plane
     let mut out = if pointer.starts_with("/face/floor/map/")
+        || pointer.starts_with("/face/zones/")
         || pointer.starts_with("/face/floor_material/")
         || pointer.starts_with("/output/maps/")
         || pointer.starts_with("/migration_output/maps/")

@@ -124,7 +124,8 @@ pub struct Presets {
 pub struct ApiDoc;
 
 /// Request fields whose documented default is `null` (they accept `null`); every other optional
-/// field may be omitted but not sent as null, and its default is described in words.
+/// field may be omitted but not sent as null, and its default is described in words. A name
+/// holds in every schema; `Schema.name` in that schema alone (`zones` is also spalling's).
 const NULL_DEFAULTS: &[&str] = &[
     "damping_ratio",
     "initial_midpoint_displacement_m",
@@ -165,6 +166,7 @@ const NULL_DEFAULTS: &[&str] = &[
     "release_velocity_m_s",
     "releases",
     "rock",
+    "FaceDto.zones",
 ];
 
 /// Array-valued request fields whose length and item bounds the server enforces but utoipa cannot
@@ -427,7 +429,7 @@ pub fn openapi_value() -> serde_json::Value {
         .pointer_mut("/components/schemas")
         .and_then(|s| s.as_object_mut())
     {
-        for schema in schemas.values_mut() {
+        for (schema_name, schema) in schemas.iter_mut() {
             let Some(props) = schema.get_mut("properties").and_then(|p| p.as_object_mut()) else {
                 continue;
             };
@@ -437,6 +439,7 @@ pub fn openapi_value() -> serde_json::Value {
                 };
                 if obj.get("default") != Some(&serde_json::Value::Null)
                     || NULL_DEFAULTS.contains(&name.as_str())
+                    || NULL_DEFAULTS.contains(&format!("{schema_name}.{name}").as_str())
                 {
                     continue;
                 }

@@ -856,7 +856,6 @@ fn coupled(
 #[allow(clippy::field_reassign_with_default)] // cases read as "the default, except …"
 mod tests {
     use super::*;
-    use crate::physics::contact::force_law;
 
     fn rel(a: f64, b: f64) -> f64 {
         ((a - b) / b).abs()

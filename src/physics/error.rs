@@ -137,6 +137,10 @@ pub enum Param {
     ReleaseZones,
     /// Rock–floor friction coefficient.
     FaceFriction,
+    /// The zone map of a floor of several materials (`face.zones`).
+    FaceZones,
+    /// The normal contact stiffness of material i of the zone map, N/m.
+    ZoneNormalStiffness(usize),
     /// Distribution of the drawn friction coefficient of an ensemble.
     DrawnFriction,
     /// Normal contact stiffness of the floor, N/m.

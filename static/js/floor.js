@@ -59,6 +59,7 @@ export function initFloor(form) {
     canvas);
   group.append(h('legend', {}, 'Floor'), h('p', { class: 'group-error', hidden: true }), row('Floor', kind), uploadBox, info);
   form.querySelector('.form-fields fieldset').after(group);
+  const zones = initZones(group, row);
 
   let loaded = null; // {name, floor (without map), draw: {kind, ...}}
   let refused = null; // why the chosen file was refused; stays until another file is chosen
@@ -149,6 +150,11 @@ export function initFloor(form) {
       }
       request.face = { ...request.face, floor };
     },
+    /** Sets `request.face.zones` from the Zones group (or throws field errors). */
+    applyZones(request) {
+      const z = zones.read();
+      if (z) request.face = { ...request.face, zones: z };
+    },
     /** Draws the run's path on the floor (face coordinates turned back to the file's). */
     showPath(data) {
       if (!loaded || canvas.hidden) return;
@@ -160,6 +166,91 @@ export function initFloor(form) {
     uploaded: () => Boolean(loaded),
     /** The uploaded floor in use ({name, sha256, bytes, summary, draw}), or null for the plane. */
     current: () => (kind.value === 'upload' && loaded ? loaded : null),
+  };
+}
+
+/**
+ * The Zones group (api.md `face.zones`): a zone map pasted or uploaded (polygons as JSON, or an
+ * ESRI ASCII grid of integer codes, in the floor's own frame) and a table of materials, each
+ * field empty for the face's value. Sent in SI: μ, e_n and e_t are dimensionless.
+ */
+function initZones(after, row) {
+  const group = h('fieldset', { class: 'zones', dataset: { group: '/face/zones' } });
+  const use = h('select', { id: 'zones-use', dataset: { local: 'zones_use', kind: 'select' } },
+    h('option', { value: 'none' }, 'one material (the face\'s)'),
+    h('option', { value: 'map' }, 'several materials by zone'));
+  const text = h('textarea', { id: 'zones-map', rows: 5, spellcheck: 'false', 'aria-describedby': 'zones-info',
+    placeholder: '[{"code": 2, "points_m": [[28, -50], [200, -50], [200, 50], [28, 50]]}]   or   ncols …' });
+  const file = h('input', { type: 'file', id: 'zones-file', accept: '.asc,.txt,.json' });
+  const outside = h('input', { type: 'text', id: 'zones-outside', inputmode: 'numeric', placeholder: 'the first material\'s' });
+  const body = h('tbody', {});
+  const addRow = (m = {}) => {
+    const cell = (key, mode, ph) => h('td', {}, h('input', { type: 'text', inputmode: mode, value: m[key] ?? '', placeholder: ph, dataset: { key }, 'aria-label': key }));
+    const remove = h('button', { type: 'button', class: 'small', 'aria-label': 'remove this material' }, '×');
+    const tr = h('tr', {}, cell('code', 'numeric', ''), cell('name', 'text', ''), cell('friction_coefficient', 'decimal', 'face'),
+      cell('restitution_normal', 'decimal', 'face'), cell('restitution_tangential', 'decimal', 'face'), h('td', {}, remove));
+    remove.addEventListener('click', () => tr.remove());
+    body.append(tr);
+  };
+  const table = h('table', { class: 'zones-materials', id: 'zones-materials' },
+    h('thead', {}, h('tr', {}, ...['code', 'name', 'μ', 'e_n', 'e_t', ''].map((t) => h('th', { scope: 'col' }, t)))), body);
+  const add = h('button', { type: 'button', id: 'zones-add', class: 'small' }, 'Add material');
+  add.addEventListener('click', () => addRow({ code: body.children.length + 1 }));
+  addRow({ code: 1, name: 'scree' });
+  addRow({ code: 2, name: 'meadow', friction_coefficient: 0.5, restitution_normal: 0.1 });
+  const info = h('p', { class: 'note', id: 'zones-info' }, 'A zone map in the floor\'s own frame (map coordinates when the floor has a map): polygons as JSON, later ones winning, or an ESRI ASCII grid of integer codes. An empty material field takes the face\'s value.');
+  const box = h('div', { class: 'zones-box', hidden: true },
+    h('div', { class: 'field field-text' }, h('label', { for: 'zones-map' }, 'Zone map'), text),
+    h('div', { class: 'field field-file' }, h('label', { for: 'zones-file' }, 'or a file'), file),
+    row('Code elsewhere', outside, '', 'outside every polygon, NODATA, off the grid'),
+    table, add, info);
+  group.append(h('legend', {}, 'Zones'), h('p', { class: 'group-error', hidden: true }), row('Materials', use), box);
+  after.after(group);
+  const sync = () => { box.hidden = use.value !== 'map'; };
+  use.addEventListener('change', sync);
+  file.addEventListener('change', async () => {
+    const f = file.files?.[0];
+    if (f) text.value = await f.text();
+  });
+  sync();
+  const fail = (message, field = '/face/zones') => { throw { fieldErrors: [{ field, message }] }; };
+  return {
+    /** The `face.zones` object of the group, or null for one material. */
+    read() {
+      if (use.value !== 'map') return null;
+      const src = text.value.trim();
+      if (!src) fail('paste or choose a zone map: polygons as JSON or an ESRI ASCII grid of codes');
+      const zones = {};
+      if (src.startsWith('[') || src.startsWith('{')) {
+        let polys;
+        try { polys = JSON.parse(src); } catch (err) { fail(`the zone map is not JSON: ${err.message}`); }
+        if (!Array.isArray(polys)) polys = polys.polygons;
+        if (!Array.isArray(polys)) fail('give the polygons as a list [{"code", "points_m"}, …]');
+        zones.polygons = polys;
+      } else {
+        zones.esri_ascii = text.value;
+      }
+      if (outside.value.trim()) {
+        const c = Number(outside.value);
+        if (!Number.isInteger(c)) fail(`${outside.value} is not an integer code`, '/face/zones/outside_code');
+        zones.outside_code = c;
+      }
+      zones.materials = [...body.children].map((tr, i) => {
+        const m = {};
+        for (const input of tr.querySelectorAll('input')) {
+          const v = input.value.trim();
+          if (!v) continue;
+          const key = input.dataset.key;
+          if (key === 'name') { m.name = v; continue; }
+          const n = Number(v);
+          if (!Number.isFinite(n) || (key === 'code' && !Number.isInteger(n))) fail(`${v} is not ${key === 'code' ? 'an integer code' : 'a number'}`, `/face/zones/materials/${i}/${key}`);
+          m[key] = n;
+        }
+        if (m.code === undefined) fail('each material needs its code', `/face/zones/materials/${i}/code`);
+        return m;
+      });
+      return zones;
+    },
   };
 }
 

@@ -8,6 +8,7 @@
 import { csvButton, fmt, h } from './format.js';
 import { destroy, joinSeries, linePlot } from './plot.js';
 import { deviceLabel } from './devices.js';
+import { readAsc } from './floor.js';
 
 const ELEV = (t) => `hsl(${120 - 90 * t}, 38%, 46%)`;
 /** Speed colour: blue (slow) to red (fast). */
@@ -22,6 +23,57 @@ const COLLECTOR = '#6b3fa0';
 /** A barrier the design search proposes, not yet applied: teal long dashes on a white halo. */
 const PROPOSED = '#0097a7';
 /** The colour of a drawn line by its kind. */
+/** Colours of a floor's material zones, by the material's place in `face.zones.materials`. */
+const ZONE_COLOURS = ['#3b6fb6', '#d2691e', '#8a5cc2', '#c8423b', '#8b6b3d', '#d46fb0', '#5b6b7a', '#b8a42a', '#2a9fb8'];
+
+/**
+ * The material zones of a request (`face.zones`), in the floor's own frame (the plan's):
+ * {polygons, grid (an ESRI code grid as drawn, or null), outside, codes, names, colour(code)},
+ * or null without zones.
+ */
+export function zonesOf(request) {
+  const z = request?.face?.zones;
+  if (!z) return null;
+  const materials = z.materials ?? [];
+  const codes = materials.map((m) => m.code);
+  let grid = null;
+  if (z.esri_ascii) {
+    try { grid = readAsc('zones', z.esri_ascii).draw; } catch { grid = null; }
+  }
+  const polygons = z.polygons ?? [];
+  const outside = z.outside_code ?? codes[0];
+  // the code at (x, y) of the floor's frame: the last polygon holding it, the grid's cell, or
+  // the outside code (even–odd crossing test, as the service's)
+  const inside = (pts, x, y) => {
+    let odd = false;
+    for (let i = 0, j = pts.length - 1; i < pts.length; j = i++) {
+      const [ax, ay] = pts[i];
+      const [bx, by] = pts[j];
+      if ((ay > y) !== (by > y) && x < ((bx - ax) * (y - ay)) / (by - ay) + ax) odd = !odd;
+    }
+    return odd;
+  };
+  const codeAt = (x, y) => {
+    for (let k = polygons.length - 1; k >= 0; k--) if (inside(polygons[k].points_m, x, y)) return polygons[k].code;
+    if (grid) {
+      const c = Math.floor((x - grid.x0 + grid.d / 2) / grid.d);
+      const r = grid.nrows - 1 - Math.floor((y - grid.y0 + grid.d / 2) / grid.d);
+      const v = grid.z[r]?.[c];
+      if (v !== undefined && v !== null) return v;
+    }
+    return outside;
+  };
+  return {
+    polygons,
+    grid,
+    outside,
+    codes,
+    codeAt,
+    names: new Map(materials.map((m) => [m.code, m.name ?? null])),
+    colour: (c) => ZONE_COLOURS[Math.max(0, codes.indexOf(c)) % ZONE_COLOURS.length],
+  };
+}
+
 const deviceColour = (d) => (d.kind === 'barrier' ? BARRIER : d.kind === 'proposed' ? PROPOSED : COLLECTOR);
 /** Map colour: pale yellow (low) through red to purple (high). */
 const MAPC = (t) => {
@@ -247,7 +299,7 @@ export function stopPositions(runsCsv, release, supports) {
  * Draws the plan of `model` into `canvas` (CSS width of its box): the floor, the supports,
  * the release, the path coloured by speed and the stops. Returns what it drew, for the legend.
  */
-export function drawPlan(canvas, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map(), maps = null, layer = null, devices = [], hideDevices = false } = {}) {
+export function drawPlan(canvas, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map(), maps = null, layer = null, devices = [], hideDevices = false, zones = null } = {}) {
   const cssW = Math.max(280, Math.floor(canvas.parentElement?.clientWidth || 600));
   const pathXY = tr ? tr.position_m.map(model.path) : [];
   // The floor's extent in the view frame.
@@ -339,6 +391,41 @@ export function drawPlan(canvas, model, { supports = [], release = {}, tr = null
     grad.addColorStop(1, ELEV(0));
     ctx.fillStyle = grad;
     ctx.fillRect(px(xr[0]), M.t, (xr[1] - xr[0]) * sx, plotH);
+  }
+  // The floor's material zones over the relief: a colour per code, the outside code first.
+  if (zones) {
+    ctx.globalAlpha = 0.38;
+    ctx.fillStyle = zones.colour(zones.outside);
+    ctx.fillRect(px(xr[0]), M.t, (xr[1] - xr[0]) * sx, plotH);
+    const g = zones.grid;
+    if (g) {
+      for (let r = 0; r < g.nrows; r++) {
+        for (let c = 0; c < g.ncols; c++) {
+          const v = g.z[r][c];
+          if (v === null) continue;
+          ctx.fillStyle = zones.colour(v);
+          const x = g.x0 + c * g.d;
+          const y = g.y0 + (g.nrows - 1 - r) * g.d;
+          ctx.fillRect(px(x - g.d / 2), py(y + g.d / 2), g.d * sx + 0.6, g.d * sy + 0.6);
+        }
+      }
+    }
+    for (const p of zones.polygons) {
+      ctx.fillStyle = zones.colour(p.code);
+      ctx.beginPath();
+      p.points_m.forEach(([x, y], i) => (i ? ctx.lineTo(px(x), py(y)) : ctx.moveTo(px(x), py(y))));
+      ctx.closePath();
+      ctx.fill();
+    }
+    ctx.globalAlpha = 1;
+    ctx.lineWidth = 1.5;
+    for (const p of zones.polygons) {
+      ctx.strokeStyle = zones.colour(p.code);
+      ctx.beginPath();
+      p.points_m.forEach(([x, y], i) => (i ? ctx.lineTo(px(x), py(y)) : ctx.moveTo(px(x), py(y))));
+      ctx.closePath();
+      ctx.stroke();
+    }
   }
   // The ensemble's map: each cell a run entered, coloured by the layer; the others left clear.
   let mapRange = null;
@@ -686,7 +773,7 @@ const views3d = new WeakMap();
  * The 3-D view in `box`: the floor surface, the supports, the release and the path; orbit
  * (drag), zoom (wheel), reset (button). Resolves to true when drawn, false when WebGL is missing.
  */
-export async function draw3d(box, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map(), devices = [] } = {}) {
+export async function draw3d(box, model, { supports = [], release = {}, tr = null, stops = [], verdicts = new Map(), devices = [], zones = null } = {}) {
   views3d.get(box)?.dispose();
   views3d.delete(box);
   box.replaceChildren();
@@ -726,6 +813,13 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
 
   // Points in the view frame, centred on the floor (large map coordinates lose float precision).
   const pts = [];
+  // a floor of several materials: each vertex's colour half its zone's
+  const zc = new THREE.Color();
+  const tint = (c3, x, y) => {
+    if (!zones) return;
+    zc.setStyle(zones.colour(zones.codeAt(x, y)));
+    c3.lerp(zc, 0.5);
+  };
   const surfaceZ = (x, y) => model.markHeight(x, y);
   let centre = [0, 0, 0];
   const V = (x, y, z) => new THREE.Vector3(x - centre[0], y - centre[1], z - centre[2]);
@@ -750,6 +844,7 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
         pos.set([x - centre[0], y - centre[1], (z ?? zlo) - centre[2]], i * 3);
         holes[i] = z === null ? 1 : 0;
         c3.setStyle(ELEV(zhi > zlo ? ((z ?? zlo) - zlo) / (zhi - zlo) : 0.5));
+        tint(c3, x, y);
         col.set([c3.r, c3.g, c3.b], i * 3);
       }
     }
@@ -789,6 +884,7 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
         const i = r * nx + c;
         pos.set([x - centre[0], y - centre[1], z - centre[2]], i * 3);
         c3.setStyle(ELEV(zhi > zlo ? (z - zlo) / (zhi - zlo) : 0.5));
+        tint(c3, x, y);
         col.set([c3.r, c3.g, c3.b], i * 3);
       }
     }
@@ -821,10 +917,43 @@ export async function draw3d(box, model, { supports = [], release = {}, tr = nul
     const y1 = Math.max(b + 2, 10);
     const x1 = model.length * Math.cos(model.dip);
     centre = [x1 / 2, (y0 + y1) / 2, model.height(x1 / 2)];
-    const geo = new THREE.BufferGeometry().setFromPoints([V(0, y0, 0), V(x1, y0, model.height(x1)), V(x1, y1, model.height(x1)), V(0, y1, 0)]);
-    geo.setIndex([0, 1, 2, 0, 2, 3]);
-    geo.computeVertexNormals();
-    scene.add(new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ color: 0x9fb58a, side: THREE.DoubleSide })));
+    if (zones) {
+      // the plane as a fine mesh coloured by zone
+      const [nx, ny] = [160, 60];
+      const pos = new Float32Array(nx * ny * 3);
+      const col = new Float32Array(nx * ny * 3);
+      const c3 = new THREE.Color();
+      for (let r = 0; r < ny; r++) {
+        for (let c = 0; c < nx; c++) {
+          const x = (x1 * c) / (nx - 1);
+          const y = y0 + ((y1 - y0) * r) / (ny - 1);
+          const i = r * nx + c;
+          pos.set([x - centre[0], y - centre[1], model.height(x) - centre[2]], i * 3);
+          c3.set(0x9fb58a);
+          tint(c3, x, y);
+          col.set([c3.r, c3.g, c3.b], i * 3);
+        }
+      }
+      const index = [];
+      for (let r = 0; r + 1 < ny; r++) {
+        for (let c = 0; c + 1 < nx; c++) {
+          const a = r * nx + c;
+          index.push(a, a + 1, a + nx, a + 1, a + nx + 1, a + nx);
+        }
+      }
+      const geo = new THREE.BufferGeometry();
+      geo.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+      geo.setAttribute('color', new THREE.BufferAttribute(col, 3));
+      geo.setIndex(index);
+      geo.computeVertexNormals();
+      scene.add(new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide })));
+      box.dataset.zones = String(zones.codes.length);
+    } else {
+      const geo = new THREE.BufferGeometry().setFromPoints([V(0, y0, 0), V(x1, y0, model.height(x1)), V(x1, y1, model.height(x1)), V(0, y1, 0)]);
+      geo.setIndex([0, 1, 2, 0, 2, 3]);
+      geo.computeVertexNormals();
+      scene.add(new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ color: 0x9fb58a, side: THREE.DoubleSide })));
+    }
     pts.push([0, y0], [x1, y1]);
   }
   const floorZ = (x, y, fallback) => surfaceZ(x, y) ?? fallback;
@@ -965,9 +1094,15 @@ function nearestAcross(tr, s) {
 }
 
 /** A legend in HTML under the plan: what each mark is (no "--" anywhere). */
-export function planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps = null, devices = [] }) {
+export function planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps = null, devices = [], zones = null }) {
   const items = [];
   const sw = (colour, shape = 'line') => h('span', { class: `swatch ${shape}`, style: `--c:${colour}` });
+  if (zones) {
+    for (const c of zones.codes) {
+      const name = zones.names.get(c);
+      items.push(h('li', { dataset: { out: 'zone' } }, sw(zones.colour(c), 'box'), `zone ${c}${name ? `, ${name}` : ''}${c === zones.outside ? ' (and everywhere no zone is drawn)' : ''}`));
+    }
+  }
   items.push(h('li', {}, sw('#9fb58a', 'box'), model.uploaded
     ? `floor: uploaded ${model.kind === 'grid' ? 'grid' : 'contours'} ${model.name}${model.sha256 ? ` (sha256 ${model.sha256.slice(0, 12)}…)` : ''}, coloured by elevation ${fmt(drawn.zr[0], 4)} to ${fmt(drawn.zr[1], 4)} m`
     : `floor: the plane of the face (dip ${fmt(model.dip * 180 / Math.PI, 4)}°, ${fmt(model.length, 4)} m along the dip), coloured by elevation`));
@@ -1041,7 +1176,8 @@ export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv,
   box.hidden = false;
   const canvas = document.getElementById(`${prefix}-floor-plan`);
   const controls = mapControls(prefix, canvas, maps);
-  const options = { supports, release, tr, stops, verdicts, maps, layer: controls?.value ?? null, devices };
+  const zones = zonesOf(request);
+  const options = { supports, release, tr, stops, verdicts, maps, layer: controls?.value ?? null, devices, zones };
   // what the plan is drawn with (a redraw after changing it draws the change)
   canvas.options = options;
   let drawn = drawPlan(canvas, model, options);
@@ -1052,7 +1188,7 @@ export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv,
   const legend = document.getElementById(`${prefix}-floor-legend`);
   canvas.redraw = () => {
     drawn = drawPlan(canvas, model, options);
-    legend.replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps, devices }));
+    legend.replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps, devices, zones }));
     return drawn;
   };
   if (controls) {
@@ -1071,7 +1207,7 @@ export function renderFloorViews(prefix, { inputs, request, upload, tr, runsCsv,
     canvas.resizeWatch.observe(canvas.parentElement);
   }
   canvas.csv = () => [['run_stop_along_dip_m', 'across_m', 'stop_reason'], ...stops.map((s) => [s.s ?? length, s.across ?? '', s.reason ?? ''])];
-  legend.replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps, devices }));
+  legend.replaceChildren(planLegend(drawn, { model, supports, release, tr, stops, unplaced, verdicts, maps, devices, zones }));
   const profile = document.getElementById(`${prefix}-profile-plot`);
   if (tr) {
     drawProfile(profile, model, tr, {

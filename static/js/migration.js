@@ -298,6 +298,7 @@ export function initMigration() {
       const request = own.request;
       vectorsToArrays(request);
       floor.apply(request, own.local);
+      floor.applyZones(request);
       const model = floorModel({ face: request.face }, floor.current());
       const r = request.release ?? {};
       const off = offFloor(model, r.along_dip_m ?? 0, r.across_m ?? 0);

@@ -1927,6 +1927,67 @@ function sceneFixture(request) {
   };
 }
 
+/**
+ * Floors of several materials: the Zones group sends `face.zones` in SI (polygons pasted as
+ * JSON, a materials table), the answer names the struck zone of each impact, and the plan draws
+ * the zones with a colour per code and a legend naming them.
+ */
+async function zonesSection(page) {
+  await check('zones: a pasted polygon map and the materials table are sent as face.zones, and the plan draws and names the zones', async () => {
+    await open(page, '#migration');
+    await page.locator('#zones-use').selectOption('map');
+    await page.locator('#zones-map').fill(JSON.stringify([{ code: 2, points_m: [[28.28, -50], [200, -50], [200, 50], [28.28, 50]] }]));
+    await page.locator('#zones-outside').fill('1');
+    const request = page.waitForRequest((r) => r.url().endsWith('/v1/migration'));
+    const response = await submit(page, '#migration-form', '/v1/migration');
+    const body = JSON.parse((await request).postData());
+    const z = body.face?.zones;
+    assert(z && z.polygons?.[0]?.code === 2 && z.outside_code === 1, `zones sent: ${JSON.stringify(z)}`);
+    assert(z.materials.length === 2 && z.materials[1].friction_coefficient === 0.5 && z.materials[1].restitution_normal === 0.1
+      && z.materials[0].friction_coefficient === undefined, `materials sent: ${JSON.stringify(z.materials)}`);
+    assert(response.status() === 200, `POST /v1/migration answered ${response.status()}: ${(await response.text()).slice(0, 300)}`);
+    const answer = await response.json();
+    assert(answer.inputs.face.zones?.kind === 'polygons' && answer.inputs.face.zones.sha256?.length === 64, 'the zones are not echoed by their hash');
+    assert(answer.events.filter((e) => e.kind === 'impact').every((e) => e.zone === 1), 'impacts up the dip of 40 m are not named zone 1');
+    // slower than the one-material face: the meadow's μ 0.5 below 40 m along the dip
+    assert(answer.arrival.speed_m_s < EXPECTED.arrivalSpeed - 1, `arrival ${answer.arrival.speed_m_s} m/s is not slowed by the meadow`);
+    await page.locator('#migration-floor-legend').waitFor({ state: 'visible', timeout: WAIT_MS });
+    const legend = await page.locator('#migration-floor-legend').textContent();
+    assert(/zone 1, scree/.test(legend) && /zone 2, meadow/.test(legend), `legend: ${legend}`);
+    // the meadow's colour (#d2691e, drawn at 38 % over the relief) fills the lower part of the plan
+    const orange = await page.evaluate(() => {
+      const c = document.getElementById('migration-floor-plan');
+      const px = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let i = 0; i < px.length; i += 4) if (px[i] > px[i + 2] + 40 && px[i + 1] < px[i] - 20) n += 1;
+      return n;
+    });
+    assert(orange > 2000, `only ${orange} pixels of the meadow's colour on the plan`);
+    await page.locator('#migration-floor').scrollIntoViewIfNeeded();
+    // the 3-D view colours the plane by zone (a mesh fine enough to show the boundary)
+    await page.locator('#migration-3d canvas').waitFor({ state: 'visible', timeout: WAIT_MS });
+    assert(await page.locator('#migration-3d').getAttribute('data-zones') === '2', 'the 3-D view does not draw the 2 zones');
+    await elementShot(page.locator('#migration-3d'), 'zones-3d.png');
+  });
+  await screenshot(page, 'zones.png');
+
+  await check('zones: a material without a code is a field error in the table, nothing is sent', async () => {
+    await open(page, '#migration');
+    await page.locator('#zones-use').selectOption('map');
+    await page.locator('#zones-map').fill('[{"code": 2, "points_m": [[0, 0], [1, 0], [1, 1]]}]');
+    await page.locator('#zones-materials tbody tr').first().locator('input').first().fill('');
+    let sent = false;
+    const watch = (r) => { if (r.url().endsWith('/v1/migration')) sent = true; };
+    page.on('request', watch);
+    await page.locator('#migration-form button[type="submit"]').click();
+    await page.locator('#migration-status.error').waitFor({ state: 'visible', timeout: WAIT_MS });
+    page.off('request', watch);
+    const text = await page.locator('#migration-status').textContent();
+    assert(/needs its code/.test(text), `no word about the code: ${text}`);
+    assert(!sent, 'the request was sent');
+  });
+}
+
 async function sceneSection(page) {
   let lastScene = null;
   const status = await endpointStatus('/v1/scene');
@@ -2811,6 +2872,7 @@ async function main() {
     if (want('column')) await columnSection(page);
     if (want('migration')) await migrationSection(page);
     if (want('floor')) await floorSection(page);
+    if (want('zones')) await zonesSection(page);
     if (want('case')) await caseSection(page, context);
     if (want('scene')) await sceneSection(page);
     if (want('study')) await studySection(page);

@@ -220,8 +220,56 @@ pub fn esri_heights(
     h: &EsriHeader,
     max_abs: f64,
 ) -> Result<(Vec<Vec<f64>>, usize), TextError> {
-    let mut rows: Vec<Vec<f64>> = Vec::with_capacity(h.nrows);
     let mut nodata = 0usize;
+    let rows = esri_rows(text, h, |n, tok| {
+        let v: f64 = tok
+            .parse()
+            .map_err(|_| format!("value {n}: '{tok}' is not a number"))?;
+        if h.nodata == Some(v) {
+            nodata += 1;
+            return Ok(f64::NAN);
+        }
+        if !v.is_finite() {
+            return Err(format!("value {n}: '{tok}' is not a finite height"));
+        }
+        if v.abs() > max_abs {
+            return Err(format!(
+                "value {n}: height {v} m is outside [−{max_abs:e}, {max_abs:e}] m"
+            ));
+        }
+        Ok(v)
+    })?;
+    Ok((rows, nodata))
+}
+
+/// Reads the data rows of an ESRI ASCII grid of integer codes (a zone map), south to north as
+/// [`esri_heights`]; NODATA cells as None. A value that is not an integer in ±2^53 is an error
+/// naming its line and place.
+pub fn esri_codes(text: &str, h: &EsriHeader) -> Result<Vec<Vec<Option<i64>>>, TextError> {
+    esri_rows(text, h, |n, tok| {
+        let v: f64 = tok
+            .parse()
+            .map_err(|_| format!("value {n}: '{tok}' is not a number"))?;
+        if h.nodata == Some(v) {
+            return Ok(None);
+        }
+        if !(v.is_finite() && v.fract() == 0.0 && v.abs() <= 9_007_199_254_740_992.0) {
+            return Err(format!(
+                "value {n}: '{tok}' is not an integer code (in ±2^53)"
+            ));
+        }
+        Ok(Some(v as i64))
+    })
+}
+
+/// The data rows of an ESRI ASCII grid, each value read by `cell` (its 1-based place in the
+/// row and its text; an error is its message), south to north.
+fn esri_rows<T>(
+    text: &str,
+    h: &EsriHeader,
+    mut cell: impl FnMut(usize, &str) -> Result<T, String>,
+) -> Result<Vec<Vec<T>>, TextError> {
+    let mut rows: Vec<Vec<T>> = Vec::with_capacity(h.nrows);
     let mut last = h.data_line;
     for (_, no, line) in lines_at(text, h.data_offset, h.data_line) {
         last = no;
@@ -238,27 +286,7 @@ pub fn esri_heights(
             if n > h.ncols {
                 continue;
             }
-            let v: f64 = tok
-                .parse()
-                .map_err(|_| err(no, format!("value {n}: '{tok}' is not a number")))?;
-            if h.nodata == Some(v) {
-                nodata += 1;
-                row.push(f64::NAN);
-                continue;
-            }
-            if !v.is_finite() {
-                return Err(err(
-                    no,
-                    format!("value {n}: '{tok}' is not a finite height"),
-                ));
-            }
-            if v.abs() > max_abs {
-                return Err(err(
-                    no,
-                    format!("value {n}: height {v} m is outside [−{max_abs:e}, {max_abs:e}] m"),
-                ));
-            }
-            row.push(v);
+            row.push(cell(n, tok).map_err(|m| err(no, m))?);
         }
         if n != h.ncols {
             return Err(err(no, format!("expected {} values, got {n}", h.ncols)));
@@ -276,7 +304,7 @@ pub fn esri_heights(
         ));
     }
     rows.reverse();
-    Ok((rows, nodata))
+    Ok(rows)
 }
 
 /// One contour line read from a GeoJSON feature, with JSON Pointers (relative to the

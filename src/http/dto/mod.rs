@@ -18,5 +18,6 @@ pub mod scene;
 pub mod spalling;
 pub mod study;
 pub mod target;
+pub mod zones;
 
 pub use common::{Meta, PlanStep, Warning};

@@ -69,6 +69,10 @@ fn place(param: Param) -> Place {
         Param::ReleaseAlongDip => Path("/release/along_dip_m".into()),
         Param::ReleaseZones => Path("/release_zones".into()),
         Param::FaceFriction => Path("/face/friction_coefficient".into()),
+        Param::FaceZones => Path("/face/zones".into()),
+        Param::ZoneNormalStiffness(i) => Path(format!(
+            "/face/zones/materials/{i}/rigid_block/normal_stiffness_n_m"
+        )),
         Param::DrawnFriction => Path("/monte_carlo/friction_coefficient".into()),
         Param::FaceNormalStiffness => Path("/face/normal_stiffness_n_m".into()),
         Param::FloorElasticModulus => Path("/face/floor_material/elastic_modulus_pa".into()),

@@ -6,7 +6,7 @@ use super::lines::Line;
 use super::lumped_mass::Motion;
 use super::monte_carlo::Distribution;
 use super::rigid_block::RigidBlockOptions;
-use super::terrain::{ContourLine, MapFrame};
+use super::terrain::{ContourLine, MapFrame, Zones};
 use crate::physics::material::Rock;
 
 /// Migration method.
@@ -66,6 +66,9 @@ pub struct Face {
     pub restitution_normal: f64,
     /// Tangential restitution e_t (default 0.8).
     pub restitution_tangential: f64,
+    /// Materials of the floor by zone (default none: one material, the fields above and the
+    /// ensemble's and rigid block's own).
+    pub zones: Option<Zones>,
 }
 
 /// The documented defaults of a migration case (api.md `POST /v1/migration`): the `Default`s
@@ -96,6 +99,7 @@ impl Default for Face {
             friction_coefficient: defaults::FRICTION_COEFFICIENT,
             restitution_normal: defaults::RESTITUTION_NORMAL,
             restitution_tangential: defaults::RESTITUTION_TANGENTIAL,
+            zones: None,
         }
     }
 }

@@ -16,7 +16,7 @@ use nalgebra::Vector3;
 use super::lumped_mass::{Phase, Recording, Setup, simulate};
 use super::maps::{CellTrack, MapGrid, RunCells};
 use super::release::{Prepared, lumped_mass_setup, prepare_on};
-use super::terrain::Floor;
+use super::terrain::{Floor, RunZones, per_run_values};
 use super::trajectory::{height_above_floor, robust_norm, support_impact_speed};
 use super::{
     Method, MigrationCase, MigrationResult, MonteCarlo, RunSummary, Statistics, StopReason,
@@ -171,13 +171,35 @@ fn lumped_run(
     let mean = pr.floor.mean;
     let m = pr.mass;
     let mut rng = monte_carlo::run_stream(mc.seed, i);
-    let mu = match &mc.friction_coefficient {
-        Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, MU_MAX),
-        None => case.face.friction_coefficient,
+    // on a floor of several materials, μ is drawn once per distinct distribution in material
+    // order (the first where today's single draw is), and (e_n, e_t) from the struck material's
+    let zones = case.face.zones.as_ref().map(|z| {
+        let mu = per_run_values(
+            z.materials()
+                .iter()
+                .map(|m| (m.friction_coefficient, m.friction_coefficient_distribution)),
+            MU_MAX,
+            |d| monte_carlo::sample(d, &mut rng),
+        );
+        RunZones::new(z, mu)
+    });
+    let mu = match (&zones, &mc.friction_coefficient) {
+        (None, Some(d)) => monte_carlo::sample(d, &mut rng).clamp(0.0, MU_MAX),
+        _ => case.face.friction_coefficient,
     };
     let mut draw = || {
-        let en = monte_carlo::sample(&mc.restitution_normal, &mut rng).clamp(0.0, 1.0);
-        let et = monte_carlo::sample(&mc.restitution_tangential, &mut rng).clamp(0.0, 1.0);
+        let (dn, dt) = match &zones {
+            None => (&mc.restitution_normal, &mc.restitution_tangential),
+            Some(z) => {
+                let m = &z.zones.materials()[z.current.get()];
+                (
+                    &m.restitution_normal_distribution,
+                    &m.restitution_tangential_distribution,
+                )
+            }
+        };
+        let en = monte_carlo::sample(dn, &mut rng).clamp(0.0, 1.0);
+        let et = monte_carlo::sample(dt, &mut rng).clamp(0.0, 1.0);
         (en, et)
     };
     let drawn = monte_carlo::drawn_release(mc, i, &case.release).map(|rel| Setup {
@@ -187,6 +209,7 @@ fn lumped_run(
     let mut o = simulate(
         drawn.as_ref().unwrap_or(setup),
         mu,
+        zones.as_ref(),
         &mut draw,
         rec,
         Some(control),

@@ -45,11 +45,13 @@ pub use rigid_block::{
     RigidBlockOptions, RigidBlockReport, bounce_restitution,
 };
 pub use terrain::{
-    CONTOUR_BYTES_PER_POINT, ContourLine, GRID_BYTES_PER_POINT, MapFrame, contour_points,
-    grid_bytes,
+    BlockContact, CONTOUR_BYTES_PER_POINT, ContourLine, GRID_BYTES_PER_POINT, MAX_CODE_CELLS,
+    MAX_MATERIALS, MAX_POLYGON_VERTICES, MAX_POLYGONS, MapFrame, Material, ZonePolygon, ZoneShape,
+    Zones, ZonesSpec, contour_points, grid_bytes, self_intersection,
 };
 
 use self::lumped_mass::{Recording, simulate};
+use self::terrain::RunZones;
 use super::control::Control;
 use super::error::{Param, PhysicsError, PhysicsResult};
 use super::material::RockShape;
@@ -197,7 +199,15 @@ pub(crate) fn run_part_mapped(
     control: &Control,
 ) -> PhysicsResult<Part> {
     if case.method == Method::RigidBlock {
-        return rigid_block::run_part(case, range, nominal, grid, control);
+        let mut part = rigid_block::run_part(case, range, nominal, grid, control)?;
+        if let (Some(r), Some(z)) = (part.0.as_mut(), case.face.zones.as_ref())
+            && let Some(events) = r.events.as_mut()
+        {
+            for e in events {
+                e.zone = Some(z.code_at(e.position[0], e.position[1]));
+            }
+        }
+        return Ok(part);
     }
     let face = &case.face;
     let dip = face.dip_deg.to_radians();
@@ -208,6 +218,23 @@ pub(crate) fn run_part_mapped(
                 Param::FaceFriction,
                 face.friction_coefficient,
                 format!("rolling without slip needs μ ≥ (2/7) tan θ = {mu_roll:.6}"),
+            ));
+        }
+        if let Some(z) = &face.zones
+            && let Some(m) = z.materials().iter().find(|m| {
+                m.friction_coefficient < mu_roll
+                    || m.friction_coefficient_distribution
+                        .is_some_and(|d| case.monte_carlo.is_some() && d.lower_bound() < mu_roll)
+            })
+        {
+            return Err(PhysicsError::invalid(
+                Param::FaceZones,
+                m.friction_coefficient,
+                format!(
+                    "rolling without slip needs μ ≥ (2/7) tan θ = {mu_roll:.6} on every \
+                     material (code {}, drawn ones included)",
+                    m.code
+                ),
             ));
         }
         if let Some(d) = case.monte_carlo.and_then(|m| m.friction_coefficient)
@@ -254,10 +281,26 @@ fn nominal_run(
     let (en, et) = (face.restitution_normal, face.restitution_tangential);
     let mut rec = Recording::default();
     let want_rec = case.output.events || case.output.trajectory;
+    let zones = face.zones.as_ref().map(|z| {
+        RunZones::new(
+            z,
+            z.materials()
+                .iter()
+                .map(|m| m.friction_coefficient)
+                .collect(),
+        )
+    });
     let out = simulate(
         &setup,
         face.friction_coefficient,
-        &mut || (en, et),
+        zones.as_ref(),
+        &mut || match &zones {
+            None => (en, et),
+            Some(z) => {
+                let m = &z.zones.materials()[z.current.get()];
+                (m.restitution_normal, m.restitution_tangential)
+            }
+        },
         want_rec.then_some(&mut rec),
         Some(control),
     )?;
@@ -317,6 +360,7 @@ fn nominal_run(
                 speed_after: e.speed_after,
                 energy_lost: e.lost * m,
                 peak_contact_force: None,
+                zone: face.zones.as_ref().map(|z| z.code_at(e.p.x, e.p.y)),
             })
             .collect()
     });

@@ -79,6 +79,8 @@ pub struct Event {
     pub energy_lost: f64,
     /// Largest total normal contact force during the contact, N (rigid block impacts).
     pub peak_contact_force: Option<f64>,
+    /// Code of the floor's zone under the event's position (None: the floor has no zones).
+    pub zone: Option<i64>,
 }
 
 /// Trajectory sampled from the closed forms (api.md `trajectory`), equal-length arrays.

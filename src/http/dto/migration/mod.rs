@@ -445,6 +445,16 @@ pub struct FaceDto {
     #[schema(default = json!(null))]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub floor_material: Option<FloorMaterialDto>,
+    /// Materials of the floor by zone: integer codes over the floor (an ESRI ASCII grid or
+    /// polygons, in the floor's own frame) and a material per code, each field defaulting to
+    /// the face's (null: one material, the fields above). Echoed in `inputs` as
+    /// `{"kind", "sha256"}`.
+    #[schema(default = json!(null))]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "super::zones::echo"
+    )]
+    pub zones: Option<super::zones::ZonesDto>,
 }
 
 impl Default for FaceDto {
@@ -462,6 +472,7 @@ impl Default for FaceDto {
             local_damping: FACE_LOCAL_DAMPING.value(),
             contact_model: ContactModelDto::Linear,
             floor_material: None,
+            zones: None,
         }
     }
 }
@@ -1047,6 +1058,12 @@ impl MigrationRequest {
         let rock = self.rock.resolve("/rock", false, &mut ck);
         self.check_motion(rigid, layout, &mut ck);
         let (monte_carlo, damping_distribution) = self.resolve_monte_carlo(config, rigid, &mut ck);
+        let zones = super::zones::resolve_zones(
+            &self.face,
+            monte_carlo.as_ref(),
+            damping_distribution,
+            &mut ck,
+        );
         if self.output.runs_csv && monte_carlo.is_none() {
             ck.push(
                 layout.migration_output("runs_csv"),
@@ -1096,6 +1113,7 @@ impl MigrationRequest {
                 friction_coefficient: self.face.friction_coefficient,
                 restitution_normal: self.face.restitution_normal,
                 restitution_tangential: self.face.restitution_tangential,
+                zones,
             },
             rock,
             release: self.release.resolve(),

@@ -76,6 +76,10 @@ pub struct EventDto {
     /// Largest total normal contact force during the contact, N (rigid-block impacts).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub peak_contact_force_n: Option<f64>,
+    /// Code of the floor's zone under the event's position (only with `face.zones`): for an
+    /// impact, the material whose restitution it used.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub zone: Option<i64>,
 }
 
 /// Sampled trajectory: equal-length arrays.
@@ -422,6 +426,7 @@ impl MigrationResponse {
                         speed_after_m_s: e.speed_after,
                         energy_lost_j: e.energy_lost,
                         peak_contact_force_n: e.peak_contact_force,
+                        zone: e.zone,
                     })
                     .collect()
             }),

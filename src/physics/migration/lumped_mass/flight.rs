@@ -134,6 +134,9 @@ impl Run<'_, '_> {
             return;
         }
         let vt = s.v - n * vn;
+        if let Some(z) = self.zones {
+            z.current.set(z.zones.material_index(s.p.x, s.p.y));
+        }
         let (en, et) = draw();
         s.impacts += 1;
         let speed_before = s.v.norm();

@@ -49,6 +49,14 @@ impl Run<'_, '_> {
             stop_at = ve.abs() / ae.abs();
         }
         t_max = t_max.min(stop_at);
+        t_max = zone_cut(
+            self.zones,
+            &s.p,
+            &s.v,
+            &dip,
+            (&(c.e * ve), &(c.e * ae)),
+            t_max,
+        );
         let len = (c.ends[1] - c.ends[0]).dot(&c.e);
         // on the edge: a rounding error past an end would never cross it again
         let u0 = (s.p - c.ends[0]).dot(&c.e).clamp(0.0, len);
@@ -183,6 +191,7 @@ impl Run<'_, '_> {
             s.undecelerated = a.dot(&s.v) >= 0.0;
         }
         t_max = t_max.min(stop_at).min(turn_at);
+        t_max = zone_cut(self.zones, &s.p, &s.v, &dip, (&s.v, &a), t_max);
         // on a coplanar patch of a grid, one piece to the patch's boundary
         let mut exit = floor.slide_exit_merged(f, &s.p, &s.v, &a, t_max);
         let mut dt = exit.map_or(t_max, |e| e.0);

@@ -20,7 +20,7 @@
 use nalgebra::Vector3;
 
 use super::lines::{Crossing, Line, LineAction, act, first_reachable};
-use super::terrain::{Facet, FacetPlane, FlightEnd, Floor, MeanPlane, inside_tri};
+use super::terrain::{Facet, FacetPlane, FlightEnd, Floor, MeanPlane, RunZones, inside_tri};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
 
@@ -468,15 +468,52 @@ fn on_ground_off_floor(t: f64) -> PhysicsError {
     ))
 }
 
-/// Runs one trajectory. `draw` gives (e_n, e_t) at each impact, e_n first.
+/// Plan direction along which the material at a rock with velocity `v` (m/s) is read: its
+/// velocity's, or down the dip (`dip`, the mean plane's down-dip unit vector) at rest.
+fn zone_dir(v: &Vector3<f64>, dip: &Vector3<f64>) -> [f64; 2] {
+    if v.x != 0.0 || v.y != 0.0 {
+        [v.x, v.y]
+    } else {
+        [dip.x, dip.y]
+    }
+}
+
+/// The end of the piece p + v t + ½ a t² (t ≤ `t_max`, s) of a rock at `p` (m) moving with
+/// `v_now` (m/s) at the first boundary between materials it crosses, so that no piece carries
+/// one μ into another zone; `t_max` without zones.
+fn zone_cut(
+    zones: Option<&RunZones<'_>>,
+    p: &Vector3<f64>,
+    v_now: &Vector3<f64>,
+    dip: &Vector3<f64>,
+    (v, a): (&Vector3<f64>, &Vector3<f64>),
+    t_max: f64,
+) -> f64 {
+    match zones {
+        Some(z) => {
+            let p = [p.x, p.y];
+            let probe = super::terrain::Zones::probe(p, zone_dir(v_now, dip));
+            z.zones
+                .cut(p, [v.x, v.y], [a.x, a.y], probe, t_max)
+                .unwrap_or(t_max)
+        }
+        None => t_max,
+    }
+}
+
+/// Runs one trajectory. `draw` gives (e_n, e_t) at each impact, e_n first; on a floor of
+/// several materials (`zones`) μ is the material's under the rock and `draw` reads the struck
+/// material from [`RunZones::current`], set before each call.
 pub(crate) fn simulate(
     su: &Setup<'_>,
     mu: f64,
+    zones: Option<&RunZones<'_>>,
     draw: &mut impl FnMut() -> (f64, f64),
     rec: Option<&mut Recording>,
     control: Option<&Control>,
 ) -> PhysicsResult<RunOut> {
     let mut run = Run::new(su, mu, rec);
+    run.zones = zones;
     let (phase, reason) = loop {
         if let Some(end) = run.step(draw, control)? {
             break end;
@@ -515,8 +552,11 @@ struct Run<'a, 'r> {
     gv: Vector3<f64>,
     /// Down-dip unit vector of the mean plane.
     dip: Vector3<f64>,
-    /// Coulomb friction coefficient of this run.
+    /// Coulomb friction coefficient of this run (on a floor of several materials: of the
+    /// material under the rock, renewed at every step).
     mu: f64,
+    /// The floor's materials in this run (None: one material).
+    zones: Option<&'r RunZones<'r>>,
     /// Rolling (spin-up ×5/7, KE = 0.7 v²) rather than sliding.
     roll: bool,
     /// Kinetic energy per kg on the ground over ½ v²: 1.4 rolling, 1 sliding.
@@ -558,6 +598,7 @@ impl<'a, 'r> Run<'a, 'r> {
             gv: Vector3::new(0.0, 0.0, -g),
             dip: mean.dip_dir(),
             mu,
+            zones: None,
             roll,
             ke_factor: if roll { 1.4 } else { 1.0 },
             has_columns: su.supports.iter().any(|c| c.across.is_some()),
@@ -694,7 +735,11 @@ impl<'a, 'r> Run<'a, 'r> {
     /// continuous slide, and a floor perturbed far below the rock's scale gives the plane's
     /// answer. From the stop speed up, the normal speed is lost as well (booked as transition).
     fn reattach(&mut self, n: &Vector3<f64>, vn: f64) -> f64 {
-        let (kf, mu) = (self.ke_factor, self.mu);
+        let kf = self.ke_factor;
+        let mu = match self.zones {
+            Some(z) => z.mu_at([self.s.p.x, self.s.p.y], self.zone_dir()),
+            None => self.mu,
+        };
         let smooth = -vn < self.su.v_stop;
         let s = &mut self.s;
         let sp = s.v.norm();
@@ -726,6 +771,11 @@ impl<'a, 'r> Run<'a, 'r> {
         lost + l
     }
 
+    /// Plan direction along which the material at the rock is read ([`zone_dir`]).
+    fn zone_dir(&self) -> [f64; 2] {
+        zone_dir(&self.s.v, &self.dip)
+    }
+
     /// The first column reached by the piece p + v τ + ½ a τ² within τ ≤ dt: its time and index.
     fn column_reach(&self, v: &Vector3<f64>, a: &Vector3<f64>, dt: f64) -> Option<(f64, usize)> {
         if self.has_columns {
@@ -755,6 +805,9 @@ impl<'a, 'r> Run<'a, 'r> {
             });
         }
         self.check_invariants()?;
+        if let Some(z) = self.zones {
+            self.mu = z.mu_at([self.s.p.x, self.s.p.y], self.zone_dir());
+        }
         if self.is_caught_in_place() {
             return Ok(self.leave_trap());
         }

@@ -104,7 +104,7 @@ impl Model<'_> {
             if action == LineAction::Stopped {
                 return Some(StopReason::Barrier);
             }
-            self.carry_springs(run, cfg.mu);
+            self.carry_springs(run, cfg);
             self.break_through(run, f, cfg.log_events);
             // the slide settles anew before it is skipped again (the skip steps from half-step
             // velocities; these are at the state's time)
@@ -175,7 +175,7 @@ impl Model<'_> {
     /// velocities the block had on it, as [`Model::stored_at_end`] carries them to a run's
     /// end), their work booked, and the velocities brought to the state's time: the state a
     /// barrier can act on, from which the leapfrog restarts as after a flight.
-    fn carry_springs(&self, run: &mut Run, mu: f64) {
+    fn carry_springs(&self, run: &mut Run, cfg: &RunSettings<'_>) {
         let lagged = run.st;
         let st = self.synced(&run.st, run.half_step, &run.acc, &run.ang_acc);
         if !run.springs.is_empty() {
@@ -183,7 +183,7 @@ impl Model<'_> {
             let (stored, slip) = self.stored_at_end(
                 &lagged,
                 &st,
-                mu,
+                cfg,
                 &run.springs,
                 &run.onsets,
                 run.drift_h,

@@ -100,7 +100,7 @@ use super::lumped_mass::{EventKind, Phase, StopReason};
 use super::maps::{CellTrack, MapGrid, RunCells};
 use super::monte_carlo::{self, Distribution};
 use super::shape::BlockShape;
-use super::terrain::{Floor, FloorKind, FloorTriangle, MeanPlane};
+use super::terrain::{Floor, FloorKind, FloorTriangle, MeanPlane, Zones, per_run_values};
 use super::{
     Arrival, EnergyBudget, Event, MigrationCase, MigrationResult, MonteCarlo, RunSummary,
     Trajectory, Warning,
@@ -293,6 +293,9 @@ struct Hertz {
 /// Everything a run needs that does not change between Monte Carlo runs.
 struct Model<'a> {
     floor: &'a Floor,
+    /// The floor's materials when they differ (None: one material, `kn`, `ks` and the run's
+    /// μ and β at every contact).
+    zones: Option<&'a Zones>,
     shape: BlockShape,
     mean: MeanPlane,
     g: f64,
@@ -492,7 +495,9 @@ fn v3(v: &Vector3<f64>) -> [f64; 3] {
 
 /// What stays fixed through one run.
 #[derive(Debug, Clone, Copy)]
-struct RunSettings {
+struct RunSettings<'z> {
+    /// Per material of a floor of several materials, (μ, β) of this run.
+    zone: Option<&'z [(f64, f64)]>,
     /// Friction coefficient of the run.
     mu: f64,
     /// Critical damping ratio of the contacts' dashpots.
@@ -672,10 +677,82 @@ fn shear_spring(
     (fs, es_new, slipping, work)
 }
 
+/// The rigid-block options of `o` with the contact parameters of material `m`.
+fn options_on(o: &RigidBlockOptions, m: &super::Material) -> RigidBlockOptions {
+    RigidBlockOptions {
+        normal_stiffness: m.block.normal_stiffness,
+        shear_stiffness: m.block.shear_stiffness,
+        critical_damping_ratio: m.block.critical_damping_ratio,
+        critical_damping_ratio_distribution: m.block.critical_damping_ratio_distribution,
+        ..*o
+    }
+}
+
+/// Per material, its (μ, β) in a run: nominal, or drawn from `rng` once per distinct
+/// distribution, μ's first then β's (as a one-material run draws μ then β).
+fn material_draws(zones: &Zones, rng: Option<&mut rand_pcg::Pcg64>) -> Vec<(f64, f64)> {
+    let ms = zones.materials();
+    let (mu, beta) = match rng {
+        None => (
+            ms.iter().map(|m| m.block.friction_coefficient).collect(),
+            ms.iter().map(|m| m.block.critical_damping_ratio).collect(),
+        ),
+        Some(rng) => {
+            let mu = per_run_values(
+                ms.iter().map(|m| {
+                    (
+                        m.block.friction_coefficient,
+                        m.block.friction_coefficient_distribution,
+                    )
+                }),
+                super::MU_MAX,
+                |d| monte_carlo::sample(d, rng),
+            );
+            let beta = per_run_values(
+                ms.iter().map(|m| {
+                    (
+                        m.block.critical_damping_ratio,
+                        m.block.critical_damping_ratio_distribution,
+                    )
+                }),
+                0.999,
+                |d| monte_carlo::sample(d, rng),
+            );
+            (mu, beta)
+        }
+    };
+    mu.into_iter().zip(beta).collect::<Vec<(f64, f64)>>()
+}
+
 impl<'a> Model<'a> {
-    /// Builds the model of a case on its floor; `pr` gives the release point.
-    fn new(case: &MigrationCase, pr: &'a super::Prepared) -> PhysicsResult<Self> {
-        let o = &case.rigid_block;
+    /// Builds the model of a case on its floor; `pr` gives the release point. On a floor of
+    /// several materials the release's material gives the resting overlap, and the time step
+    /// is the smallest any material needs.
+    fn new(case: &'a MigrationCase, pr: &'a super::Prepared) -> PhysicsResult<Self> {
+        let release_xy = pr.p0;
+        let zones = case.face.zones.as_ref();
+        let rel_index = zones.map(|z| z.material_index(release_xy.x, release_xy.y));
+        let o_rel = zones
+            .zip(rel_index)
+            .map(|(z, i)| options_on(&case.rigid_block, &z.materials()[i]));
+        let o = o_rel.as_ref().unwrap_or(&case.rigid_block);
+        // a material's own stiffness is named by its place in the zone map
+        let stiffness_param = |i: Option<usize>, k: f64| match i {
+            Some(i) if k != case.rigid_block.normal_stiffness => Param::ZoneNormalStiffness(i),
+            _ => Param::FaceNormalStiffness,
+        };
+        let rename = |e: PhysicsError, i: Option<usize>, k: f64| match e {
+            PhysicsError::InvalidInput {
+                param: Param::FaceNormalStiffness,
+                value,
+                message,
+            } => PhysicsError::InvalidInput {
+                param: stiffness_param(i, k),
+                value,
+                message,
+            },
+            e => e,
+        };
         let shape = BlockShape::of_rock(&case.rock)?;
         let floor = &pr.floor;
         let g = pr.g;
@@ -711,7 +788,10 @@ impl<'a> Model<'a> {
         };
         let rock_compliance = (1.0 - case.rock.poisson_ratio.powi(2)) / case.rock.elastic_modulus;
         let (field, what) = match (hertz, o.floor_material) {
-            (None, _) => (Param::FaceNormalStiffness, o.normal_stiffness),
+            (None, _) => (
+                stiffness_param(rel_index, o.normal_stiffness),
+                o.normal_stiffness,
+            ),
             // a given floor softer than the rock is what sinks it
             (Some(_), Some(f))
                 if (1.0 - f.poisson_ratio.powi(2)) / f.elastic_modulus > rock_compliance =>
@@ -734,9 +814,24 @@ impl<'a> Model<'a> {
         let rel = &case.release;
         let impact = step::ImpactBounds::of(case, pr, g);
         if hertz.is_none() {
-            impact.check_overlap(&shape, o.normal_stiffness)?;
+            impact
+                .check_overlap(&shape, o.normal_stiffness)
+                .map_err(|e| rename(e, rel_index, o.normal_stiffness))?;
         }
-        let (dt_crit, dt_bound, k_rest) = step::critical_step(o, &shape, hertz, &impact, g);
+        let (mut dt_crit, mut dt_bound, k_rest) = step::critical_step(o, &shape, hertz, &impact, g);
+        if let Some(z) = zones {
+            for (i, mat) in z.materials().iter().enumerate() {
+                let om = options_on(&case.rigid_block, mat);
+                if hertz.is_none() {
+                    impact
+                        .check_overlap(&shape, om.normal_stiffness)
+                        .map_err(|e| rename(e, Some(i), om.normal_stiffness))?;
+                }
+                let (c, b, _) = step::critical_step(&om, &shape, hertz, &impact, g);
+                dt_crit = dt_crit.min(c);
+                dt_bound = dt_bound.min(b);
+            }
+        }
         // safety ≤ 1 keeps the step within PFC's Δt_crit and within half the damped limit
         let dt_max = dt_crit.min(dt_bound);
         let mut dt = match o.time_step {
@@ -796,6 +891,7 @@ impl<'a> Model<'a> {
         let t_contact = std::f64::consts::PI * (m / (nc * k_rest)).sqrt();
         Ok(Model {
             floor,
+            zones: zones.filter(|z| !z.is_uniform()),
             mean,
             g,
             m,
@@ -825,7 +921,8 @@ impl<'a> Model<'a> {
             gap: (5.0 * dt).max(1e-3),
             t_contact,
             max_steps: o.max_steps,
-            skip_slides: true,
+            // a settled slide is skipped with one μ: not across zones
+            skip_slides: zones.is_none_or(Zones::is_uniform),
             stop_off_floor: true,
             isotropic: iso,
             static_overlap,
@@ -1134,14 +1231,31 @@ fn nominal_run(
     control: &Control,
 ) -> PhysicsResult<MigrationResult> {
     let o = &case.rigid_block;
-    let mu = case.face.friction_coefficient;
-    let out = model.simulate(
+    let (mu, beta, zone) = match &case.face.zones {
+        Some(z) => {
+            let d = material_draws(z, None);
+            let rel = z.material_index(model.c0.x, model.c0.y);
+            (d[rel].0, d[rel].1, Some(d))
+        }
+        None => (
+            case.face.friction_coefficient,
+            o.critical_damping_ratio,
+            None,
+        ),
+    };
+    let draws = Draws {
         mu,
-        o.critical_damping_ratio,
+        beta,
+        start: None,
+    };
+    let out = model.simulate_tracked(
+        draws,
+        zone.as_deref(),
         case.output
             .trajectory
             .then_some((case.output.sample_interval, case.output.max_samples)),
         case.output.events,
+        None,
         Some(control),
     )?;
     let st = &out.st;
@@ -1247,18 +1361,36 @@ fn rigid_one(
 ) -> PhysicsResult<(RunSummary, Option<RunCells>, super::ensemble::Crossings)> {
     let o = &case.rigid_block;
     let mut rng = monte_carlo::run_stream(mc.seed, i);
-    let mu = match &mc.friction_coefficient {
-        Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, super::MU_MAX),
-        None => case.face.friction_coefficient,
-    };
-    let beta = match &o.critical_damping_ratio_distribution {
-        Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, 0.999),
-        None => o.critical_damping_ratio,
+    let (mu, beta, zone) = match &case.face.zones {
+        // per material, drawn once per distinct distribution: μ's, then β's
+        Some(z) => {
+            let d = material_draws(z, Some(&mut rng));
+            let rel = z.material_index(model.c0.x, model.c0.y);
+            (d[rel].0, d[rel].1, Some(d))
+        }
+        None => {
+            let mu = match &mc.friction_coefficient {
+                Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, super::MU_MAX),
+                None => case.face.friction_coefficient,
+            };
+            let beta = match &o.critical_damping_ratio_distribution {
+                Some(d) => monte_carlo::sample(d, &mut rng).clamp(0.0, 0.999),
+                None => o.critical_damping_ratio,
+            };
+            (mu, beta, None)
+        }
     };
     let start = monte_carlo::drawn_release(mc, i, &case.release).map(|rel| model.start_of(&rel));
     let mut track = grid.map(|g| CellTrack::new(g, model.mean));
     let draws = Draws { mu, beta, start };
-    let r = model.simulate_tracked(draws, None, false, track.as_mut(), Some(control))?;
+    let r = model.simulate_tracked(
+        draws,
+        zone.as_deref(),
+        None,
+        false,
+        track.as_mut(),
+        Some(control),
+    )?;
     let (kt, kr, _) = model.energy(&r.st);
     if let Some(t) = track.as_mut() {
         // the end state as reported (velocities synchronised with the position)

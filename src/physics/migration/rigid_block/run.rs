@@ -9,6 +9,7 @@ impl Model<'_> {
     /// Runs the block from its release to its stop with the friction coefficient `mu` and
     /// the critical damping ratio `beta`; `record`: (sample interval s, most samples) of the
     /// trajectory; `events`: keep the event log; `control`: polled for cancellation.
+    #[cfg(test)]
     pub(super) fn simulate(
         &self,
         mu: f64,
@@ -22,7 +23,7 @@ impl Model<'_> {
             beta,
             start: None,
         };
-        self.simulate_tracked(draws, record, events, None, control)
+        self.simulate_tracked(draws, None, record, events, None, control)
     }
 
     /// The block's state at the release `rel` (a drawn velocity or orientation) on the model's
@@ -42,18 +43,43 @@ impl Model<'_> {
         )
     }
 
+    /// (kₙ, kₛ) of the floor at the contact point p (m), N/m: its material's on a floor of
+    /// several materials.
+    pub(super) fn stiffness_at(&self, p: &Vector3<f64>) -> (f64, f64) {
+        match self.zones {
+            None => (self.kn, self.ks),
+            Some(z) => {
+                let b = &z.material_at(p.x, p.y).block;
+                (b.normal_stiffness, b.shear_stiffness)
+            }
+        }
+    }
+
+    /// (μ, β) of a contact at p (m) in the run of `cfg`: its material's on a floor of several
+    /// materials.
+    pub(super) fn draws_at(&self, cfg: &RunSettings<'_>, p: &Vector3<f64>) -> (f64, f64) {
+        match (self.zones, cfg.zone) {
+            (Some(z), Some(d)) => d[z.material_index(p.x, p.y)],
+            _ => (cfg.mu, cfg.beta),
+        }
+    }
+
     /// [`Self::simulate`], following the centre's path on a map's cells when `track` is given:
     /// its state at every step, and closed-form flights and settled slides sampled at most half
-    /// a cell apart (see `maps`).
+    /// a cell apart (see `maps`); on a floor of several materials `zone` gives each material's
+    /// (μ, β) in this run.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn simulate_tracked(
         &self,
         draws: Draws,
+        zone: Option<&[(f64, f64)]>,
         record: Option<(f64, usize)>,
         events: bool,
         mut track: Option<&mut CellTrack<'_>>,
         control: Option<&Control>,
     ) -> PhysicsResult<RunOut> {
         let cfg = RunSettings {
+            zone,
             mu: draws.mu,
             beta: draws.beta,
             end_t: self.end_time.unwrap_or(f64::INFINITY),
@@ -166,18 +192,19 @@ impl Model<'_> {
             .collect();
         let stored = contacts
             .iter()
-            .map(|g| self.normal_energy(g.u))
+            .map(|g| self.normal_energy(g.u, self.stiffness_at(&g.p).0))
             .sum::<f64>();
         for gk in &contacts {
+            let (kn, ks) = self.stiffness_at(&gk.p);
             let f_el = match self.hertz {
-                None => self.kn * gk.u,
+                None => kn * gk.u,
                 Some(hz) => hz.k * gk.u * gk.u.sqrt(),
             };
             acc += gk.n * (f_el / self.m);
             springs.push(Spring {
                 key: gk.key,
                 fs: Vector3::zeros(),
-                ks: self.ks,
+                ks,
                 rr: gk.p - st.c,
                 n: gk.n,
                 u: gk.u,
@@ -544,7 +571,8 @@ impl Model<'_> {
             let vt = vrel - gk.n * vn;
             run.slip_max = run.slip_max.max(vt.norm());
             let old = run.springs.iter().find(|s| s.key == gk.key);
-            let nf = self.normal_force(gk, &rr, &v_t, &w_t, h, old.is_none(), cfg.beta);
+            let (mu, beta) = self.draws_at(cfg, &gk.p);
+            let nf = self.normal_force(gk, &rr, &v_t, &w_t, h, old.is_none(), beta);
             let (f_el, fnm, ks) = (nf.elastic, nf.total, nf.shear_stiffness);
             // dashpot work (and the clipped spring's share)
             let fd = gk.n * (fnm - f_el);
@@ -553,13 +581,13 @@ impl Model<'_> {
             fo.normal_total += nf.at_position;
             // the spring follows the contact point's drift since the last step
             let d = vt * run.drift_h;
-            let (fs, es_new, slipping, work) = shear_spring(&gk.n, old, &d, ks, cfg.mu * f_el);
+            let (fs, es_new, slipping, work) = shear_spring(&gk.n, old, &d, ks, mu * f_el);
             fo.slipping += usize::from(slipping);
             if slipping {
                 fo.slip_force += fs;
             }
             run.friction += work;
-            run.stored += self.normal_energy(gk.u) + es_new;
+            run.stored += self.normal_energy(gk.u, nf.normal_stiffness) + es_new;
             // a contact whose nearest floor feature switched during the drift
             let kink = old.map_or_else(Vector3::zeros, |o| {
                 crease_kink_force(o, gk, &(c_prev + o.rr), f_el)
@@ -656,7 +684,7 @@ impl Model<'_> {
             let vrel = run.st.v + w_world.cross(&o.rr);
             let u = o.carried + o.n.dot(&vrel) * -run.drift_h;
             if u > 0.0 {
-                lost += self.normal_energy(u);
+                lost += self.normal_energy(u, self.stiffness_at(&(run.st.c + o.rr)).0);
             }
         }
         if lost <= 0.0 {
@@ -674,23 +702,25 @@ impl Model<'_> {
             if lost <= 0.0 {
                 break;
             }
+            let kn = self.stiffness_at(&(run.st.c + run.new_onsets[k].rr)).0;
             let on = &mut run.new_onsets[k];
-            let held = self.normal_energy(on.carried);
-            let wanted = self.overlap_holding(held + lost);
+            let held = self.normal_energy(on.carried, kn);
+            let wanted = self.overlap_holding(held + lost, kn);
             let du = (wanted - on.carried).min(on.offset).max(0.0);
             on.carried += du;
             on.offset = if du >= on.offset { 0.0 } else { on.offset - du };
-            lost -= self.normal_energy(on.carried) - held;
+            lost -= self.normal_energy(on.carried, kn) - held;
             if let Some(gk) = run.contacts.iter_mut().find(|g| g.feature == on.feature) {
                 gk.u = on.carried;
             }
         }
     }
 
-    /// The overlap (m) whose normal spring holds the elastic energy `e` (J).
-    pub(super) fn overlap_holding(&self, e: f64) -> f64 {
+    /// The overlap (m) whose normal spring (of stiffness `kn`, N/m, linear law) holds the
+    /// elastic energy `e` (J).
+    pub(super) fn overlap_holding(&self, e: f64, kn: f64) -> f64 {
         match self.hertz {
-            None => (2.0 * e / self.kn).sqrt(),
+            None => (2.0 * e / kn).sqrt(),
             Some(h) => (e / (0.4 * h.k)).powf(0.4),
         }
     }
@@ -710,8 +740,9 @@ impl Model<'_> {
         fresh: bool,
         beta: f64,
     ) -> NormalForce {
+        let (kn, ks) = self.stiffness_at(&gk.p);
         let (f_el, kt, ks) = match self.hertz {
-            None => (self.kn * gk.u, self.kn, self.ks),
+            None => (kn * gk.u, kn, ks),
             Some(hz) => {
                 let kt = hz.kt * gk.u.sqrt();
                 (hz.k * gk.u * gk.u.sqrt(), kt, kt * hz.shear_ratio)
@@ -751,6 +782,7 @@ impl Model<'_> {
             elastic: f_el,
             total: (f_el - cn * vn_t + onset).max(0.0),
             shear_stiffness: ks,
+            normal_stiffness: kn,
             at_position,
         }
     }
@@ -1018,7 +1050,7 @@ impl Model<'_> {
             let (stored, slip) = self.stored_at_end(
                 &lagged,
                 &st,
-                cfg.mu,
+                cfg,
                 &run.springs,
                 &run.onsets,
                 run.drift_h,
@@ -1123,7 +1155,7 @@ impl Model<'_> {
         &self,
         lagged: &State,
         end: &State,
-        mu: f64,
+        cfg: &RunSettings<'_>,
         springs: &[Spring],
         onsets: &[Onset],
         h: f64,
@@ -1144,14 +1176,16 @@ impl Model<'_> {
                     .find(|o| o.feature == gk.feature)
                     .map_or(gk.u, |o| o.offset.min(gk.u));
             }
-            stored += self.normal_energy(gk.u);
+            let k = self.stiffness_at(&gk.p);
+            stored += self.normal_energy(gk.u, k.0);
             let Some(old) = springs.iter().find(|s| s.key == gk.key) else {
                 continue;
             };
             let rr = gk.p - end.c;
             let vrel = lagged.v + w_world.cross(&rr);
             let vt = vrel - gk.n * gk.n.dot(&vrel);
-            let (f_el, ks) = self.elastic_and_shear(gk.u);
+            let (f_el, ks) = self.elastic_and_shear(gk.u, k);
+            let mu = self.draws_at(cfg, &gk.p).0;
             let mag = old.fs.norm();
             let pr = old.fs - gk.n * gk.n.dot(&old.fs);
             let pn = pr.norm();
@@ -1189,17 +1223,20 @@ impl Model<'_> {
         (stored, friction)
     }
 
-    /// Elastic normal force (N) and shear stiffness (N/m) of a contact of overlap `u` (m).
-    pub(super) fn elastic_and_shear(&self, u: f64) -> (f64, f64) {
+    /// Elastic normal force (N) and shear stiffness (N/m) of a contact of overlap `u` (m) on
+    /// a floor of stiffnesses `(kn, ks)` (N/m, linear law).
+    pub(super) fn elastic_and_shear(&self, u: f64, (kn, ks): (f64, f64)) -> (f64, f64) {
         match self.hertz {
-            None => (self.kn * u, self.ks),
+            None => (kn * u, ks),
             Some(hz) => (hz.k * u * u.sqrt(), hz.kt * u.sqrt() * hz.shear_ratio),
         }
     }
 
-    pub(super) fn normal_energy(&self, u: f64) -> f64 {
+    /// Elastic energy (J) of a normal spring of overlap `u` (m), stiffness `kn` (N/m, linear
+    /// law).
+    pub(super) fn normal_energy(&self, u: f64, kn: f64) -> f64 {
         match self.hertz {
-            None => 0.5 * self.kn * u * u,
+            None => 0.5 * kn * u * u,
             Some(h) => 0.4 * h.k * u * u * u.sqrt(),
         }
     }
@@ -1271,6 +1308,7 @@ impl Model<'_> {
             speed_after: after,
             energy_lost: lost,
             peak_contact_force: peak,
+            zone: None,
         }
     }
 
@@ -1353,6 +1391,8 @@ pub(super) struct NormalForce {
     pub(super) total: f64,
     /// Shear stiffness at the overlap, N/m.
     pub(super) shear_stiffness: f64,
+    /// Normal stiffness kₙ of the floor there (linear law), N/m.
+    pub(super) normal_stiffness: f64,
     /// The force the contact carries at the step's position (≥ 0; a fresh touch: at the
     /// touch), N: what its peak is made of.
     pub(super) at_position: f64,

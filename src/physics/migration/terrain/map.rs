@@ -29,6 +29,19 @@ impl MapFrame {
         let (s, c) = self.dip_direction_deg.to_radians().sin_cos();
         [de * s + dn * c, dn * s - de * c]
     }
+
+    /// Map coordinates [E, N] (m) of the face point [x, y] (m): the inverse of [`Self::to_face`].
+    #[must_use]
+    pub fn to_map(&self, p: [f64; 2]) -> [f64; 2] {
+        if self.dip_direction_deg == 90.0 {
+            return [p[0] + self.origin[0], p[1] + self.origin[1]];
+        }
+        let (s, c) = self.dip_direction_deg.to_radians().sin_cos();
+        [
+            p[0] * s - p[1] * c + self.origin[0],
+            p[0] * c + p[1] * s + self.origin[1],
+        ]
+    }
 }
 
 impl GridFloor {

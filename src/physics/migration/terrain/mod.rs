@@ -15,7 +15,8 @@
 //! `patches.rs` (the grid's coplanar patches), `mesh.rs` (the triangulated floor and contours),
 //! `map.rs` (floors given in map coordinates), `locate.rs` (point queries), `flight.rs` (the
 //! first strike of a flight), `slide.rs` (a slide's exit from a facet), `triangles.rs` (the
-//! triangles under a box, for block contacts); this file holds [`Floor`], its kinds, its mean
+//! triangles under a box, for block contacts), `zones.rs` (floors of several materials: the
+//! material under a point and the boundaries a slide piece is cut at); this file holds [`Floor`], its kinds, its mean
 //! plane and the accessors common to all kinds.
 
 mod facet;
@@ -28,6 +29,7 @@ mod patches;
 mod slide;
 mod triangles;
 mod walk;
+mod zones;
 
 use nalgebra::Vector3;
 
@@ -40,6 +42,11 @@ use self::mesh::MeshFloor;
 pub use self::mesh::{CONTOUR_BYTES_PER_POINT, ContourLine, contour_points};
 pub(crate) use self::slide::outward_root;
 pub(crate) use self::triangles::FloorTriangle;
+pub use self::zones::{
+    BlockContact, MAX_CODE_CELLS, MAX_MATERIALS, MAX_POLYGON_VERTICES, MAX_POLYGONS, Material,
+    ZonePolygon, ZoneShape, Zones, ZonesSpec, self_intersection,
+};
+pub(crate) use self::zones::{RunZones, per_run_values};
 
 /// Identifier of one planar facet of a floor (the plane floor has the single facet 0).
 pub(crate) type Facet = u32;
