@@ -4,7 +4,7 @@
 use super::beam::{
     FirstMode, Galerkin, ModalSample, ModeIntegrals, ModeShapes, SingleMode, UniformColumns,
 };
-use super::contact::{ForceLaw, ImpactResult, force_law, solve_impact};
+use super::contact::{ForceLaw, ImpactDetail, ImpactResult, force_law, solve_impact};
 use super::control::Control;
 use super::coupled::{CoupledInput, solve_coupled};
 use super::error::{Param, PhysicsError, PhysicsResult};
@@ -229,6 +229,17 @@ pub struct ColumnResult {
     pub warnings: Vec<Warning>,
 }
 
+/// The contact law of a solved impact (k = P_cap/δ_cap, P_ref = e·P_cap; Hertz κ).
+#[must_use]
+pub fn force_law_of(impact: &ImpactResult) -> ForceLaw {
+    match &impact.detail {
+        ImpactDetail::Line(l) => {
+            ForceLaw::log_from_capacity(l.force_capacity, l.deformation_capacity)
+        }
+        ImpactDetail::Hertz(h) => ForceLaw::Hertz { kappa: h.stiffness },
+    }
+}
+
 /// Smallest rock kinetic energy the column models accept, J: below it the energies, their
 /// tolerances (1e-9 of it and less) and squares leave the normal range of double precision.
 pub const MIN_KINETIC_ENERGY: f64 = 1e-280;
@@ -265,7 +276,22 @@ pub const MAX_DEFAULT_END_TIME: f64 = 1e3;
 /// physics.md §B.5–§B.7; api.md `POST /v1/column`.
 pub fn solve_column(case: &ColumnCase, control: &Control) -> PhysicsResult<ColumnResult> {
     let impact = solve_impact(&case.impact)?;
-    solve_column_with_impact(case, &impact, control)
+    solve_column_solved(case, &impact, control)
+}
+
+/// Solves `/v1/column` for its impact already solved (`impact` = [`solve_impact`] of
+/// `case.impact`, the law taken from the case as [`solve_column`] does): the same bytes as
+/// [`solve_column`] without solving the impact again (the scene's strike solves it once for
+/// both stages).
+///
+/// # Errors
+/// As [`solve_column_with_impact`].
+pub fn solve_column_solved(
+    case: &ColumnCase,
+    impact: &ImpactResult,
+    control: &Control,
+) -> PhysicsResult<ColumnResult> {
+    solve_inner(case, impact, force_law(&case.impact)?, control)
 }
 
 fn check_times(times: &[f64], limit: Option<f64>) -> PhysicsResult<()> {
@@ -389,9 +415,8 @@ fn stress_of(case: &ImpactCase, curvature_clamp: f64, curvature_mid: f64) -> Ben
     }
 }
 
-/// Solves `/v1/column` for its impact already solved (`impact` = [`solve_impact`] of
-/// `case.impact`; the scene's strike solves it once for both stages): the same bytes as
-/// [`solve_column`].
+/// Solves `/v1/column` for a given impact, its contact law taken from the impact
+/// ([`force_law_of`]; for tests that set the impact themselves).
 ///
 /// # Errors
 /// `InvalidInput` for: decoupled with more than one mode ([`Param::GalerkinModes`]) or an
@@ -406,7 +431,7 @@ pub fn solve_column_with_impact(
     impact: &ImpactResult,
     control: &Control,
 ) -> PhysicsResult<ColumnResult> {
-    solve_inner(case, impact, force_law(&case.impact)?, control)
+    solve_inner(case, impact, force_law_of(impact), control)
 }
 
 fn solve_inner(
@@ -856,6 +881,7 @@ fn coupled(
 #[allow(clippy::field_reassign_with_default)] // cases read as "the default, except …"
 mod tests {
     use super::*;
+    use crate::physics::contact::force_law;
 
     fn rel(a: f64, b: f64) -> f64 {
         ((a - b) / b).abs()
@@ -874,6 +900,18 @@ mod tests {
         // 221.9 % of the yield stress: the validity warning is attached.
         assert!(r.stress_utilisation > 1.0);
         assert!(codes.contains(&"stress_utilisation_above_one"), "{codes:?}");
+    }
+
+    #[test]
+    fn the_law_of_a_solved_impact_is_the_law_of_its_case() {
+        let case = ImpactCase::default();
+        let impact = solve_impact(&case).unwrap();
+        let (ForceLaw::Log { k: k1, p_ref: p1 }, ForceLaw::Log { k: k2, p_ref: p2 }) =
+            (force_law_of(&impact), force_law(&case).unwrap())
+        else {
+            panic!("log laws expected")
+        };
+        assert!(rel(k1, k2) < 1e-14 && rel(p1, p2) < 1e-14);
     }
 
     #[test]

@@ -670,7 +670,7 @@ pub fn strike(
         impact: impact_case.clone(),
         ..case.column.clone()
     };
-    match column::solve_column_with_impact(&column_case, &impact, control) {
+    match column::solve_column_solved(&column_case, &impact, control) {
         Ok(c) => Ok(Strike::Solved {
             impact_case: Box::new(impact_case),
             impact: Box::new(impact),
