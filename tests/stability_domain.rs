@@ -44,6 +44,23 @@ const RELATED: &[(&str, &str)] = &[
         "/release/angular_velocity_rad_s/0",
         "/release/angular_velocity_rad_s",
     ),
+    (
+        "/releases/0/release/position_m/0",
+        "/releases/0/release/position_m",
+    ),
+    // the calibration's example release names its point by along_dip_m and across_m
+    (
+        "/releases/0/release/position_m/0",
+        "/releases/0/release/across_m",
+    ),
+    (
+        "/releases/0/release/orientation_wxyz/0",
+        "/releases/0/release/orientation_wxyz",
+    ),
+    (
+        "/releases/0/release/angular_velocity_rad_s/0",
+        "/releases/0/release/angular_velocity_rad_s",
+    ),
     ("/column/outer_diameter_m", "/column/inner_diameter_m"),
     (
         "/supports/0/column/outer_diameter_m",
