@@ -108,7 +108,7 @@ pub struct Presets {
         routes::study::study,
         routes::batch::batch,
     ),
-    components(schemas(Problem, FieldErrorDoc, dto::common::Warning, dto::common::PlanStep)),
+    components(schemas(Problem, FieldErrorDoc, dto::common::Warning, dto::common::PlanStep, dto::zones::ZonesDto)),
     tags(
         (name = "impact", description = "Contact of the rock on the column"),
         (name = "column", description = "Column vibration and energy after an impact"),

@@ -299,6 +299,43 @@ pub struct FloorDto {
 }
 
 /// Schema of the `geojson` field: a GeoJSON object (RFC 7946), with an example.
+/// `face.zones`: null, the zones (`ZonesDto`), or in `inputs` their echo `{"kind", "sha256"}`.
+fn zones_schema() -> utoipa::openapi::schema::Schema {
+    use utoipa::openapi::schema::{ObjectBuilder, OneOfBuilder, Type};
+    use utoipa::openapi::{Ref, RefOr};
+    let echo = ObjectBuilder::new()
+        .schema_type(Type::Object)
+        .description(Some(
+            "The zones as echoed in `inputs`: the kind of the zone map and the SHA-256 of the \
+             zones object re-serialized as compact JSON with its keys sorted (never sent).",
+        ))
+        .property(
+            "kind",
+            ObjectBuilder::new()
+                .schema_type(Type::String)
+                .enum_values(Some(["esri_ascii", "polygons"])),
+        )
+        .property("sha256", ObjectBuilder::new().schema_type(Type::String))
+        .required("kind")
+        .required("sha256")
+        .additional_properties(Some(
+            utoipa::openapi::schema::AdditionalProperties::FreeForm(false),
+        ));
+    OneOfBuilder::new()
+        .item(ObjectBuilder::new().schema_type(Type::Null))
+        .item(RefOr::Ref(Ref::from_schema_name("ZonesDto")))
+        .item(echo)
+        .description(Some(
+            "Materials of the floor by zone: integer codes over the floor (an ESRI ASCII grid or \
+             polygons, in the floor's own frame) and a material per code, each field defaulting \
+             to the face's (null: one material, the fields above). Echoed in `inputs` as \
+             `{\"kind\", \"sha256\"}`.",
+        ))
+        .default(Some(Value::Null))
+        .build()
+        .into()
+}
+
 #[allow(deprecated)] // `example`, as the derived schemas have it (not `examples`)
 fn geojson_schema() -> utoipa::openapi::schema::Object {
     utoipa::openapi::schema::ObjectBuilder::new()
@@ -449,7 +486,7 @@ pub struct FaceDto {
     /// polygons, in the floor's own frame) and a material per code, each field defaulting to
     /// the face's (null: one material, the fields above). Echoed in `inputs` as
     /// `{"kind", "sha256"}`.
-    #[schema(default = json!(null))]
+    #[schema(schema_with = zones_schema)]
     #[serde(
         skip_serializing_if = "Option::is_none",
         serialize_with = "super::zones::echo"
