@@ -107,7 +107,7 @@ const MIGRATION_GROUPS = [
       })),
       ...[0, 1, 2].map((k) => ({
         pointer: `/release/angular_velocity_rad_s/${k}`, label: `<i>ω</i><sub>${'xyz'[k]}</sub>`, unit: 'rad/s',
-        choice: { value: 0, why: 'not spinning' },
+        choice: { value: 0, why: 'not spinning: no initial angular velocity' },
       })),
     ],
   },

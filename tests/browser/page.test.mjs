@@ -297,8 +297,10 @@ async function pageSection(page) {
     // The page's own starting values are few and each says why.
     const choices = controls.filter((c) => c.choice);
     // (four of them the ensembles' targets "until precise enough" and one the design search's acceptable
-    // probability, which the server has no default for)
-    assert(choices.length <= 15 && choices.every((c) => c.choice.length > 20), `page choices: ${choices.map((c) => c.pointer).join(', ')}`);
+    // probability, which the server has no default for; a vector the server has no default for —
+    // block dimensions, release velocity, orientation, spin — counts once, its components together)
+    const distinct = new Set(choices.map((c) => c.pointer.replace(/\/\d+$/, '')));
+    assert(distinct.size <= 19 && choices.every((c) => c.choice.length > 20), `page choices: ${choices.map((c) => c.pointer).join(', ')}`);
     // Settings fields: the recommended preset where it names them, else the server's default.
     const rec = presets.presets.recommended;
     for (const [form, pointer, want] of [
