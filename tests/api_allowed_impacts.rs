@@ -8,14 +8,10 @@
 //! it); asking for none changes nothing else of the answer.
 
 mod common;
+use common::ok;
 
 use common::{post, rel};
 use serde_json::{Value, json};
-
-fn ok(r: &common::Reply) -> Value {
-    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
-    r.json()
-}
 
 const ROCK: f64 = 0.25;
 const DENSITY: f64 = 2700.0;

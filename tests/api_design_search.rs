@@ -8,15 +8,11 @@
 //! field; a sharded scene refuses `design`.
 
 mod common;
+use common::ok;
 
 use common::{assert_problem, assert_rejections, post};
 use gangue::physics::stats::interval::{Z_95, wilson_interval};
 use serde_json::{Value, json};
-
-fn ok(r: &common::Reply) -> Value {
-    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
-    r.json()
-}
 
 const RUNS: u64 = 300;
 const ACCEPTABLE: f64 = 0.05;

@@ -7,6 +7,7 @@
 //! rotation (stated per test); malformed files are refused naming the line or the feature.
 
 mod common;
+use common::migrate_ok as ok;
 
 use common::{assert_problem, post, rel};
 use serde_json::{Value, json};
@@ -23,12 +24,6 @@ fn data(name: &str) -> String {
 fn results(mut v: Value) -> Value {
     v.as_object_mut().unwrap().remove("inputs");
     v
-}
-
-async fn ok(app: &axum::Router, body: &Value) -> Value {
-    let r = post(app, "/v1/migration", body).await;
-    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
-    r.json()
 }
 
 fn hex(bytes: &[u8]) -> String {

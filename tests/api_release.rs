@@ -8,20 +8,10 @@
 //! where and past which boundary.
 
 mod common;
+use common::migrate_ok as ok;
 
 use common::{assert_problem, post, rel};
 use serde_json::{Value, json};
-
-async fn ok(app: &axum::Router, body: &Value) -> Value {
-    let r = post(app, "/v1/migration", body).await;
-    assert_eq!(
-        r.status,
-        200,
-        "{body}: {}",
-        String::from_utf8_lossy(&r.body)
-    );
-    r.json()
-}
 
 fn data(name: &str) -> String {
     let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -5,14 +5,10 @@
 //! reciprocal; bad rates are refused naming the field.
 
 mod common;
+use common::ok;
 
 use common::{assert_problem, post, rel};
 use serde_json::{Value, json};
-
-fn ok(r: &common::Reply) -> Value {
-    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
-    r.json()
-}
 
 const RUNS: u64 = 400;
 

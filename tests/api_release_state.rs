@@ -8,22 +8,12 @@
 //! friction and restitution draws as they were (common random numbers).
 
 mod common;
+use common::migrate_ok as ok;
 
 use common::{assert_problem, post, rel};
 use serde_json::{Value, json};
 
 const G: f64 = 9.81;
-
-async fn ok(app: &axum::Router, body: &Value) -> Value {
-    let r = post(app, "/v1/migration", body).await;
-    assert_eq!(
-        r.status,
-        200,
-        "{body}: {}",
-        String::from_utf8_lossy(&r.body)
-    );
-    r.json()
-}
 
 fn has_warning(b: &Value, code: &str) -> bool {
     b["warnings"]

@@ -6,14 +6,10 @@
 //! outcome fractions sum to 1 and exceedance probabilities are counts over all runs.
 
 mod common;
+use common::ok;
 
 use common::{assert_rejections, post, rel};
 use serde_json::{Value, json};
-
-fn ok(r: &common::Reply) -> Value {
-    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
-    r.json()
-}
 
 /// Removes the members that legitimately differ between a nested and a standalone response.
 fn strip_echo(mut v: Value) -> Value {

@@ -4,14 +4,10 @@
 //! allowed run and says so; bad targets are refused naming the field.
 
 mod common;
+use common::ok;
 
 use common::{assert_rejections, post};
 use serde_json::{Value, json};
-
-fn ok(r: &common::Reply) -> Value {
-    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
-    r.json()
-}
 
 /// [`common::risky_scene`] of at most `runs` runs, without the CSV, with a target when given.
 fn scene(runs: u64, target: Option<Value>) -> Value {

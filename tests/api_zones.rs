@@ -5,16 +5,11 @@
 //! their pointer.
 
 mod common;
+use common::migrate_ok as ok;
 
 use common::{post, rel};
 use gangue::physics::migration::MapFrame;
 use serde_json::{Value, json};
-
-async fn ok(app: &axum::Router, body: &Value) -> Value {
-    let r = post(app, "/v1/migration", body).await;
-    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
-    r.json()
-}
 
 /// The answer without `inputs`, `meta` and the events' zone codes: what the physics gave.
 fn physics_of(mut b: Value) -> Value {

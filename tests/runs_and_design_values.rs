@@ -12,14 +12,10 @@
 //! translational energy m g s (sin θ − μ cos θ); a rolling one carries ½ (2/5 m r²) ω² = m v²/5.
 
 mod common;
+use common::ok;
 
 use common::{post, rel};
 use serde_json::{Value, json};
-
-fn ok(r: &common::Reply) -> Value {
-    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
-    r.json()
-}
 
 /// The CSV as its header and rows of cells.
 struct Csv {

@@ -56,7 +56,10 @@ const MIGRATION_GROUPS = [
         options: [['cube', 'cube'], ['sphere', 'sphere (r = L/2)'], ['cuboid', 'cuboid (dimensions below)'], ['ellipsoid', 'ellipsoid (dimensions below)']],
         hint: 'the shape sets the mass and, for the rigid block, how it tumbles; a cuboid or an ellipsoid takes its measured dimensions',
       },
-      { pointer: '/rock/side_length_m', label: 'Cube side <i>L</i>', unit: 'mm', exp: -3 },
+      {
+        pointer: '/rock/side_length_m', label: 'Size <i>L</i>', unit: 'mm', exp: -3,
+        hint: 'a cube\'s side or a sphere\'s diameter; a cuboid or an ellipsoid takes its dimensions below instead',
+      },
       { pointer: '/rock/density_kg_m3', label: 'Density <i>ρ</i>', unit: 'kg/m³' },
       {
         pointer: '/lumped_mass/motion', label: 'Ground motion', kind: 'select',

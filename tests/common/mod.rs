@@ -98,6 +98,25 @@ pub async fn post(app: &Router, path: &str, body: &Value) -> Reply {
     .await
 }
 
+/// The body of a 200 answer as JSON (panics with the body text for any other status).
+pub fn ok(r: &Reply) -> Value {
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    r.json()
+}
+
+/// POSTs a migration request and returns its 200 answer as JSON (panics with the request and
+/// the body text for any other status).
+pub async fn migrate_ok(app: &Router, body: &Value) -> Value {
+    let r = post(app, "/v1/migration", body).await;
+    assert_eq!(
+        r.status,
+        200,
+        "{body}: {}",
+        String::from_utf8_lossy(&r.body)
+    );
+    r.json()
+}
+
 /// GETs a path.
 pub async fn get(app: &Router, path: &str) -> Reply {
     send(app, Method::GET, path, None, Vec::new(), None).await

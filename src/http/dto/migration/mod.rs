@@ -942,15 +942,15 @@ impl ReleaseDto {
                     "",
                 );
             }
-            if !inside {
-                // each component out of range is named already
-            } else if !rigid {
+            // A component out of range is named already; only a whole in-range orientation is
+            // checked further.
+            if inside && !rigid {
                 ck.push(
                     p("orientation_wxyz"),
                     json!(q),
                     "an orientation belongs to the rigid-block method (a point mass has none)",
                 );
-            } else if !(n.is_finite() && (n - 1.0).abs() <= 1e-6) {
+            } else if inside && !(n.is_finite() && (n - 1.0).abs() <= 1e-6) {
                 ck.push(
                     p("orientation_wxyz"),
                     json!(q),
