@@ -457,3 +457,72 @@ fn rigid_blocks_placed_on_a_rough_grid_start_on_the_relief_and_gain_no_energy() 
         }
     }
 }
+
+/// A block dropped beside a step of relief higher than the drop starts on the relief, not
+/// inside it. Before, a 1.85 m cube dropped 0.22 m beside a 0.5 m step (a grid of 1 m spacing
+/// on a 15° face) started 0.3 m inside the step; its springs held 0.4 MJ and threw the 15.7 t
+/// block off at 9.4 m/s within 0.2 s. Now it starts resting on the step's edge with no spring
+/// loaded beyond its rest overlap: 0.2 s later it moves slower than a free fall (g·t), has
+/// stored at most its weight's rest energy, and the account closes.
+#[test]
+fn a_block_dropped_beside_a_step_of_relief_starts_clear_of_it() {
+    let heights = vec![
+        vec![
+            0.060_215_847,
+            -0.464_612_946,
+            -0.514_376_331,
+            -1.011_344_058,
+            -1.041_303_448,
+        ],
+        vec![
+            0.043_048_928,
+            -0.474_626_119,
+            -0.468_638_255,
+            -1.075_879_243,
+            -1.073_660_801,
+        ],
+        vec![
+            0.045_634_169,
+            -0.503_795_527,
+            -0.474_554_947,
+            -0.999_581_604,
+            -1.006_439_235,
+        ],
+    ];
+    let mut c = MigrationCase {
+        method: Method::RigidBlock,
+        ..MigrationCase::default()
+    };
+    c.rock.shape = RockShape::Cube;
+    c.rock.side_length = 1.845_320_097;
+    c.face.dip_deg = 15.0;
+    c.face.friction_coefficient = 0.0;
+    c.face.length = 4.141_104_722;
+    c.face.floor = FloorSpec::Grid {
+        origin: [0.0, -1.0],
+        spacing: 1.0,
+        heights,
+    };
+    c.rigid_block.critical_damping_ratio = 0.05;
+    c.release.drop_height = 0.220_731_68;
+    c.end_time = Some(0.2);
+    let r = run(&c, &Control::unlimited()).unwrap();
+    let g = c.gravity;
+    let rb = r.rigid_block.unwrap();
+    assert!(r.arrival.speed <= g * 0.2, "{:?}", r.arrival);
+    assert!(
+        r.arrival.kinetic_energy <= 0.5 * rb.mass * (g * 0.2).powi(2),
+        "{:?}",
+        r.arrival
+    );
+    // a rest overlap under the whole weight on the stiffness, ten times over
+    let rest = 10.0 * 0.5 * (rb.mass * g).powi(2) / c.rigid_block.normal_stiffness;
+    assert!(r.energy.stored <= rest, "{:?}", r.energy);
+    // and the depth and the account within the bounds of the property tests above
+    check_within(&c, &r, 1.0).unwrap();
+    assert!(
+        r.energy.residual.abs() <= 2e-3 * r.energy.total_start,
+        "{:?}",
+        r.energy
+    );
+}
