@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 use utoipa::ToSchema;
 
-use super::common::{Checker, Meta, PlanStep, Warning, some};
+use super::common::{Checker, Meta, PlanStep, Warning, non_null};
 use crate::calc::Report;
 use crate::calc::spalling::Case as SpallingCase;
 use crate::http::error::{ApiError, num};
@@ -78,23 +78,23 @@ pub struct ZoneSupportsDto {
 pub struct SpallingRequest {
     /// Counts per zone, 1–1000 zones (default: Table 1, unless `events` is given).
     #[schema(example = json!([{"name": "lower", "spalling": 118, "high_resistance": 8, "low_resistance": 22, "spalling_and_high": 5, "spalling_and_low": 4.5}]))]
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     pub zones: Option<Vec<ZoneCountsDto>>,
     /// Event log (instead of `zones`).
     #[schema(example = json!([{"support": 12, "spalling": true, "resistance_n": 6.2e6}]))]
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     pub events: Option<Vec<SpallingEventDto>>,
     #[schema(example = json!([{"name": "lower", "first": 1, "last": 21}, {"name": "middle", "first": 22, "last": 42}, {"name": "upper", "first": 43, "last": 62}]))]
     /// Zones of the event log as support ranges (default: the paper's lower 1–21, middle 22–42, upper 43–62).
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     pub zone_supports: Option<Vec<ZoneSupportsDto>>,
     /// Event B: resistance above this, N, in (0, 1e12] (default 6e6, event log only).
     #[schema(exclusive_minimum = 0.0, maximum = 1e12, example = 6.0e6)]
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     pub high_resistance_n: Option<f64>,
     /// Event C: resistance below this, N, in (0, high_resistance_n] (default 1e6, event log only).
     #[schema(exclusive_minimum = 0.0, maximum = 1e12, example = 1.0e6)]
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     pub low_resistance_n: Option<f64>,
 }
 

@@ -98,24 +98,24 @@ pub struct ZoneBlockDto {
     /// Normal contact stiffness k_n, N/m, in [1e3, 1e12] (default: `face.normal_stiffness_n_m`).
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schema(schema_with = zone_normal_stiffness_schema)]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub normal_stiffness_n_m: Option<f64>,
     /// Shear contact stiffness k_s, N/m, in [1e3, 1e12] (default: `face.shear_stiffness_n_m`).
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schema(schema_with = zone_shear_stiffness_schema)]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub shear_stiffness_n_m: Option<f64>,
     /// Critical damping ratio β, in [0, 1) (default: `face.critical_damping_ratio`, drawn from
     /// `monte_carlo.critical_damping_ratio` in an ensemble; given here, it is not drawn).
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schema(schema_with = zone_critical_damping_schema)]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub critical_damping_ratio: Option<f64>,
     /// Coulomb friction μ of the block's contacts, in [0, 2] (default: the material's μ and
     /// its draw; given here, it is not drawn).
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schema(schema_with = zone_friction_schema)]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub friction_coefficient: Option<f64>,
 }
 
@@ -131,45 +131,45 @@ pub struct ZoneMaterialDto {
     /// A name for people (at most 200 characters; not used in the calculation).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[schema(example = "scree")]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub name: Option<String>,
     /// Coulomb friction μ, in [0, 2] (default: `face.friction_coefficient`; given without a
     /// distribution, it is μ in every run of an ensemble too).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[schema(schema_with = zone_friction_schema)]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub friction_coefficient: Option<f64>,
     /// Normal restitution e_n, in [0, 1] (default: `face.restitution_normal`; given without a
     /// distribution, it is e_n at every impact of an ensemble too).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[schema(schema_with = zone_restitution_normal_schema)]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub restitution_normal: Option<f64>,
     /// Tangential restitution e_t, in [0, 1] (default: `face.restitution_tangential`; as
     /// `restitution_normal`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[schema(schema_with = zone_restitution_tangential_schema)]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub restitution_tangential: Option<f64>,
     /// e_n drawn at every impact on this material in an ensemble, bounds in [0, 1] (default:
     /// `monte_carlo.restitution_normal`, unless `restitution_normal` is given).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub restitution_normal_distribution: Option<DistributionDto>,
     /// e_t drawn at every impact on this material in an ensemble, bounds in [0, 1] (default:
     /// `monte_carlo.restitution_tangential`, unless `restitution_tangential` is given).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub restitution_tangential_distribution: Option<DistributionDto>,
     /// μ drawn once per run in an ensemble, bounds in [0, 2] (default:
     /// `monte_carlo.friction_coefficient`, unless `friction_coefficient` is given). Equal
     /// distributions share one draw.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub friction_coefficient_distribution: Option<DistributionDto>,
     /// The rigid block's contact parameters on this material (default: the face's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub rigid_block: Option<ZoneBlockDto>,
 }
 
@@ -184,18 +184,18 @@ pub struct ZonesDto {
     /// NODATA cells take `outside_code`.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schema(example = "ncols 2\nnrows 1\nxllcorner 0\nyllcorner -50\ncellsize 100\n1 2\n")]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub esri_ascii: Option<String>,
     /// Polygons with codes, instead of `esri_ascii`; later polygons win where they overlap.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schema(example = json!([{"code": 2, "points_m": [[40.0, -20.0], [80.0, -20.0], [80.0, 20.0], [40.0, 20.0]]}]))]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub polygons: Option<Vec<ZonePolygonDto>>,
     /// Code outside every polygon, on NODATA cells and off the code grid (default: the first
     /// material's).
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schema(example = 1)]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub outside_code: Option<i64>,
     /// The materials, one per code (1 to 64).
     #[schema(example = json!([{"code": 1, "name": "scree"},

@@ -7,7 +7,7 @@ use utoipa::ToSchema;
 
 use super::common::Bound::{Closed, Open};
 use super::common::{
-    Checker, FieldDefault, Meta, NumberField, PlanStep, RockDto, Warning, number_schemas, some,
+    Checker, FieldDefault, Meta, NumberField, PlanStep, RockDto, Warning, non_null, number_schemas,
 };
 use super::floor::{self as formats, Sorted};
 use super::param::Layout;
@@ -246,46 +246,46 @@ pub struct FloorDto {
     #[schema(default = "plane", example = "plane")]
     pub kind: FloorKind,
     /// Grid origin [x₀, y₀], m (default [0, 0]).
-    #[serde(deserialize_with = "some")]
+    #[serde(deserialize_with = "non_null")]
     #[schema(default = json!([0.0, 0.0]), example = json!([0.0, -5.0]))]
     pub origin_m: Option<[f64; 2]>,
     /// Grid spacing d, m, in [0.01, 100].
-    #[serde(deserialize_with = "some")]
+    #[serde(deserialize_with = "non_null")]
     #[schema(schema_with = floor_spacing_schema)]
     pub spacing_m: Option<f64>,
     /// Grid heights: `heights_m[i][j]` is z at (x₀ + j·d, y₀ + i·d), m; at most 4096 × 4096.
-    #[serde(deserialize_with = "some")]
+    #[serde(deserialize_with = "non_null")]
     #[schema(example = json!([[0.0, -1.0, -2.0], [0.0, -1.0, -2.0]]))]
     pub heights_m: Option<Vec<Vec<f64>>>,
     /// A grid as the text of an ESRI ASCII file (`ncols …`), instead of `origin_m`, `spacing_m`
     /// and `heights_m`: square cells, heights at the cells' centres, the first data row the
     /// northernmost, one row per line, NODATA cells are holes in the floor.
-    #[serde(deserialize_with = "some")]
+    #[serde(deserialize_with = "non_null")]
     #[schema(
         example = "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value -9999\n0 -1 -2\n0 -1 -2\n"
     )]
     pub esri_ascii: Option<String>,
     /// Contour polylines with elevations.
-    #[serde(deserialize_with = "some")]
+    #[serde(deserialize_with = "non_null")]
     #[schema(example = json!([{"elevation_m": 0.0, "points_m": [[0.0, -5.0], [0.0, 5.0]]}, {"elevation_m": -10.0, "points_m": [[10.0, -5.0], [10.0, 5.0]]}]))]
     pub contours: Option<Vec<ContourDto>>,
     /// Contours as a GeoJSON FeatureCollection of LineString / MultiLineString features in
     /// projected metres, instead of `contours`.
-    #[serde(deserialize_with = "some")]
+    #[serde(deserialize_with = "non_null")]
     #[schema(schema_with = geojson_schema)]
     pub geojson: Option<Value>,
     /// Property of a GeoJSON feature holding its elevation, m (default "elevation"; without
     /// it, the third coordinate).
-    #[serde(deserialize_with = "some")]
+    #[serde(deserialize_with = "non_null")]
     #[schema(default = "elevation", example = "elevation")]
     pub elevation_property: Option<String>,
     /// Largest spacing of resampled contour points, m, in [0.01, 100] (default 1).
-    #[serde(deserialize_with = "some")]
+    #[serde(deserialize_with = "non_null")]
     #[schema(schema_with = floor_resolution_schema)]
     pub resolution_m: Option<f64>,
     /// Map coordinates: the grid or contours are given in (E, N) and placed on the face by a
     /// rigid transform.
-    #[serde(deserialize_with = "some")]
+    #[serde(deserialize_with = "non_null")]
     pub map: Option<MapDto>,
     /// SHA-256 of the floor as received (set when resolved; echoed in `inputs`).
     #[serde(skip)]
@@ -650,22 +650,22 @@ pub struct DistributionDto {
     pub distribution: DistributionKind,
     /// Lower bound (uniform, truncated_normal), inside the parameter's own range: restitution
     /// [0, 1], friction [0, 2], damping ratio [0, 1).
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     #[schema(example = 0.2)]
     pub min: Option<f64>,
     /// Upper bound (uniform, truncated_normal), at least `min` and inside the parameter's own
     /// range: restitution [0, 1], friction [0, 2], damping ratio [0, 1).
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     #[schema(example = 0.4)]
     pub max: Option<f64>,
     /// Mean (normal, truncated_normal), in [−1000, 1000], or in the field's own range where that
     /// is wider (`density_kg_m3`: up to 20 000).
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     #[schema(example = 0.3)]
     pub mean: Option<f64>,
     /// Standard deviation, in [0, 1000], or up to the width of the field's own range where that
     /// is wider (normal, truncated_normal).
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "some")]
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "non_null")]
     #[schema(example = 0.05)]
     pub std: Option<f64>,
 }

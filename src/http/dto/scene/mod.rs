@@ -51,7 +51,7 @@ pub struct SupportDto {
     /// the drop its along-dip position runs from release.along_dip_m − drop_height_m·sin θ to
     /// release.along_dip_m, so either kind standing there is reached in the fall.
     #[schema(minimum = 0.0, maximum = 10000.0, example = 60.0)]
-    #[serde(deserialize_with = "super::common::some")]
+    #[serde(deserialize_with = "super::common::non_null")]
     pub along_dip_m: Option<f64>,
     /// Across position y of the column axis, m, in [−1000, 1000] (null: the support spans the
     /// face).
