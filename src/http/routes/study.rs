@@ -133,7 +133,7 @@ fn refuse_name(
             )
         }
         Ok(_) => ApiError::invalid(
-            &format!("/parameters/{i}/name"),
+            format!("/parameters/{i}/name"),
             json!(p.name),
             "is not a numeric field of the column request that a study can sweep",
         ),
