@@ -256,13 +256,13 @@ impl Output {
     }
 }
 
-/// The paper's study: each parameter (request name), its minimum and maximum (SI units as the
-/// name says), in the paper's order.
-pub const PAPER_PARAMETERS: [(&str, f64, f64); 4] = [
-    ("velocity_m_s", 4.0, 6.0),
-    ("rock.side_length_m", 0.2, 0.3),
-    ("rock.elastic_modulus_pa", 4e9, 6e9),
-    ("rock.density_kg_m3", 2000.0, 3000.0),
+/// The paper's study: each parameter, its minimum and maximum (SI units of the parameter), in
+/// the paper's order.
+pub const PAPER_PARAMETERS: [(Parameter, f64, f64); 4] = [
+    (Parameter::Velocity, 4.0, 6.0),
+    (Parameter::RockSideLength, 0.2, 0.3),
+    (Parameter::RockElasticModulus, 4e9, 6e9),
+    (Parameter::RockDensity, 2000.0, 3000.0),
 ];
 
 /// One statement of the paper beside this study's result.
@@ -280,27 +280,28 @@ pub struct PaperComparison {
     pub note: String,
 }
 
-/// The paper's symbol of a parameter (`v`, `L`, `ρ`, `E`); other parameters by name.
+/// The paper's symbol of a parameter (`v`, `L`, `ρ`, `E`); `None` for one the paper does not
+/// sweep.
 #[must_use]
-pub fn symbol(name: &str) -> &str {
-    match name {
-        "velocity_m_s" => "v",
-        "rock.side_length_m" => "L",
-        "rock.density_kg_m3" => "ρ",
-        "rock.elastic_modulus_pa" => "E",
-        other => other,
+pub fn symbol(p: Parameter) -> Option<&'static str> {
+    match p {
+        Parameter::Velocity => Some("v"),
+        Parameter::RockSideLength => Some("L"),
+        Parameter::RockDensity => Some("ρ"),
+        Parameter::RockElasticModulus => Some("E"),
+        _ => None,
     }
 }
 
-/// An ordering in the paper's notation (`v > L = ρ > E`): groups of indices into `names`,
-/// largest first.
+/// An ordering in the paper's notation (`v > L = ρ > E`): groups of indices into `params`,
+/// largest first (a parameter the paper does not sweep as `?`).
 #[must_use]
-pub fn ordering_symbols(groups: &[Vec<usize>], names: &[&str]) -> String {
+pub fn ordering_symbols(groups: &[Vec<usize>], params: &[Parameter]) -> String {
     groups
         .iter()
         .map(|g| {
             g.iter()
-                .map(|&i| symbol(names[i]))
+                .map(|&i| symbol(params[i]).unwrap_or("?"))
                 .collect::<Vec<_>>()
                 .join(" = ")
         })
@@ -357,22 +358,22 @@ const MEASURES: [&str; 3] = ["span_over_base", "ratio", "elasticity"];
 /// the base, beside the one this study computes (physics.md §D.3, §D.4). Empty unless the
 /// study sweeps exactly the paper's four parameters over the paper's ranges.
 ///
-/// `params`: the swept parameters (name, min, max) in request order; `two_body`: the base uses
-/// the two-body E*; `coupled`: the base's column model is coupled; `groups`: per output, its
-/// orderings by span over base, ratio and elasticity (groups of parameter indices, largest
+/// `params`: the swept parameters (quantity, min, max) in request order; `two_body`: the base
+/// uses the two-body E*; `coupled`: the base's column model is coupled; `groups`: per output,
+/// its orderings by span over base, ratio and elasticity (groups of parameter indices, largest
 /// first); `x_values` and `prop_groups`: the energy-proportion fractions and the ordering at
-/// each; `base_ratio`: the base's energy ratio.
+/// each; `base_ratio`: the base's energy ratio (Figure 21's level).
 #[must_use]
 pub fn compare_with_paper(
-    params: &[(&str, f64, f64)],
+    params: &[(Parameter, f64, f64)],
     two_body: bool,
     coupled: bool,
-    groups: &[(String, [Vec<Vec<usize>>; 3])],
+    groups: &[(Output, [Vec<Vec<usize>>; 3])],
     x_values: &[f64],
     prop_groups: &[Vec<Vec<usize>>],
     base_ratio: f64,
 ) -> Vec<PaperComparison> {
-    let names: Vec<&str> = params.iter().map(|p| p.0).collect();
+    let names: Vec<Parameter> = params.iter().map(|p| p.0).collect();
     let same = params.len() == PAPER_PARAMETERS.len()
         && PAPER_PARAMETERS
             .iter()
@@ -381,15 +382,18 @@ pub fn compare_with_paper(
         return Vec::new();
     }
     let (d_name, u_name) = if coupled {
-        ("max_contact_deformation_m", "column_energy_after_contact_j")
+        (
+            Output::MaxContactDeformation,
+            Output::ColumnEnergyAfterContact,
+        )
     } else {
-        ("max_deformation_m", "absorbed_energy_j")
+        (Output::MaxDeformation, Output::AbsorbedEnergy)
     };
     let claims = [
         ("Figure 12–14 δmax ordering", d_name, "v > L > ρ > E"),
         (
             "Figures 12–20 Pmax ordering",
-            "max_force_n",
+            Output::MaxForce,
             "L > v > ρ > E",
         ),
         (
@@ -400,13 +404,13 @@ pub fn compare_with_paper(
     ];
     let mut out = Vec::new();
     for (item, output, claim) in claims {
-        let Some((_, g)) = groups.iter().find(|(n, _)| n == output) else {
+        let Some((_, g)) = groups.iter().find(|(n, _)| *n == output) else {
             continue;
         };
         for (m, measure) in MEASURES.iter().enumerate() {
             let ours = ordering_symbols(&g[m], &names);
             let reproduced = ours == claim;
-            let note = if output == "max_force_n" {
+            let note = if output == Output::MaxForce {
                 if reproduced {
                     "Reproduced: Pmax L > v > ρ > E holds by every measure for both E* conventions and both laws (physics.md §D.3).".to_string()
                 } else {
@@ -500,11 +504,11 @@ pub fn compare_with_paper(
 mod tests {
     use super::*;
 
-    const NAMES: [&str; 4] = [
-        "velocity_m_s",
-        "rock.side_length_m",
-        "rock.elastic_modulus_pa",
-        "rock.density_kg_m3",
+    const NAMES: [Parameter; 4] = [
+        Parameter::Velocity,
+        Parameter::RockSideLength,
+        Parameter::RockElasticModulus,
+        Parameter::RockDensity,
     ];
 
     #[test]
@@ -512,14 +516,14 @@ mod tests {
         let groups = [vec![0], vec![1, 3], vec![2]];
         assert_eq!(ordering_symbols(&groups, &NAMES), "v > L = ρ > E");
         assert_eq!(
-            ordering_symbols(&[vec![0]], &["column.length_m"]),
-            "column.length_m"
+            ordering_symbols(&[vec![0]], &[Parameter::ColumnLength]),
+            "?"
         );
     }
 
     #[test]
     fn the_comparison_needs_the_papers_parameters_over_the_papers_ranges() {
-        let compare = |params: &[(&str, f64, f64)], ratio: f64| {
+        let compare = |params: &[(Parameter, f64, f64)], ratio: f64| {
             compare_with_paper(params, false, false, &[], &[], &[], ratio)
         };
         assert!(compare(&PAPER_PARAMETERS[..3], 0.101).is_empty());

@@ -63,12 +63,23 @@ pub enum StudyGrid {
 pub fn paper_parameters() -> Vec<StudyParameterDto> {
     crate::calc::study::PAPER_PARAMETERS
         .iter()
-        .map(|&(n, min, max)| StudyParameterDto {
-            name: n.into(),
+        .map(|&(p, min, max)| StudyParameterDto {
+            name: paper_name(p).into(),
             min,
             max,
         })
         .collect()
+}
+
+/// The request field of a parameter of the paper's study (physics.md §D.1).
+fn paper_name(p: Parameter) -> &'static str {
+    match p {
+        Parameter::Velocity => "velocity_m_s",
+        Parameter::RockSideLength => "rock.side_length_m",
+        Parameter::RockElasticModulus => "rock.elastic_modulus_pa",
+        Parameter::RockDensity => "rock.density_kg_m3",
+        _ => "",
+    }
 }
 
 /// The paper's Figure 21 abscissae x = p/p_max: 2/3, 3/4, 5/6, 11/12, 1.

@@ -779,6 +779,7 @@ fn finish_study(plan: StudyPlan, results: Vec<Vec<f64>>) -> Result<StudyResponse
         base_resolved,
         coupled,
         outputs,
+        reads,
         params,
         values,
         pairs,
@@ -832,7 +833,7 @@ fn finish_study(plan: StudyPlan, results: Vec<Vec<f64>>) -> Result<StudyResponse
     for (o, name) in outputs.iter().enumerate() {
         let (dto, groups) = output_sensitivity(o, name, &params, &ranks, &y, n, &mut warnings);
         sensitivity.push((name.clone(), dto));
-        groups_by_output.push((name.clone(), groups));
+        groups_by_output.push((reads[o].1, groups));
     }
     let prop_groups: Vec<Vec<Vec<usize>>> = (0..req.x_values.len())
         .map(|k| {
@@ -855,9 +856,9 @@ fn finish_study(plan: StudyPlan, results: Vec<Vec<f64>>) -> Result<StudyResponse
             .map(|g| ordering_names(g, &params))
             .collect(),
     };
-    let swept: Vec<(&str, f64, f64)> = params
+    let swept: Vec<(calc::study::Parameter, f64, f64)> = params
         .iter()
-        .map(|p| (p.name.as_str(), p.min, p.max))
+        .map(|p| (p.field.parameter(), p.min, p.max))
         .collect();
     let paper_comparison: Vec<PaperComparisonDto> = calc::study::compare_with_paper(
         &swept,
