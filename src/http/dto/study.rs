@@ -6,8 +6,9 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use utoipa::ToSchema;
 
-use super::column::ColumnRequest;
+use super::column::{ColumnOutputDto, ColumnRequest};
 use super::common::{PlanStep, Warning};
+use crate::calc::study::{Output, Parameter};
 
 /// The paper's swept parameters, in the canonical order of orderings (api.md).
 pub const CANONICAL: [&str; 4] = [
@@ -62,12 +63,23 @@ pub enum StudyGrid {
 pub fn paper_parameters() -> Vec<StudyParameterDto> {
     crate::calc::study::PAPER_PARAMETERS
         .iter()
-        .map(|&(n, min, max)| StudyParameterDto {
-            name: n.into(),
+        .map(|&(p, min, max)| StudyParameterDto {
+            name: paper_name(p).into(),
             min,
             max,
         })
         .collect()
+}
+
+/// The request field of a parameter of the paper's study (physics.md §D.1).
+fn paper_name(p: Parameter) -> &'static str {
+    match p {
+        Parameter::Velocity => "velocity_m_s",
+        Parameter::RockSideLength => "rock.side_length_m",
+        Parameter::RockElasticModulus => "rock.elastic_modulus_pa",
+        Parameter::RockDensity => "rock.density_kg_m3",
+        _ => "",
+    }
 }
 
 /// The paper's Figure 21 abscissae x = p/p_max: 2/3, 3/4, 5/6, 11/12, 1.
@@ -256,35 +268,104 @@ enum Models {
     Coupled,
 }
 
-/// Every study output and the models it exists for: numeric fields the column response always
-/// has, in the order the error message lists them.
-const OUTPUTS: [(&str, Models); 25] = [
-    ("damping_coefficient_n_s_m2", Models::Both),
-    ("modal_mass_kg", Models::Both),
-    ("modal_stiffness_n_m", Models::Both),
-    ("modal_damping_n_s_m", Models::Both),
-    ("midpoint_mode_value", Models::Both),
-    ("decay_rate_1_s", Models::Both),
-    ("midpoint_stiffness_n_m", Models::Both),
-    ("midpoint_mass_kg", Models::Both),
-    ("kinetic_energy_j", Models::Both),
-    ("stress_utilisation", Models::Both),
-    ("max_force_n", Models::Both),
-    ("energy_ratio", Models::Both),
-    ("max_bending_stress_pa.clamp", Models::Both),
-    ("max_bending_stress_pa.midpoint", Models::Both),
-    ("max_deformation_m", Models::Decoupled),
-    ("initial_modal_displacement_m", Models::Decoupled),
-    ("absorbed_energy_j", Models::Decoupled),
-    ("max_contact_deformation_m", Models::Coupled),
-    ("max_midpoint_displacement_m", Models::Coupled),
-    ("contact_count", Models::Coupled),
-    ("rebound_velocity_m_s", Models::Coupled),
-    ("column_energy_after_contact_j", Models::Coupled),
-    ("rock_velocity_end_m_s", Models::Coupled),
-    ("column_energy_end_j", Models::Coupled),
-    ("damping_energy_j", Models::Coupled),
+/// Every study output, the models it exists for and the result it reads: numeric fields the
+/// column response always has, in the order the error message lists them.
+const OUTPUTS: [(&str, Models, Output); 25] = [
+    (
+        "damping_coefficient_n_s_m2",
+        Models::Both,
+        Output::DampingCoefficient,
+    ),
+    ("modal_mass_kg", Models::Both, Output::ModalMass),
+    ("modal_stiffness_n_m", Models::Both, Output::ModalStiffness),
+    ("modal_damping_n_s_m", Models::Both, Output::ModalDamping),
+    (
+        "midpoint_mode_value",
+        Models::Both,
+        Output::MidpointModeValue,
+    ),
+    ("decay_rate_1_s", Models::Both, Output::DecayRate),
+    (
+        "midpoint_stiffness_n_m",
+        Models::Both,
+        Output::MidpointStiffness,
+    ),
+    ("midpoint_mass_kg", Models::Both, Output::MidpointMass),
+    ("kinetic_energy_j", Models::Both, Output::KineticEnergy),
+    (
+        "stress_utilisation",
+        Models::Both,
+        Output::StressUtilisation,
+    ),
+    ("max_force_n", Models::Both, Output::MaxForce),
+    ("energy_ratio", Models::Both, Output::EnergyRatio),
+    (
+        "max_bending_stress_pa.clamp",
+        Models::Both,
+        Output::ClampStress,
+    ),
+    (
+        "max_bending_stress_pa.midpoint",
+        Models::Both,
+        Output::MidpointStress,
+    ),
+    (
+        "max_deformation_m",
+        Models::Decoupled,
+        Output::MaxDeformation,
+    ),
+    (
+        "initial_modal_displacement_m",
+        Models::Decoupled,
+        Output::InitialModalDisplacement,
+    ),
+    (
+        "absorbed_energy_j",
+        Models::Decoupled,
+        Output::AbsorbedEnergy,
+    ),
+    (
+        "max_contact_deformation_m",
+        Models::Coupled,
+        Output::MaxContactDeformation,
+    ),
+    (
+        "max_midpoint_displacement_m",
+        Models::Coupled,
+        Output::MaxMidpointDisplacement,
+    ),
+    ("contact_count", Models::Coupled, Output::ContactCount),
+    (
+        "rebound_velocity_m_s",
+        Models::Coupled,
+        Output::ReboundVelocity,
+    ),
+    (
+        "column_energy_after_contact_j",
+        Models::Coupled,
+        Output::ColumnEnergyAfterContact,
+    ),
+    (
+        "rock_velocity_end_m_s",
+        Models::Coupled,
+        Output::RockVelocityEnd,
+    ),
+    (
+        "column_energy_end_j",
+        Models::Coupled,
+        Output::ColumnEnergyEnd,
+    ),
+    ("damping_energy_j", Models::Coupled, Output::DampingEnergy),
 ];
+
+/// The result a study output (a name of [`study_outputs`]) reads.
+#[must_use]
+pub fn output_of(name: &str) -> Option<Output> {
+    OUTPUTS
+        .iter()
+        .find(|(n, _, _)| *n == name)
+        .map(|(_, _, o)| *o)
+}
 
 /// Outputs a study may ask for, by model: numeric fields the column response always has.
 #[must_use]
@@ -296,8 +377,8 @@ pub fn study_outputs(coupled: bool) -> Vec<&'static str> {
     };
     OUTPUTS
         .iter()
-        .filter(|(_, m)| *m == Models::Both || *m == own)
-        .map(|(name, _)| *name)
+        .filter(|(_, m, _)| *m == Models::Both || *m == own)
+        .map(|(name, _, _)| *name)
         .collect()
 }
 
@@ -363,4 +444,246 @@ pub fn set_pointer(v: &mut Value, pointer: &str, x: f64) -> bool {
         };
     }
     false
+}
+
+/// A numeric field of the column request a study parameter names (its dotted path), as the
+/// request's own fields: set on a request it is checked by the request's resolution, and it
+/// maps to the [`Parameter`] of the case it sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SweptField {
+    /// `velocity_m_s`.
+    Velocity,
+    /// `rock.side_length_m`.
+    RockSideLength,
+    /// `rock.radius_m`.
+    RockRadius,
+    /// `rock.dimensions_m.i` (of a base that gives them).
+    RockDimension(usize),
+    /// `rock.vertices_m.i.j` (of a base that gives them).
+    RockVertex(usize, usize),
+    /// `rock.random.semi_axes_m.i` (of a base that gives them).
+    RockRandomSemiAxis(usize),
+    /// `rock.density_kg_m3`.
+    RockDensity,
+    /// `rock.elastic_modulus_pa`.
+    RockElasticModulus,
+    /// `rock.poisson_ratio`.
+    RockPoissonRatio,
+    /// `rock.corner_radius_m`.
+    RockCornerRadius,
+    /// `column.outer_diameter_m`.
+    ColumnOuterDiameter,
+    /// `column.inner_diameter_m`.
+    ColumnInnerDiameter,
+    /// `column.length_m`.
+    ColumnLength,
+    /// `column.elastic_modulus_pa`.
+    ColumnElasticModulus,
+    /// `column.poisson_ratio`.
+    ColumnPoissonRatio,
+    /// `column.density_kg_m3`.
+    ColumnDensity,
+    /// `column.yield_stress_pa`.
+    ColumnYieldStress,
+    /// `column.contact_radius_m`.
+    ColumnContactRadius,
+    /// `column.damping_coefficient_n_s_m2`.
+    ColumnDampingCoefficient,
+    /// `column.damping_ratio`.
+    ColumnDampingRatio,
+    /// `initial_midpoint_displacement_m`.
+    InitialMidpointDisplacement,
+    /// `end_time_s`.
+    EndTime,
+    /// `output.duration_s`.
+    HistoryDuration,
+    /// A path that passes through a number, string or boolean of the base request, or past the
+    /// end of one of its arrays: it sets nothing.
+    Nothing,
+}
+
+impl SweptField {
+    /// The field a study parameter's dotted path `name` sets in the base request `sent` (as
+    /// sent, `sent_json` its JSON); `None` when the path does not name a numeric field of that
+    /// request (its refusal is the request's own: see the route).
+    #[must_use]
+    pub fn of(name: &str, sent: &ColumnRequest, sent_json: &Value) -> Option<Self> {
+        let mut probe = sent_json.clone();
+        if !set_pointer(&mut probe, &pointer_of(name), 0.0) {
+            return Some(Self::Nothing);
+        }
+        let segs: Vec<&str> = name.split('.').collect();
+        let index = |s: &str| s.parse::<usize>().ok();
+        let rock = &sent.rock;
+        Some(match segs.as_slice() {
+            ["velocity_m_s"] => Self::Velocity,
+            ["rock", "side_length_m"] => Self::RockSideLength,
+            ["rock", "radius_m"] => Self::RockRadius,
+            ["rock", "dimensions_m", i] if rock.dimensions_m.is_some() => {
+                Self::RockDimension(index(i)?)
+            }
+            ["rock", "vertices_m", i, j] if rock.vertices_m.is_some() => {
+                Self::RockVertex(index(i)?, index(j)?)
+            }
+            ["rock", "random", "semi_axes_m", i] if rock.random.is_some() => {
+                Self::RockRandomSemiAxis(index(i)?)
+            }
+            ["rock", "density_kg_m3"] => Self::RockDensity,
+            ["rock", "elastic_modulus_pa"] => Self::RockElasticModulus,
+            ["rock", "poisson_ratio"] => Self::RockPoissonRatio,
+            ["rock", "corner_radius_m"] => Self::RockCornerRadius,
+            ["column", "outer_diameter_m"] => Self::ColumnOuterDiameter,
+            ["column", "inner_diameter_m"] => Self::ColumnInnerDiameter,
+            ["column", "length_m"] => Self::ColumnLength,
+            ["column", "elastic_modulus_pa"] => Self::ColumnElasticModulus,
+            ["column", "poisson_ratio"] => Self::ColumnPoissonRatio,
+            ["column", "density_kg_m3"] => Self::ColumnDensity,
+            ["column", "yield_stress_pa"] => Self::ColumnYieldStress,
+            ["column", "contact_radius_m"] => Self::ColumnContactRadius,
+            ["column", "damping_coefficient_n_s_m2"] => Self::ColumnDampingCoefficient,
+            ["column", "damping_ratio"] => Self::ColumnDampingRatio,
+            ["initial_midpoint_displacement_m"] => Self::InitialMidpointDisplacement,
+            ["end_time_s"] => Self::EndTime,
+            ["output", "duration_s"] if sent.output.is_none() => Self::HistoryDuration,
+            _ => return None,
+        })
+    }
+
+    /// Sets the field to `x` in `req` (a request as sent: its resolution checks it).
+    pub fn set(self, req: &mut ColumnRequest, x: f64) {
+        let (rock, column) = (&mut req.rock, &mut req.column);
+        match self {
+            Self::Velocity => req.velocity_m_s = x,
+            Self::RockSideLength => rock.side_length_m = x,
+            Self::RockRadius => rock.radius_m = Some(x),
+            Self::RockDimension(i) => {
+                if let Some(v) = rock.dimensions_m.as_mut().and_then(|d| d.get_mut(i)) {
+                    *v = x;
+                }
+            }
+            Self::RockVertex(i, j) => {
+                if let Some(v) = rock
+                    .vertices_m
+                    .as_mut()
+                    .and_then(|v| v.get_mut(i))
+                    .and_then(|p| p.get_mut(j))
+                {
+                    *v = x;
+                }
+            }
+            Self::RockRandomSemiAxis(i) => {
+                if let Some(v) = rock.random.as_mut().and_then(|r| r.semi_axes_m.get_mut(i)) {
+                    *v = x;
+                }
+            }
+            Self::RockDensity => rock.density_kg_m3 = x,
+            Self::RockElasticModulus => rock.elastic_modulus_pa = x,
+            Self::RockPoissonRatio => rock.poisson_ratio = x,
+            Self::RockCornerRadius => rock.corner_radius_m = Some(x),
+            Self::ColumnOuterDiameter => column.outer_diameter_m = x,
+            Self::ColumnInnerDiameter => column.inner_diameter_m = x,
+            Self::ColumnLength => column.length_m = x,
+            Self::ColumnElasticModulus => column.elastic_modulus_pa = x,
+            Self::ColumnPoissonRatio => column.poisson_ratio = x,
+            Self::ColumnDensity => column.density_kg_m3 = x,
+            Self::ColumnYieldStress => column.yield_stress_pa = x,
+            Self::ColumnContactRadius => column.contact_radius_m = Some(x),
+            Self::ColumnDampingCoefficient => column.damping_coefficient_n_s_m2 = Some(x),
+            Self::ColumnDampingRatio => column.damping_ratio = Some(x),
+            Self::InitialMidpointDisplacement => req.initial_midpoint_displacement_m = Some(x),
+            Self::EndTime => req.end_time_s = Some(x),
+            Self::HistoryDuration => {
+                req.output
+                    .get_or_insert_with(ColumnOutputDto::default)
+                    .duration_s = Some(x);
+            }
+            Self::Nothing => {}
+        }
+    }
+
+    /// The base value of the parameter `name` setting this field in `req` (the resolved base),
+    /// if it has one. As a JSON Pointer reads it: an array index written with a sign or a
+    /// leading zero (which the sweep sets) reads nothing.
+    #[must_use]
+    pub fn base(self, name: &str, req: &ColumnRequest) -> Option<f64> {
+        let canonical = |s: &str| !(s.starts_with('+') || (s.starts_with('0') && s.len() != 1));
+        let indexed = matches!(
+            self,
+            Self::RockDimension(_) | Self::RockVertex(..) | Self::RockRandomSemiAxis(_)
+        );
+        if indexed && !name.split('.').skip(2).all(canonical) {
+            return None;
+        }
+        self.get(req)
+    }
+
+    /// The field's value in `req`, if it has one.
+    #[must_use]
+    pub fn get(self, req: &ColumnRequest) -> Option<f64> {
+        let (rock, column) = (&req.rock, &req.column);
+        match self {
+            Self::Velocity => Some(req.velocity_m_s),
+            Self::RockSideLength => Some(rock.side_length_m),
+            Self::RockRadius => rock.radius_m,
+            Self::RockDimension(i) => rock.dimensions_m.and_then(|d| d.get(i).copied()),
+            Self::RockVertex(i, j) => rock
+                .vertices_m
+                .as_ref()
+                .and_then(|v| v.get(i))
+                .and_then(|p| p.get(j).copied()),
+            Self::RockRandomSemiAxis(i) => rock
+                .random
+                .as_ref()
+                .and_then(|r| r.semi_axes_m.get(i).copied()),
+            Self::RockDensity => Some(rock.density_kg_m3),
+            Self::RockElasticModulus => Some(rock.elastic_modulus_pa),
+            Self::RockPoissonRatio => Some(rock.poisson_ratio),
+            Self::RockCornerRadius => rock.corner_radius_m,
+            Self::ColumnOuterDiameter => Some(column.outer_diameter_m),
+            Self::ColumnInnerDiameter => Some(column.inner_diameter_m),
+            Self::ColumnLength => Some(column.length_m),
+            Self::ColumnElasticModulus => Some(column.elastic_modulus_pa),
+            Self::ColumnPoissonRatio => Some(column.poisson_ratio),
+            Self::ColumnDensity => Some(column.density_kg_m3),
+            Self::ColumnYieldStress => Some(column.yield_stress_pa),
+            Self::ColumnContactRadius => column.contact_radius_m,
+            Self::ColumnDampingCoefficient => column.damping_coefficient_n_s_m2,
+            Self::ColumnDampingRatio => column.damping_ratio,
+            Self::InitialMidpointDisplacement => req.initial_midpoint_displacement_m,
+            Self::EndTime => req.end_time_s,
+            Self::HistoryDuration => req.output.as_ref().and_then(|o| o.duration_s),
+            Self::Nothing => None,
+        }
+    }
+
+    /// The quantity of the column case the field sets.
+    #[must_use]
+    pub fn parameter(self) -> Parameter {
+        match self {
+            Self::Velocity => Parameter::Velocity,
+            Self::RockSideLength => Parameter::RockSideLength,
+            Self::RockRadius => Parameter::RockRadius,
+            Self::RockDimension(_)
+            | Self::RockVertex(..)
+            | Self::RockRandomSemiAxis(_)
+            | Self::Nothing => Parameter::Unused,
+            Self::RockDensity => Parameter::RockDensity,
+            Self::RockElasticModulus => Parameter::RockElasticModulus,
+            Self::RockPoissonRatio => Parameter::RockPoissonRatio,
+            Self::RockCornerRadius => Parameter::RockCornerRadius,
+            Self::ColumnOuterDiameter => Parameter::ColumnOuterDiameter,
+            Self::ColumnInnerDiameter => Parameter::ColumnInnerDiameter,
+            Self::ColumnLength => Parameter::ColumnLength,
+            Self::ColumnElasticModulus => Parameter::ColumnElasticModulus,
+            Self::ColumnPoissonRatio => Parameter::ColumnPoissonRatio,
+            Self::ColumnDensity => Parameter::ColumnDensity,
+            Self::ColumnYieldStress => Parameter::ColumnYieldStress,
+            Self::ColumnContactRadius => Parameter::ColumnContactRadius,
+            Self::ColumnDampingCoefficient => Parameter::ColumnDampingCoefficient,
+            Self::ColumnDampingRatio => Parameter::ColumnDampingRatio,
+            Self::InitialMidpointDisplacement => Parameter::InitialMidpointDisplacement,
+            Self::EndTime => Parameter::EndTime,
+            Self::HistoryDuration => Parameter::HistoryDuration,
+        }
+    }
 }

@@ -1,11 +1,16 @@
 //! `POST /v1/study`: parameter sweeps over the base column request, sensitivity measures and
 //! orderings, energy proportions and the comparison with the paper's orderings.
 //!
-//! Every study point is a column request built by setting the swept values in the base
-//! request's JSON, resolved through the column DTO (so the ranges are checked) and solved by the
-//! same code as `POST /v1/column`: a study value equals a separate `/v1/column` call bit for
-//! bit. Points run in parallel on the solver pool and are collected in a fixed order, so the
-//! answer does not depend on the thread count.
+//! The route maps the wire to the calculation and back: each swept parameter's dotted path to
+//! the request field it names ([`SweptField`]) and the quantity of the column case it sets
+//! ([`calc::study::Parameter`]), each output name to the result it reads
+//! ([`calc::study::Output`]). The base request is resolved once into its case; every swept
+//! value is checked by setting it on the base request as sent and resolving that (so a value
+//! the request's own validation refuses is refused with the same problem); a study point is the
+//! base case with its values set ([`calc::study::StudyCase::point`]), solved by the same code as
+//! `POST /v1/column`: a study value equals a separate `/v1/column` call bit for bit. Points run
+//! in parallel on the solver pool and are collected in a fixed order, so the answer does not
+//! depend on the thread count.
 
 use axum::extract::State;
 use axum::http::HeaderMap;
@@ -14,20 +19,23 @@ use rayon::prelude::*;
 use serde_json::{Value, json};
 
 use crate::calc;
+use crate::calc::Calculation;
+use crate::calc::column::Column;
+use crate::calc::study::{Given, Output, StudyCase};
 use crate::config::Config;
 use crate::http::dto::column::{ColumnModelDto, ColumnRequest};
 use crate::http::dto::common::{LawDto, Meta, ModulusDto, ShapeKind, Warning, plan_of};
 use crate::http::dto::study::{
     CANONICAL, ENERGY_PROPORTION_UNDEFINED, EnergyProportionDto, MeasuresDto, OrderedMap,
     OrderingDto, OutputSensitivityDto, PaperComparisonDto, StudyGrid, StudyGridDto,
-    StudyParameterDto, StudyRequest, StudyResponse, default_outputs, pointer_of, set_pointer,
-    study_outputs,
+    StudyParameterDto, StudyRequest, StudyResponse, SweptField, default_outputs, output_of,
+    pointer_of, set_pointer, study_outputs,
 };
 use crate::http::error::{ApiError, FieldError};
 use crate::http::json::{AppJson, from_value};
-use crate::http::routes::column;
 use crate::http::runner::{AppState, respond};
 use crate::physics::Control;
+use crate::physics::column::ColumnCase;
 use crate::physics::study::{
     ImpactParameter, TIE_REL, TIE_REL_NUMERIC, impact_elasticities, order_groups, ratio,
     richardson_elasticity, richardson_points, span_over_base,
@@ -69,6 +77,8 @@ enum Slot {
 
 struct Param {
     name: String,
+    /// The request field the name sets.
+    field: SweptField,
     pointer: String,
     min: f64,
     max: f64,
@@ -82,22 +92,52 @@ struct Param {
     analytic: Option<crate::physics::study::ImpactElasticities>,
 }
 
-/// A column request with the given values set at the given pointers.
-fn point_json(base: &Value, sets: &[(&str, f64)]) -> Value {
-    let mut v = base.clone();
-    for (p, x) in sets {
-        set_pointer(&mut v, p, *x);
-    }
-    v
-}
-
+/// The base request as sent with each field of `sets` set, checked and resolved as a column
+/// request: the case of the point, or the request's own refusal.
 fn resolve_point(
     config: &Config,
-    v: &Value,
-) -> Result<(ColumnRequest, crate::physics::column::ColumnCase), ApiError> {
-    let mut req: ColumnRequest = from_value(v)?;
-    let case = req.resolve(config)?;
-    Ok((req, case))
+    sent: &ColumnRequest,
+    sets: &[(SweptField, f64)],
+) -> Result<ColumnCase, ApiError> {
+    let mut req = sent.clone();
+    for &(f, x) in sets {
+        f.set(&mut req, x);
+    }
+    req.resolve(config)
+}
+
+/// The refusal of a parameter whose dotted path names no numeric field of the base request
+/// (`sent`, `json` its JSON): the path is set in the JSON and read as a column request, so the
+/// problem is the request's own (an unknown field, a wrong type).
+fn refuse_name(
+    config: &Config,
+    json: &Value,
+    i: usize,
+    p: &StudyParameterDto,
+    pointer: &str,
+) -> ApiError {
+    let mut v = json.clone();
+    set_pointer(&mut v, pointer, p.min);
+    let refused = from_value::<ColumnRequest>(&v).and_then(|mut req| req.resolve(config));
+    match refused {
+        Err(e) => {
+            let field = if matches!(e.code(), "unknown_field" | "invalid_type") {
+                format!("/parameters/{i}/name")
+            } else {
+                format!("/parameters/{i}/min")
+            };
+            blame(
+                &e,
+                &field,
+                &format!("{} = {} is not a valid column request", p.name, p.min),
+            )
+        }
+        Ok(_) => ApiError::invalid(
+            format!("/parameters/{i}/name"),
+            json!(p.name),
+            "is not a numeric field of the column request that a study can sweep",
+        ),
+    }
 }
 
 /// Maps an error of a trial point to the study field that caused it.
@@ -122,14 +162,17 @@ fn blame(e: &ApiError, field: &str, what: &str) -> ApiError {
     }
 }
 
-fn extract(resp: &Value, outputs: &[String]) -> Result<Vec<f64>, ApiError> {
-    outputs
+/// The outputs `reads` (each with its name) of a point's result.
+fn extract(
+    r: &crate::physics::column::ColumnResult,
+    reads: &[(String, Output)],
+) -> Result<Vec<f64>, ApiError> {
+    reads
         .iter()
-        .map(|o| {
-            resp.pointer(&pointer_of(o))
-                .and_then(Value::as_f64)
+        .map(|(name, o)| {
+            o.of(r)
                 .filter(|x| x.is_finite())
-                .ok_or_else(|| ApiError::internal(format!("study output {o} missing")))
+                .ok_or_else(|| ApiError::internal(format!("study output {name} missing")))
         })
         .collect()
 }
@@ -165,10 +208,13 @@ pub fn solve(
 /// the response lists them: curves, grids, energy proportions, central-difference points).
 pub struct StudyPlan {
     req: StudyRequest,
-    base_json: Value,
+    /// The base case and what it was given: each point's case is made from it.
+    base: StudyCase,
     base_resolved: ColumnRequest,
     coupled: bool,
     outputs: Vec<String>,
+    /// The outputs each point reads, then the energy ratio.
+    reads: Vec<(String, Output)>,
     params: Vec<Param>,
     values: Vec<Vec<f64>>,
     pairs: Vec<(usize, usize)>,
@@ -197,16 +243,24 @@ pub fn plan(config: &Config, mut req: StudyRequest) -> Result<StudyPlan, ApiErro
     let base_json = serde_json::to_value(&req.base).map_err(ApiError::internal)?;
     let mut base_resolved = req.base.clone();
     let base_case = base_resolved.resolve(config).map_err(|e| e.nest("/base"))?;
-    let base_resolved_json = serde_json::to_value(&base_resolved).map_err(ApiError::internal)?;
     let coupled = base_resolved.model == ColumnModelDto::Coupled;
     let outputs = check_request(config, &mut req, coupled)?;
+    let reads = outputs
+        .iter()
+        .chain(std::iter::once(&"energy_ratio".to_string()))
+        .map(|o| {
+            output_of(o)
+                .map(|r| (o.clone(), r))
+                .ok_or_else(|| ApiError::internal(format!("study output {o} unknown")))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
 
     // Each parameter: its range ends must resolve, and its base value.
     let base = StudyBase {
         config,
         json: &base_json,
+        sent: &req.base,
         resolved: &base_resolved,
-        resolved_json: &base_resolved_json,
         case: &base_case,
         coupled,
         corner_given: req.base.rock.corner_radius_m.is_some(),
@@ -229,18 +283,29 @@ pub fn plan(config: &Config, mut req: StudyRequest) -> Result<StudyPlan, ApiErro
         Vec::new()
     };
     let slots = study_slots(&params, pairs.len(), n, req.x_values.len());
-    Ok(StudyPlan {
+    let given = Given {
+        corner_radius: req.base.rock.corner_radius_m.is_some(),
+        radius: req.base.rock.radius_m.is_some(),
+        contact_radius: req.base.column.contact_radius_m.is_some(),
+    };
+    let plan = StudyPlan {
         req,
-        base_json,
+        base: StudyCase {
+            case: base_case,
+            given,
+        },
         base_resolved,
         coupled,
         outputs,
+        reads,
         params,
         values,
         pairs,
         slots,
         warnings,
-    })
+    };
+    plan.check_points(config)?;
+    Ok(plan)
 }
 
 /// The study's own fields: points, parameters (distinct dotted paths, finite min < max),
@@ -330,14 +395,14 @@ fn check_request(
 /// resolved, its case) and what it left to its defaults.
 struct StudyBase<'a> {
     config: &'a Config,
-    /// The base request as sent.
+    /// The base request as sent, as JSON.
     json: &'a Value,
-    /// The base request as resolved.
+    /// The base request as sent.
+    sent: &'a ColumnRequest,
+    /// The base request as resolved (the parameters' base values).
     resolved: &'a ColumnRequest,
-    /// The resolved base request as JSON (the parameters' base values).
-    resolved_json: &'a Value,
     /// The base case.
-    case: &'a crate::physics::column::ColumnCase,
+    case: &'a ColumnCase,
     /// The coupled column model.
     coupled: bool,
     /// The base request gave the rock's corner radius.
@@ -359,13 +424,15 @@ impl StudyBase<'_> {
         warnings: &mut Vec<Warning>,
     ) -> Result<Param, ApiError> {
         let pointer = pointer_of(&p.name);
-        let proportion_defined = self.check_sweep(i, p, &pointer, x_values, warnings)?;
-        let base = self.resolved_json.pointer(&pointer).and_then(Value::as_f64);
+        let field = SweptField::of(&p.name, self.sent, self.json)
+            .ok_or_else(|| refuse_name(self.config, self.json, i, p, &pointer))?;
+        let proportion_defined = self.check_sweep(i, p, field, x_values, warnings)?;
+        let base = field.base(&p.name, self.resolved);
         let rank = CANONICAL
             .iter()
             .position(|c| *c == p.name)
             .unwrap_or(CANONICAL.len() + i);
-        let analytic = self.analytic(&p.name)?;
+        let analytic = self.analytic(field)?;
         let needs_fd = outputs.iter().any(|o| {
             analytic.is_none()
                 || !matches!(
@@ -375,9 +442,8 @@ impl StudyBase<'_> {
         });
         let fd = if needs_fd {
             let pts = base.and_then(richardson_points).filter(|pts| {
-                pts.iter().all(|&x| {
-                    resolve_point(self.config, &point_json(self.json, &[(&pointer, x)])).is_ok()
-                })
+                pts.iter()
+                    .all(|&x| resolve_point(self.config, self.sent, &[(field, x)]).is_ok())
             });
             if pts.is_none() {
                 warnings.push(Warning::new(
@@ -395,6 +461,7 @@ impl StudyBase<'_> {
         };
         Ok(Param {
             name: p.name.clone(),
+            field,
             pointer,
             min: p.min,
             max: p.max,
@@ -406,7 +473,7 @@ impl StudyBase<'_> {
         })
     }
 
-    /// The base request with parameter `i` (`p`, at `pointer`) set to its range ends must be a
+    /// The base request with parameter `i` (`p`, setting `field`) set to its range ends must be a
     /// valid column request (else 422 naming that end); returns, for each x value, whether x·max
     /// is one too. An energy-proportion point that is not (x·max below the field's range, or
     /// against another field's bound, e.g. an outer diameter at or below the inner one) is not
@@ -416,12 +483,12 @@ impl StudyBase<'_> {
         &self,
         i: usize,
         p: &StudyParameterDto,
-        pointer: &str,
+        field: SweptField,
         x_values: &[f64],
         warnings: &mut Vec<Warning>,
     ) -> Result<Vec<bool>, ApiError> {
         for (end, x) in [("min", p.min), ("max", p.max)] {
-            if let Err(e) = resolve_point(self.config, &point_json(self.json, &[(pointer, x)])) {
+            if let Err(e) = resolve_point(self.config, self.sent, &[(field, x)]) {
                 let field = if matches!(e.code(), "unknown_field" | "invalid_type") {
                     format!("/parameters/{i}/name")
                 } else {
@@ -439,7 +506,7 @@ impl StudyBase<'_> {
         let mut why = None;
         for &x in x_values {
             let v = x * p.max;
-            match resolve_point(self.config, &point_json(self.json, &[(pointer, v)])) {
+            match resolve_point(self.config, self.sent, &[(field, v)]) {
                 Ok(_) => defined.push(true),
                 Err(e) => {
                     defined.push(false);
@@ -466,18 +533,18 @@ impl StudyBase<'_> {
         Ok(defined)
     }
 
-    /// The analytic elasticities of the impact (physics.md §D.2) for the parameter `name`:
-    /// v, L, ρ or E of a cube on the decoupled model from rest (not L when it moves the
-    /// Hertz corner radius), all finite; None otherwise.
+    /// The analytic elasticities of the impact (physics.md §D.2) for the parameter setting
+    /// `field`: v, L, ρ or E of a cube on the decoupled model from rest (not L when it moves
+    /// the Hertz corner radius), all finite; None otherwise.
     fn analytic(
         &self,
-        name: &str,
+        field: SweptField,
     ) -> Result<Option<crate::physics::study::ImpactElasticities>, ApiError> {
-        let which = match name {
-            "velocity_m_s" => Some(ImpactParameter::Velocity),
-            "rock.side_length_m" => Some(ImpactParameter::SideLength),
-            "rock.density_kg_m3" => Some(ImpactParameter::Density),
-            "rock.elastic_modulus_pa" => Some(ImpactParameter::RockModulus),
+        let which = match field {
+            SweptField::Velocity => Some(ImpactParameter::Velocity),
+            SweptField::RockSideLength => Some(ImpactParameter::SideLength),
+            SweptField::RockDensity => Some(ImpactParameter::Density),
+            SweptField::RockElasticModulus => Some(ImpactParameter::RockModulus),
             _ => None,
         };
         let resolved = self.resolved;
@@ -568,93 +635,94 @@ impl StudyPlan {
         req
     }
 
+    /// The swept values of point `index`: (parameter index, value) of each.
+    fn sets(&self, index: usize) -> Vec<(usize, f64)> {
+        let (params, values) = (&self.params, &self.values);
+        match self.slots[index] {
+            Slot::Base => Vec::new(),
+            Slot::Curve(i, k) => vec![(i, values[i][k])],
+            Slot::Grid(g, yi, xi) => {
+                let (a, b) = self.pairs[g];
+                vec![(a, values[a][xi]), (b, values[b][yi])]
+            }
+            Slot::Proportion(i, k) => vec![(i, self.req.x_values[k] * params[i].max)],
+            Slot::Difference(i, j) => vec![(i, params[i].fd.map_or(0.0, |f| f[j]))],
+        }
+    }
+
+    /// A point's error names the swept parameter (of `sets`) that set the field, else the
+    /// base's field.
+    fn blame_point(&self, e: ApiError, sets: &[(usize, f64)]) -> ApiError {
+        let params = &self.params;
+        e.rename_fields(|f| {
+            params
+                .iter()
+                .enumerate()
+                .position(|(i, p)| p.pointer == f && sets.iter().any(|(s, _)| *s == i))
+                .map_or_else(|| format!("/base{f}"), |i| format!("/parameters/{i}"))
+        })
+    }
+
+    /// Every curve and grid point must be a valid column request (the range ends, energy
+    /// proportions and central-difference points are checked with their parameter): the first
+    /// point, in point order, that the request's own validation refuses is refused as such.
+    fn check_points(&self, config: &Config) -> Result<(), ApiError> {
+        let sent = &self.req.base;
+        match (0..self.slots.len())
+            .into_par_iter()
+            .filter(|&k| matches!(self.slots[k], Slot::Curve(..) | Slot::Grid(..)))
+            .find_map_first(|k| {
+                let sets = self.sets(k);
+                let fields: Vec<(SweptField, f64)> = sets
+                    .iter()
+                    .map(|&(i, x)| (self.params[i].field, x))
+                    .collect();
+                resolve_point(config, sent, &fields)
+                    .err()
+                    .map(|e| self.blame_point(e, &sets))
+            }) {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
     /// Solves point `index`: the listed outputs and then the energy ratio.
     pub fn eval(
         &self,
-        config: &Config,
+        _config: &Config,
         index: usize,
         control: &Control,
     ) -> Result<Vec<f64>, ApiError> {
-        let (params, values, pairs) = (&self.params, &self.values, &self.pairs);
-        let x_values = &self.req.x_values;
-        let mut extract_names = self.outputs.clone();
-        extract_names.push("energy_ratio".into());
         control.check()?;
-        let sets: Vec<(&str, f64)> = match self.slots[index] {
-            Slot::Base => Vec::new(),
-            Slot::Curve(i, k) => vec![(params[i].pointer.as_str(), values[i][k])],
-            Slot::Grid(g, yi, xi) => {
-                let (a, b) = pairs[g];
-                vec![
-                    (params[a].pointer.as_str(), values[a][xi]),
-                    (params[b].pointer.as_str(), values[b][yi]),
-                ]
-            }
-            Slot::Proportion(i, k) => {
-                vec![(params[i].pointer.as_str(), x_values[k] * params[i].max)]
-            }
-            Slot::Difference(i, j) => {
-                vec![(
-                    params[i].pointer.as_str(),
-                    params[i].fd.map_or(0.0, |f| f[j]),
-                )]
-            }
-        };
-        // A point's error names the swept parameter that set the field, else the base's field.
-        let blame_point = |e: ApiError| {
-            e.rename_fields(|f| {
-                params
-                    .iter()
-                    .position(|p| p.pointer == f && sets.iter().any(|(s, _)| *s == f))
-                    .map_or_else(|| format!("/base{f}"), |i| format!("/parameters/{i}"))
-            })
-        };
-        let (req, case) =
-            resolve_point(config, &point_json(&self.base_json, &sets)).map_err(blame_point)?;
-        let resp = column::solve(&case, req, control).map_err(blame_point)?;
-        let v = serde_json::to_value(&resp).map_err(ApiError::internal)?;
-        let out = extract(&v, &extract_names)?;
+        let sets = self.sets(index);
+        let swept: Vec<(calc::study::Parameter, f64)> = sets
+            .iter()
+            .map(|&(i, x)| (self.params[i].field.parameter(), x))
+            .collect();
+        let case = self.base.point(&swept);
+        let report = Column::solve(&case, control).map_err(|e| {
+            let e = ApiError::from(e).with_capacity_velocity(case.impact.velocity);
+            let e = match case.end_time {
+                Some(t) => e.with_step_field("/end_time_s", t),
+                None => e,
+            };
+            self.blame_point(e, &sets)
+        })?;
+        let out = extract(&report.result, &self.reads)?;
         control.add_done(1);
         Ok(out)
     }
 
     /// The response from the outputs of every point, in point order.
     pub fn finish(self, results: Vec<Vec<f64>>) -> Result<StudyResponse, ApiError> {
-        let StudyPlan {
-            req,
-            base_resolved,
-            coupled,
-            outputs,
-            params,
-            values,
-            pairs,
-            slots,
-            warnings,
-            ..
-        } = self;
-        if results.len() != slots.len() {
+        if results.len() != self.slots.len() {
             return Err(ApiError::internal(format!(
                 "{} study results for {} points",
                 results.len(),
-                slots.len()
+                self.slots.len()
             )));
         }
-        let n = req.points as usize;
-        let np = params.len();
-        finish_study(
-            req,
-            base_resolved,
-            coupled,
-            &outputs,
-            &params,
-            &values,
-            &pairs,
-            &slots,
-            warnings,
-            n,
-            np,
-            results,
-        )
+        finish_study(self, results)
     }
 }
 
@@ -704,24 +772,26 @@ fn assemble(
     y
 }
 
-#[allow(clippy::too_many_arguments)]
-fn finish_study(
-    mut req: StudyRequest,
-    base_resolved: ColumnRequest,
-    coupled: bool,
-    outputs: &[String],
-    params: &[Param],
-    values: &[Vec<f64>],
-    pairs: &[(usize, usize)],
-    slots: &[Slot],
-    mut warnings: Vec<Warning>,
-    n: usize,
-    np: usize,
-    results: Vec<Vec<f64>>,
-) -> Result<StudyResponse, ApiError> {
+/// The response of a checked study `plan` from the outputs `results` of its points.
+fn finish_study(plan: StudyPlan, results: Vec<Vec<f64>>) -> Result<StudyResponse, ApiError> {
+    let StudyPlan {
+        mut req,
+        base_resolved,
+        coupled,
+        outputs,
+        reads,
+        params,
+        values,
+        pairs,
+        slots,
+        mut warnings,
+        ..
+    } = plan;
+    let n = req.points as usize;
+    let np = params.len();
     let no = outputs.len();
     let ie = no; // index of energy_ratio in each result
-    let y = assemble(slots, results, no, np, n, pairs.len(), req.x_values.len());
+    let y = assemble(&slots, results, no, np, n, pairs.len(), req.x_values.len());
     let curves = OrderedMap(
         params
             .iter()
@@ -761,9 +831,9 @@ fn finish_study(
     let mut sensitivity = Vec::new();
     let mut groups_by_output = Vec::new();
     for (o, name) in outputs.iter().enumerate() {
-        let (dto, groups) = output_sensitivity(o, name, params, &ranks, &y, n, &mut warnings);
+        let (dto, groups) = output_sensitivity(o, name, &params, &ranks, &y, n, &mut warnings);
         sensitivity.push((name.clone(), dto));
-        groups_by_output.push((name.clone(), groups));
+        groups_by_output.push((reads[o].1, groups));
     }
     let prop_groups: Vec<Vec<Vec<usize>>> = (0..req.x_values.len())
         .map(|k| {
@@ -783,12 +853,12 @@ fn finish_study(
         ),
         orderings: prop_groups
             .iter()
-            .map(|g| ordering_names(g, params))
+            .map(|g| ordering_names(g, &params))
             .collect(),
     };
-    let swept: Vec<(&str, f64, f64)> = params
+    let swept: Vec<(calc::study::Parameter, f64, f64)> = params
         .iter()
-        .map(|p| (p.name.as_str(), p.min, p.max))
+        .map(|p| (p.field.parameter(), p.min, p.max))
         .collect();
     let paper_comparison: Vec<PaperComparisonDto> = calc::study::compare_with_paper(
         &swept,
@@ -928,4 +998,150 @@ fn output_sensitivity(
         },
     };
     (dto, [g_span, g_ratio, g_el])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calc::study::Parameter;
+
+    /// Bases a study may start from: each rule that derives one field from another (the corner
+    /// radius from L, a sphere's radius from L, the contact radius from D₁), given or derived,
+    /// on both models.
+    fn bases() -> Vec<Value> {
+        vec![
+            json!({}),
+            json!({"contact": {"law": "hertz_point"}}),
+            json!({"contact": {"law": "hertz_point"}, "rock": {"corner_radius_m": 0.03}}),
+            json!({"contact": {"law": "hertz_point"}, "rock": {"shape": "sphere"}}),
+            json!({"contact": {"law": "hertz_point"}, "rock": {"shape": "sphere", "radius_m": 0.1}}),
+            json!({"contact": {"law": "johnson", "effective_modulus": "two_body"},
+                   "column": {"contact_radius_m": 0.2}}),
+            json!({"column": {"damping_ratio": 0.02}}),
+            json!({"model": "coupled", "end_time_s": 0.02}),
+            json!({"rock": {"dimensions_m": [0.2, 0.3, 0.4],
+                            "random": {"semi_axes_m": [0.1, 0.2, 0.3]},
+                            "vertices_m": [[0, 0, 0], [0.3, 0, 0], [0, 0.3, 0], [0, 0, 0.3]]}}),
+        ]
+    }
+
+    const NAMES: [&str; 26] = [
+        "velocity_m_s",
+        "rock.side_length_m",
+        "rock.radius_m",
+        "rock.dimensions_m.1",
+        "rock.vertices_m.2.0",
+        "rock.random.semi_axes_m.2",
+        "rock.density_kg_m3",
+        "rock.elastic_modulus_pa",
+        "rock.poisson_ratio",
+        "rock.corner_radius_m",
+        "column.outer_diameter_m",
+        "column.inner_diameter_m",
+        "column.length_m",
+        "column.elastic_modulus_pa",
+        "column.poisson_ratio",
+        "column.density_kg_m3",
+        "column.yield_stress_pa",
+        "column.contact_radius_m",
+        "column.damping_coefficient_n_s_m2",
+        "column.damping_ratio",
+        "initial_midpoint_displacement_m",
+        "end_time_s",
+        "output.duration_s",
+        "velocity_m_s.x",
+        "rock.dimensions_m.9",
+        "contact.law.x",
+    ];
+
+    /// The case of a study point made on the base case equals the case of the base request with
+    /// the same values set and resolved, for every field a study sweeps, alone and two at a
+    /// time (the pairs that move a derived field), at values across each field's range.
+    #[test]
+    fn a_point_case_is_the_resolved_request_with_its_values() {
+        let config = Config::default();
+        let mut compared = 0;
+        for base in bases() {
+            let sent: ColumnRequest = from_value(&base).unwrap();
+            let sent_json = serde_json::to_value(&sent).unwrap();
+            let mut resolved = sent.clone();
+            let case = resolved.resolve(&config).unwrap();
+            let study = StudyCase {
+                case,
+                given: Given {
+                    corner_radius: sent.rock.corner_radius_m.is_some(),
+                    radius: sent.rock.radius_m.is_some(),
+                    contact_radius: sent.column.contact_radius_m.is_some(),
+                },
+            };
+            assert_eq!(study.point(&[]), study.case, "{base}");
+            let fields: Vec<(&str, SweptField)> = NAMES
+                .iter()
+                .filter_map(|n| SweptField::of(n, &sent, &sent_json).map(|f| (*n, f)))
+                .collect();
+            for &(name, f) in &fields {
+                let b = f.get(&resolved).unwrap_or(0.1);
+                for x in [
+                    0.01,
+                    0.05,
+                    0.13,
+                    0.3,
+                    0.7,
+                    0.5 * b,
+                    0.9 * b,
+                    1.1 * b,
+                    2.0 * b,
+                ] {
+                    let mut sets = vec![(f, x)];
+                    let mut cases = vec![sets.clone()];
+                    for &(_, g) in &fields {
+                        if g != f {
+                            sets.push((g, 0.9 * g.get(&resolved).unwrap_or(0.1)));
+                            cases.push(sets.clone());
+                            sets.pop();
+                        }
+                    }
+                    for sets in cases {
+                        let Ok(want) = resolve_point(&config, &sent, &sets) else {
+                            continue;
+                        };
+                        let params: Vec<(Parameter, f64)> =
+                            sets.iter().map(|&(g, x)| (g.parameter(), x)).collect();
+                        assert_eq!(study.point(&params), want, "{base}: {name} {sets:?}");
+                        compared += 1;
+                    }
+                }
+            }
+        }
+        assert!(compared > 2000, "{compared} points compared");
+    }
+
+    /// A path through a number or past an array's end sets nothing; a path the request does not
+    /// have, or to a field that is not a number, names no field (the request's own refusal).
+    #[test]
+    fn swept_names_map_to_the_fields_they_set() {
+        let sent: ColumnRequest =
+            from_value(&json!({"rock": {"dimensions_m": [0.2, 0.3, 0.4]}})).unwrap();
+        let v = serde_json::to_value(&sent).unwrap();
+        let of = |n: &str| SweptField::of(n, &sent, &v);
+        assert_eq!(of("rock.density_kg_m3"), Some(SweptField::RockDensity));
+        assert_eq!(
+            of("rock.dimensions_m.2"),
+            Some(SweptField::RockDimension(2))
+        );
+        assert_eq!(
+            of("rock.dimensions_m.+1"),
+            Some(SweptField::RockDimension(1))
+        );
+        assert_eq!(of("rock.dimensions_m.3"), Some(SweptField::Nothing));
+        assert_eq!(of("velocity_m_s.x"), Some(SweptField::Nothing));
+        assert_eq!(of("rock.densty_kg_m3"), None);
+        assert_eq!(of("galerkin.modes"), None);
+        assert_eq!(of("rock.vertices_m.0.0"), None);
+        // the base value as a JSON Pointer reads it
+        let f = SweptField::RockDimension(1);
+        assert_eq!(f.base("rock.dimensions_m.1", &sent), Some(0.3));
+        assert_eq!(f.base("rock.dimensions_m.+1", &sent), None);
+        assert_eq!(f.base("rock.dimensions_m.01", &sent), None);
+    }
 }

@@ -18,6 +18,32 @@ pub(super) struct Columns {
     reach_max: f64,
 }
 
+/// A piece of the centre's path, p + v τ + ½ a τ² for τ in [0, `dt`] (s, or any parameter
+/// the velocity and acceleration are per): where [`Columns::first_reach`] looks for a column.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Piece<'a> {
+    /// Position at τ = 0, m.
+    pub(super) p: &'a Vector3<f64>,
+    /// Velocity, m per unit of τ.
+    pub(super) v: &'a Vector3<f64>,
+    /// Acceleration, m per unit of τ².
+    pub(super) a: &'a Vector3<f64>,
+    /// End of the piece, in units of τ.
+    pub(super) dt: f64,
+}
+
+impl<'a> Piece<'a> {
+    /// The piece p + v τ + ½ a τ², τ in [0, `dt`].
+    pub(super) fn new(
+        p: &'a Vector3<f64>,
+        v: &'a Vector3<f64>,
+        a: &'a Vector3<f64>,
+        dt: f64,
+    ) -> Self {
+        Self { p, v, a, dt }
+    }
+}
+
 /// How far along the dip (m, beyond the largest reach) [`Columns::clearance`] looks for the
 /// nearest column: the most a clearance can be.
 const CLEARANCE_SEARCH_M: f64 = 3.0;
@@ -77,17 +103,14 @@ impl Columns {
     /// the earliest reach found, but only those whose along-dip position lies within the reach
     /// of the along-dip interval the piece sweeps (|Δs| ≤ |v·d| τ + ½|a·d| τ², padded); the
     /// others are the ones that function rejects before solving.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn first_reach(
         &self,
         mean: &MeanPlane,
         supports: &[SupportStop],
-        p: &Vector3<f64>,
-        v: &Vector3<f64>,
-        a: &Vector3<f64>,
-        dt: f64,
+        piece: Piece<'_>,
         margin: f64,
     ) -> Option<(f64, usize)> {
+        let Piece { p, v, a, dt } = piece;
         if self.order.is_empty() || dt.is_nan() || dt <= 0.0 {
             return None;
         }
@@ -191,7 +214,7 @@ mod tests {
                 rng.random_range(0.0..3.0)
             };
             let full = first_column_reach(&mean, &supports, &p, &v, &a, dt);
-            let indexed = cols.first_reach(&mean, &supports, &p, &v, &a, dt, 0.0);
+            let indexed = cols.first_reach(&mean, &supports, Piece::new(&p, &v, &a, dt), 0.0);
             assert_eq!(
                 full.map(|(t, k)| (t.to_bits(), k)),
                 indexed.map(|(t, k)| (t.to_bits(), k)),

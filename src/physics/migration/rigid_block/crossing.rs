@@ -180,17 +180,7 @@ impl Model<'_> {
         let st = self.synced(&run.st, run.half_step, &run.acc, &run.ang_acc);
         if !run.springs.is_empty() {
             let mut carried = Vec::with_capacity(run.springs.len());
-            let (stored, slip) = self.stored_at_end(
-                &lagged,
-                &st,
-                cfg,
-                &run.springs,
-                &run.onsets,
-                run.drift_h,
-                &mut run.tris,
-                &mut run.contacts,
-                Some(&mut carried),
-            );
+            let (stored, slip) = self.stored_at_end(run, &lagged, &st, cfg, Some(&mut carried));
             run.springs = carried;
             run.stored = stored;
             run.friction += slip;
@@ -217,10 +207,12 @@ impl Model<'_> {
                 st.t,
                 EventKind::Barrier,
                 &st.c,
-                before,
-                st.v.norm(),
-                lost,
-                None,
+                EventChange {
+                    before,
+                    after: st.v.norm(),
+                    lost,
+                    peak: None,
+                },
             );
             run.events.push(ev);
         }

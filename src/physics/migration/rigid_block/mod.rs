@@ -109,6 +109,7 @@ use crate::physics::control::Control;
 use crate::physics::error::{Param, PhysicsError, PhysicsResult};
 
 mod columns;
+use columns::Piece;
 mod contacts;
 mod crossing;
 mod run;
@@ -554,6 +555,20 @@ struct Step {
     diss_before: f64,
     /// The forces it applied.
     forces: Forces,
+}
+
+/// What an event did to the block (see [`Model::event`]): its speed before and after (m/s),
+/// the energy lost (J) and, for an impact, the peak contact force (N).
+#[derive(Debug, Clone, Copy)]
+struct EventChange {
+    /// Speed before, m/s.
+    before: f64,
+    /// Speed after, m/s.
+    after: f64,
+    /// Energy lost, J.
+    lost: f64,
+    /// Peak contact force of an impact, N.
+    peak: Option<f64>,
 }
 
 /// One run in progress: the block, its contacts and the books kept on them.

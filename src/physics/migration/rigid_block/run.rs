@@ -68,7 +68,6 @@ impl Model<'_> {
     /// its state at every step, and closed-form flights and settled slides sampled at most half
     /// a cell apart (see `maps`); on a floor of several materials `zone` gives each material's
     /// (μ, β) in this run.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn simulate_tracked(
         &self,
         draws: Draws,
@@ -354,10 +353,7 @@ impl Model<'_> {
             self.columns.first_reach(
                 &self.mean,
                 &self.supports,
-                &st.c,
-                &st.v,
-                &gravity,
-                cross.unwrap_or(tau),
+                Piece::new(&st.c, &st.v, &gravity, cross.unwrap_or(tau)),
                 0.0,
             )
         } else {
@@ -576,7 +572,12 @@ impl Model<'_> {
             run.slip_max = run.slip_max.max(vt.norm());
             let old = run.springs.iter().find(|s| s.key == gk.key);
             let (mu, beta) = self.draws_at(cfg, &gk.p);
-            let nf = self.normal_force(gk, &rr, &v_t, &w_t, h, old.is_none(), beta);
+            let motion = StepMotion {
+                v_t: &v_t,
+                w_t: &w_t,
+                h,
+            };
+            let nf = self.normal_force(gk, &rr, motion, old.is_none(), beta);
             let (f_el, fnm, ks) = (nf.elastic, nf.total, nf.shear_stiffness);
             // dashpot work (and the clipped spring's share)
             let fd = gk.n * (fnm - f_el);
@@ -729,21 +730,19 @@ impl Model<'_> {
         }
     }
 
-    /// Normal force of the contact `gk` (arm `rr` from the centre, m) over a step h (s), the
-    /// dashpot taking the velocity at x(t) from `v_t` and `w_t` (world frame); `fresh`: a
-    /// contact that has just closed, whose dashpot impulse is corrected for the time since its
-    /// touch.
-    #[allow(clippy::too_many_arguments)]
+    /// Normal force of the contact `gk` (arm `rr` from the centre, m) over the step `motion`,
+    /// the dashpot taking the velocity at x(t) from it; `fresh`: a contact that has just
+    /// closed, whose dashpot impulse is corrected for the time since its touch; `beta`: the
+    /// critical damping ratio there.
     pub(super) fn normal_force(
         &self,
         gk: &Geo,
         rr: &Vector3<f64>,
-        v_t: &Vector3<f64>,
-        w_t: &Vector3<f64>,
-        h: f64,
+        motion: StepMotion<'_>,
         fresh: bool,
         beta: f64,
     ) -> NormalForce {
+        let StepMotion { v_t, w_t, h } = motion;
         let (kn, ks) = self.stiffness_at(&gk.p);
         let (f_el, kt, ks) = match self.hertz {
             None => (kn * gk.u, kn, ks),
@@ -918,20 +917,24 @@ impl Model<'_> {
                 ep.t0,
                 EventKind::Impact,
                 &ep.p,
-                ep.speed_before,
-                speed,
-                run.damping + run.friction - ep.diss_before,
-                Some(ep.peak),
+                EventChange {
+                    before: ep.speed_before,
+                    after: speed,
+                    lost: run.damping + run.friction - ep.diss_before,
+                    peak: Some(ep.peak),
+                },
             ));
             ep.impact = false;
             run.events.push(self.event(
                 t,
                 EventKind::SlideStart,
                 &run.st.c,
-                speed,
-                speed,
-                0.0,
-                None,
+                EventChange {
+                    before: speed,
+                    after: speed,
+                    lost: 0.0,
+                    peak: None,
+                },
             ));
         }
     }
@@ -962,10 +965,7 @@ impl Model<'_> {
             } else if let Some((tc, k)) = self.columns.first_reach(
                 &self.mean,
                 &self.supports,
-                &c_prev,
-                &st.v,
-                &Vector3::zeros(),
-                h,
+                Piece::new(&c_prev, &st.v, &Vector3::zeros(), h),
                 0.0,
             ) {
                 st.t -= h - tc;
@@ -1051,17 +1051,7 @@ impl Model<'_> {
         // carried over the last drift (the slip on it booked)
         let in_contact = !run.springs.is_empty();
         if in_contact {
-            let (stored, slip) = self.stored_at_end(
-                &lagged,
-                &st,
-                cfg,
-                &run.springs,
-                &run.onsets,
-                run.drift_h,
-                &mut run.tris,
-                &mut run.contacts,
-                None,
-            );
+            let (stored, slip) = self.stored_at_end(&mut run, &lagged, &st, cfg, None);
             run.stored = stored;
             run.friction += slip;
         }
@@ -1072,7 +1062,17 @@ impl Model<'_> {
             run.barrier += kt + kr;
             barrier_event = cfg.log_events.then(|| {
                 let before = st.v.norm();
-                self.event(st.t, EventKind::Barrier, &st.c, before, 0.0, kt + kr, None)
+                self.event(
+                    st.t,
+                    EventKind::Barrier,
+                    &st.c,
+                    EventChange {
+                        before,
+                        after: 0.0,
+                        lost: kt + kr,
+                        peak: None,
+                    },
+                )
             });
             st.v = Vector3::zeros();
             st.w = Vector3::zeros();
@@ -1101,8 +1101,17 @@ impl Model<'_> {
         };
         let stop_along = stopped.then(|| self.mean.along(&st.c));
         if cfg.log_events && stopped {
-            run.events
-                .push(self.event(st.t, EventKind::Stop, &st.c, st.v.norm(), 0.0, 0.0, None));
+            run.events.push(self.event(
+                st.t,
+                EventKind::Stop,
+                &st.c,
+                EventChange {
+                    before: st.v.norm(),
+                    after: 0.0,
+                    lost: 0.0,
+                    peak: None,
+                },
+            ));
         }
         if let Some(r) = run.rec.as_mut()
             && r.tr.time.last().is_none_or(|&t| t < st.t)
@@ -1154,19 +1163,23 @@ impl Model<'_> {
     /// spring whose contact is no longer closed releases its energy. With `carried`, the
     /// carried springs of the pairs still closed are pushed there (a pair new at the end has
     /// none: its next force evaluation sees it as a fresh touch).
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn stored_at_end(
         &self,
+        run: &mut Run,
         lagged: &State,
         end: &State,
         cfg: &RunSettings<'_>,
-        springs: &[Spring],
-        onsets: &[Onset],
-        h: f64,
-        tris: &mut Vec<FloorTriangle>,
-        geos: &mut Vec<Geo>,
         mut carried: Option<&mut Vec<Spring>>,
     ) -> (f64, f64) {
+        let Run {
+            springs,
+            onsets,
+            drift_h: h,
+            tris,
+            contacts: geos,
+            ..
+        } = run;
+        let h = *h;
         let r = self.rot(&end.q);
         self.contacts(&end.c, &r, tris, geos);
         let w_world = r * lagged.w;
@@ -1292,17 +1305,19 @@ impl Model<'_> {
         super::super::terrain::outward_root(s0, b, a).filter(|&t| t <= tau)
     }
 
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn event(
         &self,
         t: f64,
         kind: EventKind,
         p: &Vector3<f64>,
-        before: f64,
-        after: f64,
-        lost: f64,
-        peak: Option<f64>,
+        change: EventChange,
     ) -> Event {
+        let EventChange {
+            before,
+            after,
+            lost,
+            peak,
+        } = change;
         Event {
             time: t,
             kind,
@@ -1333,10 +1348,12 @@ impl Model<'_> {
                 ep.t0,
                 EventKind::Impact,
                 &ep.p,
-                ep.speed_before,
-                ep.last_speed,
-                ep.last_diss - ep.diss_before,
-                Some(ep.peak),
+                EventChange {
+                    before: ep.speed_before,
+                    after: ep.last_speed,
+                    lost: ep.last_diss - ep.diss_before,
+                    peak: Some(ep.peak),
+                },
             ));
         }
         if ep.ground && separated {
@@ -1344,10 +1361,12 @@ impl Model<'_> {
                 ep.last_t,
                 EventKind::TakeOff,
                 &ep.last_p,
-                ep.last_speed,
-                ep.last_speed,
-                0.0,
-                None,
+                EventChange {
+                    before: ep.last_speed,
+                    after: ep.last_speed,
+                    lost: 0.0,
+                    peak: None,
+                },
             ));
         }
     }
@@ -1383,6 +1402,18 @@ impl Model<'_> {
         tr.dissipated_energy.push(diss);
         Ok(())
     }
+}
+
+/// The block's motion over one step as a contact's normal force reads it (see
+/// [`Model::normal_force`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct StepMotion<'a> {
+    /// Velocity of the centre predicted at x(t) (world frame), m/s.
+    pub(super) v_t: &'a Vector3<f64>,
+    /// Angular velocity predicted at x(t) (world frame), rad/s.
+    pub(super) w_t: &'a Vector3<f64>,
+    /// The step h, s.
+    pub(super) h: f64,
 }
 
 /// The normal force of one contact over one step (see [`Model::normal_force`]).

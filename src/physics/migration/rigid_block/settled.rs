@@ -97,10 +97,7 @@ impl Model<'_> {
         let (k_hit, _) = self.columns.first_reach(
             &self.mean,
             &self.supports,
-            &st.c,
-            &vk,
-            &ak,
-            n_skip as f64,
+            Piece::new(&st.c, &vk, &ak, n_skip as f64),
             margin,
         )?;
         let n = k_hit.floor() - 2.0;

@@ -68,7 +68,6 @@ impl CellGrid {
     /// crosses the line is then ill-conditioned, so both cells' facets are candidates. Returned
     /// as the offsets along x and along y (the cell itself first, then −1, then +1); the cells
     /// are visited row by row, (ci + ox, cj + oy) for oy in the y offsets, ox in the x offsets.
-    #[allow(clippy::too_many_arguments)]
     #[inline]
     pub(super) fn near_cells(
         &self,
