@@ -226,6 +226,16 @@ async fn bad_studies_are_422_naming_the_field() {
             json!({"parameters": [{"name": "contact.law", "min": 1, "max": 2}]}),
             "/parameters/0/name",
         ),
+        // paths through a number name no field (they once swept
+        // nothing and answered 200 with constant outputs)
+        (
+            json!({"parameters": [{"name": "velocity_m_s.x", "min": 4, "max": 6}]}),
+            "/parameters/0/name",
+        ),
+        (
+            json!({"parameters": [{"name": "rock.side_length_m.0", "min": 0.2, "max": 0.3}]}),
+            "/parameters/0/name",
+        ),
         (
             json!({"parameters": [{"name": "velocity_m_s", "min": 6, "max": 4}]}),
             "/parameters/0/max",
@@ -347,8 +357,13 @@ mod properties {
             };
             let p = [ImpactParameter::Velocity, ImpactParameter::SideLength,
                      ImpactParameter::Density, ImpactParameter::RockModulus][which];
+            // Within 10 % of a line law's capacity (G > 0.9) the answer warns `near_capacity`:
+            // force and half-width are ill-conditioned there, and the difference quotient's
+            // truncation error grows as its points near G = 1 (v = 283 m/s, Johnson, G =
+            // 0.99938: the points ± 1e-4 v move G by a third of 1 − G, and Richardson's P
+            // elasticity is off by 1.5e-4 of 28.97, the analytic one being exact).
             if let Ok(ImpactDetail::Line(l)) = impact_maxima(&case) {
-                prop_assume!(l.u > 1e-2);
+                prop_assume!(l.u > 1e-2 && l.energy_parameter <= 0.9);
             }
             let Ok(Some(e)) = impact_elasticities(&case, p) else {
                 prop_assume!(false);

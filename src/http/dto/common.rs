@@ -24,15 +24,6 @@ where
     T::deserialize(d).map(Some)
 }
 
-/// The former name of [`non_null`], kept for the DTOs that still use it.
-pub fn some<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
-where
-    D: serde::Deserializer<'de>,
-    T: Deserialize<'de>,
-{
-    non_null(d)
-}
-
 /// Collects range errors so that one answer names every bad field.
 #[derive(Debug, Default)]
 pub struct Checker {

@@ -113,7 +113,7 @@ pub struct StudyRequest {
     /// max_contact_deformation_m, max_force_n, column_energy_after_contact_j, energy_ratio).
     #[serde(
         skip_serializing_if = "Option::is_none",
-        deserialize_with = "super::common::some"
+        deserialize_with = "super::common::non_null"
     )]
     #[schema(example = json!(["max_force_n", "energy_ratio"]))]
     pub outputs: Option<Vec<String>>,
@@ -497,9 +497,6 @@ pub enum SweptField {
     EndTime,
     /// `output.duration_s`.
     HistoryDuration,
-    /// A path that passes through a number, string or boolean of the base request, or past the
-    /// end of one of its arrays: it sets nothing.
-    Nothing,
 }
 
 impl SweptField {
@@ -509,8 +506,10 @@ impl SweptField {
     #[must_use]
     pub fn of(name: &str, sent: &ColumnRequest, sent_json: &Value) -> Option<Self> {
         let mut probe = sent_json.clone();
+        // a path through a number, string or boolean of the request, or past the end of one
+        // of its arrays, sets nothing: refused as no numeric field
         if !set_pointer(&mut probe, &pointer_of(name), 0.0) {
-            return Some(Self::Nothing);
+            return None;
         }
         let segs: Vec<&str> = name.split('.').collect();
         let index = |s: &str| s.parse::<usize>().ok();
@@ -597,7 +596,6 @@ impl SweptField {
                     .get_or_insert_with(ColumnOutputDto::default)
                     .duration_s = Some(x);
             }
-            Self::Nothing => {}
         }
     }
 
@@ -652,7 +650,6 @@ impl SweptField {
             Self::InitialMidpointDisplacement => req.initial_midpoint_displacement_m,
             Self::EndTime => req.end_time_s,
             Self::HistoryDuration => req.output.as_ref().and_then(|o| o.duration_s),
-            Self::Nothing => None,
         }
     }
 
@@ -663,10 +660,9 @@ impl SweptField {
             Self::Velocity => Parameter::Velocity,
             Self::RockSideLength => Parameter::RockSideLength,
             Self::RockRadius => Parameter::RockRadius,
-            Self::RockDimension(_)
-            | Self::RockVertex(..)
-            | Self::RockRandomSemiAxis(_)
-            | Self::Nothing => Parameter::Unused,
+            Self::RockDimension(_) | Self::RockVertex(..) | Self::RockRandomSemiAxis(_) => {
+                Parameter::Unused
+            }
             Self::RockDensity => Parameter::RockDensity,
             Self::RockElasticModulus => Parameter::RockElasticModulus,
             Self::RockPoissonRatio => Parameter::RockPoissonRatio,
