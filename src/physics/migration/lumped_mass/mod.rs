@@ -20,12 +20,15 @@
 use nalgebra::Vector3;
 
 use super::lines::{Crossing, Line, LineAction, act, first_reachable};
-use super::terrain::{Facet, FacetPlane, FlightEnd, Floor, MeanPlane, RunZones, inside_tri};
+use super::terrain::{
+    Facet, FacetPlane, FlightEnd, Floor, FloorKind, MeanPlane, RunZones, inside_tri,
+};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
 
 mod flight;
 mod ground;
+mod plane;
 mod trap;
 
 use trap::trap_length;
@@ -512,12 +515,34 @@ pub(crate) fn simulate(
     rec: Option<&mut Recording>,
     control: Option<&Control>,
 ) -> PhysicsResult<RunOut> {
+    simulate_on(su, mu, zones, draw, rec, control, true)
+}
+
+/// [`simulate`], through the plane loop ([`Run::step_plane`]) when `plane_loop` is set and the
+/// case allows it ([`Run::plane_only`]), through the general loop otherwise: the same answer
+/// either way, to the bit.
+fn simulate_on(
+    su: &Setup<'_>,
+    mu: f64,
+    zones: Option<&RunZones<'_>>,
+    draw: &mut impl FnMut() -> (f64, f64),
+    rec: Option<&mut Recording>,
+    control: Option<&Control>,
+    plane_loop: bool,
+) -> PhysicsResult<RunOut> {
     let mut run = Run::new(su, mu, rec);
     run.zones = zones;
-    let (phase, reason) = loop {
-        if let Some(end) = run.step(draw, control)? {
-            break end;
-        }
+    let (phase, reason) = match run.plane_only().filter(|_| plane_loop) {
+        Some(pl) => loop {
+            if let Some(end) = run.step_plane(&pl, draw, control)? {
+                break end;
+            }
+        },
+        None => loop {
+            if let Some(end) = run.step(draw, control)? {
+                break end;
+            }
+        },
     };
     run.finish(phase, reason)
 }
