@@ -963,7 +963,7 @@ impl<'a, 'r> Run<'a, 'r> {
 
     /// The outcome of a run that ended in `phase` for `reason`: the last invariant check, the
     /// stop event, the rotation and the account.
-    fn finish(mut self, phase: Phase, reason: StopReason) -> PhysicsResult<RunOut> {
+    fn finish(&mut self, phase: Phase, reason: StopReason) -> PhysicsResult<RunOut> {
         let (floor, su) = (self.floor, self.su);
         // invariant: the state the run ends in is above the floor too (the last piece is not
         // checked inside the loop)
@@ -1016,7 +1016,7 @@ impl<'a, 'r> Run<'a, 'r> {
             steps: self.steps,
             support: self.hit,
             e_barrier: s.e_barrier,
-            crossings: self.crossings,
+            crossings: std::mem::take(&mut self.crossings),
         })
     }
 }

@@ -148,13 +148,85 @@ impl Run<'_, '_> {
         }
         match hit {
             Some(_) => {
-                self.impact(0, p_start, draw);
+                self.impact_plane(pl, p_start, draw);
                 None
             }
             None if t_s <= t_left || past_end.is_some() => {
                 Some((Phase::Flight, StopReason::LowerEnd))
             }
             None => Some((Phase::Flight, StopReason::EndTime)),
+        }
+    }
+
+    /// [`Run::impact`] on the plane `pl` (facet 0, one material): the rock put on the plane,
+    /// the restitution drawn and applied in its frame, a rebound slower than the stop speed
+    /// starting the ground phase.
+    #[inline]
+    fn impact_plane(
+        &mut self,
+        pl: &FacetPlane,
+        p_start: Vector3<f64>,
+        draw: &mut impl FnMut() -> (f64, f64),
+    ) {
+        let (g, dip, su) = (self.g, self.dip, self.su);
+        let s = &mut self.s;
+        let n = pl.normal();
+        let z = pl.z(s.p.x, s.p.y);
+        // the plane is the floor's surface: nothing above it to check
+        set_height(s, z, g, 1.0);
+        s.on_surface = Some(s.p);
+        if (s.p - p_start).norm() <= self.catch.len {
+            self.catch.hops += 1;
+        } else {
+            self.catch.hops = 0;
+        }
+        s.s_r += (s.p - s.r).dot(&dip);
+        s.r = s.p;
+        let vn = s.v.dot(&n);
+        let touch_down_below = match s.flight_from {
+            FlightFrom::Release => 0.0,
+            FlightFrom::Rebound => REBOUND_TOUCH_DOWN * su.v_stop,
+            FlightFrom::TakeOff => su.v_stop,
+        };
+        if -vn < touch_down_below {
+            self.touch_down(0, n, vn);
+            return;
+        }
+        let vt = s.v - n * vn;
+        let (en, et) = draw();
+        s.impacts += 1;
+        let speed_before = s.v.norm();
+        let lost =
+            0.5 * ((1.0 - en * en) * vn * vn + (1.0 - et * et) * vt.norm_squared()) + s.spin.0;
+        s.e_imp += lost;
+        s.spin = (0.0, Vector3::zeros());
+        let r = -en * vn;
+        let rebound = vt * et + n * r;
+        self.push_event(|s| EventRec {
+            t: s.t,
+            kind: EventKind::Impact,
+            p: s.p,
+            speed_before,
+            speed_after: rebound.norm(),
+            lost,
+        });
+        let s = &mut self.s;
+        if r < su.v_stop || r < MIN_REBOUND {
+            s.rebound_cutoff |= r >= su.v_stop;
+            s.e_trans += 0.5 * r * r;
+            s.v = vt * et;
+            let ke_before = rebound.norm();
+            self.enter_ground(0);
+            if let Some(rr) = self.rec.as_deref_mut()
+                && let Some(ev) = rr.events.last_mut()
+            {
+                ev.speed_before = ke_before;
+                ev.lost += 0.5 * r * r;
+            }
+        } else {
+            s.v = rebound;
+            s.flight_from = FlightFrom::Rebound;
+            s.apex = Some((r * r / (2.0 * g * n.z), s.t + r / (g * n.z)));
         }
     }
 
