@@ -515,7 +515,25 @@ pub(crate) fn simulate(
     rec: Option<&mut Recording>,
     control: Option<&Control>,
 ) -> PhysicsResult<RunOut> {
-    simulate_on(su, mu, zones, draw, rec, control, true)
+    simulate_on(su, mu, zones, draw, rec, control, plane_loop_allowed())
+}
+
+/// Whether runs may take the plane loop: always, but in the tests that compare whole answers
+/// through both loops ([`plane`]'s tests), which turn it off for a while.
+#[cfg(not(test))]
+#[inline(always)]
+fn plane_loop_allowed() -> bool {
+    true
+}
+
+/// Set by [`plane`]'s tests to send every run through the general loop.
+#[cfg(test)]
+static GENERAL_LOOP_ONLY: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether runs may take the plane loop (not while [`GENERAL_LOOP_ONLY`] is set).
+#[cfg(test)]
+fn plane_loop_allowed() -> bool {
+    !GENERAL_LOOP_ONLY.load(std::sync::atomic::Ordering::SeqCst)
 }
 
 /// [`simulate`], through the plane loop ([`Run::step_plane`]) when `plane_loop` is set and the

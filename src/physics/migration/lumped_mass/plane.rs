@@ -345,6 +345,7 @@ mod tests {
     //! rolling, stop speed, end time, face length, a spanning support, a step limit) give the
     //! same outcome, events and trajectory pieces through both, compared bit for bit.
     use super::*;
+    use crate::physics::migration::MigrationCase;
     use crate::physics::migration::monte_carlo::splitmix64;
     use proptest::prelude::*;
 
@@ -422,6 +423,81 @@ mod tests {
             // the case takes the plane loop
             prop_assert!(Run::new(&su, mu, None).plane_only().is_some());
             let (fast, general) = (go(true), go(false));
+            prop_assert_eq!(fast, general);
+        }
+    }
+
+    /// The whole answer of `case` (nominal run with its events and trajectory, statistics and
+    /// every run's summary), as its `{:?}`, through the plane loop or only the general loop.
+    fn answer(case: &MigrationCase, plane_loop: bool) -> String {
+        use std::sync::atomic::Ordering;
+        GENERAL_LOOP_ONLY.store(!plane_loop, Ordering::SeqCst);
+        let out = crate::physics::migration::run(case, &Control::unlimited());
+        GENERAL_LOOP_ONLY.store(false, Ordering::SeqCst);
+        format!("{out:?}")
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 60, ..ProptestConfig::default() })]
+
+        /// Whole migration answers of random plane ensembles (dip, μ fixed or drawn per run,
+        /// e_n and e_t drawn per impact, release drop, speed and drawn velocity, sliding or
+        /// rolling, stop speed, end time, a spanning support) are the same bits through the
+        /// plane loop and through the general loop alone: every run's summary, the statistics,
+        /// the nominal run's events and trajectory.
+        #[test]
+        fn whole_plane_answers_are_the_same_through_either_loop(
+            dip_deg in 35.0..55.0f64,
+            mu in 0.0..1.0f64,
+            mu_drawn in any::<bool>(),
+            roll in any::<bool>(),
+            stop in prop_oneof![0.0..0.3f64, Just(0.0)],
+            drop in prop_oneof![0.0..5.0f64, Just(0.0)],
+            speed in prop_oneof![0.0..4.0f64, Just(0.0)],
+            velocity_drawn in any::<bool>(),
+            end_time in prop::option::of(0.5..20.0f64),
+            span in any::<bool>(),
+            en in (0.0..0.6f64, 0.0..0.3f64),
+            et in (0.4..0.9f64, 0.0..0.1f64),
+            seed in any::<u64>(),
+        ) {
+            use crate::physics::migration::{
+                Distribution, FloorSpec, MonteCarlo, SupportStop,
+            };
+            let mut c = MigrationCase::default();
+            c.face.dip_deg = dip_deg;
+            c.face.floor = FloorSpec::Plane;
+            c.face.length = 60.0;
+            c.face.friction_coefficient = mu;
+            c.release.drop_height = drop;
+            c.release.speed = speed;
+            c.lumped_mass.stop_normal_speed = stop;
+            if roll {
+                c.lumped_mass.motion = Motion::Roll;
+            }
+            c.end_time = end_time;
+            if span {
+                c.supports = vec![SupportStop { along_dip: 50.0, across: None, reach: 0.0 }];
+            }
+            c.monte_carlo = Some(MonteCarlo {
+                runs: 64,
+                seed,
+                restitution_normal: Distribution::Uniform { min: en.0, max: en.0 + en.1 },
+                restitution_tangential: Distribution::Uniform { min: et.0, max: et.0 + et.1 },
+                friction_coefficient: mu_drawn
+                    .then_some(Distribution::Uniform { min: mu, max: mu + 0.3 }),
+                release_velocity: velocity_drawn.then_some([
+                    Distribution::Uniform { min: -1.0, max: 2.0 },
+                    Distribution::Normal { mean: 0.0, std: 0.5 },
+                    Distribution::Uniform { min: 0.0, max: 1.0 },
+                ]),
+                random_orientation: false,
+            });
+            c.output.events = true;
+            c.output.trajectory = true;
+            c.output.runs_csv = true;
+            let fast = answer(&c, true);
+            let general = answer(&c, false);
             prop_assert_eq!(fast, general);
         }
     }
