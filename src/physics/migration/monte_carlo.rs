@@ -142,7 +142,18 @@ fn standard_normal(rng: &mut Pcg64) -> f64 {
 /// # Special cases
 /// A truncated normal whose window holds almost no probability (more than 10 000 rejections)
 /// returns a uniform draw on [min, max] instead of looping for ever.
+#[inline]
 pub fn sample(d: &Distribution, rng: &mut Pcg64) -> f64 {
+    match *d {
+        // the uniform draw (the default restitution's, two per impact) in line
+        Distribution::Uniform { min, max } => min + (max - min) * uniform01(rng),
+        _ => sample_normal(d, rng),
+    }
+}
+
+/// [`sample`] of a normal or truncated normal distribution (out of line).
+#[inline(never)]
+fn sample_normal(d: &Distribution, rng: &mut Pcg64) -> f64 {
     match *d {
         Distribution::Uniform { min, max } => min + (max - min) * uniform01(rng),
         Distribution::Normal { mean, std } => mean + std * standard_normal(rng),

@@ -179,7 +179,7 @@ impl Run<'_, '_> {
     /// from here. A rolling rock also keeps its angular momentum about the contact point, so
     /// its rolling speed is (v + 0.4 u)/1.4 with u the surface speed of its spin in flight; the
     /// loss |v − u|²/7 (zero when the spin matches) is booked as transition.
-    fn touch_down(&mut self, facet: Facet, n: Vector3<f64>, vn: f64) {
+    pub(super) fn touch_down(&mut self, facet: Facet, n: Vector3<f64>, vn: f64) {
         let (roll, radius) = (self.roll, self.su.radius);
         let speed_before = self.s.v.norm();
         let spin_in_flight = std::mem::replace(&mut self.s.spin, (0.0, Vector3::zeros()));

@@ -20,12 +20,15 @@
 use nalgebra::Vector3;
 
 use super::lines::{Crossing, Line, LineAction, act, first_reachable};
-use super::terrain::{Facet, FacetPlane, FlightEnd, Floor, MeanPlane, RunZones, inside_tri};
+use super::terrain::{
+    Facet, FacetPlane, FlightEnd, Floor, FloorKind, MeanPlane, RunZones, inside_tri,
+};
 use crate::physics::control::Control;
 use crate::physics::error::{PhysicsError, PhysicsResult};
 
 mod flight;
 mod ground;
+mod plane;
 mod trap;
 
 use trap::trap_length;
@@ -512,12 +515,52 @@ pub(crate) fn simulate(
     rec: Option<&mut Recording>,
     control: Option<&Control>,
 ) -> PhysicsResult<RunOut> {
+    simulate_on(su, mu, zones, draw, rec, control, plane_loop_allowed())
+}
+
+/// Whether runs may take the plane loop: always, but in the tests that compare whole answers
+/// through both loops ([`plane`]'s tests), which turn it off for a while.
+#[cfg(not(test))]
+#[inline(always)]
+fn plane_loop_allowed() -> bool {
+    true
+}
+
+/// Set by [`plane`]'s tests to send every run through the general loop.
+#[cfg(test)]
+static GENERAL_LOOP_ONLY: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether runs may take the plane loop (not while [`GENERAL_LOOP_ONLY`] is set).
+#[cfg(test)]
+fn plane_loop_allowed() -> bool {
+    !GENERAL_LOOP_ONLY.load(std::sync::atomic::Ordering::SeqCst)
+}
+
+/// [`simulate`], through the plane loop ([`Run::step_plane`]) when `plane_loop` is set and the
+/// case allows it ([`Run::plane_only`]), through the general loop otherwise: the same answer
+/// either way, to the bit.
+fn simulate_on(
+    su: &Setup<'_>,
+    mu: f64,
+    zones: Option<&RunZones<'_>>,
+    draw: &mut impl FnMut() -> (f64, f64),
+    rec: Option<&mut Recording>,
+    control: Option<&Control>,
+    plane_loop: bool,
+) -> PhysicsResult<RunOut> {
     let mut run = Run::new(su, mu, rec);
     run.zones = zones;
-    let (phase, reason) = loop {
-        if let Some(end) = run.step(draw, control)? {
-            break end;
-        }
+    let (phase, reason) = match run.plane_only().filter(|_| plane_loop) {
+        Some(pl) => loop {
+            if let Some(end) = run.step_plane(&pl, draw, control)? {
+                break end;
+            }
+        },
+        None => loop {
+            if let Some(end) = run.step(draw, control)? {
+                break end;
+            }
+        },
     };
     run.finish(phase, reason)
 }
@@ -938,7 +981,7 @@ impl<'a, 'r> Run<'a, 'r> {
 
     /// The outcome of a run that ended in `phase` for `reason`: the last invariant check, the
     /// stop event, the rotation and the account.
-    fn finish(mut self, phase: Phase, reason: StopReason) -> PhysicsResult<RunOut> {
+    fn finish(&mut self, phase: Phase, reason: StopReason) -> PhysicsResult<RunOut> {
         let (floor, su) = (self.floor, self.su);
         // invariant: the state the run ends in is above the floor too (the last piece is not
         // checked inside the loop)
@@ -991,7 +1034,7 @@ impl<'a, 'r> Run<'a, 'r> {
             steps: self.steps,
             support: self.hit,
             e_barrier: s.e_barrier,
-            crossings: self.crossings,
+            crossings: std::mem::take(&mut self.crossings),
         })
     }
 }

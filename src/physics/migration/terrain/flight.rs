@@ -46,6 +46,60 @@ pub(crate) enum FlightEnd {
     Clear,
 }
 
+/// Rounding allowance, m, of a start point's height against a facet's plane: a few ulps of
+/// p's coordinates (m), far below the invariant's 1e-9 tolerance.
+#[inline]
+pub(crate) fn start_rounding(p: &Vector3<f64>) -> f64 {
+    1e-12 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()))
+}
+
+/// The strike of the parabola p + v t + ½ (0, 0, −g) t² (m, m/s, m/s²) on the plane `pl`: its
+/// time, s, and whether it is a strike at the start (`h_round`, m: [`start_rounding`] of p), or
+/// None when the parabola does not strike it.
+#[inline]
+fn strike_root(
+    pl: &FacetPlane,
+    p: &Vector3<f64>,
+    v: &Vector3<f64>,
+    g: f64,
+    h_round: f64,
+) -> Option<(f64, bool)> {
+    let h0 = pl.height(p);
+    let b = pl.height_rate(v);
+    let r = descent_root(h0, b, g)?;
+    // a strike: the height decreases through zero (not a graze at the start)
+    let slope = b - g * r;
+    // A start on the plane (to rounding) not moving away from it is a strike now, if the
+    // motion goes on over the facet (checked a little ahead, see `ahead`): a rock at rest
+    // on a facet grazes it at t = 0 (h = −g t²/2), and a start a rounding error below
+    // the plane, sinking further, has its root h0/|b| in the past, which is long for a
+    // slow rock (a rock bounced off a node at 6 mm/s into a steeper facet 9e-16 m below
+    // the node's height had its root 3.6e-12 s back: refused as past, it fell through).
+    if slope >= -1e-12 * (1.0 + b.abs()) {
+        return (h0.abs() <= h_round && b <= 1e-12).then_some((0.0, true));
+    }
+    if r < -1e-12 && h0 >= -h_round {
+        return Some((0.0, true));
+    }
+    Some((r, false))
+}
+
+/// First strike within t ≤ `t_max` (s) of the parabola p + v t + ½ (0, 0, −g) t² on the plane
+/// floor `pl` (one facet, 0, without holes): [`Floor::flight`] on a plane.
+#[inline]
+pub(crate) fn plane_flight(
+    pl: &FacetPlane,
+    p: &Vector3<f64>,
+    v: &Vector3<f64>,
+    g: f64,
+    t_max: f64,
+) -> FlightEnd {
+    match strike_root(pl, p, v, g, start_rounding(p)) {
+        Some((t, _)) if t <= t_max => FlightEnd::Hit { t, facet: 0 },
+        _ => FlightEnd::Clear,
+    }
+}
+
 impl Floor {
     /// First strike of the parabola p + v t + ½ (0, 0, −g) t² on the floor within t ≤ t_max.
     /// A strike on a hole's facet (its height filled in from the data around it) is a landing
@@ -67,27 +121,8 @@ impl Floor {
     fn flight_any(&self, p: &Vector3<f64>, v: &Vector3<f64>, g: f64, t_max: f64) -> FlightEnd {
         // rounding of the start point's height against a facet's plane (a few ulps of its
         // coordinates), far below the invariant's 1e-9 tolerance
-        let h_round = 1e-12 * (1.0 + p.x.abs().max(p.y.abs()).max(p.z.abs()));
-        let root = |pl: &FacetPlane| -> Option<(f64, bool)> {
-            let h0 = pl.height(p);
-            let b = pl.height_rate(v);
-            let r = descent_root(h0, b, g)?;
-            // a strike: the height decreases through zero (not a graze at the start)
-            let slope = b - g * r;
-            // A start on the plane (to rounding) not moving away from it is a strike now, if the
-            // motion goes on over the facet (checked a little ahead, see `ahead`): a rock at rest
-            // on a facet grazes it at t = 0 (h = −g t²/2), and a start a rounding error below
-            // the plane, sinking further, has its root h0/|b| in the past, which is long for a
-            // slow rock (a rock bounced off a node at 6 mm/s into a steeper facet 9e-16 m below
-            // the node's height had its root 3.6e-12 s back: refused as past, it fell through).
-            if slope >= -1e-12 * (1.0 + b.abs()) {
-                return (h0.abs() <= h_round && b <= 1e-12).then_some((0.0, true));
-            }
-            if r < -1e-12 && h0 >= -h_round {
-                return Some((0.0, true));
-            }
-            Some((r, false))
-        };
+        let h_round = start_rounding(p);
+        let root = |pl: &FacetPlane| strike_root(pl, p, v, g, h_round);
         // where a strike at the start is tested against a facet: a step of 1e-6 of a cell
         // along the horizontal motion (on the start point itself when there is none), so that a
         // rock leaving a facet across its edge does not strike it again
@@ -100,10 +135,7 @@ impl Floor {
             }
         };
         match &self.kind {
-            FloorKind::Plane(pl) => match root(pl) {
-                Some((t, _)) if t <= t_max => FlightEnd::Hit { t, facet: 0 },
-                _ => FlightEnd::Clear,
-            },
+            FloorKind::Plane(pl) => plane_flight(pl, p, v, g, t_max),
             // In each cell of the walk, the candidates are its facets and those of the cells
             // whose boundary the path runs within `near` of; a root counts when its point lies in
             // the facet (closed, with a rounding tolerance), not in the past and not after the cell's

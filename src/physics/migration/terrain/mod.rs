@@ -34,7 +34,7 @@ mod zones;
 use nalgebra::Vector3;
 
 pub(crate) use self::facet::{FacetPlane, inside_tri};
-pub(crate) use self::flight::FlightEnd;
+pub(crate) use self::flight::{FlightEnd, plane_flight, start_rounding};
 use self::grid::GridFloor;
 pub use self::grid::{GRID_BYTES_PER_POINT, grid_bytes};
 pub use self::map::MapFrame;
