@@ -145,7 +145,7 @@ impl StudyCase {
             }
             _ => {
                 if !given.corner_radius {
-                    rock.corner_radius = 0.02f64.min(l / 2.0);
+                    rock.corner_radius = crate::physics::material::defaults::corner_radius(l);
                 }
             }
         }

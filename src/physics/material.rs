@@ -88,6 +88,14 @@ pub mod defaults {
     pub const COLUMN_YIELD_STRESS: f64 = 345e6;
     /// Column damping coefficient c, N·s/m².
     pub const COLUMN_DAMPING_COEFFICIENT: f64 = 1.0;
+    /// Largest default corner radius of the rock, m: the default r_c is min(this, L/2).
+    pub const ROCK_CORNER_RADIUS: f64 = 0.02;
+
+    /// The default corner radius min(0.02, L/2) of a rock of side `side_length` (m), m.
+    #[must_use]
+    pub fn corner_radius(side_length: f64) -> f64 {
+        ROCK_CORNER_RADIUS.min(side_length / 2.0)
+    }
 }
 
 impl Default for Rock {
@@ -98,7 +106,7 @@ impl Default for Rock {
             density: defaults::ROCK_DENSITY,
             elastic_modulus: defaults::ROCK_ELASTIC_MODULUS,
             poisson_ratio: defaults::ROCK_POISSON_RATIO,
-            corner_radius: 0.02,
+            corner_radius: defaults::corner_radius(defaults::ROCK_SIDE_LENGTH),
         }
     }
 }

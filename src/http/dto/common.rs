@@ -741,7 +741,9 @@ impl RockDto {
         };
         let corner = match shape {
             RockShape::Sphere { radius } => radius,
-            _ => *self.corner_radius_m.get_or_insert(0.02f64.min(l / 2.0)),
+            _ => *self
+                .corner_radius_m
+                .get_or_insert(crate::physics::material::defaults::corner_radius(l)),
         };
         if corner_needed && !matches!(shape, RockShape::Sphere { .. }) {
             checker.range(

@@ -316,7 +316,9 @@ impl StudyBase<'_> {
         let hertz = resolved.contact.law == LawDto::HertzPoint;
         let side_moves_corner = hertz
             && which == Some(ImpactParameter::SideLength)
-            && !(self.corner_given || resolved.rock.side_length_m / 2.0 > 0.02);
+            && !(self.corner_given
+                || resolved.rock.side_length_m / 2.0
+                    > crate::physics::material::defaults::ROCK_CORNER_RADIUS);
         Ok(match which {
             Some(w)
                 if !self.coupled
