@@ -4,7 +4,9 @@
 //!
 //! Cancellation: the [`Control`] is polled before anything is allocated and before every run, so
 //! a cancelled or timed-out ensemble stops within one run per thread of the flag. The records
-//! are allocated per chunk as the runs are done, never up front for the whole range.
+//! are allocated after that first poll: per chunk as the runs are done ([`run_in_chunks`]), or
+//! once for the whole range and written in place by the chunks ([`run_in_chunks_in_place`],
+//! the lumped-mass ensemble's summaries: no copy of the chunks into the whole record).
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -82,6 +84,52 @@ where
     Ok(all)
 }
 
+/// [`run_in_chunks`] writing each run's result into its slot of the whole record, allocated
+/// once (filled with `fill`, every slot overwritten when no run fails): the same chunks, checks,
+/// progress and first error in run order, without the copy of the chunks' records into the
+/// whole one.
+///
+/// Errors: as [`run_in_chunks`].
+pub(crate) fn run_in_chunks_in_place<T, E>(
+    range: Range<u64>,
+    chunk: usize,
+    control: &Control,
+    fill: T,
+    one: impl Fn(u64) -> Result<T, E> + Sync,
+) -> Result<Vec<T>, E>
+where
+    T: Copy + Send + Sync,
+    E: From<PhysicsError> + Send,
+{
+    control.check()?;
+    let runs = range.end.saturating_sub(range.start);
+    let chunk = chunk.max(1);
+    let runs = usize::try_from(runs).map_err(|_| {
+        E::from(PhysicsError::Numerical(
+            "more runs than usize counts".into(),
+        ))
+    })?;
+    let mut all = vec![fill; runs];
+    let done: Vec<Result<(), E>> = all
+        .par_chunks_mut(chunk)
+        .enumerate()
+        .map(|(c, out)| {
+            let start = range.start + (c * chunk) as u64;
+            for (slot, i) in out.iter_mut().zip(start..) {
+                control.check()?;
+                *slot = one(i)?;
+            }
+            control.add_done(out.len() as u64);
+            control.check_pace()?;
+            Ok(())
+        })
+        .collect();
+    for d in done {
+        d?;
+    }
+    Ok(all)
+}
+
 /// Largest friction coefficient of the face's range [0, 2]; drawn values are clipped to it.
 pub(super) const MU_MAX: f64 = 2.0;
 
@@ -96,8 +144,33 @@ pub(super) fn ensemble(
     let setup = lumped_mass_setup(case, pr);
     control.announce(range.end - range.start);
     let one = |i: u64| lumped_one(case, pr, &setup, mc, i, control);
-    run_in_chunks(range, CHUNK as usize, control, one)
+    run_in_chunks_in_place(range, CHUNK as usize, control, UNSET, one)
 }
+
+/// The value of a summary's slot before its run is written into it (never returned: a slot
+/// stays unset only when a run failed, and then the ensemble fails).
+const UNSET: RunSummary = RunSummary {
+    time: 0.0,
+    speed: 0.0,
+    kinetic_energy: 0.0,
+    impact_count: 0,
+    runout: 0.0,
+    max_bounce_height: 0.0,
+    stop_reason: StopReason::AtRest,
+    steps: 0,
+    along_dip_velocity: 0.0,
+    support: None,
+    impact_speed: 0.0,
+    release_along_dip: 0.0,
+    release_across: 0.0,
+    side_length: 0.0,
+    density: 0.0,
+    stop_along_dip: 0.0,
+    stop_across: 0.0,
+    translational_energy: 0.0,
+    rotational_energy: 0.0,
+    passing_height: 0.0,
+};
 
 /// [`ensemble`] with the cells each run entered on `grid` (see [`super::maps`]).
 pub(super) fn ensemble_mapped(

@@ -461,6 +461,17 @@ fn below_floor(z: f64, p: &Vector3<f64>, t: f64) -> PhysicsError {
     ))
 }
 
+/// The error of a run that took more than its step limit `limit` (`steps` taken), out of line
+/// (see [`below_floor`]).
+#[cold]
+#[inline(never)]
+fn too_many_steps(steps: u64, limit: u64) -> PhysicsError {
+    PhysicsError::TooManySteps {
+        estimated: steps as f64,
+        limit: limit as f64,
+    }
+}
+
 /// The error of a rock on the ground off the floor at time `t`, s (out of line, see
 /// [`below_floor`]).
 #[cold]
@@ -842,10 +853,7 @@ impl<'a, 'r> Run<'a, 'r> {
             c.check()?;
         }
         if self.steps > self.su.max_steps {
-            return Err(PhysicsError::TooManySteps {
-                estimated: self.steps as f64,
-                limit: self.su.max_steps as f64,
-            });
+            return Err(too_many_steps(self.steps, self.su.max_steps));
         }
         self.check_invariants()?;
         if let Some(z) = self.zones {

@@ -37,16 +37,13 @@ impl Run<'_, '_> {
             c.check()?;
         }
         if self.steps > self.su.max_steps {
-            return Err(PhysicsError::TooManySteps {
-                estimated: self.steps as f64,
-                limit: self.su.max_steps as f64,
-            });
+            return Err(too_many_steps(self.steps, self.su.max_steps));
         }
         // invariant: never below the floor (the plane is everywhere, so the rock is never on
         // the ground off it)
         check_above_height(Some(pl.z(self.s.p.x, self.s.p.y)), &self.s.p, self.s.t)?;
         if self.is_caught_in_place() {
-            return Ok(self.leave_trap());
+            return Ok(self.leave_trap_plane());
         }
         let (s, dip) = (&mut self.s, self.dip);
         if s.ground.is_some() {
@@ -77,7 +74,7 @@ impl Run<'_, '_> {
         let diss0 = s.e_imp + s.e_fric + s.e_trans + s.e_barrier;
         Ok(match (s.ground, s.crease) {
             (None, _) => self.flight_plane(pl, draw, t_left, s_left, diss0),
-            (Some(_), Some(c)) => self.crease_step(c, t_left, s_left, moving),
+            (Some(_), Some(c)) => self.crease_step_plane(c, t_left, s_left, moving),
             (Some(_), None) => self.ground_plane(pl, t_left, s_left, diss0, moving),
         })
     }
@@ -189,7 +186,7 @@ impl Run<'_, '_> {
             FlightFrom::TakeOff => su.v_stop,
         };
         if -vn < touch_down_below {
-            self.touch_down(0, n, vn);
+            self.touch_down_plane(n, vn);
             return;
         }
         let vt = s.v - n * vn;
@@ -212,22 +209,52 @@ impl Run<'_, '_> {
         });
         let s = &mut self.s;
         if r < su.v_stop || r < MIN_REBOUND {
-            s.rebound_cutoff |= r >= su.v_stop;
-            s.e_trans += 0.5 * r * r;
-            s.v = vt * et;
-            let ke_before = rebound.norm();
-            self.enter_ground(0);
-            if let Some(rr) = self.rec.as_deref_mut()
-                && let Some(ev) = rr.events.last_mut()
-            {
-                ev.speed_before = ke_before;
-                ev.lost += 0.5 * r * r;
-            }
+            self.rebound_to_ground(r, vt * et, rebound);
         } else {
             s.v = rebound;
             s.flight_from = FlightFrom::Rebound;
             s.apex = Some((r * r / (2.0 * g * n.z), s.t + r / (g * n.z)));
         }
+    }
+
+    /// A rebound slower than the stop speed (normal part `r`, m/s; `rebound` the velocity it
+    /// would have had): its normal part booked as transition, the ground phase started with the
+    /// tangential part `vt` (as [`Run::impact`]). Out of line, as are the other branches a
+    /// flight takes at most once per run, so that the flight's own values keep their registers.
+    #[inline(never)]
+    fn rebound_to_ground(&mut self, r: f64, vt: Vector3<f64>, rebound: Vector3<f64>) {
+        let s = &mut self.s;
+        s.rebound_cutoff |= r >= self.su.v_stop;
+        s.e_trans += 0.5 * r * r;
+        s.v = vt;
+        let ke_before = rebound.norm();
+        self.enter_ground(0);
+        if let Some(rr) = self.rec.as_deref_mut()
+            && let Some(ev) = rr.events.last_mut()
+        {
+            ev.speed_before = ke_before;
+            ev.lost += 0.5 * r * r;
+        }
+    }
+
+    /// [`Run::touch_down`] on the plane (facet 0), out of line (see [`Run::rebound_to_ground`]).
+    #[inline(never)]
+    fn touch_down_plane(&mut self, n: Vector3<f64>, vn: f64) {
+        self.touch_down(0, n, vn);
+    }
+
+    /// [`Run::leave_trap`], out of line and cold: a rock caught in place is rare.
+    #[cold]
+    #[inline(never)]
+    fn leave_trap_plane(&mut self) -> StepEnd {
+        self.leave_trap()
+    }
+
+    /// [`Run::crease_step`], out of line and cold: on a plane only a trap's exit sets a crease.
+    #[cold]
+    #[inline(never)]
+    fn crease_step_plane(&mut self, c: Crease, t_left: f64, s_left: f64, moving: Phase) -> StepEnd {
+        self.crease_step(c, t_left, s_left, moving)
     }
 
     /// [`Run::ground_step`] on the plane `pl`: constant acceleration up to the lower end, the
