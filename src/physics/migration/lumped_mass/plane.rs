@@ -393,8 +393,9 @@ mod tests {
 
         #[test]
         fn the_plane_loop_gives_the_general_loops_bits(
-            dip_deg in 35.0..55.0f64,
-            mu in prop_oneof![0.0..1.2f64, Just(0.0)],
+            // the documented dip range [5°, 80°] with its ends, and the steep seams' 35–55°
+            dip_deg in prop_oneof![5.0..=80.0f64, Just(5.0), Just(80.0), 35.0..55.0f64],
+            mu in prop_oneof![0.0..=2.0f64, Just(0.0), Just(2.0), 0.0..1.2f64],
             roll in any::<bool>(),
             v_stop in prop_oneof![0.0..0.5f64, Just(0.0), Just(0.1)],
             drop in prop_oneof![0.0..5.0f64, Just(0.0)],
@@ -474,8 +475,8 @@ mod tests {
         /// the nominal run's events and trajectory.
         #[test]
         fn whole_plane_answers_are_the_same_through_either_loop(
-            dip_deg in 35.0..55.0f64,
-            mu in 0.0..1.0f64,
+            dip_deg in prop_oneof![5.0..=80.0f64, Just(5.0), Just(80.0), 35.0..55.0f64],
+            mu in prop_oneof![0.0..=2.0f64, 0.0..1.0f64],
             mu_drawn in any::<bool>(),
             roll in any::<bool>(),
             stop in prop_oneof![0.0..0.3f64, Just(0.0)],
