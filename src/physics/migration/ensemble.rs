@@ -438,6 +438,77 @@ pub trait RunRecords {
     /// The values at the 0-based `ranks` (ascending) of column `col` of [`run_columns`] (its
     /// present values only) sorted by `f64::total_cmp`.
     fn order_values(&self, col: usize, ranks: &[u64]) -> Result<Vec<f64>, Self::Error>;
+    /// Every column's present values in run order and the number of runs that reached the
+    /// lower end, taken in one pass, when the records are in memory: the statistics then read
+    /// the compact columns instead of passing over the whole records once per statistic. None
+    /// (the default) where the records are read from files and may not fit in memory.
+    fn columns(&self) -> Result<Option<Columns>, Self::Error> {
+        Ok(None)
+    }
+    /// Called before each column's order statistics: reading in memory stops there at a
+    /// cancel (nothing by default).
+    fn poll(&self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// The statistics columns of an ensemble's records in memory ([`RunRecords::columns`]).
+#[derive(Debug, Default)]
+pub struct Columns {
+    /// Each column's present values, in run order.
+    values: [Vec<f64>; STATISTICS_COLUMNS],
+    /// Each column's first pass, taken while the values are gathered.
+    first: [stats::FirstPass; STATISTICS_COLUMNS],
+    /// Runs that reached the lower end.
+    reached: u64,
+}
+
+impl Columns {
+    /// Empty columns with room for `runs` values each, taken at once.
+    fn with_capacity(runs: usize) -> Self {
+        Columns {
+            values: std::array::from_fn(|_| Vec::with_capacity(runs)),
+            first: [stats::FirstPass::default(); STATISTICS_COLUMNS],
+            reached: 0,
+        }
+    }
+
+    /// The columns of `runs`.
+    fn of(runs: &[RunSummary]) -> Self {
+        let mut c = Columns::with_capacity(runs.len());
+        c.extend(runs);
+        c
+    }
+
+    /// Appends the columns of `runs`.
+    fn extend(&mut self, runs: &[RunSummary]) {
+        for r in runs {
+            self.reached += u64::from(r.stop_reason == StopReason::LowerEnd);
+            for ((v, p), x) in self
+                .values
+                .iter_mut()
+                .zip(&mut self.first)
+                .zip(run_columns(r))
+            {
+                if let Some(x) = x {
+                    v.push(x);
+                    p.push(x);
+                }
+            }
+        }
+    }
+}
+
+/// The summary of one column's values in run order given their first pass (None for no
+/// values): the second pass in that order, then the order statistics by selection over the
+/// values' order keys, the same bits as the passes over the records and
+/// [`RunRecords::order_values`].
+fn column_summary(values: Vec<f64>, first: &stats::FirstPass) -> Option<stats::Summary> {
+    let mut second = first.second_pass()?;
+    second.push_all(&values);
+    let mut keys: Vec<u64> = values.into_iter().map(stats::order_key).collect();
+    let order = stats::select_ranks(&mut keys, &stats::order_ranks(first.count()));
+    Some(second.finish(&order))
 }
 
 impl RunRecords for [RunSummary] {
@@ -475,6 +546,10 @@ impl RunRecords for [RunSummary] {
         };
         Ok(stats::select_ranks(&mut work, ranks))
     }
+
+    fn columns(&self) -> Result<Option<Columns>, Self::Error> {
+        Ok(Some(Columns::of(self)))
+    }
 }
 
 /// Completes a nominal result (from [`run_part`](super::run_part)) with the ensemble's statistics, warnings and,
@@ -508,6 +583,20 @@ pub(super) fn statistics_of<R: RunRecords + ?Sized>(
     mc: &MonteCarlo,
     records: &R,
 ) -> Result<Option<Statistics>, R::Error> {
+    let n = records.runs();
+    if let Some(Columns {
+        values,
+        first,
+        reached,
+    }) = records.columns()?
+    {
+        let mut summaries = Vec::with_capacity(STATISTICS_COLUMNS);
+        for (v, f) in values.into_iter().zip(&first) {
+            records.poll()?;
+            summaries.push(column_summary(v, f));
+        }
+        return Ok(statistics(mc, n, reached, summaries));
+    }
     let mut first = [stats::FirstPass::default(); STATISTICS_COLUMNS];
     let mut reached = 0u64;
     records.for_each_run(&mut |r| {
@@ -533,15 +622,26 @@ pub(super) fn statistics_of<R: RunRecords + ?Sized>(
             None => None,
         });
     }
+    Ok(statistics(mc, n, reached, summaries))
+}
+
+/// The statistics of `n` runs of which `reached` reached the lower end, from the summaries of
+/// the columns of [`run_columns`] in its order; None when a column every run has is empty (no
+/// run).
+fn statistics(
+    mc: &MonteCarlo,
+    n: u64,
+    reached: u64,
+    summaries: Vec<Option<stats::Summary>>,
+) -> Option<Statistics> {
     let mut s = summaries.into_iter();
     let mut next = || s.next().flatten();
-    let n = records.runs();
     let (speed, along_dip_velocity, kinetic_energy, time) = (next(), next(), next(), next());
     let (Some(impact_count), Some(runout), Some(max_bounce_height)) = (next(), next(), next())
     else {
-        return Ok(None);
+        return None;
     };
-    Ok(Some(Statistics {
+    Some(Statistics {
         runs: n,
         seed: mc.seed,
         reached_fraction: reached as f64 / n.max(1) as f64,
@@ -553,7 +653,7 @@ pub(super) fn statistics_of<R: RunRecords + ?Sized>(
         runout,
         max_bounce_height,
         target: None,
-    }))
+    })
 }
 
 /// An ensemble's records in memory, read under a [`Control`]: the statistics of a large
@@ -584,6 +684,19 @@ impl RunRecords for Polled<'_> {
         self.control.check()?;
         let Ok(values) = self.runs.order_values(col, ranks);
         Ok(values)
+    }
+
+    fn columns(&self) -> Result<Option<Columns>, PhysicsError> {
+        let mut c = Columns::with_capacity(self.runs.len());
+        for block in self.runs.chunks(4096) {
+            self.control.check()?;
+            c.extend(block);
+        }
+        Ok(Some(c))
+    }
+
+    fn poll(&self) -> Result<(), PhysicsError> {
+        self.control.check()
     }
 }
 
@@ -668,6 +781,85 @@ mod tests {
         let out = run_part(&case, 0..1_000_000, false, &control);
         assert!(matches!(out, Err(PhysicsError::Cancelled)));
         assert_eq!(control.progress().0, 0);
+    }
+
+    /// Records read as a file is: run by run, without columns in memory.
+    struct Streamed<'a>(&'a [RunSummary]);
+
+    impl RunRecords for Streamed<'_> {
+        type Error = std::convert::Infallible;
+        fn runs(&self) -> u64 {
+            self.0.runs()
+        }
+        fn for_each_run(&self, f: &mut dyn FnMut(&RunSummary)) -> Result<(), Self::Error> {
+            self.0.for_each_run(f)
+        }
+        fn order_values(&self, col: usize, ranks: &[u64]) -> Result<Vec<f64>, Self::Error> {
+            self.0.order_values(col, ranks)
+        }
+    }
+
+    /// The statistics from the columns in memory (one pass, the second pass by four tallies,
+    /// the order statistics through buckets) are those of the passes over the records, bit for
+    /// bit: ensembles above and below the bucketed selection's size, with runs that stop short
+    /// of the lower end (absent values), one run, and a floor where most runs stop.
+    #[test]
+    fn statistics_from_columns_are_those_of_the_passes_over_the_records() {
+        use crate::physics::migration::{Distribution, FloorSpec, run};
+        let mut cases = Vec::new();
+        for (runs, end_time, mu) in [
+            (20_000u64, None, 1.1),
+            (20_000, Some(7.0), 0.5),
+            (3_001, None, 1.5),
+            (1, None, 0.3),
+        ] {
+            let mut c = MigrationCase {
+                monte_carlo: Some(MonteCarlo {
+                    runs,
+                    seed: runs + 7,
+                    // rocks with μ above tan 45° slow down and some stop short
+                    friction_coefficient: Some(Distribution::Uniform { min: 0.1, max: mu }),
+                    ..MonteCarlo::default()
+                }),
+                ..MigrationCase::default()
+            };
+            c.output.events = false;
+            c.output.runs_csv = true;
+            c.end_time = end_time;
+            c.face.friction_coefficient = mu;
+            cases.push(c);
+        }
+        let mut rough = cases[2].clone();
+        rough.face.floor = FloorSpec::Grid {
+            origin: [0.0, -5.0],
+            spacing: 1.0,
+            heights: (0..11)
+                .map(|i| {
+                    (0..90)
+                        .map(|j| -(j as f64) + 0.1 * ((i * j) % 3) as f64)
+                        .collect()
+                })
+                .collect(),
+        };
+        cases.push(rough);
+        let mut partly_reached = 0;
+        for c in &cases {
+            let r = run(c, &Control::unlimited()).expect("an ensemble");
+            let runs = r.runs.expect("runs_csv asks for the runs");
+            let mc = c.monte_carlo.as_ref().expect("an ensemble");
+            let Ok(from_columns) = statistics_of(mc, &runs[..]);
+            let Ok(streamed) = statistics_of(mc, &Streamed(&runs));
+            let f = from_columns.as_ref().expect("statistics").reached_fraction;
+            partly_reached += usize::from(f > 0.0 && f < 1.0);
+            assert_eq!(
+                format!("{from_columns:?}"),
+                format!("{streamed:?}"),
+                "{} runs",
+                runs.len()
+            );
+        }
+        // columns with absent values (runs that stopped short) are among them
+        assert!(partly_reached >= 2, "{partly_reached}");
     }
 
     #[test]

@@ -24,8 +24,8 @@ mod trajectory;
 
 pub use self::case::*;
 pub use self::ensemble::Crossings;
+pub use self::ensemble::{Columns, RunRecords, STATISTICS_COLUMNS, attach_ensemble, run_columns};
 use self::ensemble::{MU_MAX, Polled, ensemble, ensemble_mapped};
-pub use self::ensemble::{RunRecords, STATISTICS_COLUMNS, attach_ensemble, run_columns};
 pub(crate) use self::ensemble::{ensemble_run, run_in_chunks};
 pub use self::lines::{Barrier, Crossing, Line, LineAction};
 use self::release::{

@@ -137,6 +137,19 @@ impl FirstPass {
         self.max = self.max.max(x);
     }
 
+    /// Adds `values` in their order: the same bits as [`FirstPass::push`] of each, with the
+    /// running values kept in registers.
+    pub fn push_all(&mut self, values: &[f64]) {
+        let (mut sum, mut min, mut max) = (self.sum, self.min, self.max);
+        for &x in values {
+            sum += x;
+            min = min.min(x);
+            max = max.max(x);
+        }
+        (self.sum, self.min, self.max) = (sum, min, max);
+        self.n += values.len() as u64;
+    }
+
     /// Number of values seen.
     #[must_use]
     pub fn count(&self) -> u64 {
@@ -181,6 +194,40 @@ impl SecondPass {
             0
         };
         self.counts[k] += 1;
+    }
+
+    /// Adds `values` in their order: the same bits and counts as [`SecondPass::push`] of
+    /// each, with the running sum in a register and the counts in four interleaved tallies (so
+    /// that equal neighbours do not wait on each other's count).
+    pub fn push_all(&mut self, values: &[f64]) {
+        let (mean, min, width) = (self.mean, self.min, self.width);
+        let mut ss = self.ss;
+        let mut tallies = [[0u64; HISTOGRAM_BINS]; 4];
+        let bin = |x: f64| -> usize {
+            if width > 0.0 {
+                // in [0, HISTOGRAM_BINS] up to rounding: the same bin as `as usize`
+                (((x - min) / width) as u32 as usize).min(HISTOGRAM_BINS - 1)
+            } else {
+                0
+            }
+        };
+        let mut quads = values.chunks_exact(4);
+        for q in &mut quads {
+            for (t, &x) in tallies.iter_mut().zip(q) {
+                ss += (x - mean) * (x - mean);
+                t[bin(x)] += 1;
+            }
+        }
+        for &x in quads.remainder() {
+            ss += (x - mean) * (x - mean);
+            tallies[0][bin(x)] += 1;
+        }
+        self.ss = ss;
+        for t in &tallies {
+            for (c, k) in self.counts.iter_mut().zip(t) {
+                *c += k;
+            }
+        }
     }
 
     /// The summary, given the values of the sorted column at the ranks [`order_ranks`] listed
@@ -255,21 +302,94 @@ pub fn from_order_key(k: u64) -> f64 {
 /// rank next to one already selected (⌊h⌋ + 1 after ⌊h⌋) scans the part between its
 /// neighbours, not the whole tail. The value at a rank is unique, so the result does not depend
 /// on the order of selection.
+///
+/// A column of [`BUCKETED_FROM`] values or more, asked for at most [`BUCKETED_RANKS`] ranks, is
+/// first counted into buckets of equal key
+/// ranges (a key's bucket grows with the key, so every key of a bucket orders before every key of
+/// the next); only the buckets holding a listed rank are gathered and selected in, a few
+/// percent of the values for a spread column instead of the whole column several times.
 #[must_use]
 pub fn select_ranks(keys: &mut [u64], ranks: &[u64]) -> Vec<f64> {
-    fn within(w: &mut [u64], offset: u64, ranks: &[u64]) {
-        let mid = ranks.len() / 2;
-        let Some(&k) = ranks.get(mid) else {
-            return;
-        };
-        let (left, _, right) = w.select_nth_unstable((k - offset) as usize);
-        within(left, offset, &ranks[..mid]);
-        within(right, k + 1, &ranks[mid + 1..]);
+    if keys.len() >= BUCKETED_FROM && ranks.len() <= BUCKETED_RANKS {
+        return select_by_buckets(keys, ranks);
     }
-    within(keys, 0, ranks);
+    select_within(keys, 0, ranks);
     ranks
         .iter()
         .map(|&k| from_order_key(keys[k as usize]))
+        .collect()
+}
+
+/// Columns from this many values on are selected in by buckets ([`select_ranks`]).
+pub const BUCKETED_FROM: usize = 1 << 14;
+
+/// At most this many ranks are selected by buckets ([`select_ranks`]); the order statistics
+/// of a summary need nine.
+pub const BUCKETED_RANKS: usize = 64;
+
+/// Selects the 0-based ascending `ranks` of `w` (ranks counted from `offset`, the position of
+/// `w` in the whole column) in place: the middle rank first, then those on either side within
+/// their part.
+fn select_within(w: &mut [u64], offset: u64, ranks: &[u64]) {
+    let mid = ranks.len() / 2;
+    let Some(&k) = ranks.get(mid) else {
+        return;
+    };
+    let (left, _, right) = w.select_nth_unstable((k - offset) as usize);
+    select_within(left, offset, &ranks[..mid]);
+    select_within(right, k + 1, &ranks[mid + 1..]);
+}
+
+/// [`select_ranks`] through buckets: 2¹² buckets of equal key ranges between the least and
+/// the greatest key; the ranks' buckets gathered (in key order) and selected in.
+fn select_by_buckets(keys: &[u64], ranks: &[u64]) -> Vec<f64> {
+    const BITS: u32 = 12;
+    let (lo, hi) = keys
+        .iter()
+        .fold((u64::MAX, u64::MIN), |(lo, hi), &k| (lo.min(k), hi.max(k)));
+    // the shift that brings the key range below 2^BITS buckets
+    let shift = (u64::BITS - (hi - lo).leading_zeros()).saturating_sub(BITS);
+    let bucket = |k: u64| ((k - lo) >> shift) as usize;
+    let mut counts = vec![0usize; 1 << BITS];
+    for &k in keys {
+        counts[bucket(k)] += 1;
+    }
+    // each rank's bucket and its rank within the bucket; ranks ascend, so buckets do too
+    let (mut b, mut below) = (0usize, 0usize);
+    let mut at = Vec::with_capacity(ranks.len());
+    for &r in ranks {
+        let r = r as usize;
+        while below + counts[b] <= r {
+            below += counts[b];
+            b += 1;
+        }
+        at.push((b, r - below));
+    }
+    // the parts: one per distinct bucket, in order, gathered in one pass
+    let mut slot = vec![u8::MAX; 1 << BITS];
+    let mut parts: Vec<Vec<u64>> = Vec::new();
+    for &(b, _) in &at {
+        if slot[b] == u8::MAX {
+            slot[b] = parts.len() as u8;
+            parts.push(Vec::with_capacity(counts[b]));
+        }
+    }
+    for &k in keys {
+        let s = slot[bucket(k)];
+        if s != u8::MAX {
+            parts[usize::from(s)].push(k);
+        }
+    }
+    for (i, part) in parts.iter_mut().enumerate() {
+        let local: Vec<u64> = at
+            .iter()
+            .filter(|&&(b, _)| usize::from(slot[b]) == i)
+            .map(|&(_, r)| r as u64)
+            .collect();
+        select_within(part, 0, &local);
+    }
+    at.iter()
+        .map(|&(b, r)| from_order_key(parts[usize::from(slot[b])][r]))
         .collect()
 }
 
@@ -367,19 +487,30 @@ mod tests {
                 .wrapping_add(1_442_695_040_888_963_407);
             state >> 11
         };
-        for n in [1usize, 2, 3, 10, 101, 1000, 4097] {
-            for levels in [4u64, 1000] {
+        for n in [1usize, 2, 3, 10, 101, 1000, 4097, BUCKETED_FROM, 40_000] {
+            for levels in [1u64, 4, 1000, 1 << 40] {
                 let column: Vec<f64> = (0..n)
                     .map(|_| match next() % 5 {
                         0 => 0.0,
                         1 => -0.0,
+                        // values over many binades (a heavy tail), beside an even spread
+                        2 if levels > 4 => {
+                            (next() % levels) as f64 * 2f64.powi((next() % 200) as i32 - 100)
+                        }
                         _ => (next() % levels) as f64 - 0.5 * levels as f64,
                     })
                     .collect();
                 let mut sorted = column.clone();
                 sorted.sort_by(f64::total_cmp);
                 let all: Vec<u64> = (0..n as u64).collect();
-                for ranks in [order_ranks(n as u64), vec![0], vec![n as u64 - 1], all] {
+                let spread: Vec<u64> = (0..n as u64).step_by(n.div_ceil(BUCKETED_RANKS)).collect();
+                for ranks in [
+                    order_ranks(n as u64),
+                    vec![0],
+                    vec![n as u64 - 1],
+                    spread,
+                    all,
+                ] {
                     let mut work: Vec<u64> = column.iter().map(|&x| order_key(x)).collect();
                     let got = select_ranks(&mut work, &ranks);
                     let want: Vec<u64> = ranks
