@@ -127,7 +127,9 @@ impl Floor {
         // along the horizontal motion (on the start point itself when there is none), so that a
         // rock leaving a facet across its edge does not strike it again
         let ahead = |d: f64| -> (f64, f64) {
-            let hv = v.x.hypot(v.y);
+            // the direction only (a step of 1e-6 of a cell): a sum and a square root, not the
+            // library's hypot; a speed whose square underflows counts as none
+            let hv = (v.x * v.x + v.y * v.y).sqrt();
             if hv > 0.0 {
                 (p.x + 1e-6 * d * v.x / hv, p.y + 1e-6 * d * v.y / hv)
             } else {
