@@ -218,14 +218,10 @@ pub trait SceneRecords {
 }
 
 /// The values at the 0-based ascending `ranks` of `work` sorted by `f64::total_cmp`, found by
-/// selection (O(n)); `work` is reordered.
-fn select_ranks(mut work: Vec<f64>, ranks: &[u64]) -> Vec<f64> {
-    let mut start = 0;
-    for &k in ranks {
-        work[start..].select_nth_unstable_by(k as usize - start, f64::total_cmp);
-        start = k as usize + 1;
-    }
-    ranks.iter().map(|&k| work[k as usize]).collect()
+/// [`stats::select_ranks`] over the values' order keys (the migration's selection).
+fn select_ranks(work: Vec<f64>, ranks: &[u64]) -> Vec<f64> {
+    let mut keys: Vec<u64> = work.into_iter().map(stats::order_key).collect();
+    stats::select_ranks(&mut keys, ranks)
 }
 
 impl SceneRecords for [SceneRun] {
