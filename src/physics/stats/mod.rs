@@ -171,6 +171,19 @@ impl FirstPass {
     }
 }
 
+/// The histogram bin of `x` among bins of `width` from `min` (the last bin takes the maximum;
+/// one bin when all values are equal).
+#[inline]
+fn bin(x: f64, min: f64, width: f64) -> usize {
+    if width > 0.0 {
+        // in [0, HISTOGRAM_BINS] up to rounding; through u32, the same bin as through usize
+        // (both saturate, NaN and negatives give 0) with a cheaper conversion
+        (((x - min) / width) as u32 as usize).min(HISTOGRAM_BINS - 1)
+    } else {
+        0
+    }
+}
+
 /// Second streaming pass over a column, in the same order as the first: the sum of squared
 /// deviations from the mean and the histogram counts.
 #[derive(Debug, Clone, Copy)]
@@ -188,12 +201,7 @@ impl SecondPass {
     /// Adds the next value (the same sequence as the first pass).
     pub fn push(&mut self, x: f64) {
         self.ss += (x - self.mean) * (x - self.mean);
-        let k = if self.width > 0.0 {
-            (((x - self.min) / self.width) as usize).min(HISTOGRAM_BINS - 1)
-        } else {
-            0
-        };
-        self.counts[k] += 1;
+        self.counts[bin(x, self.min, self.width)] += 1;
     }
 
     /// Adds `values` in their order: the same bits and counts as [`SecondPass::push`] of
@@ -203,14 +211,7 @@ impl SecondPass {
         let (mean, min, width) = (self.mean, self.min, self.width);
         let mut ss = self.ss;
         let mut tallies = [[0u64; HISTOGRAM_BINS]; 4];
-        let bin = |x: f64| -> usize {
-            if width > 0.0 {
-                // in [0, HISTOGRAM_BINS] up to rounding: the same bin as `as usize`
-                (((x - min) / width) as u32 as usize).min(HISTOGRAM_BINS - 1)
-            } else {
-                0
-            }
-        };
+        let bin = |x: f64| bin(x, min, width);
         let mut quads = values.chunks_exact(4);
         for q in &mut quads {
             for (t, &x) in tallies.iter_mut().zip(q) {
