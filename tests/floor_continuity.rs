@@ -8,11 +8,14 @@
 //!   grid converges, as the grid is refined, to the continuous slide of a point on the curve
 //!   with Coulomb friction, the normal force including its centripetal part (an independent
 //!   RK4 integration here): within 2 % at 0.1 m, and never further at 0.1 m than at 2 m.
-//! - **Landings.** The energy a landing dissipates vanishes with its normal speed, and relief of
-//!   centimetres on 0.5 m cells still makes impacts.
+//! - **Landings.** The energy a landing dissipates is continuous in its normal speed and the
+//!   kink's angle and vanishes with them: a sweep of a single kink over 0–10° in steps of 0.05°
+//!   (convex and concave) never moves the arrival speed by more than 0.5 % between neighbours;
+//!   survey noise of up to ±10 mm on cells of 0.25–2 m costs at most 5 % of the plane's arrival
+//!   speed, whatever the spacing; relief of centimetres on 0.5 m cells still makes impacts.
 //!
-//! Cases per property: `GANGUE_CONTINUITY_CASES` (default 24). The seed is fixed by
-//! PROPTEST_RNG_SEED in CI (scripts/test).
+//! Cases per property: `GANGUE_CONTINUITY_CASES` (default 24; the kink sweep, 402 runs a case,
+//! takes a sixth of it). The seed is fixed by PROPTEST_RNG_SEED in CI (scripts/test).
 
 mod common;
 
@@ -381,6 +384,210 @@ proptest! {
     }
 }
 
+/// The profile of a face of dip `dip` (deg) with one kink of `kink` (deg; positive convex, the
+/// lower part steeper) at x = `xk` (m), as a floor of `kind` (a grid, or contour lines across
+/// the face) of spacing `d` (m) covering `x_end` (m) and ±3 m across.
+fn kinked_floor(kind: Kind, dip: f64, kink: f64, xk: f64, x_end: f64, d: f64) -> Value {
+    let (t1, t2) = (dip.to_radians().tan(), (dip + kink).to_radians().tan());
+    let z = |x: f64| {
+        if x <= xk {
+            -x * t1
+        } else {
+            -xk * t1 - (x - xk) * t2
+        }
+    };
+    let nx = (x_end / d).ceil() as usize + 1;
+    let ny = (6.0 / d).ceil() as usize + 1;
+    match kind {
+        Kind::Contours | Kind::GeoJson => {
+            let c: Vec<Value> = (0..nx)
+                .map(|k| {
+                    let x = k as f64 * d;
+                    let pts: Vec<[f64; 2]> = (0..ny).map(|i| [x, -3.0 + i as f64 * d]).collect();
+                    json!({"elevation_m": z(x), "points_m": pts})
+                })
+                .collect();
+            json!({"kind": "contours", "resolution_m": d, "contours": c})
+        }
+        Kind::Grid | Kind::EsriMap => {
+            let row: Vec<f64> = (0..nx).map(|j| z(j as f64 * d)).collect();
+            json!({"kind": "grid", "origin_m": [0.0, -3.0], "spacing_m": d,
+                   "heights_m": vec![row; ny]})
+        }
+    }
+}
+
+/// The arrival speed (m/s) of a lumped-mass run and the along-dip positions (m) of its landings
+/// after its first take-off, failing the property unless it reached the lower end.
+fn arrival_and_landings(req: &Value) -> Result<(f64, Vec<f64>), TestCaseError> {
+    let mut req = req.clone();
+    req["output"] = json!({"events": true});
+    let b = migrate(&req)?;
+    let a = &b["arrival"];
+    prop_assert_eq!(a["stop_reason"].as_str(), Some("lower_end"), "{}", a);
+    let ev = b["events"].as_array().cloned().unwrap_or_default();
+    // an impact that ends the flights is followed by its slide start at the same point
+    let mut landings: Vec<f64> = match ev.iter().position(|e| e["kind"] == "take_off") {
+        Some(k) => ev[k..]
+            .iter()
+            .filter(|e| e["kind"] == "impact" || e["kind"] == "slide_start")
+            .map(|e| e["along_dip_m"].as_f64().unwrap_or(f64::NAN))
+            .collect(),
+        None => Vec::new(),
+    };
+    landings.dedup();
+    Ok((a["speed_m_s"].as_f64().unwrap_or(f64::NAN), landings))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: cases(24).div_ceil(6),
+        ..ProptestConfig::default()
+    })]
+
+    /// A single kink swept over 0–10° in steps of 0.05°, convex and concave, on a grid or
+    /// contours of 0.25–2 m, for a rock sliding (or rolling) past it or dropped well above it:
+    /// the arrival speed never moves by more than 0.5 % between neighbouring angles (no
+    /// threshold at which a landing's loss jumps).
+    #[test]
+    fn a_kink_sweep_moves_the_arrival_speed_continuously(
+        dip in 30.0f64..60.0,
+        len in 20.0f64..120.0,
+        ld in (0.25f64.ln()..2.0f64.ln()),
+        contours in prop::bool::weighted(0.3),
+        at in 0.3f64..0.7,
+        mu_frac in 0.1f64..0.8,
+        release in prop_oneof![(Just(0.0), 0.0f64..10.0), (0.2f64..1.5, Just(0.0))],
+        roll in prop::bool::weighted(0.15),
+    ) {
+        let d = ld.exp();
+        let (h, v0) = release;
+        // the lower part stays steep enough for the rock to go on: μ below tan(θ − 10°)
+        let mu = mu_frac * (dip - 10.0).to_radians().tan();
+        let roll = roll && mu >= 2.0 / 7.0 * (dip + 10.0).to_radians().tan();
+        // the floor reaches past the lower end whatever the kink (the face's mean plane is
+        // fitted to the floor)
+        let x_end = 1.3 * len * dip.to_radians().cos() + 4.0;
+        let xk = ((at * len * dip.to_radians().cos()) / d).round() * d;
+        let kind = if contours { Kind::Contours } else { Kind::Grid };
+        let motion = if roll { "roll" } else { "slide" };
+        let req = |kink: f64| {
+            let mut r = request(dip, len, Some(kinked_floor(kind, dip, kink, xk, x_end, d)),
+                                h, v0, motion);
+            r["face"]["friction_coefficient"] = json!(mu);
+            r
+        };
+        // a dropped rock's bouncing phase is over well above the kink (the paper's bounces are
+        // themselves discontinuous where a rebound's normal speed meets the stop speed)
+        let first = migrate(&req(0.0))?;
+        let xk_along = xk / dip.to_radians().cos();
+        if let Some(s0) = first["slide_start_along_dip_m"].as_f64() {
+            prop_assume!(s0 < xk_along - 2.0);
+        } else {
+            prop_assume!(false);
+        }
+        for sign in [1.0, -1.0] {
+            let mut last = arrival_and_landings(&req(0.0))?;
+            for k in 1..=200 {
+                let kink = sign * 0.05 * k as f64;
+                let now = arrival_and_landings(&req(kink))?;
+                // the one jump a point mass with instant landings has: a landing moved across
+                // the lower end (the flight that follows a take-off lengthens with the kink),
+                // which is in one run and not in the other
+                let across_end = |a: &[f64], b: &[f64]| {
+                    a.len() == b.len() + 1 && a.last().is_some_and(|&x| x > len - 1.0)
+                };
+                let (v0_, v1_) = (last.0, now.0);
+                prop_assert!(
+                    common::rel(v1_, v0_) <= 0.005
+                        || across_end(&last.1, &now.1)
+                        || across_end(&now.1, &last.1),
+                    "kink {:.2}° → {kink:.2}°: {v0_} → {v1_} m/s ({:.3} %; dip {dip}, d {d} m, \
+                     μ {mu}, release h {h} v {v0}, {motion}, {kind:?}; landings {:?} → {:?})",
+                    kink - sign * 0.05,
+                    100.0 * (v1_ / v0_ - 1.0),
+                    last.1,
+                    now.1
+                );
+                last = now;
+            }
+        }
+    }
+
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: cases(24), ..ProptestConfig::default() })]
+
+    /// Survey noise of up to ±10 mm on cells of 0.25–2 m, in every floor format, costs at most
+    /// 5 % of the plane's arrival speed, whatever the spacing (physics.md §C.2, second amendment
+    /// (6)).
+    #[test]
+    fn survey_noise_of_a_centimetre_keeps_the_plane_arrival_within_five_percent(
+        kind in prop_oneof![Just(Kind::Grid), Just(Kind::EsriMap), Just(Kind::Contours),
+                            Just(Kind::GeoJson)],
+        dip in 30.0f64..60.0,
+        len in 20.0f64..120.0,
+        ld in (0.25f64.ln()..2.0f64.ln()),
+        amp in 1e-3f64..0.01,
+        release in prop_oneof![(Just(0.0), 0.0f64..6.0), (0.3f64..3.0, Just(0.0))],
+        seed in any::<u64>(),
+    ) {
+        let mut d = ld.exp();
+        if let Kind::EsriMap = kind {
+            d = d.max(0.4);
+        }
+        if let Kind::Contours | Kind::GeoJson = kind {
+            d = d.max(0.3);
+        }
+        let (h, v) = release;
+        let plane = migrate(&request(dip, len, None, h, v, "slide"))?;
+        // as above: leave out drops at the plane's own discontinuity in the bounce count
+        for f in [0.98, 1.02] {
+            let near = migrate(&request(dip, len, None, h * f, v, "slide"))?;
+            prop_assume!(near["impact_count"] == plane["impact_count"]);
+        }
+        let floor = plane_floor(kind, dip, len, d, Disturb::Noise(amp), seed);
+        let real = migrate(&request(dip, len, Some(floor), h, v, "slide"))?;
+        let (pa, ra) = (&plane["arrival"], &real["arrival"]);
+        prop_assert_eq!(&pa["stop_reason"], &ra["stop_reason"], "{}\n{}", pa, ra);
+        let (p, r) = (pa["speed_m_s"].as_f64().unwrap(), ra["speed_m_s"].as_f64().unwrap());
+        prop_assert!(
+            common::rel(r, p) <= 0.05,
+            "±{amp} m noise on {d} m ({kind:?}): plane {p}, floor {r} m/s ({:.2} %)",
+            100.0 * (r / p - 1.0)
+        );
+    }
+}
+
+/// The reported pair: a rock sliding at 22.5 m/s over a convex kink of 1.30° and of 1.35°
+/// arrived at 26.64 and 23.07 m/s (a landing at 0.53 m/s normal speed booked as a full impact);
+/// they now agree within 1 %, and with the rigid block's 26.65 / 26.66 m/s within 1 %.
+#[tokio::test]
+async fn the_reported_kinks_of_1_30_and_1_35_degrees_agree() {
+    let app = common::app();
+    let mut v = Vec::new();
+    for name in ["lumped_mass_kink_1_30deg", "lumped_mass_kink_1_35deg"] {
+        let path = common::shared_dir().join(format!("repro/{name}.json"));
+        let repro: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let r = common::post(&app, "/v1/migration", &repro["request"]).await;
+        assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+        v.push(r.json()["arrival"]["speed_m_s"].as_f64().unwrap());
+    }
+    assert!(
+        common::rel(v[0], v[1]) <= 0.01,
+        "1.30°: {} m/s, 1.35°: {} m/s",
+        v[0],
+        v[1]
+    );
+    for (x, rigid) in v.iter().zip([26.648, 26.659]) {
+        assert!(
+            common::rel(*x, rigid) <= 0.01,
+            "{x} m/s against the rigid block's {rigid}"
+        );
+    }
+}
+
 /// A 45° face with a convex kink of `eps` rad at x = 10 m (the lower part steeper), as a 1 m grid.
 fn kinked_grid(eps: f64) -> Value {
     let th = 45f64.to_radians();
@@ -399,9 +606,9 @@ fn kinked_grid(eps: f64) -> Value {
 }
 
 /// The energy a landing dissipates tends to 0 with its normal speed: a sliding rock takes off at
-/// a convex kink of angle ε and lands again at a normal speed of about v ε; the landing's loss is
-/// at most the Coulomb bound μ |vₙ| v per kg (plus the normal energy ½ vₙ² once vₙ reaches the
-/// stop speed), and it shrinks with ε.
+/// a convex kink of angle ε and lands again at a normal speed vₙ of about v ε; the re-contact
+/// loses at most the normal energy ½ vₙ² and the Coulomb impulse's work μ (1 + e_n) |vₙ| v per
+/// kg, and the loss shrinks with ε.
 #[tokio::test]
 async fn the_energy_a_landing_dissipates_vanishes_with_its_normal_speed() {
     let app = common::app();
@@ -428,14 +635,14 @@ async fn the_energy_a_landing_dissipates_vanishes_with_its_normal_speed() {
         // the normal speed at landing: the flight leaves along the upper facet, which rises
         // above the lower one by about ε, and comes back at about the same angle
         let vn = v * eps.sin() * 1.1;
-        if vn < 0.5 {
-            // a touch-down, not an impact: at most the Coulomb impulse's work
+        let bound = 0.5 * vn * vn + 0.2 * 1.3 * vn * v;
+        assert!(
+            lost <= bound + 1e-9 * v * v,
+            "ε = {eps}: landing lost {lost} J/kg, bound {bound}"
+        );
+        if vn < 0.45 {
+            // below the stop speed: a re-contact, not an impact
             assert_eq!(landing["kind"], "slide_start", "ε = {eps}: {landing}");
-            let bound = 0.2 * vn * v;
-            assert!(
-                lost <= bound + 1e-9 * v * v,
-                "ε = {eps}: landing lost {lost} J/kg, bound {bound}"
-            );
         }
         assert!(lost <= last, "ε = {eps}: loss {lost} grew from {last}");
         last = lost;
@@ -444,38 +651,49 @@ async fn the_energy_a_landing_dissipates_vanishes_with_its_normal_speed() {
 }
 
 /// Relief of centimetres on 0.5 m cells is real relief: it still makes impacts (many more than
-/// the plane's bounces) and slows the rock.
+/// the plane's bounces) and slows the rock, and a rougher floor slows it more. (The rigid block
+/// on the same floors arrives within a few per cent of the lumped mass: VALIDATION.md, "The two
+/// methods side by side".)
 #[tokio::test]
 async fn centimetre_relief_on_half_metre_cells_still_makes_impacts() {
     let app = common::app();
     let (dip, len, d) = (45.0f64, 60.0, 0.5);
     let tan = dip.to_radians().tan();
     let nx = ((len * dip.to_radians().cos() + 2.0) / d).ceil() as usize + 1;
-    let mut s = 17u64;
-    let heights: Vec<Vec<f64>> = (0..13)
-        .map(|_| {
-            (0..nx)
-                .map(|j| -(j as f64 * d) * tan + 0.02 * (2.0 * unit(&mut s) - 1.0))
-                .collect()
-        })
-        .collect();
+    let rough = |amp: f64| {
+        let mut s = 17u64;
+        let heights: Vec<Vec<f64>> = (0..13)
+            .map(|_| {
+                (0..nx)
+                    .map(|j| -(j as f64 * d) * tan + amp * (2.0 * unit(&mut s) - 1.0))
+                    .collect()
+            })
+            .collect();
+        json!({"kind": "grid", "origin_m": [0.0, -3.0], "spacing_m": d, "heights_m": heights})
+    };
     let mc = json!({"runs": 100, "seed": 3});
     let plane = json!({"method": "lumped_mass", "face": {"dip_deg": dip, "length_m": len},
                        "monte_carlo": mc});
-    let mut rough = plane.clone();
-    rough["face"]["floor"] =
-        json!({"kind": "grid", "origin_m": [0.0, -3.0], "spacing_m": d, "heights_m": heights});
-    let p = common::post(&app, "/v1/migration", &plane).await.json();
-    let r = common::post(&app, "/v1/migration", &rough).await.json();
-    let ip = p["statistics"]["impact_count"]["mean"].as_f64().unwrap();
-    let ir = r["statistics"]["impact_count"]["mean"].as_f64().unwrap();
-    assert!(
-        ir >= ip + 3.0,
-        "rough grid {ir} impacts per run, plane {ip}"
+    let mut answers = vec![common::post(&app, "/v1/migration", &plane).await.json()];
+    for amp in [0.02, 0.1] {
+        let mut req = plane.clone();
+        req["face"]["floor"] = rough(amp);
+        answers.push(common::post(&app, "/v1/migration", &req).await.json());
+    }
+    let stat = |a: &Value, k: &str| a["statistics"][k]["mean"].as_f64().unwrap();
+    let (ip, ir) = (
+        stat(&answers[0], "impact_count"),
+        stat(&answers[1], "impact_count"),
     );
-    let vp = p["statistics"]["speed_m_s"]["mean"].as_f64().unwrap();
-    let vr = r["statistics"]["speed_m_s"]["mean"].as_f64().unwrap();
-    assert!(vr < 0.9 * vp, "rough grid {vr} m/s, plane {vp} m/s");
+    assert!(ir >= ip + 3.0, "±2 cm: {ir} impacts per run, plane {ip}");
+    let v: Vec<f64> = answers.iter().map(|a| stat(a, "speed_m_s")).collect();
+    assert!(
+        v[0] > v[1] && v[1] > v[2],
+        "mean arrival speed: plane {}, ±2 cm {}, ±10 cm {}",
+        v[0],
+        v[1],
+        v[2]
+    );
 }
 
 /// The reported case: a 40° plane as a grid with heights rounded to the millimetre gave 10.96

@@ -456,11 +456,12 @@ fn grid_height_slope(
 }
 
 /// A point mass on a grid floor integrated by a small-time-step projection method (semi-
-/// implicit Euler; below the floor it is put back on it by the service's re-attachment rule
-/// with e_n = 0 and e_t = 1: an inward normal speed below `v_stop` turns the velocity into the
-/// plane keeping its speed, a faster one is removed, and a kink met in contact or a slow landing
-/// costs the Coulomb impulse μ|vₙ|; in contact, Coulomb friction μ g n_z against the sliding
-/// velocity), from rest on the floor at (x, y) for `t_end` s. Returns the final position.
+/// implicit Euler; below the floor it is put back on it by the service's rule for a rock in its
+/// ground phase with e_n = 0 and e_t = 1: the inward normal speed is removed (plastic), a kink met
+/// in contact costs the Coulomb impulse μ|vₙ| and a landing after a flight the re-contact's
+/// min((1 − e_t)|v_t|, μ|vₙ|), nothing with e_t = 1; in contact, Coulomb friction μ g n_z
+/// against the sliding velocity), from rest on the floor at (x, y) for `t_end` s. Returns the
+/// final position (with e_n = 0 no rebound is flown, whatever the stop speed).
 #[allow(clippy::too_many_arguments)]
 fn projected_run(
     origin: [f64; 2],
@@ -472,7 +473,6 @@ fn projected_run(
     g: f64,
     t_end: f64,
     dt: f64,
-    v_stop: f64,
 ) -> [f64; 3] {
     let mut p = [x, y, grid_height(origin, d, h, x, y).unwrap()];
     let mut v = [0.0f64; 3];
@@ -520,22 +520,20 @@ fn projected_run(
                 let n = [-bx * k, -by * k, k];
                 let vn = v[0] * n[0] + v[1] * n[1] + v[2] * n[2];
                 if vn < 0.0 {
-                    // the re-attachment rule: below the stop speed the rock turns into the
-                    // plane keeping its speed; faster, a kink met on the ground loses the
-                    // normal speed and a landing is an impact (e_n = 0, e_t = 1 here); a kink
-                    // or a slow landing also loses the Coulomb impulse μ|vₙ|
-                    let speed = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                    // plastic (e_n = 0: no rebound below or above the stop speed); a kink met
+                    // in contact loses μ|vₙ|, a re-contact after a flight min((1 − e_t)|v_t|,
+                    // μ|vₙ|) with e_t = 1
                     for c in 0..3 {
                         v[c] -= vn * n[c];
                     }
                     let vt = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-                    let slow = -vn < v_stop;
-                    let keep = if slow { speed } else { vt };
-                    let after = if slow || contact {
-                        (keep - mu * -vn).max(0.0)
+                    let e_t = 1.0;
+                    let dv = if contact {
+                        mu * -vn
                     } else {
-                        keep
+                        ((1.0 - e_t) * vt).min(mu * -vn)
                     };
+                    let after = (vt - dv).max(0.0);
                     if vt > 0.0 {
                         for c in v.iter_mut() {
                             *c *= after / vt;
@@ -608,10 +606,7 @@ fn smooth_grids_agree_with_a_small_step_projection_method() {
         let q = r.arrival.position;
         // from the release point the service placed on the floor (the first sample, t = 0)
         let start = r.trajectory.as_ref().expect("asked for").position[0];
-        let v_stop = c.lumped_mass.stop_normal_speed;
-        let p = projected_run(
-            origin, d, &heights, start[0], start[1], mu, 9.81, 1.5, 2e-5, v_stop,
-        );
+        let p = projected_run(origin, d, &heights, start[0], start[1], mu, 9.81, 1.5, 2e-5);
         // along the dip (the runout) and across it
         let (sn, cs) = dip.to_radians().sin_cos();
         let along = ((p[0] - q[0]) * cs - (p[2] - q[2]) * sn).abs();

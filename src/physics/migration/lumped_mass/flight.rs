@@ -121,16 +121,11 @@ impl Run<'_, '_> {
         s.s_r += (s.p - s.r).dot(&dip);
         s.r = s.p;
         let vn = s.v.dot(&n);
-        // the release's landing is the procedure's first impact (§C.2 step 2); a take-off's
-        // landing slower along the normal than the stop speed is a touch-down, a rebound's
-        // below a fraction of it ([`FlightFrom`])
-        let touch_down_below = match s.flight_from {
-            FlightFrom::Release => 0.0,
-            FlightFrom::Rebound => REBOUND_TOUCH_DOWN * su.v_stop,
-            FlightFrom::TakeOff => su.v_stop,
-        };
-        if -vn < touch_down_below {
-            self.touch_down(facet, n, vn);
+        // a flight of the ground phase (a take-off at a convex edge, or a re-contact's rebound)
+        // ends in a re-contact; the release's and the bouncing phase's flights in an impact
+        // (§C.2 step 2)
+        if s.flight_from == FlightFrom::TakeOff {
+            self.recontact(facet, n, vn.min(0.0), draw);
             return;
         }
         let vt = s.v - n * vn;
@@ -174,19 +169,90 @@ impl Run<'_, '_> {
         }
     }
 
-    /// A touch-down on `facet` (unit normal `n`) at normal speed `vn` (m/s, ≤ 0) below the stop
-    /// speed: not an impact but a re-attachment ([`Run::reattach`]), the ground phase going on
-    /// from here. A rolling rock also keeps its angular momentum about the contact point, so
-    /// its rolling speed is (v + 0.4 u)/1.4 with u the surface speed of its spin in flight; the
-    /// loss |v − u|²/7 (zero when the spin matches) is booked as transition.
-    pub(super) fn touch_down(&mut self, facet: Facet, n: Vector3<f64>, vn: f64) {
-        let (roll, radius) = (self.roll, self.su.radius);
-        let speed_before = self.s.v.norm();
+    /// The landing of a flight of the ground phase on `facet` (unit normal `n`) at normal speed
+    /// `vn` (m/s, ≤ 0): a re-contact. Its normal speed is restituted with the drawn e_n, as at
+    /// any landing, but its tangential change is the Coulomb impulse of a rigid-body impact with
+    /// friction, bounded by the paper's e_t: |Δv_t| = min((1 − e_t)|v_t|, μ J_n) with J_n the
+    /// normal speed change the floor delivers, |vₙ| + v_kept ([`kept_rebound`]: the rebound the
+    /// rock flies on, 0 when it stays on the floor). The loss is continuous in vₙ and tends to 0
+    /// with it, so hopping over relief far below the rock's scale costs what sliding over it
+    /// costs, while a landing at a normal speed of metres per second loses what an impact loses.
+    /// A rolling rock has no slip: it keeps its tangential speed and, on staying, its angular
+    /// momentum about the contact point (rolling speed (v + 0.4 u)/1.4 with u the surface speed
+    /// of its spin in flight; the loss |v − u|²/7 is booked as transition). A landing at the stop
+    /// speed or faster counts as an impact.
+    pub(super) fn recontact(
+        &mut self,
+        facet: Facet,
+        n: Vector3<f64>,
+        vn: f64,
+        draw: &mut impl FnMut() -> (f64, f64),
+    ) {
+        let (g, su, roll) = (self.g, self.su, self.roll);
+        let mu = match self.zones {
+            Some(z) => {
+                z.current
+                    .set(z.zones.material_index(self.s.p.x, self.s.p.y));
+                z.mu_at([self.s.p.x, self.s.p.y], self.zone_dir())
+            }
+            None => self.mu,
+        };
+        let (en, et) = draw();
+        let s = &mut self.s;
+        let speed_before = s.v.norm();
+        let vt = s.v - n * vn;
+        let vtn = vt.norm();
+        let r = -en * vn;
+        let kept = kept_rebound(r, su.v_stop);
+        // the normal energy not flown on: restitution's loss (impact), what the switch to the
+        // ground phase takes (transition)
+        let e_normal = 0.5 * (1.0 - en * en) * vn * vn;
+        let e_switch = 0.5 * (r * r - kept * kept);
+        s.e_imp += e_normal;
+        s.e_trans += e_switch;
+        let mut lost = e_normal + e_switch;
+        let vt_after = if roll || vtn == 0.0 {
+            vt
+        } else {
+            let dv = ((1.0 - et) * vtn).min(mu * (-vn + kept));
+            let after = (vtn - dv).max(0.0);
+            let l = 0.5 * (vtn * vtn - after * after);
+            s.e_fric += l;
+            lost += l;
+            vt * (after / vtn)
+        };
+        let on = kept >= MIN_REBOUND;
+        s.rebound_cutoff |= kept > 0.0 && !on;
+        let counted = on || (su.v_stop > 0.0 && -vn >= su.v_stop);
+        if counted {
+            s.impacts += 1;
+        }
+        if on {
+            s.v = vt_after + n * kept;
+            s.apex = Some((kept * kept / (2.0 * g * n.z), s.t + kept / (g * n.z)));
+        } else {
+            s.e_trans += 0.5 * kept * kept;
+            lost += 0.5 * kept * kept;
+            s.v = vt_after;
+        }
+        if counted {
+            let after = s.v.norm();
+            self.push_event(|s| EventRec {
+                t: s.t,
+                kind: EventKind::Impact,
+                p: s.p,
+                speed_before,
+                speed_after: after,
+                lost,
+            });
+        }
+        if on {
+            return;
+        }
         let spin_in_flight = std::mem::replace(&mut self.s.spin, (0.0, Vector3::zeros()));
-        let mut lost = self.reattach(&n, vn);
         if roll {
             let s = &mut self.s;
-            let u = spin_in_flight.1.cross(&n) * radius;
+            let u = spin_in_flight.1.cross(&n) * su.radius;
             let u = u - n * u.dot(&n);
             let v_after = (s.v + u * 0.4) / 1.4;
             let spin_loss =
@@ -195,6 +261,27 @@ impl Run<'_, '_> {
             s.v = v_after;
             lost += spin_loss;
         }
-        self.ground_phase(facet, speed_before, lost);
+        if counted {
+            // the impact's event holds the loss
+            let before = self.s.v.norm();
+            self.ground_phase(facet, before, 0.0);
+        } else {
+            self.ground_phase(facet, speed_before, lost);
+        }
+    }
+}
+
+/// The normal speed (m/s) a re-contact of the ground phase flies on after restituting `r`
+/// (m/s): none below the stop speed `v_stop` (the switch to the ground phase, §C.2 step 2.4),
+/// all of it from 2 `v_stop`, and 2 (r − v_stop) between, so that neither the landing's loss
+/// (its friction impulse grows with the rebound) nor the path jumps where the rebound crosses
+/// the stop speed. With a stop speed of 0 every rebound is flown (down to [`MIN_REBOUND`]).
+pub(super) fn kept_rebound(r: f64, v_stop: f64) -> f64 {
+    if r >= 2.0 * v_stop {
+        r
+    } else if r > v_stop {
+        2.0 * (r - v_stop)
+    } else {
+        0.0
     }
 }

@@ -3,9 +3,13 @@
 //! The rock is a point mass. Flights are parabolas whose first strike of the floor is a root of a
 //! quadratic; an impact applies the normal and tangential restitution in the struck facet's frame;
 //! a rebound slower than the stop speed starts the ground phase (slide, or roll as a sphere). A
-//! landing after a take-off at a kink, or a grazing one after a rebound, is not an impact but a
-//! re-attachment ([`Run::reattach`]): the limit of a smooth floor, so a floor within millimetres
-//! of a plane gives the plane's answer and a finer grid of a curve converges to it. On a
+//! rock in its ground phase that leaves the floor at a convex edge stays in that phase: its
+//! landing is a re-contact ([`Run::recontact`]) whose normal speed is restituted with e_n and
+//! whose tangential change is the Coulomb impulse of a rigid-body impact (bounded by the paper's
+//! e_t), so its loss is continuous in the landing's normal speed and tends to 0 with it; a
+//! concave edge met on the ground is the plastic limit of the same rule ([`Run::reattach`]). A
+//! floor within centimetres of a plane gives the plane's answer and a finer grid of a curve
+//! converges to the continuous slide. On a
 //! facet the acceleration is constant while the friction direction is fixed, so a slide moves in
 //! closed form from event to event: a facet edge, the lower end, the end time, the moment the
 //! speed along the friction direction reaches zero, or — only when gravity's in-plane part is not
@@ -261,19 +265,13 @@ impl St {
 enum FlightFrom {
     /// The release's fall: its landing is the procedure's first impact (§C.2 step 2).
     Release,
-    /// A rebound at the stop speed or faster: its landing is an impact unless its normal speed
-    /// is below [`REBOUND_TOUCH_DOWN`] of the stop speed.
+    /// A rebound of the bouncing phase: its landing is an impact with the paper's e_t.
     Rebound,
-    /// A take-off at a convex edge: its landing is a touch-down below the stop speed.
+    /// A flight of the ground phase (a take-off at a convex edge, or the rebound of a landing
+    /// after one): the rock stays in its sliding (rolling) phase and its landing is a re-contact
+    /// ([`Run::recontact`]).
     TakeOff,
 }
-
-/// Fraction of the stop speed below which the landing of a rebound's flight is a touch-down
-/// rather than an impact. On a plane a rebound lands at its launch speed, at least the stop
-/// speed, so it is an impact; the margin (hysteresis) keeps a floor within millimetres of the
-/// plane from turning such an impact into a touch-down, while a rebound landing on a facet that
-/// falls away (a grazing landing on real relief) is one.
-pub(crate) const REBOUND_TOUCH_DOWN: f64 = 0.5;
 
 /// A concave edge (V-shaped crease) that holds the rock: it slides along the edge line.
 #[derive(Debug, Clone, Copy)]
@@ -787,23 +785,20 @@ impl<'a, 'r> Run<'a, 'r> {
         }
     }
 
-    /// Puts the velocity into a plane of unit normal `n` that the rock meets at normal speed
-    /// `vn` (m/s, ≤ 0): a concave kink met on the ground, or a touch-down after a flight; returns
-    /// the energy lost per kg. The meeting is a plastic impact with Coulomb friction. Below the
-    /// stop speed (|vn| < v_stop) the kink is taken as a fillet too small for the floor to
-    /// resolve: the rock turns into the plane keeping its speed (the normal force of a smooth
-    /// turn does no work), and a sliding rock loses the friction impulse μ|vn| along its motion
-    /// (booked as friction). Summed over the kinks of a curve that is μ v² κ per metre, the
-    /// work of the centripetal part of the normal force, so a finer floor converges to the
-    /// continuous slide, and a floor perturbed far below the rock's scale gives the plane's
-    /// answer. From the stop speed up, the normal speed is lost as well (booked as transition).
+    /// Puts the velocity into a plane of unit normal `n` that the sliding (rolling) rock meets at
+    /// normal speed `vn` (m/s, ≤ 0) at a concave edge; returns the energy lost per kg. The
+    /// meeting is a plastic impact with Coulomb friction: the normal speed is lost (booked as
+    /// transition, ½ vₙ²: second order in the kink's angle) and a sliding rock loses the friction
+    /// impulse μ|vₙ| along its motion (booked as friction; a rolling one has no slip). Summed over
+    /// the kinks of a curve that is μ v² κ per metre, the work of the centripetal part of the
+    /// normal force, so a finer floor converges to the continuous slide; the loss is continuous
+    /// in vₙ and tends to 0 with it (the plastic limit of [`Run::recontact`], without a rebound).
     fn reattach(&mut self, n: &Vector3<f64>, vn: f64) -> f64 {
         let kf = self.ke_factor;
         let mu = match self.zones {
             Some(z) => z.mu_at([self.s.p.x, self.s.p.y], self.zone_dir()),
             None => self.mu,
         };
-        let smooth = -vn < self.su.v_stop;
         let s = &mut self.s;
         let sp = s.v.norm();
         let vt = s.v - n * vn;
@@ -814,24 +809,17 @@ impl<'a, 'r> Run<'a, 'r> {
             s.v = Vector3::zeros();
             return lost;
         };
-        let mut lost = 0.0;
-        let speed = if smooth {
-            sp
-        } else {
-            let l = 0.5 * kf * (sp * sp - vtn * vtn);
-            s.e_trans += l;
-            lost += l;
-            vtn
-        };
+        let l_normal = 0.5 * kf * (sp * sp - vtn * vtn);
+        s.e_trans += l_normal;
         let after = if self.roll {
-            speed
+            vtn
         } else {
-            (speed - mu * -vn).max(0.0)
+            (vtn - mu * -vn).max(0.0)
         };
-        let l = 0.5 * kf * (speed * speed - after * after);
+        let l = 0.5 * kf * (vtn * vtn - after * after);
         s.e_fric += l;
         s.v = dir * after;
-        lost + l
+        l_normal + l
     }
 
     /// Plan direction along which the material at the rock is read ([`zone_dir`]).

@@ -180,13 +180,8 @@ impl Run<'_, '_> {
         s.s_r += (s.p - s.r).dot(&dip);
         s.r = s.p;
         let vn = s.v.dot(&n);
-        let touch_down_below = match s.flight_from {
-            FlightFrom::Release => 0.0,
-            FlightFrom::Rebound => REBOUND_TOUCH_DOWN * su.v_stop,
-            FlightFrom::TakeOff => su.v_stop,
-        };
-        if -vn < touch_down_below {
-            self.touch_down_plane(n, vn);
+        if s.flight_from == FlightFrom::TakeOff {
+            self.recontact_plane(n, vn.min(0.0), draw);
             return;
         }
         let vt = s.v - n * vn;
@@ -237,10 +232,10 @@ impl Run<'_, '_> {
         }
     }
 
-    /// [`Run::touch_down`] on the plane (facet 0), out of line (see [`Run::rebound_to_ground`]).
+    /// [`Run::recontact`] on the plane (facet 0), out of line (see [`Run::rebound_to_ground`]).
     #[inline(never)]
-    fn touch_down_plane(&mut self, n: Vector3<f64>, vn: f64) {
-        self.touch_down(0, n, vn);
+    fn recontact_plane(&mut self, n: Vector3<f64>, vn: f64, draw: &mut impl FnMut() -> (f64, f64)) {
+        self.recontact(0, n, vn, draw);
     }
 
     /// [`Run::leave_trap`], out of line and cold: a rock caught in place is rare.
