@@ -52,7 +52,9 @@ pub struct EnergyDto {
     /// Taken by a scene's barriers, J (omitted when none took any).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub barriers_j: Option<f64>,
-    /// KE + PE + losses − total at start (rounding only), J.
+    /// KE + PE + stored + losses − total at start, J: negative, energy lost without being
+    /// booked; positive, energy created (rounding for the lumped mass; the scheme's error for the
+    /// rigid block, warned above its bound).
     pub residual_j: f64,
 }
 
