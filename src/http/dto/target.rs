@@ -14,8 +14,9 @@ use crate::physics::scene::target::{SceneTarget, TargetOutcome, TargetStatistic}
 pub enum TargetStatisticDto {
     /// The probability that a run overloads some support (`statistics.any_exceeded`).
     AnyExceeded,
-    /// Every support's exceedance probability (some design limit, or the capacity): the widest
-    /// interval over the supports.
+    /// Every probability the answer reports with an interval at a support
+    /// (`statistics.supports[i]`): each design limit's exceedance, the overloads, a guard's
+    /// `held` and `broken_through`; the widest of them.
     EverySupport,
 }
 

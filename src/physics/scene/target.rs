@@ -5,7 +5,7 @@
 //! asked for. The prefixes do not depend on the machine or the thread count (run i is seeded by
 //! (seed, i) whatever the split), so the answer is the ensemble of that many runs, bit for bit.
 
-use super::{SceneCase, SceneRun, overloads};
+use super::{Guard, SceneCase, SceneRun};
 use crate::physics::stats::precision::probability_half_width;
 
 /// The statistic a target is set on.
@@ -13,7 +13,9 @@ use crate::physics::stats::precision::probability_half_width;
 pub enum TargetStatistic {
     /// The probability that a run overloads some support.
     AnyExceeded,
-    /// Every support entry's exceedance probability (some design limit, or the capacity).
+    /// Every probability the answer reports with an interval at a support entry: each design
+    /// limit's exceedance (the capacity among them), the overloads (some limit), a guard's held
+    /// and broken-through fractions.
     EverySupport,
 }
 
@@ -22,8 +24,8 @@ pub enum TargetStatistic {
 pub struct SceneTarget {
     /// The statistic.
     pub statistic: TargetStatistic,
-    /// Largest half-width of its Wilson 95 % interval (the widest over the supports for
-    /// [`TargetStatistic::EverySupport`]).
+    /// Largest half-width of its Wilson 95 % interval (the widest of all the intervals it
+    /// covers for [`TargetStatistic::EverySupport`]).
     pub half_width: f64,
 }
 
@@ -57,11 +59,41 @@ pub fn measured_half_width(case: &SceneCase, target: &SceneTarget, runs: &[Scene
         TargetStatistic::AnyExceeded => {
             half_width(runs.iter().filter(|r| r.overloaded()).count() as u64, n)
         }
-        TargetStatistic::EverySupport => overloads(case, runs)
-            .iter()
-            .map(|&k| half_width(k, n))
+        TargetStatistic::EverySupport => reported_counts(case, runs)
+            .into_iter()
+            .map(|k| half_width(k, n))
             .fold(0.0, f64::max),
     }
+}
+
+/// Every count behind a probability the answer reports with its interval at a support entry
+/// of `case` over `runs`: per entry, each active limit's exceedances, the overloads (some
+/// limit), and where the entry has a guard, the runs it held and the runs that broke through.
+fn reported_counts(case: &SceneCase, runs: &[SceneRun]) -> Vec<u64> {
+    let e = case.supports.len();
+    let l = case.limits.active().len();
+    // per entry: l limits, the overloads, held, broken through
+    let w = l + 3;
+    let mut c = vec![0u64; e * w];
+    for r in runs {
+        if let Some(k) = r.summary.support {
+            let row = &mut c[k * w..(k + 1) * w];
+            for (x, &hit) in row.iter_mut().zip(&r.exceeded) {
+                *x += u64::from(hit);
+            }
+            row[l] += u64::from(r.overloaded());
+            row[l + 1] += u64::from(r.guard == Guard::Held);
+            row[l + 2] += u64::from(r.guard == Guard::BrokenThrough);
+        }
+    }
+    let guarded = |k: usize| case.guards.get(k).copied().flatten().is_some();
+    c.chunks(w)
+        .enumerate()
+        .flat_map(|(k, row)| {
+            let n = if guarded(k) { w } else { l + 1 };
+            row[..n].to_vec()
+        })
+        .collect()
 }
 
 #[cfg(test)]
