@@ -27,7 +27,7 @@
 //!   that carry offsets (their offsets lowered until their springs hold it), as far as their
 //!   offsets go. What finds no offset stays lost: the account then shows a negative residual,
 //!   and beyond the scheme's error (0.2 % of the energy in play, Hertz 1 %) the answer warns
-//!   `energy_unaccounted` with the amount. A sphere's touches change feature
+//!   `energy_unaccounted` with the amount (a gain beyond it too). A sphere's touches change feature
 //!   (face, edge, corner) without a jump in depth, so they need no offset.
 //! * **Placed on a rough floor** (drop 0), the block set on the facet under the release point
 //!   is lifted along that facet's normal until no contact is deeper than the rest overlap.
@@ -47,12 +47,15 @@
 //!   is exact for an isotropic block, else integrated by RK4 with turns of at most 0.02 rad per
 //!   sub-step (local error below 1e-10 rad).
 //! * **Steady slides** on the plane are skipped in closed form too: once every contact of a
-//!   face-down block slips at the Coulomb limit and the normal and angular motion has settled
+//!   face-down block slips at the Coulomb limit against the block's motion (the slip force
+//!   opposing the velocity, no acceleration along it beyond gravity's: not a block just past
+//!   the stop of a decelerating slide) and the normal and angular motion has settled
 //!   (accelerations below 1e-9 g, speeds below 1e-9 of the slide's, for two contact times), the
 //!   forces no longer change, and the leapfrog's N steps under a constant force are advanced
 //!   exactly (v ← v + N a Δt, x ← x + N Δt v + a Δt² N(N+1)/2, the friction work booked with the
 //!   steps' mean velocities) up to two steps before the end time, the lower end or the stop of a
-//!   decelerating slide, and to each trajectory sample. On a grid or contour floor the same holds
+//!   decelerating slide (a skipped piece never turns the velocity nor does negative friction
+//!   work), to each trajectory sample, and before the steps at which the rest checks decide. On a grid or contour floor the same holds
 //!   on a flat patch (vertex–face contacts only, all on one plane), and the skip also stops two
 //!   steps before the block's footprint (its plan box padded by 1 % of r_max, swept along the
 //!   straight path) meets the plan box of a floor triangle off the contact plane, or a contact
@@ -572,6 +575,10 @@ struct EventChange {
     peak: Option<f64>,
 }
 
+/// A window of uninterrupted contact the rest check watches: its start time (s), the centre
+/// (m) and the orientation there.
+type QuietWindow = (f64, Vector3<f64>, UnitQuaternion<f64>);
+
 /// One run in progress: the block, its contacts and the books kept on them.
 struct Run {
     /// The block; its velocities lag by half a step while `half_step` is set.
@@ -623,7 +630,7 @@ struct Run {
     /// Since when the block is slower than the rest speed, s.
     still_since: Option<f64>,
     /// Start (time, centre, orientation) of the current window of uninterrupted contact.
-    quiet_window: Option<(f64, Vector3<f64>, UnitQuaternion<f64>)>,
+    quiet_window: Option<QuietWindow>,
     /// Fastest tangential slip of a contact at the last step, m/s.
     slip_max: f64,
     /// Along-dip position of the centre at the last step, m.

@@ -104,7 +104,7 @@ impl Model<'_> {
         n_skip: u64,
         v_t: &Vector3<f64>,
         a_t: &Vector3<f64>,
-    ) -> (u64, Option<(f64, Vector3<f64>, UnitQuaternion<f64>)>) {
+    ) -> (u64, Option<QuietWindow>) {
         let dt = self.dt;
         let t = run.st.t;
         let mut n = n_skip as f64;
