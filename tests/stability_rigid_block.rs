@@ -152,9 +152,10 @@ fn check_within(c: &MigrationCase, r: &MigrationResult, factor: f64) -> Result<(
     );
 
     // a loss the account cannot book (a contact switched off on the floor's relief while
-    // compressed) is answered with the `energy_unaccounted` warning, and only a loss is
+    // compressed), or a gain beyond the step's error, is answered with the
+    // `energy_unaccounted` warning, and only such a residual is
     let warned = r.warnings.iter().any(|w| w.code == "energy_unaccounted");
-    prop_assert!(!warned || e.residual < 0.0, "{:?} {e:?}", r.warnings);
+    prop_assert!(!warned || e.residual != 0.0, "{:?} {e:?}", r.warnings);
     prop_assert!(
         e.residual <= tol * scale + mid && (warned || e.residual >= -(tol * scale + mid)),
         "residual {} of scale {scale}: {e:?}",
@@ -525,4 +526,179 @@ fn a_block_dropped_beside_a_step_of_relief_starts_clear_of_it() {
         "{:?}",
         r.energy
     );
+}
+
+/// Cases of the sweep of valid requests: `GANGUE_RIGID_BLOCK_CASES` (default 24; run the
+/// documented 1 000 or more with e.g. `GANGUE_RIGID_BLOCK_CASES=1000 cargo test --release
+/// --test stability_rigid_block valid_request`).
+fn sweep_cases() -> u32 {
+    std::env::var("GANGUE_RIGID_BLOCK_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(24)
+}
+
+prop_compose! {
+    /// A valid rigid-block request anywhere in the documented domain of the step and the
+    /// contact: every shape, the plane or a grid (flat, with valleys or ridges, wavy), β from 0
+    /// to 0.999, safety up to 1, linear or Hertz, dropped or placed, with a release speed and
+    /// spin.
+    fn sweep_case()(
+        shape in prop_oneof![
+            Just(RockShape::Cube),
+            (0.05..=1.0f64).prop_map(|radius| RockShape::Sphere { radius }),
+            prop::array::uniform3(0.1..=2.0f64)
+                .prop_map(|dimensions| RockShape::Cuboid { dimensions }),
+            prop::array::uniform3(0.1..=2.0f64)
+                .prop_map(|dimensions| RockShape::Ellipsoid { dimensions }),
+            (prop::array::uniform3(0.05..=1.0f64), 4usize..=40, any::<u64>())
+                .prop_map(|(semi_axes, vertices, seed)| RockShape::RandomPolyhedron {
+                    semi_axes,
+                    vertices,
+                    seed,
+                }),
+        ],
+        floor in 0usize..4,
+        d in 0.25..=1.0f64,
+        relief in 0.05..=0.3f64,
+        dip in 10.0..=60.0f64,
+        mu in 0.0..=1.0f64,
+        beta in prop_oneof![Just(0.0), Just(0.999), 0.0..=0.999f64],
+        safety in prop_oneof![Just(1.0), 0.8..=1.0f64, 0.01..=1.0f64],
+        hertz in prop::bool::weighted(0.2),
+        h in prop_oneof![Just(0.0), 0.0..=10.0f64],
+        speed in prop_oneof![Just(0.0), 0.0..=10.0f64],
+        spin in prop_oneof![Just([0.0; 3]), prop::array::uniform3(-20.0..=20.0f64)],
+        end_time in 0.05..=0.5f64,
+    ) -> MigrationCase {
+        let mut c = MigrationCase { method: Method::RigidBlock, ..MigrationCase::default() };
+        c.rock.shape = shape;
+        c.face.dip_deg = dip;
+        c.face.friction_coefficient = mu;
+        c.face.length = 12.0;
+        if floor > 0 {
+            let t = dip.to_radians().tan();
+            let nx = (12.0 * dip.to_radians().cos() / d).ceil() as usize + 2;
+            let ny = (8.0 / d).round() as usize + 1;
+            let heights = (0..ny)
+                .map(|i| {
+                    (0..nx)
+                        .map(|j| {
+                            let x = j as f64 * d;
+                            let bump = match floor {
+                                // a valley (or a ridge) across the dip every third column
+                                2 if j % 3 == 1 => -relief * d,
+                                3 => relief * d * (x * 2.0).sin() * (i as f64).cos(),
+                                _ => 0.0,
+                            };
+                            -x * t + bump
+                        })
+                        .collect()
+                })
+                .collect();
+            c.face.floor = FloorSpec::Grid { origin: [0.0, -4.0], spacing: d, heights };
+            c.release.along_dip = 1.0;
+        }
+        c.release.drop_height = h;
+        c.release.speed = speed;
+        c.release.angular_velocity = Some(spin);
+        c.end_time = Some(end_time);
+        c.rigid_block.critical_damping_ratio = beta;
+        c.rigid_block.time_step_safety = safety;
+        c.rigid_block.contact_model = if hertz { ContactModel::Hertz } else { ContactModel::Linear };
+        c.rigid_block.max_steps = 20_000.0;
+        c
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: sweep_cases(), ..ProptestConfig::default() })]
+
+    /// A valid request is answered or refused naming its field, never a numerical failure (the
+    /// run's own invariant, energy never created beyond five times the bound, is what would
+    /// fail it): at β 0 and safety 1 too, whose impacts the step must resolve; and a residual
+    /// beyond the documented bound (0.2 % of the energy in play, Hertz 1 %) is never silent.
+    #[test]
+    fn a_valid_request_never_fails_and_no_residual_beyond_the_bound_is_silent(c in sweep_case()) {
+        match run(&c, &Control::unlimited()) {
+            Ok(r) => {
+                check_finite(&r)?;
+                let e = &r.energy;
+                // the energy in play (the run's scale: the start's kinetic energy and m g
+                // times the travel) is at most twice the energy at release above the lower end
+                let scale = 2.0 * e.total_start.abs();
+                let tol = match c.rigid_block.contact_model {
+                    ContactModel::Linear => 2e-3,
+                    ContactModel::Hertz => 1e-2,
+                };
+                let warned = r.warnings.iter().any(|w| w.code == "energy_unaccounted");
+                prop_assert!(
+                    warned || e.residual.abs() <= tol * scale + e.stored,
+                    "residual {} of about {scale} J in play, not warned: {e:?}",
+                    e.residual
+                );
+            }
+            Err(PhysicsError::InvalidInput { param, .. }) => {
+                prop_assert!(
+                    matches!(param, Param::FaceNormalStiffness | Param::RockElasticModulus),
+                    "{param:?}"
+                );
+            }
+            Err(PhysicsError::TooManySteps { .. }) => {}
+            Err(e) => prop_assert!(false, "a valid request failed: {e:?}"),
+        }
+    }
+}
+
+fn check_finite(r: &MigrationResult) -> Result<(), TestCaseError> {
+    let a = &r.arrival;
+    let e = &r.energy;
+    prop_assert!(
+        [
+            a.time,
+            a.speed,
+            a.along_dip,
+            a.kinetic_energy,
+            e.total_start,
+            e.residual
+        ]
+        .iter()
+        .all(|x| x.is_finite()),
+        "{r:?}"
+    );
+    Ok(())
+}
+
+/// The default sphere without damping on a 20 m face at a high safety factor: at 0.9 its
+/// impacts created more than 1 % of the energy and the run failed (500); at 1.0, dropped
+/// 10 m, it created 0.98 % silently. Every accepted safety answers within the bound.
+#[test]
+fn an_undamped_sphere_at_a_high_safety_answers_within_the_energy_bound() {
+    for (drop, safety) in [
+        (0.0, 0.9),
+        (3.27, 0.9),
+        (10.0, 0.9),
+        (10.0, 1.0),
+        (3.27, 1.0),
+    ] {
+        let mut c = MigrationCase {
+            method: Method::RigidBlock,
+            ..MigrationCase::default()
+        };
+        c.rock.shape = RockShape::Sphere {
+            radius: c.rock.side_length / 2.0,
+        };
+        c.rigid_block.critical_damping_ratio = 0.0;
+        c.face.length = 20.0;
+        c.release.drop_height = drop;
+        c.rigid_block.time_step_safety = safety;
+        let r = run(&c, &Control::unlimited()).unwrap_or_else(|e| panic!("{drop} {safety}: {e:?}"));
+        let e = &r.energy;
+        assert!(
+            e.residual.abs() <= 2e-3 * e.total_start,
+            "drop {drop} safety {safety}: residual {} of {} J",
+            e.residual,
+            e.total_start
+        );
+    }
 }

@@ -50,15 +50,28 @@ impl Model<'_> {
                 return;
             }
         }
+        // the rest checks decide at the steps the stepped run would take them
+        let window;
+        (n_skip, window) = self.rest_checks_in_skip(run, n_skip, &v_t, &a_t);
+        if n_skip < 8 {
+            return;
+        }
+        let nf = n_skip as f64;
+        // the skipped piece ends before the slide's stop (the velocity never turns) and its
+        // slip takes energy: a piece that would not is stepped
+        let v_end = v_t + a_t * (nf * dt);
+        let drifts = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * (nf - 1.0));
+        if v_end.dot(&v_t) <= 0.0 || drifts.dot(&fo.slip_force) > 0.0 {
+            return;
+        }
+        run.quiet_window = window;
         if !self.lines.is_empty() {
             self.lines_in_skip(run, n_skip, &v_t, &a_t);
         }
-        let nf = n_skip as f64;
         // N leapfrog steps under the constant force, exactly: v ← v + N a h,
         // x ← x + N h v + a h² N(N+1)/2; the damping with the steps' mean velocities (their
         // kinetic-energy change), the slip over the drifts the springs see (one behind)
         let path = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * nf);
-        let drifts = v_t * (nf * dt) + a_t * (0.5 * dt * dt * nf * (nf - 1.0));
         run.damping -= path.dot(&fo.damping_force);
         run.friction -= drifts.dot(&fo.slip_force);
         let st = &mut run.st;
@@ -75,6 +88,55 @@ impl Model<'_> {
             ep.last_t = st.t;
         }
         run.prev_along = self.mean.along(&st.c);
+    }
+
+    /// Steps of `n_skip` a settled slide (velocity `v_t`, acceleration `a_t`) may skip so that
+    /// the rest checks ([`Model::at_rest`]) decide as in the stepped run: the skip ends two
+    /// steps before the speed falls below the rest speed, before the step at which a started
+    /// rest timer would reach its time, and before a step at which the quiet window would be
+    /// judged with the block slow enough to be found quiet (or too near a step boundary to
+    /// tell). A window judged inside the skip with the block faster than that fails, and is
+    /// re-anchored where and when the stepped run re-anchors it: returns the steps and the
+    /// window after them.
+    fn rest_checks_in_skip(
+        &self,
+        run: &Run,
+        n_skip: u64,
+        v_t: &Vector3<f64>,
+        a_t: &Vector3<f64>,
+    ) -> (u64, Option<QuietWindow>) {
+        let dt = self.dt;
+        let t = run.st.t;
+        let mut n = n_skip as f64;
+        let vs = v_t.norm();
+        let a_s = a_t.dot(v_t) / vs;
+        match run.still_since {
+            Some(since) => n = n.min(((since + REST_TIME_S - t) / dt).ceil() - 2.0),
+            None if a_s < 0.0 => {
+                n = n.min(((vs - REST_SPEED_M_S) / (-a_s * dt)).floor() - 2.0);
+            }
+            None => {}
+        }
+        let mut window = run.quiet_window;
+        if let Some((mut t0, mut c0, q0)) = window {
+            let at = |k: f64| run.st.c + v_t * (k * dt) + a_t * (0.5 * dt * dt * k * (k + 1.0));
+            loop {
+                let x = (t0 + REST_TIME_S - t) / dt;
+                let k = x.ceil().max(1.0);
+                if k > n {
+                    break;
+                }
+                let speed = (v_t + a_t * (k * dt)).norm();
+                if speed < 2.0 * REST_SPEED_M_S || (x - x.round()).abs() < 1e-6 {
+                    n = n.min(k - 2.0);
+                    break;
+                }
+                t0 = t + k * dt;
+                c0 = at(k);
+            }
+            window = Some((t0, c0, q0));
+        }
+        (if n > 0.0 { n as u64 } else { 0 }, window)
     }
 
     /// Steps a settled slide from `st` (velocity `v_t`, acceleration `a_t`) may skip of `n_skip`
@@ -171,7 +233,17 @@ impl Model<'_> {
         let v_t = st.v - nrm * nrm.dot(&st.v);
         let vs = v_t.norm();
         let tol_a = STEADY_TOLERANCE * self.g;
+        // a slide: the slip force opposes the velocity (friction takes energy, never gives
+        // it), and the acceleration along the velocity is at most gravity's there (no contact
+        // pushes the block on); a block moving up the slope with its springs still capped the
+        // way they held it sliding down (just past the stop of a decelerating slide) is not
+        // one, and skipped so it would rise with friction driving it
+        let e = v_t / vs.max(f64::MIN_POSITIVE);
+        let slip = fo.slip_force.norm();
+        let g_along = -self.g * e.z;
         let settled = vs > 0.0
+            && (slip == 0.0 || fo.slip_force.dot(&e) < 0.0)
+            && a_t.dot(&e) <= g_along + tol_a
             && nrm.dot(&acc).abs() <= tol_a
             && nrm.dot(&st.v).abs() <= STEADY_TOLERANCE * vs.max(1.0)
             && run.ang_acc.norm() * self.shape.r_max <= tol_a
