@@ -3,7 +3,7 @@
 
 use super::{Calculation, Ensemble, Report, Stage};
 use crate::physics::migration::{
-    self, Method, MigrationCase, MigrationResult, RunRecords, RunSummary, maps,
+    self, Method, MigrationCase, MigrationResult, RunRecords, RunSummary, compare, maps,
 };
 use crate::physics::{Control, PhysicsError};
 
@@ -20,8 +20,28 @@ impl Calculation for Migration {
         case: &MigrationCase,
         control: &Control,
     ) -> Result<Report<MigrationResult>, PhysicsError> {
-        Ok(report(case, migration::run(case, control)?))
+        let mut r = migration::run(case, control)?;
+        if case.output.compare_methods {
+            r.comparison = Some(compare_methods(case, &r, control)?);
+        }
+        Ok(report(case, r))
     }
+}
+
+/// The other method on `case` (the same ensemble, the runs `r` used) and the comparison of its
+/// answer with `r` ([`compare::compare`]).
+///
+/// # Errors
+/// The other method's run's: the request is answered for both methods or refused.
+pub fn compare_methods(
+    case: &MigrationCase,
+    r: &MigrationResult,
+    control: &Control,
+) -> Result<compare::MethodComparison, PhysicsError> {
+    let other = compare::other_case(case, r.statistics.as_ref().map(|s| s.runs));
+    let o = migration::run(&other, control)?;
+    let floor = migration::build_floor(case)?;
+    compare::compare(case, &floor, r, &o)
 }
 
 impl Ensemble for Migration {
@@ -93,7 +113,7 @@ pub enum MergeError<E> {
 pub fn report(case: &MigrationCase, mut r: MigrationResult) -> Report<MigrationResult> {
     let mc = case.monte_carlo.is_some();
     let trajectory = r.trajectory.is_some();
-    let plan = match case.method {
+    let mut plan = match case.method {
         Method::RigidBlock => vec![
             Stage::ran(
                 "migration",
@@ -125,6 +145,14 @@ pub fn report(case: &MigrationCase, mut r: MigrationResult) -> Report<MigrationR
             },
         ],
     };
+    plan.push(if r.comparison.is_some() {
+        Stage::ran(
+            "comparison",
+            "the other method on the same case and ensemble, and whether the two agree",
+        )
+    } else {
+        Stage::skipped("comparison", "output.compare_methods is false")
+    });
     Report {
         warnings: std::mem::take(&mut r.warnings),
         result: r,

@@ -123,6 +123,14 @@ impl Wire for HttpWire {
                 .and_then(|m| m.target)
                 .map(serde_json::to_value),
         );
+        if req.output.compare_methods {
+            ck.push(
+                "/output/compare_methods",
+                serde_json::json!(true),
+                "a sharded computation runs the requested method's runs only; send the other \
+                 method as a sharded computation of its own, or the request to the service",
+            );
+        }
         ck.finish()?;
         let inputs = serde_json::to_vec(&req).map_err(ApiError::internal)?;
         Ok((case, req, inputs))

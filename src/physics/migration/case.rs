@@ -211,6 +211,9 @@ pub struct OutputOptions {
     pub max_samples: usize,
     /// Per-cell maps of the ensemble on this grid (Monte Carlo; default none: no work spent).
     pub maps: Option<super::maps::MapGrid>,
+    /// Run the other method on the same case and say whether the two agree (default false;
+    /// see [`super::compare`]).
+    pub compare_methods: bool,
 }
 
 impl Default for OutputOptions {
@@ -222,6 +225,7 @@ impl Default for OutputOptions {
             runs_csv: false,
             max_samples: 1_000_000,
             maps: None,
+            compare_methods: false,
         }
     }
 }

@@ -10,6 +10,7 @@
 //! energy is m g (z − z_end) with z_end the mean plane's height at `along_dip` = length.
 
 mod case;
+pub mod compare;
 mod ensemble;
 pub mod lines;
 mod lumped_mass;
@@ -393,5 +394,6 @@ fn nominal_run(
         warnings,
         rigid_block: None,
         maps: None,
+        comparison: None,
     })
 }

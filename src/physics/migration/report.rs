@@ -226,4 +226,6 @@ pub struct MigrationResult {
     pub rigid_block: Option<RigidBlockReport>,
     /// Per-cell maps of the ensemble (Monte Carlo with a map grid).
     pub maps: Option<super::maps::Maps>,
+    /// Both methods on the case (with `output.compare_methods`).
+    pub comparison: Option<super::compare::MethodComparison>,
 }

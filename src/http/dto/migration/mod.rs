@@ -21,9 +21,11 @@ use crate::physics::migration::{
     OutputOptions, Phase, Release, RigidBlockOptions, RunSummary, StopReason, Summary,
 };
 
+mod compare;
 mod floor_check;
 mod response;
 
+pub use compare::{MethodArrivalDto, MethodComparisonDto};
 use floor_check::resolve_floor;
 pub use response::*;
 
@@ -1011,6 +1013,11 @@ pub struct MigrationOutputDto {
     #[schema(default = json!(null))]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub maps: Option<super::maps::MapsDto>,
+    /// Run the other method on the same case and ensemble too and say whether the two agree,
+    /// and where they do not, why and which to trust (`method_comparison`; a migration
+    /// request's only: a scene compares with its own `compare_methods`).
+    #[schema(default = false, example = false)]
+    pub compare_methods: bool,
 }
 
 impl Default for MigrationOutputDto {
@@ -1021,6 +1028,7 @@ impl Default for MigrationOutputDto {
             events: true,
             runs_csv: false,
             maps: None,
+            compare_methods: false,
         }
     }
 }
@@ -1101,6 +1109,13 @@ impl MigrationRequest {
             damping_distribution,
             &mut ck,
         );
+        if self.output.compare_methods && layout == Layout::Scene {
+            ck.push(
+                layout.migration_output("compare_methods"),
+                json!(true),
+                "a scene compares the methods with its own compare_methods",
+            );
+        }
         if self.output.runs_csv && monte_carlo.is_none() {
             ck.push(
                 layout.migration_output("runs_csv"),
@@ -1170,6 +1185,7 @@ impl MigrationRequest {
                 runs_csv: o.runs_csv,
                 max_samples: config.max_samples as usize,
                 maps,
+                compare_methods: o.compare_methods,
             },
             target,
             ..MigrationCase::default()

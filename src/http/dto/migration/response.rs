@@ -260,6 +260,10 @@ pub struct MigrationResponse {
     /// Per-cell maps of the ensemble (when `output.maps`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub maps: Option<super::super::maps::MapsOutDto>,
+    /// Both methods on the case, whether they agree and, where not, why (when
+    /// `output.compare_methods`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub method_comparison: Option<super::MethodComparisonDto>,
     /// Named warnings, among them `release_moved` (the rigid block overhung the floor's edge at
     /// the release point and was placed where every corner is over the floor: by how much) and
     /// `left_floor` (the run left the floor: where, and past which boundary).
@@ -468,6 +472,7 @@ impl MigrationResponse {
                 principal_inertia_kg_m2: b.principal_inertia,
             }),
             maps: r.maps.as_ref().map(Into::into),
+            method_comparison: r.comparison.as_ref().map(Into::into),
             warnings: meta.warnings,
             plan: meta.plan,
             inputs,

@@ -1367,6 +1367,7 @@ fn nominal_run(
         warnings,
         rigid_block: Some(model.report(out.steps, out.max_overlap)),
         maps: None,
+        comparison: None,
     })
 }
 
