@@ -329,8 +329,9 @@ export function initMigration() {
         request.output = { ...request.output, runs_csv: true, maps: defaultMapGrid(request, floor.current(), mc.runs) };
       }
       if (compareNext) {
+        // the ensemble is kept: the service compares the two methods' ensembles within their
+        // intervals (one run each without one)
         compareNext = false;
-        delete request.monte_carlo;
         request.output = { ...request.output, trajectory: true, runs_csv: false };
         delete request.output.maps;
         Object.defineProperty(request, 'compare', { value: true, enumerable: false });
@@ -340,7 +341,7 @@ export function initMigration() {
     send: (request, opts) => (request.compare ? sendBoth(request, opts) : postJson('v1/migration', request, opts)),
     stream: (request) => Boolean(request.monte_carlo) && !request.compare,
     busy: (request) => (request.compare
-      ? 'Computing with both methods…'
+      ? (request.monte_carlo ? `Computing ${request.monte_carlo.runs} runs with each method…` : 'Computing with both methods…')
       : request.monte_carlo?.target ? `Running up to ${groupDigits(request.monte_carlo.runs)} runs, stopping when precise enough…`
         : request.monte_carlo ? `Running ${request.monte_carlo.runs} runs…` : 'Computing…'),
     progressText: (p, request) => targetProgress(p, request),
@@ -362,16 +363,31 @@ export function initMigration() {
     panel.run();
   });
 
-  /** Sends the request with each method; the answer is the form's own method's, with both attached. */
+  /**
+   * Sends the request with output.compare_methods (the service runs the other method on the
+   * same case and ensemble and says whether the two agree, and why not), and the other method
+   * once more without the ensemble for its trajectory; the answer is the form's own method's,
+   * with both attached.
+   */
   async function sendBoth(request, opts) {
+    const ownMethod = request.method ?? 'lumped_mass';
+    const otherMethod = ownMethod === 'lumped_mass' ? 'rigid_block' : 'lumped_mass';
     const answers = {};
-    for (const method of ['lumped_mass', 'rigid_block']) {
-      const answer = await postJson('v1/migration', { ...request, method }, { signal: opts.signal });
-      if (!answer.ok) return { ...answer, label: `with "method": "${method}"` };
-      answers[method] = answer.data;
-    }
-    const own = answers[request.method ?? 'lumped_mass'] ?? answers.lumped_mass;
-    return { ok: true, status: 200, data: { ...own, comparison: answers } };
+    const own = await postJson('v1/migration',
+      { ...request, method: ownMethod, output: { ...(request.output ?? {}), compare_methods: true } },
+      { signal: opts.signal });
+    if (!own.ok) return { ...own, label: `with "method": "${ownMethod}"` };
+    answers[ownMethod] = own.data;
+    const other = { ...request, method: otherMethod };
+    delete other.monte_carlo;
+    if (otherMethod === 'lumped_mass') delete other.rigid_block;
+    else delete other.lumped_mass;
+    if (other.output) other.output = { ...other.output, runs_csv: false, maps: undefined };
+    const answer = await postJson('v1/migration', other, { signal: opts.signal });
+    if (!answer.ok) return { ...answer, label: `with "method": "${otherMethod}"` };
+    answers[otherMethod] = answer.data;
+    const ordered = { lumped_mass: answers.lumped_mass, rigid_block: answers.rigid_block };
+    return { ok: true, status: 200, data: { ...own.data, comparison: ordered } };
   }
 
   const tableTitle = document.getElementById('migration-table-title');
@@ -387,7 +403,7 @@ export function initMigration() {
     runsCsv = data.runs_csv ?? null;
     renderStatistics(data.statistics);
     renderTrajectory(data.trajectory, data);
-    renderComparison(data.comparison ?? null);
+    renderComparison(data.comparison ?? null, data.method_comparison ?? null);
     floor.showPath(data);
     const names = { lumped_mass: 'lumped mass', rigid_block: 'rigid block (DEM)' };
     const extra = Object.entries(data.comparison ?? {})
@@ -396,9 +412,10 @@ export function initMigration() {
     renderFloorViews('migration', { inputs: data.inputs, request, upload: floor.current(), tr: data.trajectory ?? null, runsCsv, arrival: data.arrival, extra, maps: data.maps ?? null });
   }
 
-  function renderComparison(both) {
+  function renderComparison(both, verdict) {
     compareBox.hidden = !both;
     compareBody.replaceChildren();
+    renderVerdict(verdict);
     if (!both) {
       destroy(comparePlot);
       return;
@@ -442,6 +459,37 @@ export function initMigration() {
     } else {
       plotMessage(comparePlot, 'Ask for the trajectory to see the two curves.');
     }
+  }
+
+  /** The service's word on the two methods (method_comparison): agree or not, and why. */
+  function renderVerdict(c) {
+    const box = document.getElementById('migration-compare-verdict');
+    box.replaceChildren();
+    box.hidden = !c;
+    if (!c) return;
+    const names = { lumped_mass: 'lumped mass', rigid_block: 'rigid block' };
+    const floorWords = {
+      plane: 'the plane',
+      smooth: 'a smooth floor',
+      relief_below_rock_size: 'relief smaller than the rock',
+      relief_above_rock_size: 'relief of the rock\'s size or larger',
+    };
+    const speed = (m) => {
+      if (m.speed_mean_m_s === null) return `${names[m.method]}: no run reached the lower end`;
+      const ci = m.speed_ci95_m_s ? ` [${fmt(m.speed_ci95_m_s[0], 4)}, ${fmt(m.speed_ci95_m_s[1], 4)}]` : '';
+      const runs = m.runs > 1 ? `mean of ${m.runs} runs` : 'one run';
+      return `${names[m.method]} ${fmt(m.speed_mean_m_s, 4)} m/s${ci} (${runs}, ${fmt(100 * m.reached_fraction, 3)} % reached the lower end)`;
+    };
+    const diff = c.speed_difference === null ? '' : ` (${c.speed_difference >= 0 ? '+' : ''}${fmt(100 * c.speed_difference, 3)} %)`;
+    box.classList.toggle('agree', c.agree);
+    box.classList.toggle('differ', !c.agree);
+    box.append(
+      h('strong', {}, c.agree ? 'The two methods agree on this case.' : 'The two methods do not agree on this case.'),
+      ` Arrival speed: ${c.methods.map(speed).join(' against ')}${diff}; they agree within their intervals or ±${fmt(100 * c.speed_tolerance, 2)} %.`,
+      ` Floor: ${floorWords[c.floor] ?? c.floor} (relief ${fmt(c.floor_relief_m, 3)} m at the rock's scale, the rock ${fmt(c.rock_size_m, 3)} m).`,
+      h('br'),
+      c.note.replace(/^The two methods (do not )?agree on this case\. /, ''),
+    );
   }
 
   /** Roll, pitch, yaw (z–y–x Tait–Bryan, degrees) of quaternions [w, x, y, z], unwrapped. */

@@ -747,12 +747,25 @@ async function migrationSection(page) {
   await check('migration: "Compare both methods" sends the form with each method and overlays both speed curves and arrival speeds', async () => {
     await open(page, '#migration');
     const methods = [];
-    const listen = (r) => { if (r.url().endsWith('/v1/migration') && r.method() === 'POST') methods.push(JSON.parse(r.postData()).method); };
+    const compared = [];
+    const listen = (r) => {
+      if (r.url().endsWith('/v1/migration') && r.method() === 'POST') {
+        const body = JSON.parse(r.postData());
+        methods.push(body.method);
+        compared.push(Boolean(body.output?.compare_methods));
+      }
+    };
     page.on('request', listen);
     await page.locator('#migration-compare-button').click();
     await page.locator('#migration-compare').waitFor({ state: 'visible', timeout: WAIT_MS });
     page.off('request', listen);
     assert(methods.join() === 'lumped_mass,rigid_block', `methods sent: ${methods.join()}`);
+    // the form's own method asks the service to compare (the other request is for its trajectory)
+    assert(compared.join() === 'true,false', `compare_methods sent: ${compared.join()}`);
+    // the service's word: agree or not, the arrival speeds, the floor, and which to trust
+    const verdict = await page.locator('#migration-compare-verdict').innerText();
+    assert(/The two methods (agree|do not agree) on this case\./.test(verdict) && /Floor: the plane/.test(verdict)
+      && /lumped mass [0-9.]+ m\/s/.test(verdict) && /rigid block [0-9.]+ m\/s/.test(verdict), `verdict: ${verdict}`);
     const lumped = await shown(page, 'comparison.lumped_mass.arrival.speed_m_s');
     const rigid = await shown(page, 'comparison.rigid_block.arrival.speed_m_s');
     assertClose(lumped, EXPECTED.arrivalSpeed, 1e-3, 'lumped-mass arrival speed (m/s)');
