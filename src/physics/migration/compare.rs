@@ -325,15 +325,15 @@ mod tests {
     #[test]
     fn a_tilted_or_curved_floor_has_no_relief_and_bumps_have_their_height() {
         let tan = 45f64.to_radians().tan();
-        // a plane as a grid, and a face curved over its length: relief far below a millimetre
-        for f in [
-            Box::new(move |x: f64, _| -x * tan) as Box<dyn Fn(f64, f64) -> f64>,
-            Box::new(move |x: f64, _| -x * tan - 0.002 * x * x),
-        ] {
-            let c = grid_case(f, 0.5);
-            let r = floor_relief(&build_floor(&c).unwrap(), c.face.length);
-            assert!(r < 2e-3, "{r}");
-        }
+        // a plane as a grid: no relief
+        let c = grid_case(move |x: f64, _| -x * tan, 0.5);
+        let r = floor_relief(&build_floor(&c).unwrap(), c.face.length);
+        assert!(r < 1e-9, "{r}");
+        // a face curved over its length (z'' = 0.004 /m): each tile's plane takes the curve out
+        // but for c L²/√180 ≈ 1.5 cm over a 10 m tile, below 5 % of a 0.37 m block (smooth)
+        let c = grid_case(move |x: f64, _| -x * tan - 0.002 * x * x, 0.5);
+        let r = floor_relief(&build_floor(&c).unwrap(), c.face.length);
+        assert!(r < 0.016, "{r}");
         // a sine of amplitude A along the dip, wavelength 2 m: RMS A/√2 about each tile's plane
         let a = 0.1;
         let c = grid_case(
