@@ -5,8 +5,8 @@
 //! the floor above or below the least-squares plane of each [`RELIEF_TILE_M`] tile, sampled on a
 //! lattice finer than the floor's cells, over the face's extent; compared with the rock's size
 //! (the diameter of the sphere of its volume). A curved face is no relief (each tile takes its
-//! own plane); survey noise of a centimetre is a few per cent of a 0.3 m block; bumps and steps
-//! of decimetres are of the rock's size or above.
+//! own plane); survey noise of a centimetre is about 1 % of a 0.3 m cube (0.37 m the sphere of
+//! its volume); bumps and steps of decimetres are of the rock's size or above.
 
 use super::shape::BlockShape;
 use super::terrain::{Floor, FloorKind};
@@ -15,11 +15,13 @@ use crate::physics::error::PhysicsResult;
 use crate::physics::stats::interval::{Z_95, wilson_interval};
 
 /// Side of the plan tiles over which the floor's relief is measured, m.
-pub const RELIEF_TILE_M: f64 = 10.0;
-/// Relief below this share of the rock's size is a smooth floor (survey noise, rounding).
-pub const SMOOTH_RELIEF: f64 = 0.05;
-/// Relief from this share of the rock's size up is relief of the rock's size or above.
-pub const LARGE_RELIEF: f64 = 0.5;
+pub const RELIEF_TILE_M: f64 = 5.0;
+/// Relief (RMS) below this share of the rock's size is a smooth floor (survey noise, rounding):
+/// uniform noise of ±1 cm on 0.5 m cells measures 0.004 m, 1 % of a 0.37 m block.
+pub const SMOOTH_RELIEF: f64 = 0.02;
+/// Relief (RMS) from this share of the rock's size up is relief of the rock's size or above
+/// (bumps from trough to crest about 2√2 times the RMS: over half the rock's size).
+pub const LARGE_RELIEF: f64 = 0.2;
 /// Relative difference of the mean arrival speeds within which the two methods agree even
 /// where their intervals are narrower (a difference no engineering decision turns on).
 pub const SPEED_TOLERANCE: f64 = 0.05;
@@ -330,10 +332,10 @@ mod tests {
         let r = floor_relief(&build_floor(&c).unwrap(), c.face.length);
         assert!(r < 1e-9, "{r}");
         // a face curved over its length (z'' = 0.004 /m): each tile's plane takes the curve out
-        // but for c L²/√180 ≈ 1.5 cm over a 10 m tile, below 5 % of a 0.37 m block (smooth)
+        // but for c L²/√180 ≈ 4 mm over a 5 m tile, 1 % of a 0.37 m block (smooth)
         let c = grid_case(move |x: f64, _| -x * tan - 0.002 * x * x, 0.5);
         let r = floor_relief(&build_floor(&c).unwrap(), c.face.length);
-        assert!(r < 0.016, "{r}");
+        assert!(r < 0.0045, "{r}");
         // a sine of amplitude A along the dip, wavelength 2 m: RMS A/√2 about each tile's plane
         let a = 0.1;
         let c = grid_case(

@@ -44,12 +44,13 @@ pub struct MethodComparisonDto {
     /// Difference of the shares reaching the lower end within which they agree.
     pub reached_tolerance: f64,
     /// The floor's relief at the rock's scale: RMS height about the least-squares plane of each
-    /// 10 m plan tile, m (0 on the plane).
+    /// 5 m plan tile, m (0 on the plane).
     pub floor_relief_m: f64,
     /// The rock's size: the diameter of the sphere of its volume, m.
     pub rock_size_m: f64,
-    /// `plane`; `smooth` (relief below 5 % of the rock's size: survey noise, rounding, a curved
-    /// face); `relief_below_rock_size` (below half of it); `relief_above_rock_size`.
+    /// `plane`; `smooth` (relief below 2 % of the rock's size: survey noise, rounding, a curved
+    /// face); `relief_below_rock_size` (below 20 % of it, bumps from trough to crest below
+    /// about half the rock); `relief_above_rock_size`.
     pub floor: String,
     /// Why the two differ on such a floor (or would), and which one to trust for what.
     pub note: String,
@@ -70,7 +71,7 @@ fn floor_name(c: FloorClass) -> &'static str {
 fn note(c: FloorClass, agree: bool) -> String {
     let reason = match c {
         FloorClass::Plane | FloorClass::Smooth => format!(
-            "On a smooth floor (relief below {:.0} % of the rock's size) the two differ only by \
+            "On a smooth floor (relief with an RMS below {:.0} % of the rock's size) the two differ only by \
              the rock's shape: the rigid block's corners bounce and it turns and rolls, the \
              lumped mass's bounces follow e_n and e_t and it slides (or rolls as a sphere). \
              Measured on the plane and on survey noise of a centimetre they agree within 1-2 %. \
@@ -79,7 +80,7 @@ fn note(c: FloorClass, agree: bool) -> String {
             100.0 * SMOOTH_RELIEF
         ),
         FloorClass::ReliefBelowRockSize => format!(
-            "The relief is smaller than the rock (below {:.0} % of its size): the rigid block \
+            "The relief is smaller than the rock (an RMS below {:.0} % of its size): the rigid block \
              bridges bumps smaller than itself and touches only their crests, while the lumped \
              mass is a point that lands on every facet (each landing costs the Coulomb impulse of \
              the normal speed it brings). Where they differ, trust the rigid block for the \
