@@ -49,6 +49,7 @@ async fn both_methods_agree_on_the_plane_and_the_answer_is_otherwise_unchanged()
     let a = ok(&post(&app, "/v1/migration", &case("lumped_mass", None)).await);
     let c = &a["method_comparison"];
     assert_eq!(c["floor"], "plane", "{c}");
+    assert_eq!(c["reason"], "shape", "{c}");
     assert_eq!(c["floor_relief_m"], 0.0);
     assert_eq!(c["agree"], true, "{c}");
     let m = c["methods"].as_array().unwrap();
@@ -189,4 +190,29 @@ fn a_sharded_migration_refuses_compare_methods_naming_the_field() {
         text.contains("/output/compare_methods") && text.contains("sharded"),
         "{text}"
     );
+}
+
+/// Where rocks come to rest (a 32° face, μ ~ U[0.6, 0.8] about tan 32° = 0.62) the sliding
+/// point stops where the rigid sphere rolls on: the shares reaching the lower end differ, and the
+/// reason is how the rock moves (`stopping`), whatever the floor.
+#[tokio::test]
+async fn where_rocks_stop_the_reason_is_how_they_move() {
+    let app = common::app();
+    let mut req = case("lumped_mass", None);
+    req["face"]["dip_deg"] = json!(32);
+    req["rock"] = json!({"shape": "sphere", "radius_m": 0.2});
+    req["monte_carlo"]["runs"] = json!(30);
+    req["monte_carlo"]["friction_coefficient"] = json!({"min": 0.6, "max": 0.8});
+    let a = ok(&post(&app, "/v1/migration", &req).await);
+    let c = &a["method_comparison"];
+    let m = c["methods"].as_array().unwrap();
+    let (lm, rb) = (
+        m[0]["reached_fraction"].as_f64().unwrap(),
+        m[1]["reached_fraction"].as_f64().unwrap(),
+    );
+    assert!(lm < 0.5 && rb > 0.9, "{c}");
+    assert_eq!(c["agree"], false, "{c}");
+    assert_eq!(c["reason"], "stopping", "{c}");
+    assert_eq!(c["floor"], "plane", "{c}");
+    assert!(c["note"].as_str().unwrap().contains("rolls on"), "{c}");
 }

@@ -46,6 +46,22 @@ pub enum FloorClass {
     ReliefAboveRockSize,
 }
 
+/// What the two methods differ by on a case (or would, where they agree).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reason {
+    /// The rock's shape and rotation on a smooth floor: the rigid block's corners bounce and it
+    /// turns, the lumped mass's bounces follow e_n, e_t.
+    Shape,
+    /// Relief smaller than the rock: the rigid block bridges it, the point mass lands on it.
+    ReliefBelowRockSize,
+    /// Relief of the rock's size or larger: the paths part where the shape decides the way.
+    ReliefAboveRockSize,
+    /// The shares of runs reaching the lower end differ: where rocks come to rest, the way the
+    /// rock moves (the lumped mass slides or rolls as told; the rigid block slides, tumbles or
+    /// rolls as its shape lets it) decides whether it stops.
+    Stopping,
+}
+
 /// One method's arrival over the compared runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MethodArrival {
@@ -80,6 +96,8 @@ pub struct MethodComparison {
     pub rock_size: f64,
     /// The floor's class.
     pub floor: FloorClass,
+    /// What the two differ by on this case.
+    pub reason: Reason,
 }
 
 /// The other migration method.
@@ -134,7 +152,14 @@ pub(crate) fn compare(
         (Some(x), Some(y)) if x > 0.0 => Some(y / x - 1.0),
         _ => None,
     };
-    let agree = speeds_agree(&a, &b) && reached_agree(&a, &b);
+    let reached = reached_agree(&a, &b);
+    let agree = speeds_agree(&a, &b) && reached;
+    let reason = match class {
+        _ if !reached => Reason::Stopping,
+        FloorClass::Plane | FloorClass::Smooth => Reason::Shape,
+        FloorClass::ReliefBelowRockSize => Reason::ReliefBelowRockSize,
+        FloorClass::ReliefAboveRockSize => Reason::ReliefAboveRockSize,
+    };
     Ok(MethodComparison {
         methods: [a, b],
         speed_difference,
@@ -142,6 +167,7 @@ pub(crate) fn compare(
         relief,
         rock_size,
         floor: class,
+        reason,
     })
 }
 

@@ -7,8 +7,8 @@ use utoipa::ToSchema;
 use super::MethodDto;
 use crate::physics::migration::Method;
 use crate::physics::migration::compare::{
-    FloorClass, LARGE_RELIEF, MethodArrival, MethodComparison, REACHED_TOLERANCE, SMOOTH_RELIEF,
-    SPEED_TOLERANCE,
+    FloorClass, LARGE_RELIEF, MethodArrival, MethodComparison, REACHED_TOLERANCE, Reason,
+    SMOOTH_RELIEF, SPEED_TOLERANCE,
 };
 
 /// One method's arrival over the compared runs.
@@ -52,6 +52,10 @@ pub struct MethodComparisonDto {
     /// face); `relief_below_rock_size` (below 20 % of it, bumps from trough to crest below
     /// about half the rock); `relief_above_rock_size`.
     pub floor: String,
+    /// What the two differ by on this case: `shape` (a smooth floor: the rock's shape and
+    /// rotation), `relief_below_rock_size`, `relief_above_rock_size`, or `stopping` (the shares
+    /// reaching the lower end differ: how the rock moves decides whether it stops).
+    pub reason: String,
     /// Why the two differ on such a floor (or would), and which one to trust for what.
     pub note: String,
 }
@@ -66,33 +70,53 @@ fn floor_name(c: FloorClass) -> &'static str {
     }
 }
 
-/// The documented reason the two methods differ on a floor of class `c` (or agree), and which
-/// to trust for what (README "The two methods side by side", VALIDATION.md).
-fn note(c: FloorClass, agree: bool) -> String {
-    let reason = match c {
-        FloorClass::Plane | FloorClass::Smooth => format!(
-            "On a smooth floor (relief with an RMS below {:.0} % of the rock's size) the two differ only by \
-             the rock's shape: the rigid block's corners bounce and it turns and rolls, the \
-             lumped mass's bounces follow e_n and e_t and it slides (or rolls as a sphere). \
-             Measured on the plane and on survey noise of a centimetre they agree within 1-2 %. \
-             Use either for arrival speeds; the lumped mass for large ensembles (it is about a \
-             thousand times faster); the rigid block for a block's bounce heights and rotation.",
+/// The wire name of a reason.
+fn reason_name(r: Reason) -> &'static str {
+    match r {
+        Reason::Shape => "shape",
+        Reason::ReliefBelowRockSize => "relief_below_rock_size",
+        Reason::ReliefAboveRockSize => "relief_above_rock_size",
+        Reason::Stopping => "stopping",
+    }
+}
+
+/// The documented reason the two methods differ for `r` (or would, where they agree), and which
+/// to trust for what (VALIDATION.md "The two methods side by side").
+fn note(r: Reason, agree: bool) -> String {
+    let reason = match r {
+        Reason::Shape => format!(
+            "On a smooth floor (relief with an RMS below {:.0} % of the rock's size) the two \
+             differ only by the rock's shape: the rigid block's corners bounce and it turns and \
+             rolls, the lumped mass's bounces follow e_n and e_t and it slides (or rolls as a \
+             sphere). Measured on the plane and on survey noise of a centimetre they agree within \
+             1-3 % where the rocks run to the lower end. Use either for arrival speeds; the lumped \
+             mass for large ensembles (it is thousands of times faster); the rigid block for a \
+             block's bounce heights and rotation.",
             100.0 * SMOOTH_RELIEF
         ),
-        FloorClass::ReliefBelowRockSize => format!(
-            "The relief is smaller than the rock (an RMS below {:.0} % of its size): the rigid block \
-             bridges bumps smaller than itself and touches only their crests, while the lumped \
-             mass is a point that lands on every facet (each landing costs the Coulomb impulse of \
-             the normal speed it brings). Where they differ, trust the rigid block for the \
-             arrival and bounce heights of a block of this size.",
+        Reason::ReliefBelowRockSize => format!(
+            "The relief is smaller than the rock (an RMS below {:.0} % of its size): the rigid \
+             block bridges bumps smaller than itself and touches only their crests, while the \
+             lumped mass is a point that lands on every facet (each landing costs the Coulomb \
+             impulse of the normal speed it brings). Where they differ, trust the rigid block for \
+             the arrival and bounce heights of a block of this size.",
             100.0 * LARGE_RELIEF
         ),
-        FloorClass::ReliefAboveRockSize => "The relief is of the rock's size or larger: bumps, \
+        Reason::ReliefAboveRockSize => "The relief is of the rock's size or larger: bumps, \
              steps and benches deflect both methods, and their paths part where the rock's shape \
-             and orientation decide which way it goes (a point mass has neither). Compare \
-             ensembles, not single runs; trust the rigid block for a block of known shape, and \
-             calibrate the lumped mass's e_n, e_t (POST /v1/calibrate) before using it for \
-             statistics here."
+             and orientation decide which way it goes (a point mass has neither; a rigid sphere \
+             rolls over benches a sliding point loses speed on). Compare ensembles, not single \
+             runs; trust the rigid block for a block of known shape, and calibrate the lumped \
+             mass's e_n, e_t (POST /v1/calibrate) before using it for statistics here."
+            .to_string(),
+        Reason::Stopping => "The shares of runs reaching the lower end differ: where rocks come \
+             to rest, how the rock moves decides whether it stops. The lumped mass slides with \
+             Coulomb friction (or rolls as a sphere with lumped_mass.motion roll); the rigid \
+             block slides, tumbles or rolls as its shape lets it, and a sphere or a rounded block \
+             rolls on without loss (no rolling resistance is modelled yet), so it runs further. A \
+             sliding point is the short side, unsafe for a block that tumbles or rolls: take the \
+             rigid block (or the lumped mass with motion roll for round blocks) for runout and \
+             reach, and back-analyse field runouts (POST /v1/calibrate) before trusting either."
             .to_string(),
     };
     if agree {
@@ -129,7 +153,8 @@ impl From<&MethodComparison> for MethodComparisonDto {
             floor_relief_m: c.relief,
             rock_size_m: c.rock_size,
             floor: floor_name(c.floor).into(),
-            note: note(c.floor, c.agree),
+            reason: reason_name(c.reason).into(),
+            note: note(c.reason, c.agree),
         }
     }
 }
