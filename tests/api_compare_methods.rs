@@ -166,26 +166,9 @@ async fn compare_methods_belongs_to_the_migration_request() {
 /// naming the field.
 #[test]
 fn a_sharded_migration_refuses_compare_methods_naming_the_field() {
-    let dir = std::env::temp_dir().join(format!("gangue-compare-shard-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let req = dir.join("migration.json");
     let body = json!({"monte_carlo": {"runs": 5}, "output": {"compare_methods": true}});
-    std::fs::write(&req, serde_json::to_vec(&body).unwrap()).unwrap();
-    let out = common::gangue_cli(&[
-        "compute",
-        "--request",
-        req.to_str().unwrap(),
-        "--kind",
-        "migration",
-        "--shard",
-        "0/2",
-        "--out",
-        dir.join("part").to_str().unwrap(),
-    ]);
-    let text =
-        String::from_utf8_lossy(&out.stderr).into_owned() + &String::from_utf8_lossy(&out.stdout);
-    let _ = std::fs::remove_dir_all(&dir);
-    assert!(!out.status.success(), "{text}");
+    let (ok, text) = common::shard_0_of_2(&body, "migration", "compare-shard");
+    assert!(!ok, "{text}");
     assert!(
         text.contains("/output/compare_methods") && text.contains("sharded"),
         "{text}"

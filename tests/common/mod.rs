@@ -221,16 +221,22 @@ pub fn type7(sorted: &[f64], p: f64) -> f64 {
 /// `gangue compute` of shard 0 of 2 of the scene request `body`, in a scratch folder named by
 /// `tag`: whether it succeeded, and what it printed (stderr, then stdout).
 pub fn scene_shard(body: &Value, tag: &str) -> (bool, String) {
+    shard_0_of_2(body, "scene", tag)
+}
+
+/// Shard 0 of 2 of a computation of `kind` on the request `body` through `gangue compute`
+/// (`tag` names its scratch directory): whether it succeeded, and what it printed.
+pub fn shard_0_of_2(body: &Value, kind: &str, tag: &str) -> (bool, String) {
     let dir = std::env::temp_dir().join(format!("gangue-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let req = dir.join("scene.json");
+    let req = dir.join("request.json");
     std::fs::write(&req, serde_json::to_vec(body).unwrap()).unwrap();
     let out = gangue_cli(&[
         "compute",
         "--request",
         req.to_str().unwrap(),
         "--kind",
-        "scene",
+        kind,
         "--shard",
         "0/2",
         "--out",
