@@ -123,6 +123,9 @@ mod step;
 pub const FLOOR_MODULUS_PA: f64 = 4.38e9;
 /// Poisson ratio of the floor for the Hertz law when none is given.
 pub const FLOOR_POISSON: f64 = 0.3;
+/// Code of the warning that the requested `time_step_safety` was above the largest one the
+/// step is taken with and was used as that one.
+pub const TIME_STEP_SAFETY_CAPPED: &str = "time_step_safety_capped";
 /// Speed below which the block counts as still (|v| and |ω| r_max), m/s.
 pub const REST_SPEED_M_S: f64 = 1e-3;
 /// Time the block must stay still to be at rest, s.
@@ -1335,6 +1338,19 @@ fn nominal_run(
                  Speeds and energies may be high by up to this amount; a smaller \
                  time_step_safety or time_step_s reduces it",
                 100.0 * residual / scale
+            ),
+        });
+    }
+    if o.time_step.is_none() && o.time_step_safety > step::ACCURATE_SAFETY {
+        warnings.push(Warning {
+            code: TIME_STEP_SAFETY_CAPPED,
+            message: format!(
+                "time_step_safety {} was used as {} (time step {:.4e} s): the leapfrog's energy \
+                 error at the impacts grows with the step, and a larger safety would take the \
+                 energy account beyond its bound (0.2 % of the energy in play)",
+                o.time_step_safety,
+                step::ACCURATE_SAFETY,
+                model.dt
             ),
         });
     }
