@@ -129,7 +129,7 @@ pub const FLOOR_MODULUS_PA: f64 = 4.38e9;
 pub const FLOOR_POISSON: f64 = 0.3;
 /// Code of the warning that the requested `time_step_safety` was above the largest one the
 /// step is taken with and was used as that one.
-pub const TIME_STEP_SAFETY_CAPPED: &str = "time_step_safety_capped";
+const TIME_STEP_SAFETY_CAPPED: &str = "time_step_safety_capped";
 /// Speed below which the block counts as still (|v| and |ω| r_max), m/s.
 pub const REST_SPEED_M_S: f64 = 1e-3;
 /// Time the block must stay still to be at rest, s.
