@@ -19,11 +19,11 @@
 //!   rolls over a crease instead of seeing only the facet under its centre.
 //! * **Onset offsets** (3DEC's incremental normal law at a contact's birth): a polyhedron's
 //!   pair of features that first touches deeper than twice the last drift's approach at that
-//!   point (a floor peak or crease met inside the block as it tips over the relief, or one
-//!   that switches on under a block resting on the relief) carries only that much in its
-//!   spring; the rest is its offset, kept while the pair is closed and lowered with the
+//!   point (a block vertex: than the rest overlap plus that; a floor peak or crease met inside
+//!   the block as it tips over the relief, or one that switches on under a block resting on
+//!   the relief) carries only that much in its spring; the rest is its offset, kept while the pair is closed and lowered with the
 //!   overlap. A feature switching on never creates the ½kₙU² of its depth (0.95 m cubes on
-//!   ±5 cm of relief gained 1.06 kJ of 30.5 kJ so), not even that of the rest overlap: a
+//!   ±5 cm of relief gained 1.06 kJ of 30.5 kJ so), a peak or crease not even that of the rest overlap: a
 //!   crease contact under a cube resting on a wavy grid switched on and off at the rest
 //!   overlap as the cube rocked by micro-radians, each switch creating its ½kₙU² (1e-3 J in
 //!   0.1 s at any step, beyond the run's guard). A pair that switches off

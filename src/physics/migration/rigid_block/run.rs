@@ -622,7 +622,8 @@ impl Model<'_> {
     /// Onset offsets, after 3DEC's incremental normal law (a contact's force grows from zero
     /// with the approach after it forms): a pair of features that first touches deeper than
     /// twice the approach of the last drift (the velocities of that drift at the contact
-    /// point, over the longer of it and the step `h`, s) is a floor peak or crease met while
+    /// point, over the longer of it and the step `h`, s; a block vertex: deeper than the rest
+    /// overlap plus that, as a face settles on a facet) is a floor peak or crease met while
     /// the block already touched through another feature. Its spring carries only that much;
     /// the rest of the overlap is the contact's offset, kept while the pair stays closed and
     /// lowered to the overlap whenever the overlap falls below it. So a feature switching on
@@ -656,7 +657,14 @@ impl Model<'_> {
                 None => {
                     let vrel = run.st.v + w_world.cross(&(gk.p - run.st.c));
                     let approach = (-gk.n.dot(&vrel)).max(0.0) * span;
-                    (gk.u - 2.0 * approach - slack).max(0.0)
+                    // a block vertex may land at the rest overlap (a face settling on a
+                    // facet); a floor peak or crease is born unloaded
+                    let rest = if gk.feature >> 62 == 0 {
+                        self.static_overlap
+                    } else {
+                        0.0
+                    };
+                    (gk.u - 2.0 * approach - rest - slack).max(0.0)
                 }
             };
             gk.u -= offset;
