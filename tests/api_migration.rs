@@ -351,3 +351,40 @@ async fn distributions_of_the_other_method_are_refused_when_sent_even_at_their_d
         assert_eq!(p["errors"][0]["value"], beta, "{p}");
     }
 }
+
+/// physics.md §C.3 (time step): a `time_step_safety` above 0.3 is used as 0.3, and the answer
+/// says so (`time_step_safety_capped`, naming the safety asked and the one used, with the
+/// step); at 0.3 or below, or with a given `time_step_s`, there is no such warning, and 0.5
+/// answers what 0.3 answers.
+#[tokio::test]
+async fn a_rigid_block_safety_above_the_cap_is_used_as_the_cap_and_warned() {
+    let app = common::app();
+    let body = |safety: f64| {
+        json!({"method": "rigid_block", "face": {"length_m": 3},
+               "rigid_block": {"time_step_safety": safety}})
+    };
+    let capped = common::migrate_ok(&app, &body(0.5)).await;
+    let at_cap = common::migrate_ok(&app, &body(0.3)).await;
+    let warning = |b: &Value| {
+        b["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|w| w["code"] == "time_step_safety_capped")
+            .cloned()
+    };
+    let w = warning(&capped).expect("a capped safety warns");
+    let msg = w["message"].as_str().unwrap();
+    assert!(msg.contains("0.5") && msg.contains("0.3"), "{msg}");
+    assert!(warning(&at_cap).is_none(), "{at_cap}");
+    assert_eq!(capped["arrival"], at_cap["arrival"]);
+    assert_eq!(capped["energy"], at_cap["energy"]);
+    let dt = at_cap["rigid_block"]["time_step_s"].as_f64().unwrap();
+    let given = common::migrate_ok(
+        &app,
+        &json!({"method": "rigid_block", "face": {"length_m": 3},
+                "rigid_block": {"time_step_s": dt, "time_step_safety": 0.9}}),
+    )
+    .await;
+    assert!(warning(&given).is_none(), "{given}");
+}

@@ -131,7 +131,9 @@ number_fields! {
         FieldDefault::Null, Open(0.0), Closed(1.0), "s", 1e-5;
     /// `rigid_block.time_step_safety`.
     TIME_STEP_SAFETY, time_step_safety_schema:
-        "Safety factor on the critical time step, in (0, 1].",
+        "Safety factor on the critical time step, in (0, 1]. One above 0.3 is used as 0.3, the\n\
+         largest whose impacts keep the energy account within its bound (warning\n\
+         `time_step_safety_capped` with the safety used).",
         FieldDefault::Value(0.2), Open(0.0), Closed(1.0), "", 0.2;
     /// `end_time_s` of a migration (`null`: run to the lower end).
     MIGRATION_END_TIME, migration_end_time_schema:
@@ -616,7 +618,8 @@ pub struct RigidBlockDto {
     #[schema(schema_with = time_step_schema)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time_step_s: Option<f64>,
-    /// Safety factor on the critical time step, in (0, 1].
+    /// Safety factor on the critical time step, in (0, 1] (one above 0.3 is used as 0.3, with
+    /// the warning `time_step_safety_capped`).
     #[schema(schema_with = time_step_safety_schema)]
     pub time_step_safety: f64,
 }

@@ -18,11 +18,15 @@
 //!   switching it on, would happen deep inside the sphere), so it rests on both walls of a V and
 //!   rolls over a crease instead of seeing only the facet under its centre.
 //! * **Onset offsets** (3DEC's incremental normal law at a contact's birth): a polyhedron's
-//!   pair of features that first touches deeper than the rest overlap plus twice the last
-//!   drift's approach at that point (a floor peak or crease met inside the block as it tips
-//!   over the relief) carries only that much in its spring; the rest is its offset, kept while the pair is closed and
-//!   lowered with the overlap. A feature switching on never creates the ½kₙU² of its depth
-//!   (0.95 m cubes on ±5 cm of relief gained 1.06 kJ of 30.5 kJ so). A pair that switches off
+//!   pair of features that first touches deeper than twice the last drift's approach at that
+//!   point (a block vertex: than the rest overlap plus that; a floor peak or crease met inside
+//!   the block as it tips over the relief, or one that switches on under a block resting on
+//!   the relief) carries only that much in its spring; the rest is its offset, kept while the pair is closed and lowered with the
+//!   overlap. A feature switching on never creates the ½kₙU² of its depth (0.95 m cubes on
+//!   ±5 cm of relief gained 1.06 kJ of 30.5 kJ so), a peak or crease not even that of the rest overlap: a
+//!   crease contact under a cube resting on a wavy grid switched on and off at the rest
+//!   overlap as the cube rocked by micro-radians, each switch creating its ½kₙU² (1e-3 J in
+//!   0.1 s at any step, beyond the run's guard). A pair that switches off
 //!   while compressed takes its elastic energy with it; that energy is handed to the contacts
 //!   that carry offsets (their offsets lowered until their springs hold it), as far as their
 //!   offsets go. What finds no offset stays lost: the account then shows a negative residual,
@@ -123,6 +127,9 @@ mod step;
 pub const FLOOR_MODULUS_PA: f64 = 4.38e9;
 /// Poisson ratio of the floor for the Hertz law when none is given.
 pub const FLOOR_POISSON: f64 = 0.3;
+/// Code of the warning that the requested `time_step_safety` was above the largest one the
+/// step is taken with and was used as that one.
+const TIME_STEP_SAFETY_CAPPED: &str = "time_step_safety_capped";
 /// Speed below which the block counts as still (|v| and |ω| r_max), m/s.
 pub const REST_SPEED_M_S: f64 = 1e-3;
 /// Time the block must stay still to be at rest, s.
@@ -1338,6 +1345,19 @@ fn nominal_run(
             ),
         });
     }
+    if o.time_step.is_none() && o.time_step_safety > step::ACCURATE_SAFETY {
+        warnings.push(Warning {
+            code: TIME_STEP_SAFETY_CAPPED,
+            message: format!(
+                "time_step_safety {} was used as {} (time step {:.4e} s): the leapfrog's energy \
+                 error at the impacts grows with the step, and a larger safety would take the \
+                 energy account beyond its bound (0.2 % of the energy in play)",
+                o.time_step_safety,
+                step::ACCURATE_SAFETY,
+                model.dt
+            ),
+        });
+    }
     if case.monte_carlo.is_none() {
         control.set_total(1);
         control.add_done(1);
@@ -1666,7 +1686,8 @@ mod tests {
         // stepped one sample by sample; the feature itself is stepped (its impacts dissipate
         // what the stepped run's do). Past it the two runs agree only loosely: the cube lands
         // on a face after crossing the feature, and a near-flat landing on four vertices
-        // amplifies the skip's rounding differences (1e-12) into its roll (to about 1e-4).
+        // amplifies the skip's rounding differences (1e-12) into its roll (to about 1e-4; 4e-4
+        // in the friction once the crease contact under the block started unloaded).
         let t = 45f64.to_radians().tan();
         let kink = move |deg: f64, xc: f64| {
             move |x: f64, _: f64| {
@@ -1735,9 +1756,9 @@ mod tests {
             assert!(before > 20, "{name}: {before} samples before the feature");
             // across it: the same stop and about the same dissipation by impacts
             assert_eq!(fast.reason, slow.reason, "{name}");
-            close(fast.st.t, slow.st.t, 1e-4);
-            close(fast.st.v.norm(), slow.st.v.norm(), 1e-4);
-            close(fast.friction, slow.friction, 1e-4);
+            close(fast.st.t, slow.st.t, 1e-3);
+            close(fast.st.v.norm(), slow.st.v.norm(), 1e-3);
+            close(fast.friction, slow.friction, 1e-3);
             assert!(
                 (fast.damping - slow.damping).abs() <= 1e-2 * slow.damping.max(1e-3),
                 "{name}: damping {} against {}",

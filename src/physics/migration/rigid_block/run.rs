@@ -621,14 +621,16 @@ impl Model<'_> {
 
     /// Onset offsets, after 3DEC's incremental normal law (a contact's force grows from zero
     /// with the approach after it forms): a pair of features that first touches deeper than
-    /// the rest overlap plus twice the approach of the last drift (the velocities of that
-    /// drift at the contact point, over the longer of it and the step `h`, s) is a floor peak
-    /// or crease met while the block already touched through another feature. Its spring
-    /// carries only that much; the rest of the overlap is the contact's offset, kept while the
-    /// pair stays closed and lowered to the overlap whenever the overlap falls below it. So a
-    /// feature switching on inside the block creates at most the elastic energy of the rest
-    /// overlap (a crease passed under a sliding block touches it there), never that of its
-    /// depth, and the offset never adds any. Records the deepest geometric overlap; `w_world`:
+    /// twice the approach of the last drift (the velocities of that drift at the contact
+    /// point, over the longer of it and the step `h`, s; a block vertex: deeper than the rest
+    /// overlap plus that, as a face settles on a facet) is a floor peak or crease met while
+    /// the block already touched through another feature. Its spring carries only that much;
+    /// the rest of the overlap is the contact's offset, kept while the pair stays closed and
+    /// lowered to the overlap whenever the overlap falls below it. So a feature switching on
+    /// inside the block creates at most the elastic energy of its approach, never that of its
+    /// depth (nor of the rest overlap: a crease under a block resting on the relief, switching
+    /// on and off as the block rocks, would create that at every switch), and the offset never
+    /// adds any. Records the deepest geometric overlap; `w_world`:
     /// ω, world frame.
     pub(super) fn onset_offsets(&self, run: &mut Run, w_world: &Vector3<f64>, h: f64) {
         let span = run.drift_h.max(h);
@@ -655,7 +657,14 @@ impl Model<'_> {
                 None => {
                     let vrel = run.st.v + w_world.cross(&(gk.p - run.st.c));
                     let approach = (-gk.n.dot(&vrel)).max(0.0) * span;
-                    (gk.u - 2.0 * approach - self.static_overlap - slack).max(0.0)
+                    // a block vertex may land at the rest overlap (a face settling on a
+                    // facet); a floor peak or crease is born unloaded
+                    let rest = if gk.feature >> 62 == 0 {
+                        self.static_overlap
+                    } else {
+                        0.0
+                    };
+                    (gk.u - 2.0 * approach - rest - slack).max(0.0)
                 }
             };
             gk.u -= offset;
