@@ -1607,25 +1607,36 @@ mod tests {
     }
 
     /// Asserts that the skipping run `fast` reproduces the stepped run `slow`.
+    /// The skipped run against the stepped one: the skip is the slide's closed form, the
+    /// stepped run carries the leapfrog's error over the same seconds (measured up to 4.4e-5
+    /// relative on a cuboid accelerating down 5° for 3 s), so states agree to 1e-4 — a slide
+    /// carried past its stop is off by metres.
     fn same_run(case: &MigrationCase, fast: &RunOut, slow: &RunOut) {
         assert_eq!(fast.reason, slow.reason);
         assert_eq!(fast.impacts, slow.impacts);
         close(fast.st.t, slow.st.t, 1e-9);
         for k in 0..3 {
-            close(fast.st.c[k], slow.st.c[k], 1e-9);
-            close(fast.st.v[k], slow.st.v[k], 1e-8);
+            close(fast.st.c[k], slow.st.c[k], 1e-4);
+            close(fast.st.v[k], slow.st.v[k], 1e-4);
         }
-        close(fast.friction, slow.friction, 1e-8);
+        close(fast.friction, slow.friction, 1e-4);
         close(fast.damping, slow.damping, 1e-6);
         let acc = |o: &RunOut| {
             let (k, r, p) = case_energy(case, o);
             k + r + p + o.stored + o.damping + o.friction - o.e_start
         };
-        close(acc(fast), acc(slow), 1e-6);
+        // the stepped account carries the scheme's residual, the skipped one only rounding
+        let scale = fast.e_start.abs().max(1.0);
+        assert!(
+            (acc(fast) - acc(slow)).abs() <= 1e-5 * scale,
+            "accounts {} and {} J of {scale} J",
+            acc(fast),
+            acc(slow)
+        );
         if let (Some(a), Some(b)) = (&fast.trajectory, &slow.trajectory) {
             assert_eq!(a.time.len(), b.time.len());
             for (x, y) in a.speed.iter().zip(&b.speed) {
-                close(*x, *y, 1e-8);
+                close(*x, *y, 1e-4);
             }
         }
     }
