@@ -29,7 +29,7 @@ impl Calculation for Migration {
 }
 
 /// The other method on `case` (the same ensemble, the runs `r` used) and the comparison of its
-/// answer with `r` ([`compare::compare`]).
+/// answer with `r` (the agreement, the floor's relief and class: [`compare::MethodComparison`]).
 ///
 /// # Errors
 /// The other method's run's: the request is answered for both methods or refused.
