@@ -714,6 +714,42 @@ fn an_undamped_sphere_at_a_high_safety_answers_within_the_energy_bound() {
     }
 }
 
+/// A sweep case (seed 4411) as the sweep builds it: `shape` placed 1 m down a face of 12 m at
+/// `dip` on sweep floor `floor` of spacing `d` (relief 0.05 m), μ `mu`, no spin, to `end_time`
+/// at safety 1 with damping `beta` and the contact law `model`; run, its numbers finite.
+#[allow(clippy::too_many_arguments)]
+fn placed_on_a_sweep_floor(
+    shape: RockShape,
+    dip: f64,
+    mu: f64,
+    floor: usize,
+    d: f64,
+    end_time: f64,
+    beta: f64,
+    model: ContactModel,
+) -> (MigrationCase, MigrationResult) {
+    let mut c = MigrationCase {
+        method: Method::RigidBlock,
+        ..MigrationCase::default()
+    };
+    c.rock.shape = shape;
+    c.face.dip_deg = dip;
+    c.face.length = 12.0;
+    c.face.friction_coefficient = mu;
+    c.face.floor = sweep_floor(floor, d, 0.05, dip);
+    c.release.along_dip = 1.0;
+    c.release.drop_height = 0.0;
+    c.release.angular_velocity = Some([0.0; 3]);
+    c.end_time = Some(end_time);
+    c.rigid_block.critical_damping_ratio = beta;
+    c.rigid_block.time_step_safety = 1.0;
+    c.rigid_block.contact_model = model;
+    c.rigid_block.max_steps = 20_000.0;
+    let r = run(&c, &Control::unlimited()).unwrap_or_else(|e| panic!("{e:?}"));
+    check_finite(&r).unwrap();
+    (c, r)
+}
+
 /// A case of the sweep (seed 4411): the default cube placed on the wavy grid at β 0.999 and
 /// safety 1 (run at 0.3), μ 0.96, so that it barely moves (0.055 J in play). Resting on the
 /// relief it rocks by micro-radians, and a crease contact under it switched on at the rest
@@ -721,24 +757,16 @@ fn an_undamped_sphere_at_a_high_safety_answers_within_the_energy_bound() {
 /// 1.03e-3 J by 0.1 s at any step, beyond the run's guard of 1.0e-3 J (a 500).
 #[test]
 fn a_cube_placed_on_a_wavy_grid_at_high_damping_answers() {
-    let mut c = MigrationCase {
-        method: Method::RigidBlock,
-        ..MigrationCase::default()
-    };
-    let dip = 25.566418259358816;
-    c.face.dip_deg = dip;
-    c.face.length = 12.0;
-    c.face.friction_coefficient = 0.9566295850917984;
-    c.face.floor = sweep_floor(3, 0.5343073763815036, 0.05, dip);
-    c.release.along_dip = 1.0;
-    c.release.drop_height = 0.0;
-    c.release.angular_velocity = Some([0.0; 3]);
-    c.end_time = Some(0.3064343244837477);
-    c.rigid_block.critical_damping_ratio = 0.999;
-    c.rigid_block.time_step_safety = 1.0;
-    c.rigid_block.max_steps = 20_000.0;
-    let r = run(&c, &Control::unlimited()).unwrap_or_else(|e| panic!("{e:?}"));
-    check_finite(&r).unwrap();
+    let (c, r) = placed_on_a_sweep_floor(
+        RockShape::Cube,
+        25.566418259358816,
+        0.9566295850917984,
+        3,
+        0.5343073763815036,
+        0.3064343244837477,
+        0.999,
+        ContactModel::Linear,
+    );
     // the account closes well within one switch's ½kₙU² at the rest overlap (1.1e-4 J)
     let e = &r.energy;
     let rest = r.rigid_block.unwrap().static_overlap;
@@ -757,27 +785,18 @@ fn a_cube_placed_on_a_wavy_grid_at_high_damping_answers() {
 /// the cone's sides, it created 3.06 J of 54 J in play).
 #[test]
 fn a_stick_placed_on_a_wavy_grid_without_damping_answers() {
-    let mut c = MigrationCase {
-        method: Method::RigidBlock,
-        ..MigrationCase::default()
-    };
-    c.rock.shape = RockShape::Cuboid {
-        dimensions: [0.1, 0.1, 1.4191004726055625],
-    };
-    c.face.dip_deg = 10.0;
-    c.face.length = 12.0;
-    c.face.friction_coefficient = 0.0;
-    c.face.floor = sweep_floor(3, 0.3055378890036565, 0.05, 10.0);
-    c.release.along_dip = 1.0;
-    c.release.drop_height = 0.0;
-    c.release.angular_velocity = Some([0.0; 3]);
-    c.end_time = Some(0.38400114683986114);
-    c.rigid_block.critical_damping_ratio = 0.0;
-    c.rigid_block.time_step_safety = 1.0;
-    c.rigid_block.contact_model = ContactModel::Hertz;
-    c.rigid_block.max_steps = 20_000.0;
-    let r = run(&c, &Control::unlimited()).unwrap_or_else(|e| panic!("{e:?}"));
-    check_finite(&r).unwrap();
+    let (_, r) = placed_on_a_sweep_floor(
+        RockShape::Cuboid {
+            dimensions: [0.1, 0.1, 1.4191004726055625],
+        },
+        10.0,
+        0.0,
+        3,
+        0.3055378890036565,
+        0.38400114683986114,
+        0.0,
+        ContactModel::Hertz,
+    );
     let e = &r.energy;
     assert!(e.residual.abs() <= 1e-2 * e.total_start, "{e:?}");
 }
@@ -787,29 +806,20 @@ fn a_stick_placed_on_a_wavy_grid_without_damping_answers() {
 /// contact held open beyond its cone's side created 4.4e-2 J of 0.50 J in play).
 #[test]
 fn a_flat_polyhedron_placed_over_valleys_without_damping_answers() {
-    let mut c = MigrationCase {
-        method: Method::RigidBlock,
-        ..MigrationCase::default()
-    };
-    c.rock.shape = RockShape::RandomPolyhedron {
-        semi_axes: [0.5459303902499156, 0.2444249181262188, 0.05],
-        vertices: 20,
-        seed: 985254917854911726,
-    };
-    c.face.dip_deg = 10.0;
-    c.face.length = 12.0;
-    c.face.friction_coefficient = 0.9317564552894072;
-    c.face.floor = sweep_floor(2, 0.4741254746929891, 0.05, 10.0);
-    c.release.along_dip = 1.0;
-    c.release.drop_height = 0.0;
-    c.release.angular_velocity = Some([0.0; 3]);
-    c.end_time = Some(0.21277191194039255);
-    c.rigid_block.critical_damping_ratio = 0.0;
-    c.rigid_block.time_step_safety = 1.0;
-    c.rigid_block.contact_model = ContactModel::Hertz;
-    c.rigid_block.max_steps = 20_000.0;
-    let r = run(&c, &Control::unlimited()).unwrap_or_else(|e| panic!("{e:?}"));
-    check_finite(&r).unwrap();
+    let (_, r) = placed_on_a_sweep_floor(
+        RockShape::RandomPolyhedron {
+            semi_axes: [0.5459303902499156, 0.2444249181262188, 0.05],
+            vertices: 20,
+            seed: 985254917854911726,
+        },
+        10.0,
+        0.9317564552894072,
+        2,
+        0.4741254746929891,
+        0.21277191194039255,
+        0.0,
+        ContactModel::Hertz,
+    );
     let e = &r.energy;
     assert!(e.residual.abs() <= 1e-2 * e.total_start, "{e:?}");
 }

@@ -189,14 +189,11 @@ impl Run<'_, '_> {
         draw: &mut impl FnMut() -> (f64, f64),
     ) {
         let (g, su, roll) = (self.g, self.su, self.roll);
-        let mu = match self.zones {
-            Some(z) => {
-                z.current
-                    .set(z.zones.material_index(self.s.p.x, self.s.p.y));
-                z.mu_at([self.s.p.x, self.s.p.y], self.zone_dir())
-            }
-            None => self.mu,
-        };
+        if let Some(z) = self.zones {
+            z.current
+                .set(z.zones.material_index(self.s.p.x, self.s.p.y));
+        }
+        let mu = self.mu_here();
         let (en, et) = draw();
         let s = &mut self.s;
         let speed_before = s.v.norm();

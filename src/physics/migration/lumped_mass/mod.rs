@@ -795,10 +795,7 @@ impl<'a, 'r> Run<'a, 'r> {
     /// in vₙ and tends to 0 with it (the plastic limit of [`Run::recontact`], without a rebound).
     fn reattach(&mut self, n: &Vector3<f64>, vn: f64) -> f64 {
         let kf = self.ke_factor;
-        let mu = match self.zones {
-            Some(z) => z.mu_at([self.s.p.x, self.s.p.y], self.zone_dir()),
-            None => self.mu,
-        };
+        let mu = self.mu_here();
         let s = &mut self.s;
         let sp = s.v.norm();
         let vt = s.v - n * vn;
@@ -820,6 +817,15 @@ impl<'a, 'r> Run<'a, 'r> {
         s.e_fric += l;
         s.v = dir * after;
         l_normal + l
+    }
+
+    /// μ of the floor under the rock, moving as it moves (the material's on a floor of several
+    /// materials, the run's otherwise).
+    fn mu_here(&self) -> f64 {
+        match self.zones {
+            Some(z) => z.mu_at([self.s.p.x, self.s.p.y], self.zone_dir()),
+            None => self.mu,
+        }
     }
 
     /// Plan direction along which the material at the rock is read ([`zone_dir`]).
